@@ -1,0 +1,395 @@
+//! Leaf files: a flat layout of particles, springs and triangles plus folds,
+//! read from TOML, validated, and turned into a [`Model`]. The paper's two
+//! prototypes (figure 4) are embedded so the tool runs without any file.
+//! Every field is documented in `prototypes/README.md`.
+
+use crate::field::WindField;
+use crate::model::{AeroLaw, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle};
+use nalgebra::{Unit, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::fmt;
+use std::path::Path;
+
+/// Prototype A of the paper's figure 4 (symmetric star, three flaps).
+pub const PROTOTYPE_A: &str = include_str!("../prototypes/leaf-a.toml");
+/// Prototype B of the paper's figure 4 (asymmetric strip with three flaps).
+pub const PROTOTYPE_B: &str = include_str!("../prototypes/leaf-b.toml");
+
+/// A leaf as written in a file. Positions are the flat (unfolded) layout;
+/// folds turn vertices about hinges when the model is built.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeafSpec {
+    /// Short name, used in outputs.
+    pub name: String,
+    /// Aerodynamic law and coefficients shared by all triangles.
+    pub aero: AeroSpec,
+    /// Limits the genome respects when varying this leaf.
+    #[serde(default)]
+    pub bounds: Bounds,
+    /// Gravity, m/s² (default: standard gravity down z).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Point masses.
+    #[serde(rename = "particle")]
+    pub particles: Vec<ParticleSpec>,
+    /// Springs with dashpots.
+    #[serde(rename = "spring", default)]
+    pub springs: Vec<SpringSpec>,
+    /// Wind-catching triangles.
+    #[serde(rename = "triangle", default)]
+    pub triangles: Vec<TriangleSpec>,
+    /// Folds applied in order to the flat layout.
+    #[serde(rename = "fold", default)]
+    pub folds: Vec<FoldSpec>,
+    /// Wind (still air when absent).
+    #[serde(default, skip_serializing_if = "WindField::is_still")]
+    pub wind: WindField,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -STANDARD_GRAVITY]
+}
+
+/// The aerodynamic law of a leaf (eq. 9–10 by default).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroSpec {
+    /// Which law; `linear` is the paper's.
+    #[serde(default)]
+    pub law: AeroLaw,
+    /// Normal coefficient αⁿ, kg/(m²·s).
+    pub alpha_n: f64,
+    /// Tangential coefficient αᵗ, kg/(m²·s).
+    pub alpha_t: f64,
+}
+
+/// One point mass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleSpec {
+    /// Flat-layout position, m.
+    pub position: [f64; 3],
+    /// Mass, kg.
+    pub mass: f64,
+    /// Pinned in space.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub fixed: bool,
+    /// Linear drag α of eq. 7, kg/s, for a particle in no triangle.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub drag: f64,
+}
+
+/// One spring.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringSpec {
+    /// The two particle indices.
+    pub ends: [usize; 2],
+    /// Stiffness k, N/m.
+    pub stiffness: f64,
+    /// Dashpot coefficient c, N·s/m.
+    #[serde(default)]
+    pub damping: f64,
+    /// Group name; the genome scales stiffness per group.
+    #[serde(default = "default_group")]
+    pub group: String,
+    /// Rest length, m (default: the distance in the folded shape).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_length: Option<f64>,
+    /// Breaking strain (l − L)/L (default: unbreakable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub break_strain: Option<f64>,
+}
+
+fn default_group() -> String {
+    "edge".to_string()
+}
+
+/// One triangle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleSpec {
+    /// The three corner particle indices.
+    pub corners: [usize; 3],
+    /// The paper's flap label (1, 2, 3 in figure 4), if this is a flap.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flap: Option<u8>,
+    /// Overrides the leaf's αⁿ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_n: Option<f64>,
+    /// Overrides the leaf's αᵗ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_t: Option<f64>,
+}
+
+/// A fold: the vertices in `moves` turn about the hinge line by `angle_deg`;
+/// positive turns them up (towards +z, the side of the leaf's normal).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FoldSpec {
+    /// The paper's flap label this fold belongs to, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flap: Option<u8>,
+    /// A name for folds that are not flaps (e.g. a camber of the blade).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The two particles on the hinge line.
+    pub hinge: [usize; 2],
+    /// The particles carried by the fold.
+    pub moves: Vec<usize>,
+    /// Fold angle, degrees, + up.
+    pub angle_deg: f64,
+}
+
+/// Physical bounds for variation (issue 7's genome clamps to these).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Bounds {
+    /// Range of |fold angle|, degrees (kept away from 0 where a flat hinge is floppy).
+    pub fold_deg: [f64; 2],
+    /// Range of each particle's mass relative to the prototype.
+    pub mass_factor: [f64; 2],
+    /// Range of each spring group's stiffness relative to the prototype.
+    pub stiffness_factor: [f64; 2],
+    /// Range of the overall size relative to the prototype.
+    pub size_factor: [f64; 2],
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Bounds {
+            fold_deg: [5.0, 60.0],
+            mass_factor: [0.25, 4.0],
+            stiffness_factor: [0.5, 4.0],
+            size_factor: [0.5, 2.0],
+        }
+    }
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// A leaf file that could not be read or is invalid.
+#[derive(Debug)]
+pub struct LeafError {
+    /// The file (or embedded prototype) name.
+    pub source: String,
+    /// What is wrong, naming the item.
+    pub message: String,
+}
+
+impl fmt::Display for LeafError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.source, self.message)
+    }
+}
+
+impl std::error::Error for LeafError {}
+
+impl LeafSpec {
+    /// Parses and validates TOML text; `source` names it in errors.
+    pub fn from_toml(text: &str, source: &str) -> Result<LeafSpec, LeafError> {
+        let spec: LeafSpec = toml::from_str(text).map_err(|e| LeafError {
+            source: source.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        spec.model().map_err(|e| LeafError {
+            source: source.to_string(),
+            message: e.to_string(),
+        })?;
+        Ok(spec)
+    }
+
+    /// Reads a leaf file.
+    pub fn read(path: &Path) -> Result<LeafSpec, LeafError> {
+        let text = std::fs::read_to_string(path).map_err(|e| LeafError {
+            source: path.display().to_string(),
+            message: format!("cannot read: {e}"),
+        })?;
+        LeafSpec::from_toml(&text, &path.display().to_string())
+    }
+
+    /// `a` or `b` for the embedded prototypes, otherwise a file path.
+    pub fn load(name_or_path: &str) -> Result<LeafSpec, LeafError> {
+        match name_or_path {
+            "a" | "A" => LeafSpec::from_toml(PROTOTYPE_A, "prototype a"),
+            "b" | "B" => LeafSpec::from_toml(PROTOTYPE_B, "prototype b"),
+            path => LeafSpec::read(Path::new(path)),
+        }
+    }
+
+    /// The TOML text of this leaf (round-trips through [`LeafSpec::from_toml`]).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a leaf always serialises")
+    }
+
+    /// The folded rest shape: the flat layout with every fold applied in order.
+    pub fn folded_positions(&self) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let mut x: Vec<Vector3<f64>> = self
+            .particles
+            .iter()
+            .map(|p| Vector3::from(p.position))
+            .collect();
+        let n = x.len();
+        // Positions must be finite before folds turn them (a NaN hinge would
+        // otherwise be reported as coincident particles).
+        for (i, p) in x.iter().enumerate() {
+            for (axis, value) in p.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(ModelError {
+                        item: format!("particle[{i}].position[{axis}]"),
+                        reason: format!("must be a finite number, got {value}"),
+                    });
+                }
+            }
+        }
+        for (f, fold) in self.folds.iter().enumerate() {
+            let item = |field: &str| format!("fold[{f}].{field}");
+            for &i in fold.hinge.iter() {
+                if i >= n {
+                    return Err(ModelError {
+                        item: item("hinge"),
+                        reason: format!(
+                            "particle index {i} out of range (there are {n} particles)"
+                        ),
+                    });
+                }
+            }
+            if !fold.angle_deg.is_finite() {
+                return Err(ModelError {
+                    item: item("angle_deg"),
+                    reason: format!("must be a finite number, got {}", fold.angle_deg),
+                });
+            }
+            let (a, b) = (x[fold.hinge[0]], x[fold.hinge[1]]);
+            let Some(axis) = Unit::try_new(b - a, 1e-12) else {
+                return Err(ModelError {
+                    item: item("hinge"),
+                    reason: "the hinge particles coincide".to_string(),
+                });
+            };
+            for &m in &fold.moves {
+                if m >= n {
+                    return Err(ModelError {
+                        item: item("moves"),
+                        reason: format!(
+                            "particle index {m} out of range (there are {n} particles)"
+                        ),
+                    });
+                }
+                if fold.hinge.contains(&m) {
+                    return Err(ModelError {
+                        item: item("moves"),
+                        reason: format!("particle {m} is on the hinge and cannot move"),
+                    });
+                }
+            }
+            // "Up" is towards +z: pick the turning sense in which the first
+            // moved vertex rises, so the sign does not depend on hinge order.
+            let Some(&first) = fold.moves.first() else {
+                continue;
+            };
+            let lever = x[first] - a;
+            let sense = if axis.cross(&lever).z >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let rotation =
+                UnitQuaternion::from_axis_angle(&axis, sense * fold.angle_deg.to_radians());
+            for &m in &fold.moves {
+                x[m] = a + rotation * (x[m] - a);
+            }
+        }
+        Ok(x)
+    }
+
+    /// Builds and validates the model of this leaf.
+    pub fn model(&self) -> Result<Model, ModelError> {
+        let rest = self.folded_positions()?;
+        let n = rest.len();
+        let mut springs = Vec::with_capacity(self.springs.len());
+        for (s, spec) in self.springs.iter().enumerate() {
+            let [i, j] = spec.ends;
+            if i >= n || j >= n {
+                return Err(ModelError {
+                    item: format!("spring[{s}].ends"),
+                    reason: format!(
+                        "particle index {} out of range (there are {n} particles)",
+                        i.max(j)
+                    ),
+                });
+            }
+            springs.push(Spring {
+                i,
+                j,
+                rest_length: spec
+                    .rest_length
+                    .unwrap_or_else(|| (rest[i] - rest[j]).norm()),
+                stiffness: spec.stiffness,
+                damping: spec.damping,
+                break_strain: spec.break_strain,
+            });
+        }
+        let triangles = self
+            .triangles
+            .iter()
+            .map(|t| Triangle {
+                corners: t.corners,
+                alpha_n: t.alpha_n.unwrap_or(self.aero.alpha_n),
+                alpha_t: t.alpha_t.unwrap_or(self.aero.alpha_t),
+            })
+            .collect();
+        Model::new(ModelParts {
+            mass: self.particles.iter().map(|p| p.mass).collect(),
+            fixed: self.particles.iter().map(|p| p.fixed).collect(),
+            particle_drag: self.particles.iter().map(|p| p.drag).collect(),
+            rest_position: rest,
+            springs,
+            triangles,
+            aero: self.aero.law,
+            wind: self.wind.clone(),
+            gravity: Vector3::from(self.gravity),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_prototypes_load_and_round_trip() {
+        for p in ["a", "b"] {
+            let spec = LeafSpec::load(p).unwrap();
+            let again = LeafSpec::from_toml(&spec.to_toml(), "round trip").unwrap();
+            assert_eq!(spec, again);
+        }
+    }
+
+    #[test]
+    fn a_positive_fold_raises_the_flap_tip() {
+        let spec = LeafSpec::load("a").unwrap();
+        let x = spec.folded_positions().unwrap();
+        for fold in &spec.folds {
+            for &m in &fold.moves {
+                assert!(
+                    x[m].z > 0.0,
+                    "fold {:?} moved {m} to z = {}",
+                    fold.flap,
+                    x[m].z
+                );
+            }
+        }
+        let mut down = spec.clone();
+        down.folds[0].angle_deg = -20.0;
+        let x = down.folded_positions().unwrap();
+        assert!(x[down.folds[0].moves[0]].z < 0.0);
+    }
+}

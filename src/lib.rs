@@ -1,0 +1,23 @@
+//! leafmagic: design the motion of falling leaves by breeding them in a
+//! physically based simulator (after Haumann et al., "An Application of
+//! Motion Design and Control for Physically-Based Animation").
+//!
+//! Data flow: a leaf file ([`leaf`]) becomes an immutable [`model::Model`];
+//! [`integrate::Simulator`] advances a mutable [`state::State`] under the
+//! forces of [`force`] (gravity, springs, the paper's per-triangle
+//! aerodynamics in the wind of [`field`]); [`sim`] runs frames and records
+//! poses ([`pose`]) into a trajectory.
+#![warn(missing_docs)]
+
+pub mod classify;
+pub mod field;
+pub mod force;
+pub mod integrate;
+pub mod io;
+pub mod leaf;
+pub mod model;
+pub mod pose;
+pub mod sim;
+pub mod stability;
+pub mod state;
+pub mod trajectory;

@@ -1,0 +1,400 @@
+//! The immutable description of what is simulated: particles, springs,
+//! triangles, the wind field and gravity (the paper's section 2).
+//!
+//! A [`Model`] never changes during a run; everything that does (positions,
+//! velocities, which springs are still intact, time) lives in
+//! [`crate::state::State`]. Construction validates every item, so the
+//! simulator can assume finite masses, stiffnesses and in-range indices.
+
+use crate::field::WindField;
+use nalgebra::Vector3;
+use serde::{Deserialize, Serialize};
+use std::collections::HashSet;
+use std::fmt;
+
+/// Standard gravity, m/s², pointing down the z axis (z is up).
+pub const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// A triangle whose doubled area |N| is below this fraction of its squared
+/// longest edge is treated as degenerate (no aerodynamic force, not NaN).
+pub const DEGENERATE_TRIANGLE_RATIO: f64 = 1e-9;
+
+/// A spring between two particles with a parallel dashpot (section 2.1).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Spring {
+    /// First particle index.
+    pub i: usize,
+    /// Second particle index.
+    pub j: usize,
+    /// Length at which the spring exerts no force, m.
+    pub rest_length: f64,
+    /// Hooke stiffness k, N/m.
+    pub stiffness: f64,
+    /// Dashpot coefficient c along the spring, N·s/m.
+    pub damping: f64,
+    /// Strain (l − L)/L beyond which the spring breaks for good; `None` means
+    /// unbreakable (the paper's "threshold associated with every spring").
+    pub break_strain: Option<f64>,
+}
+
+/// A triangular surface element that feels the wind (eq. 8–10).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Triangle {
+    /// The three corner particles.
+    pub corners: [usize; 3],
+    /// Normal coefficient αⁿ, kg/(m²·s): force per area per normal relative speed.
+    pub alpha_n: f64,
+    /// Tangential coefficient αᵗ, kg/(m²·s).
+    pub alpha_t: f64,
+}
+
+/// Which aerodynamic law turns relative wind into force on triangles.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AeroLaw {
+    /// The paper's linear law, eq. 9–10: F = αⁿ A vⁿ + αᵗ A vᵗ at each corner.
+    #[default]
+    Linear,
+}
+
+/// Everything that stays fixed during a run. Fields are public for reading;
+/// build one with [`Model::new`], which validates.
+#[derive(Clone, Debug)]
+pub struct Model {
+    /// Particle masses, kg (all > 0).
+    pub mass: Vec<f64>,
+    /// 1/m for free particles and 0 for fixed ones, so that fixed particles
+    /// never accelerate without a branch in the integrators.
+    pub inv_mass: Vec<f64>,
+    /// Particles pinned in space (the paper's swing ropes hang from these).
+    pub fixed: Vec<bool>,
+    /// Linear drag α of eq. 7 for each particle, kg/s; used for particles that
+    /// belong to no triangle (0 elsewhere).
+    pub particle_drag: Vec<f64>,
+    /// Rest shape, m: the reference for pose extraction and rest lengths.
+    pub rest_position: Vec<Vector3<f64>>,
+    /// Springs; a broken spring keeps its index (see `State::spring_alive`).
+    pub springs: Vec<Spring>,
+    /// Wind-catching triangles.
+    pub triangles: Vec<Triangle>,
+    /// The aerodynamic law used on triangles.
+    pub aero: AeroLaw,
+    /// The wind velocity field G(x, t).
+    pub wind: WindField,
+    /// Gravitational acceleration, m/s².
+    pub gravity: Vector3<f64>,
+}
+
+/// The raw parts of a model, before validation.
+#[derive(Clone, Debug, Default)]
+pub struct ModelParts {
+    /// See [`Model::mass`].
+    pub mass: Vec<f64>,
+    /// See [`Model::fixed`].
+    pub fixed: Vec<bool>,
+    /// See [`Model::particle_drag`]; empty means zero for all.
+    pub particle_drag: Vec<f64>,
+    /// See [`Model::rest_position`].
+    pub rest_position: Vec<Vector3<f64>>,
+    /// See [`Model::springs`].
+    pub springs: Vec<Spring>,
+    /// See [`Model::triangles`].
+    pub triangles: Vec<Triangle>,
+    /// See [`Model::aero`].
+    pub aero: AeroLaw,
+    /// See [`Model::wind`].
+    pub wind: WindField,
+    /// See [`Model::gravity`].
+    pub gravity: Vector3<f64>,
+}
+
+/// A reason a model is invalid, naming the offending item.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ModelError {
+    /// The item, as a path a user can find in the file: `particle[3].mass`.
+    pub item: String,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
+impl fmt::Display for ModelError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.item, self.reason)
+    }
+}
+
+impl std::error::Error for ModelError {}
+
+fn err(item: impl Into<String>, reason: impl Into<String>) -> ModelError {
+    ModelError {
+        item: item.into(),
+        reason: reason.into(),
+    }
+}
+
+fn finite(item: &str, value: f64) -> Result<(), ModelError> {
+    if value.is_finite() {
+        Ok(())
+    } else {
+        Err(err(item, format!("must be a finite number, got {value}")))
+    }
+}
+
+impl Model {
+    /// Validates the parts and builds the model. Rejects non-finite values,
+    /// mass ≤ 0, negative stiffness, damping or rest length, indices out of
+    /// range, springs joining a particle to itself, duplicate springs, and
+    /// triangles of zero area at rest.
+    pub fn new(parts: ModelParts) -> Result<Model, ModelError> {
+        let n = parts.mass.len();
+        if parts.fixed.len() != n || parts.rest_position.len() != n {
+            return Err(err(
+                "particle",
+                "mass, fixed flag and position lists differ in length",
+            ));
+        }
+        if n == 0 {
+            return Err(err("particle", "a model needs at least one particle"));
+        }
+        let particle_drag = if parts.particle_drag.is_empty() {
+            vec![0.0; n]
+        } else if parts.particle_drag.len() == n {
+            parts.particle_drag
+        } else {
+            return Err(err("particle", "drag list length differs from particles"));
+        };
+        for (p, &m) in parts.mass.iter().enumerate() {
+            finite(&format!("particle[{p}].mass"), m)?;
+            if m <= 0.0 {
+                return Err(err(
+                    format!("particle[{p}].mass"),
+                    format!("must be > 0 kg, got {m}"),
+                ));
+            }
+            let x = parts.rest_position[p];
+            for (axis, value) in x.iter().enumerate() {
+                finite(&format!("particle[{p}].position[{axis}]"), *value)?;
+            }
+            let drag = particle_drag[p];
+            finite(&format!("particle[{p}].drag"), drag)?;
+            if drag < 0.0 {
+                return Err(err(
+                    format!("particle[{p}].drag"),
+                    format!("must be ≥ 0 kg/s, got {drag}"),
+                ));
+            }
+        }
+        let mut seen = HashSet::new();
+        for (s, spring) in parts.springs.iter().enumerate() {
+            let item = |f: &str| format!("spring[{s}].{f}");
+            for (name, idx) in [("ends[0]", spring.i), ("ends[1]", spring.j)] {
+                if idx >= n {
+                    return Err(err(
+                        item(name),
+                        format!("particle index {idx} out of range (there are {n} particles)"),
+                    ));
+                }
+            }
+            if spring.i == spring.j {
+                return Err(err(
+                    item("ends"),
+                    "a spring must join two different particles",
+                ));
+            }
+            let key = (spring.i.min(spring.j), spring.i.max(spring.j));
+            if !seen.insert(key) {
+                return Err(err(
+                    item("ends"),
+                    format!("duplicate spring between particles {} and {}", key.0, key.1),
+                ));
+            }
+            for (name, value) in [
+                ("rest_length", spring.rest_length),
+                ("stiffness", spring.stiffness),
+                ("damping", spring.damping),
+            ] {
+                finite(&item(name), value)?;
+                if value < 0.0 {
+                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+                }
+            }
+            if let Some(b) = spring.break_strain {
+                finite(&item("break_strain"), b)?;
+                if b <= 0.0 {
+                    return Err(err(
+                        item("break_strain"),
+                        format!("must be > 0 (a strain), got {b}"),
+                    ));
+                }
+            }
+        }
+        for (t, tri) in parts.triangles.iter().enumerate() {
+            let item = |f: &str| format!("triangle[{t}].{f}");
+            for (c, &idx) in tri.corners.iter().enumerate() {
+                if idx >= n {
+                    return Err(err(
+                        item(&format!("corners[{c}]")),
+                        format!("particle index {idx} out of range (there are {n} particles)"),
+                    ));
+                }
+            }
+            let [a, b, c] = tri.corners;
+            if a == b || b == c || a == c {
+                return Err(err(
+                    item("corners"),
+                    "corners must be three different particles",
+                ));
+            }
+            for (name, value) in [("alpha_n", tri.alpha_n), ("alpha_t", tri.alpha_t)] {
+                finite(&item(name), value)?;
+                if value < 0.0 {
+                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+                }
+            }
+            let x = &parts.rest_position;
+            let doubled_area = (x[b] - x[a]).cross(&(x[c] - x[a])).norm();
+            let longest = (x[b] - x[a])
+                .norm()
+                .max((x[c] - x[b]).norm())
+                .max((x[a] - x[c]).norm());
+            if doubled_area <= DEGENERATE_TRIANGLE_RATIO * longest * longest {
+                return Err(err(
+                    item("corners"),
+                    "zero area at rest (the corners are coincident or collinear)",
+                ));
+            }
+        }
+        for (axis, value) in parts.gravity.iter().enumerate() {
+            finite(&format!("gravity[{axis}]"), *value)?;
+        }
+        parts
+            .wind
+            .validate()
+            .map_err(|e| err(e.item.clone(), e.reason.clone()))?;
+        let inv_mass = parts
+            .mass
+            .iter()
+            .zip(&parts.fixed)
+            .map(|(&m, &f)| if f { 0.0 } else { 1.0 / m })
+            .collect();
+        Ok(Model {
+            mass: parts.mass,
+            inv_mass,
+            fixed: parts.fixed,
+            particle_drag,
+            rest_position: parts.rest_position,
+            springs: parts.springs,
+            triangles: parts.triangles,
+            aero: parts.aero,
+            wind: parts.wind,
+            gravity: parts.gravity,
+        })
+    }
+
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.mass.len()
+    }
+
+    /// True when the model has no particles (never, for a validated model).
+    pub fn is_empty(&self) -> bool {
+        self.mass.is_empty()
+    }
+
+    /// Total mass, kg.
+    pub fn total_mass(&self) -> f64 {
+        self.mass.iter().sum()
+    }
+
+    /// Mass-weighted centre of a set of positions.
+    pub fn centre_of_mass(&self, x: &[Vector3<f64>]) -> Vector3<f64> {
+        let mut sum = Vector3::zeros();
+        for (m, p) in self.mass.iter().zip(x) {
+            sum += *m * p;
+        }
+        sum / self.total_mass()
+    }
+
+    /// Largest distance between two particles of the rest shape (the chord), m.
+    pub fn chord(&self) -> f64 {
+        let x = &self.rest_position;
+        let mut best: f64 = 0.0;
+        for a in 0..x.len() {
+            for b in a + 1..x.len() {
+                best = best.max((x[a] - x[b]).norm());
+            }
+        }
+        best
+    }
+
+    /// Total triangle area of the rest shape, m².
+    pub fn surface_area(&self) -> f64 {
+        self.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.corners;
+                let x = &self.rest_position;
+                0.5 * (x[b] - x[a]).cross(&(x[c] - x[a])).norm()
+            })
+            .sum()
+    }
+
+    /// Which particles belong to at least one triangle.
+    pub fn in_surface(&self) -> Vec<bool> {
+        let mut flags = vec![false; self.len()];
+        for t in &self.triangles {
+            for &c in &t.corners {
+                flags[c] = true;
+            }
+        }
+        flags
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn pair() -> ModelParts {
+        ModelParts {
+            mass: vec![1.0, 1.0, 1.0],
+            fixed: vec![false; 3],
+            rest_position: vec![
+                Vector3::new(0.0, 0.0, 0.0),
+                Vector3::new(1.0, 0.0, 0.0),
+                Vector3::new(0.0, 1.0, 0.0),
+            ],
+            springs: vec![Spring {
+                i: 0,
+                j: 1,
+                rest_length: 1.0,
+                stiffness: 1.0,
+                damping: 0.0,
+                break_strain: None,
+            }],
+            triangles: vec![Triangle {
+                corners: [0, 1, 2],
+                alpha_n: 1.0,
+                alpha_t: 0.1,
+            }],
+            gravity: Vector3::new(0.0, 0.0, -STANDARD_GRAVITY),
+            ..Default::default()
+        }
+    }
+
+    #[test]
+    fn a_valid_model_builds_and_reports_its_size() {
+        let m = Model::new(pair()).unwrap();
+        assert_eq!(m.len(), 3);
+        assert!((m.surface_area() - 0.5).abs() < 1e-15);
+        assert!((m.chord() - 2f64.sqrt()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn fixed_particles_have_zero_inverse_mass() {
+        let mut p = pair();
+        p.fixed[1] = true;
+        let m = Model::new(p).unwrap();
+        assert_eq!(m.inv_mass, vec![1.0, 0.0, 1.0]);
+    }
+}

@@ -1,0 +1,66 @@
+//! Small models built in code for the oracles.
+
+use leafmagic::field::WindField;
+use leafmagic::model::{AeroLaw, Model, ModelParts, Spring, Triangle};
+use nalgebra::Vector3;
+
+pub type V3 = Vector3<f64>;
+
+/// Parts with `n` free unit-mass particles at the origin, no gravity.
+pub fn parts(n: usize) -> ModelParts {
+    ModelParts {
+        mass: vec![1.0; n],
+        fixed: vec![false; n],
+        particle_drag: vec![0.0; n],
+        rest_position: vec![V3::zeros(); n],
+        springs: vec![],
+        triangles: vec![],
+        aero: AeroLaw::Linear,
+        wind: WindField::still(),
+        gravity: V3::zeros(),
+    }
+}
+
+/// A single free particle of mass `m` under gravity `g` (down z).
+pub fn falling_particle(m: f64, g: f64) -> Model {
+    let mut p = parts(1);
+    p.mass = vec![m];
+    p.gravity = V3::new(0.0, 0.0, -g);
+    Model::new(p).unwrap()
+}
+
+/// A free particle of mass `m` tied by a spring (k, c) of rest length 1 to a
+/// fixed particle at the origin, lying on the x axis: motion along x is the
+/// linear oscillator x'' = −(k/m) x − (c/m) x' in the stretch x = l − 1.
+pub fn oscillator(m: f64, k: f64, c: f64) -> Model {
+    let mut p = parts(2);
+    p.mass = vec![1.0, m];
+    p.fixed = vec![true, false];
+    p.rest_position = vec![V3::zeros(), V3::new(1.0, 0.0, 0.0)];
+    p.springs = vec![Spring {
+        i: 0,
+        j: 1,
+        rest_length: 1.0,
+        stiffness: k,
+        damping: c,
+        break_strain: None,
+    }];
+    Model::new(p).unwrap()
+}
+
+/// One flat triangle of equal masses in the x-y plane.
+pub fn flat_triangle(mass_each: f64, alpha_n: f64, alpha_t: f64) -> Model {
+    let mut p = parts(3);
+    p.mass = vec![mass_each; 3];
+    p.rest_position = vec![
+        V3::new(0.0, 0.0, 0.0),
+        V3::new(0.1, 0.0, 0.0),
+        V3::new(0.0, 0.1, 0.0),
+    ];
+    p.triangles = vec![Triangle {
+        corners: [0, 1, 2],
+        alpha_n,
+        alpha_t,
+    }];
+    Model::new(p).unwrap()
+}

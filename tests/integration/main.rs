@@ -1,0 +1,9 @@
+//! Integration tests: one binary (one link on a 2-core machine), one module
+//! per topic. Oracles are exact where the notes give one (numerics notes §3).
+
+mod common;
+mod integrators;
+mod invariants;
+mod leaves;
+mod stability;
+mod validation;

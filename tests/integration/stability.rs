@@ -1,0 +1,116 @@
+//! The stable-step estimate against the dense eigenvalue problem, and the
+//! auto step in use (numerics notes §2b).
+
+use leafmagic::integrate::Integrator;
+use leafmagic::leaf::LeafSpec;
+use leafmagic::model::Model;
+use leafmagic::stability;
+use nalgebra::DMatrix;
+
+/// Dense M^-1/2 K M^-1/2 at the rest shape (free particles only).
+fn dense_spectrum(model: &Model) -> Vec<f64> {
+    let n = model.len();
+    let mut k = DMatrix::<f64>::zeros(3 * n, 3 * n);
+    for s in &model.springs {
+        let d = model.rest_position[s.i] - model.rest_position[s.j];
+        let dir = d / d.norm();
+        let block = dir * dir.transpose() * s.stiffness;
+        for (a, b, sign) in [
+            (s.i, s.i, 1.0),
+            (s.j, s.j, 1.0),
+            (s.i, s.j, -1.0),
+            (s.j, s.i, -1.0),
+        ] {
+            for r in 0..3 {
+                for c in 0..3 {
+                    k[(3 * a + r, 3 * b + c)] += sign * block[(r, c)];
+                }
+            }
+        }
+    }
+    for a in 0..3 * n {
+        for b in 0..3 * n {
+            k[(a, b)] /= (model.mass[a / 3] * model.mass[b / 3]).sqrt();
+        }
+    }
+    let mut eig: Vec<f64> = k.symmetric_eigenvalues().iter().copied().collect();
+    eig.sort_by(f64::total_cmp);
+    eig
+}
+
+#[test]
+fn power_iteration_finds_the_top_mode_within_the_bounds() {
+    for p in ["a", "b"] {
+        let model = LeafSpec::load(p).unwrap().model().unwrap();
+        let est = stability::estimate(&model);
+        let eig = dense_spectrum(&model);
+        let top = eig.last().unwrap().sqrt();
+        assert!(est.power_converged, "prototype {p}");
+        assert!(
+            (est.omega_max - top).abs() < 1e-6 * top,
+            "prototype {p}: {} vs dense {top}",
+            est.omega_max
+        );
+        assert!(est.omega_lower <= top * (1.0 + 1e-12) && top <= est.omega_upper * (1.0 + 1e-12));
+    }
+}
+
+/// The prototypes are rigid networks: exactly six zero modes (three
+/// translations, three rotations), no floppy mechanism.
+#[test]
+fn prototypes_have_exactly_six_zero_modes() {
+    for p in ["a", "b"] {
+        let model = LeafSpec::load(p).unwrap().model().unwrap();
+        let eig = dense_spectrum(&model);
+        let top = *eig.last().unwrap();
+        let zero = eig.iter().filter(|&&e| e.abs() < 1e-8 * top).count();
+        assert_eq!(zero, 6, "prototype {p}: spectrum {eig:?}");
+    }
+}
+
+/// The auto step is below the estimated limit, divides the output frame, and
+/// is what drop uses.
+#[test]
+fn auto_step_is_safe_and_divides_the_frame() {
+    let model = LeafSpec::load("a").unwrap().model().unwrap();
+    let est = stability::estimate(&model);
+    let frame = 1.0 / 240.0;
+    for integrator in [Integrator::Symplectic, Integrator::Verlet, Integrator::Rk4] {
+        let dt = est.auto_dt(integrator, frame).unwrap();
+        let limit = est.dt_max(integrator).unwrap();
+        assert!(dt <= stability::AUTO_SAFETY * limit + 1e-15);
+        let per_frame = frame / dt;
+        assert!((per_frame - per_frame.round()).abs() < 1e-9);
+    }
+    // Forward Euler is stable on the leaf only because air and dashpots damp
+    // every spring mode; its limit is far below the others.
+    let euler = est.dt_max(Integrator::Euler).unwrap();
+    assert!(euler > 0.0 && euler < 0.5 * est.dt_max(Integrator::Symplectic).unwrap());
+}
+
+/// Stiff and extreme set-ups are flagged with the item named.
+#[test]
+fn warnings_name_the_light_particle_and_stiff_spring() {
+    let mut spec = LeafSpec::load("a").unwrap();
+    spec.particles[4].mass *= 1e-5;
+    spec.springs[7].stiffness = 1e4;
+    let est = stability::estimate(&spec.model().unwrap());
+    assert_eq!(est.lightest_particle, 4);
+    assert!(
+        est.warnings
+            .iter()
+            .any(|w| w.starts_with("particle[4]") && w.contains("mass ratio")),
+        "{:?}",
+        est.warnings
+    );
+    assert!(
+        est.warnings.iter().any(|w| w.starts_with("spring[")),
+        "{:?}",
+        est.warnings
+    );
+    assert!(
+        stability::estimate(&LeafSpec::load("a").unwrap().model().unwrap())
+            .warnings
+            .is_empty()
+    );
+}
