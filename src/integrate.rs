@@ -421,6 +421,19 @@ impl Simulator {
                 b[spring.j] += kv;
             }
         }
+        for blk in &imp.hinge_blocks {
+            if blk.active {
+                let rate: f64 = blk
+                    .ids
+                    .iter()
+                    .zip(&blk.grad)
+                    .map(|(&i, g)| g.dot(&s.velocity[i]))
+                    .sum();
+                for (&i, g) in blk.ids.iter().zip(&blk.grad) {
+                    b[i] -= g * (h * h * blk.stiffness * rate);
+                }
+            }
+        }
         let result = imp.solve(model);
         match result {
             Ok(()) => {
@@ -439,26 +452,48 @@ impl Simulator {
         }
     }
 
-    /// Non-finite or runaway values stop the run with a diagnosis.
+    /// Non-finite or runaway values stop the run with a diagnosis. The
+    /// common case costs one pass of sums (NaN and inf propagate through
+    /// them, and a sum over the limit means some term is large); only a
+    /// failing state is scanned particle by particle to name the culprit.
     fn check(&mut self, model: &Model, s: &State, dt: f64, step: u64) -> Result<(), SimError> {
         let limit_x2 = RUNAWAY_DISTANCE * RUNAWAY_DISTANCE;
-        for (i, (x, v)) in s.position.iter().zip(&s.velocity).enumerate() {
-            let (x2, v2) = (x.norm_squared(), v.norm_squared());
-            // `is_some_and(is_le)` is false for NaN as well as for too large.
-            let x_ok = x2.partial_cmp(&limit_x2).is_some_and(|o| o.is_le());
-            let v_ok = v2
-                .partial_cmp(&self.speed_limit2)
-                .is_some_and(|o| o.is_le());
-            if !(x_ok && v_ok) {
-                let (quantity, value) = if x_ok {
-                    ("velocity", v2.sqrt())
-                } else {
-                    ("position", x2.sqrt())
-                };
-                return Err(self.diagnose(model, s, dt, step, i, quantity, value));
-            }
+        let (mut sum_x2, mut sum_v2) = (0.0, 0.0);
+        for (x, v) in s.position.iter().zip(&s.velocity) {
+            sum_x2 += x.norm_squared();
+            sum_v2 += v.norm_squared();
         }
-        Ok(())
+        let within = |value: f64, limit: f64| value.partial_cmp(&limit).is_some_and(|o| o.is_le());
+        if within(sum_x2, limit_x2) && within(sum_v2, self.speed_limit2) {
+            return Ok(());
+        }
+        // The worst particle: non-finite first, then the largest value.
+        let badness = |x2: f64, v2: f64| {
+            if !(x2.is_finite() && v2.is_finite()) {
+                f64::INFINITY
+            } else {
+                (x2 / limit_x2).max(v2 / self.speed_limit2)
+            }
+        };
+        let (i, x2, v2) = s
+            .position
+            .iter()
+            .zip(&s.velocity)
+            .enumerate()
+            .map(|(i, (x, v))| (i, x.norm_squared(), v.norm_squared()))
+            .fold((0, 0.0, 0.0), |best, cur| {
+                if badness(cur.1, cur.2) > badness(best.1, best.2) {
+                    cur
+                } else {
+                    best
+                }
+            });
+        let (quantity, value) = if within(x2, limit_x2) && x2.is_finite() {
+            ("velocity", v2.sqrt())
+        } else {
+            ("position", x2.sqrt())
+        };
+        Err(self.diagnose(model, s, dt, step, i, quantity, value))
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -540,9 +575,22 @@ impl SpringBlock {
     }
 }
 
+/// One hinge's linearisation: the rank-one block α g gᵀ with g = ∇θ
+/// (Gauss–Newton: the curvature of θ itself is left out, which keeps the
+/// block positive semi-definite).
+#[derive(Clone, Copy, Debug, Default)]
+struct HingeBlock {
+    active: bool,
+    ids: [usize; 4],
+    grad: [V3; 4],
+    alpha: f64,
+    stiffness: f64,
+}
+
 #[derive(Clone, Debug)]
 struct ImplicitScratch {
     spring_blocks: Vec<SpringBlock>,
+    hinge_blocks: Vec<HingeBlock>,
     /// h × (aero + particle drag damping) per particle, plus the mass on the diagonal.
     particle_blocks: Vec<Matrix3<f64>>,
     diag: Vec<V3>,
@@ -564,6 +612,7 @@ impl ImplicitScratch {
         let zeros = || vec![V3::zeros(); n];
         ImplicitScratch {
             spring_blocks: vec![SpringBlock::default(); model.springs.len()],
+            hinge_blocks: vec![HingeBlock::default(); model.hinges.len()],
             particle_blocks: vec![Matrix3::zeros(); n],
             diag: zeros(),
             b: zeros(),
@@ -598,6 +647,23 @@ impl ImplicitScratch {
                 }
             };
         }
+        for (blk, hinge) in self.hinge_blocks.iter_mut().zip(&model.hinges) {
+            *blk = match crate::force::dihedral(&s.position, hinge) {
+                Some((_, grad)) => HingeBlock {
+                    active: true,
+                    ids: [
+                        hinge.edge[0],
+                        hinge.edge[1],
+                        hinge.apexes[0],
+                        hinge.apexes[1],
+                    ],
+                    grad,
+                    alpha: h * hinge.damping + h * h * hinge.stiffness,
+                    stiffness: hinge.stiffness,
+                },
+                None => HingeBlock::default(),
+            };
+        }
         for (i, blk) in self.particle_blocks.iter_mut().enumerate() {
             *blk = Matrix3::identity() * (model.mass[i] + h * model.particle_drag[i]);
         }
@@ -630,6 +696,11 @@ impl ImplicitScratch {
                 self.diag[spring.j] += dd;
             }
         }
+        for blk in self.hinge_blocks.iter().filter(|b| b.active) {
+            for (&i, g) in blk.ids.iter().zip(&blk.grad) {
+                self.diag[i] += g.component_mul(g) * blk.alpha;
+            }
+        }
     }
 
     fn apply(&self, model: &Model, y: &[V3], out: &mut [V3]) {
@@ -642,6 +713,17 @@ impl ImplicitScratch {
                 let f = blk.times(&(y[spring.i] - y[spring.j]));
                 out[spring.i] += f;
                 out[spring.j] -= f;
+            }
+        }
+        for blk in self.hinge_blocks.iter().filter(|b| b.active) {
+            let gy: f64 = blk
+                .ids
+                .iter()
+                .zip(&blk.grad)
+                .map(|(&i, g)| g.dot(&y[i]))
+                .sum();
+            for (&i, g) in blk.ids.iter().zip(&blk.grad) {
+                out[i] += g * (blk.alpha * gy);
             }
         }
         for (o, &free) in out.iter_mut().zip(&self.free) {

@@ -4,7 +4,9 @@
 //! Every field is documented in `prototypes/README.md`.
 
 use crate::field::WindField;
-use crate::model::{AeroLaw, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle};
+use crate::model::{
+    AeroLaw, Hinge, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle,
+};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -27,6 +29,9 @@ pub struct LeafSpec {
     /// Limits the genome respects when varying this leaf.
     #[serde(default)]
     pub bounds: Bounds,
+    /// Bending stiffness of every edge shared by two triangles (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending: Option<BendingSpec>,
     /// Gravity, m/s² (default: standard gravity down z).
     #[serde(default = "default_gravity")]
     pub gravity: [f64; 3],
@@ -62,6 +67,18 @@ pub struct AeroSpec {
     pub alpha_n: f64,
     /// Tangential coefficient αᵗ, kg/(m²·s).
     pub alpha_t: f64,
+}
+
+/// Bending hinges on every edge shared by two triangles, resisting changes of
+/// the fold angle from its value in the folded rest shape.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BendingSpec {
+    /// Bending stiffness k_b, N·m/rad.
+    pub stiffness: f64,
+    /// Bending damping c_b, N·m·s/rad.
+    #[serde(default)]
+    pub damping: f64,
 }
 
 /// One point mass.
@@ -310,6 +327,44 @@ impl LeafSpec {
         Ok(x)
     }
 
+    /// One hinge per edge shared by exactly two triangles (in triangle order,
+    /// so indices are stable), at the fold angle of the rest shape.
+    fn hinges(&self, rest: &[Vector3<f64>], bending: &BendingSpec) -> Vec<Hinge> {
+        let mut out = Vec::new();
+        let n = rest.len();
+        for (i, t) in self.triangles.iter().enumerate() {
+            for u in &self.triangles[i + 1..] {
+                if t.corners.iter().chain(&u.corners).any(|&c| c >= n) {
+                    continue; // reported by Model::new
+                }
+                let shared: Vec<usize> = t
+                    .corners
+                    .iter()
+                    .copied()
+                    .filter(|c| u.corners.contains(c))
+                    .collect();
+                if shared.len() != 2 {
+                    continue;
+                }
+                let p = t.corners.iter().copied().find(|c| !shared.contains(c));
+                let q = u.corners.iter().copied().find(|c| !shared.contains(c));
+                let (Some(p), Some(q)) = (p, q) else { continue };
+                let mut hinge = Hinge {
+                    edge: [shared[0], shared[1]],
+                    apexes: [p, q],
+                    rest_angle: 0.0,
+                    stiffness: bending.stiffness,
+                    damping: bending.damping,
+                };
+                if let Some((theta, _)) = crate::force::dihedral(rest, &hinge) {
+                    hinge.rest_angle = theta;
+                    out.push(hinge);
+                }
+            }
+        }
+        out
+    }
+
     /// Builds and validates the model of this leaf.
     pub fn model(&self) -> Result<Model, ModelError> {
         let rest = self.folded_positions()?;
@@ -337,6 +392,20 @@ impl LeafSpec {
                 break_strain: spec.break_strain,
             });
         }
+        let hinges = match &self.bending {
+            None => Vec::new(),
+            Some(b) => {
+                for (name, value) in [("stiffness", b.stiffness), ("damping", b.damping)] {
+                    if !(value.is_finite() && value >= 0.0) {
+                        return Err(ModelError {
+                            item: format!("bending.{name}"),
+                            reason: format!("must be a finite number ≥ 0, got {value}"),
+                        });
+                    }
+                }
+                self.hinges(&rest, b)
+            }
+        };
         let triangles = self
             .triangles
             .iter()
@@ -353,6 +422,7 @@ impl LeafSpec {
             rest_position: rest,
             springs,
             triangles,
+            hinges,
             aero: self.aero.law,
             wind: self.wind.clone(),
             gravity: Vector3::from(self.gravity),

@@ -48,6 +48,25 @@ pub struct Triangle {
     pub alpha_t: f64,
 }
 
+/// A bending hinge between two triangles that share the edge `edge`, with
+/// apexes `apexes[0]` (first triangle) and `apexes[1]` (second). It resists
+/// changes of the fold angle θ (0 when flat) about its rest value, which is
+/// what keeps a folded leaf folded; unlike a spring across the fold it is as
+/// stiff near flat as anywhere else (falling-plates notes §4e).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hinge {
+    /// The shared edge (particles a, b).
+    pub edge: [usize; 2],
+    /// The two apexes (p on one side, q on the other).
+    pub apexes: [usize; 2],
+    /// Fold angle at rest, rad.
+    pub rest_angle: f64,
+    /// Bending stiffness k_b, N·m/rad.
+    pub stiffness: f64,
+    /// Bending damping c_b, N·m·s/rad.
+    pub damping: f64,
+}
+
 /// Which aerodynamic law turns relative wind into force on triangles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -77,6 +96,8 @@ pub struct Model {
     pub springs: Vec<Spring>,
     /// Wind-catching triangles.
     pub triangles: Vec<Triangle>,
+    /// Bending hinges between triangles.
+    pub hinges: Vec<Hinge>,
     /// The aerodynamic law used on triangles.
     pub aero: AeroLaw,
     /// The wind velocity field G(x, t).
@@ -100,6 +121,8 @@ pub struct ModelParts {
     pub springs: Vec<Spring>,
     /// See [`Model::triangles`].
     pub triangles: Vec<Triangle>,
+    /// See [`Model::hinges`].
+    pub hinges: Vec<Hinge>,
     /// See [`Model::aero`].
     pub aero: AeroLaw,
     /// See [`Model::wind`].
@@ -264,6 +287,41 @@ impl Model {
                 ));
             }
         }
+        for (h, hinge) in parts.hinges.iter().enumerate() {
+            let item = |f: &str| format!("hinge[{h}].{f}");
+            let ids = [
+                hinge.edge[0],
+                hinge.edge[1],
+                hinge.apexes[0],
+                hinge.apexes[1],
+            ];
+            if let Some(&bad) = ids.iter().find(|&&i| i >= n) {
+                return Err(err(
+                    item("particles"),
+                    format!("particle index {bad} out of range (there are {n} particles)"),
+                ));
+            }
+            for a in 0..4 {
+                for b in a + 1..4 {
+                    if ids[a] == ids[b] {
+                        return Err(err(
+                            item("particles"),
+                            "edge and apexes must be four different particles",
+                        ));
+                    }
+                }
+            }
+            for (name, value) in [
+                ("rest_angle", hinge.rest_angle),
+                ("stiffness", hinge.stiffness),
+                ("damping", hinge.damping),
+            ] {
+                finite(&item(name), value)?;
+                if name != "rest_angle" && value < 0.0 {
+                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+                }
+            }
+        }
         for (axis, value) in parts.gravity.iter().enumerate() {
             finite(&format!("gravity[{axis}]"), *value)?;
         }
@@ -285,6 +343,7 @@ impl Model {
             rest_position: parts.rest_position,
             springs: parts.springs,
             triangles: parts.triangles,
+            hinges: parts.hinges,
             aero: parts.aero,
             wind: parts.wind,
             gravity: parts.gravity,

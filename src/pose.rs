@@ -5,9 +5,9 @@
 use crate::model::Model;
 use nalgebra::{Matrix3, Unit, UnitQuaternion, Vector3};
 
-/// Iterations of the rotation fit per call; warm-started from the previous
-/// frame it converges in two or three, a cold start needs more.
-const MAX_ITERATIONS: usize = 50;
+/// Iterations of the rotation fit per call; Newton's method warm-started
+/// from the previous frame converges in two or three.
+const MAX_ITERATIONS: usize = 30;
 /// Stop when the correcting rotation is below this angle, rad.
 const ANGLE_TOLERANCE: f64 = 1e-13;
 
@@ -38,10 +38,9 @@ impl PoseTracker {
 
     /// Centre of mass and best-fit rotation (body to world) of `position`.
     ///
-    /// The rotation R maximises Σ mᵢ (R rᵢ)·pᵢ, found by repeatedly turning R
-    /// about the axis Σ (R aₖ) × bₖ of the columns of the cross-covariance
-    /// (a fixed-point iteration on the polar decomposition, warm-started from
-    /// the previous frame). The quaternion keeps continuity (no sign jumps).
+    /// The rotation R maximises Σ mᵢ (R rᵢ)·(pᵢ − c), found by Newton's method
+    /// on the rotation group, warm-started from the previous frame. The
+    /// quaternion keeps continuity (no sign jumps).
     pub fn pose(
         &mut self,
         model: &Model,
@@ -55,21 +54,31 @@ impl PoseTracker {
         }
         let mut q = self.rotation;
         for _ in 0..MAX_ITERATIONS {
+            // Maximise f(R) = tr(Rᵀ A) over rotations R ← exp(δ̂) R. With
+            // M = A Rᵀ: gradient g = Σₖ rₖ × aₖ (the vector part of M − Mᵀ) and
+            // Hessian −(tr M · I − sym M). Newton's step δ = (tr M · I − sym M)⁻¹ g
+            // converges quadratically, also for a flat leaf whose A has rank 2
+            // (a plain gradient step would crawl there).
             let r = q.to_rotation_matrix();
-            let r = r.matrix();
-            let mut torque = Vector3::zeros();
-            let mut alignment = 0.0;
-            for k in 0..3 {
-                torque += r.column(k).cross(&a.column(k));
-                alignment += r.column(k).dot(&a.column(k));
-            }
-            let scale = alignment.abs() + 1e-300;
-            let omega = torque / scale;
-            let angle = omega.norm();
-            if angle < ANGLE_TOLERANCE {
+            let m = a * r.matrix().transpose();
+            let g = Vector3::new(
+                m[(2, 1)] - m[(1, 2)],
+                m[(0, 2)] - m[(2, 0)],
+                m[(1, 0)] - m[(0, 1)],
+            );
+            let trace = m.trace();
+            let h = Matrix3::identity() * trace - (m + m.transpose()) * 0.5;
+            let delta = match h.cholesky() {
+                Some(c) => c.solve(&g),
+                // Far from the optimum the Hessian may be indefinite: take a
+                // scaled gradient step instead.
+                None => g / (trace.abs() + 1e-300),
+            };
+            let angle = delta.norm();
+            if angle.is_nan() || angle < ANGLE_TOLERANCE {
                 break;
             }
-            q = UnitQuaternion::from_axis_angle(&Unit::new_unchecked(omega / angle), angle) * q;
+            q = UnitQuaternion::from_axis_angle(&Unit::new_unchecked(delta / angle), angle) * q;
         }
         let q = UnitQuaternion::new_normalize(*q.quaternion());
         // Keep the hemisphere of the previous frame so the CSV has no sign flips.

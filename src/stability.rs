@@ -120,6 +120,33 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
             ));
         }
     }
+    // Hinges at rest: K_h = k_b g gᵀ with g = ∇θ (4 particles).
+    let hinge_grads: Vec<([usize; 4], [V3; 4], f64, f64)> = model
+        .hinges
+        .iter()
+        .filter_map(|h| {
+            crate::force::dihedral(&model.rest_position, h).map(|(_, g)| {
+                (
+                    [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]],
+                    g,
+                    h.stiffness,
+                    h.damping,
+                )
+            })
+        })
+        .collect();
+    for (ids, g, k, _) in &hinge_grads {
+        let total: f64 = g.iter().map(|v| v.norm()).sum();
+        for (&i, gi) in ids.iter().zip(g) {
+            row_sum[i] += 0.5 * k * gi.norm() * total;
+        }
+        for (&i, gi) in ids.iter().zip(g) {
+            let rate = k * gi.norm_squared() * model.inv_mass[i];
+            if rate > omega2_lower {
+                omega2_lower = rate;
+            }
+        }
+    }
     let omega2_upper = (0..n)
         .filter(|&i| free[i])
         .map(|i| 2.0 * row_sum[i] / model.mass[i])
@@ -154,6 +181,16 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
             out[i] += f * inv_sqrt_m[i];
             out[j] -= f * inv_sqrt_m[j];
         }
+        for (ids, g, k, _) in &hinge_grads {
+            let gy: f64 = ids
+                .iter()
+                .zip(g)
+                .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+                .sum();
+            for (&i, gi) in ids.iter().zip(g) {
+                out[i] += gi * (k * gy * inv_sqrt_m[i]);
+            }
+        }
     };
     // A fixed, irregular start vector: deterministic, and not orthogonal to
     // the top mode for any realistic network.
@@ -169,9 +206,10 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         .collect();
     let mut sy = vec![V3::zeros(); n];
     let mut lambda = 0.0;
-    let mut converged = dirs.is_empty();
+    let stiff = !dirs.is_empty() || !hinge_grads.is_empty();
+    let mut converged = !stiff;
     for _ in 0..POWER_ITERATIONS {
-        if dirs.is_empty() {
+        if !stiff {
             break;
         }
         let norm = norm(&y);
@@ -205,6 +243,14 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     for (s, &(i, j, dir, _)) in model.springs.iter().zip(&dirs) {
         let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];
         c_eff += s.damping * dir.dot(&u).powi(2);
+    }
+    for (ids, g, _, c) in &hinge_grads {
+        let gq: f64 = ids
+            .iter()
+            .zip(g)
+            .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+            .sum();
+        c_eff += c * gq * gq;
     }
     for i in 0..n {
         let q = y[i] * inv_sqrt_m[i];

@@ -15,6 +15,7 @@ pub fn parts(n: usize) -> ModelParts {
         rest_position: vec![V3::zeros(); n],
         springs: vec![],
         triangles: vec![],
+        hinges: vec![],
         aero: AeroLaw::Linear,
         wind: WindField::still(),
         gravity: V3::zeros(),

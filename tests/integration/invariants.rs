@@ -365,7 +365,7 @@ fn force_terms_sum_to_the_total() {
     );
     for (p, total_p) in total.iter().enumerate() {
         let t = forces.terms_on(&model, &s.position, &s.velocity, &s.spring_alive, 0.0, p);
-        let sum = t.gravity + t.spring + t.aero + t.drag;
+        let sum = t.gravity + t.spring + t.bending + t.aero + t.drag;
         assert!((sum - total_p).norm() < 1e-15 + 1e-12 * total_p.norm());
     }
 }

@@ -105,3 +105,42 @@ fn drops_are_deterministic() {
     assert_eq!(a.position, b.position);
     assert_eq!(a.orientation, b.orientation);
 }
+
+/// The pose tracker recovers an exact rigid motion of the rest shape: the
+/// centre of mass and the rotation, for folded and flat leaves alike.
+#[test]
+fn pose_of_a_rigidly_moved_leaf_is_exact() {
+    use leafmagic::pose::PoseTracker;
+    use nalgebra::UnitQuaternion;
+    for p in ["a", "b"] {
+        let mut spec = LeafSpec::load(p).unwrap();
+        for flat in [false, true] {
+            if flat {
+                spec.folds.iter_mut().for_each(|f| f.angle_deg = 0.0);
+            }
+            let model = spec.model().unwrap();
+            let com0 = model.centre_of_mass(&model.rest_position);
+            let mut tracker = PoseTracker::new(&model, UnitQuaternion::identity());
+            // A sequence of growing rotations, as frames of a tumble.
+            for k in 0..40 {
+                let angle = 0.3 * k as f64;
+                let axis =
+                    nalgebra::Unit::new_normalize(Vector3::new(0.3, -1.0, 0.5 + 0.01 * k as f64));
+                let q = UnitQuaternion::from_axis_angle(&axis, angle);
+                let shift = Vector3::new(0.1 * k as f64, -0.02, -0.5 * k as f64);
+                let x: Vec<_> = model
+                    .rest_position
+                    .iter()
+                    .map(|r| shift + q * (r - com0))
+                    .collect();
+                let (c, found) = tracker.pose(&model, &x);
+                assert!((c - shift).norm() < 1e-12);
+                assert!(
+                    found.angle_to(&q) < 1e-9,
+                    "prototype {p} flat={flat} frame {k}: off by {} rad",
+                    found.angle_to(&q)
+                );
+            }
+        }
+    }
+}

@@ -7,7 +7,7 @@ use leafmagic::model::Model;
 use leafmagic::stability;
 use nalgebra::DMatrix;
 
-/// Dense M^-1/2 K M^-1/2 at the rest shape (free particles only).
+/// Dense M^-1/2 K M^-1/2 at the rest shape: springs and hinges.
 fn dense_spectrum(model: &Model) -> Vec<f64> {
     let n = model.len();
     let mut k = DMatrix::<f64>::zeros(3 * n, 3 * n);
@@ -24,6 +24,20 @@ fn dense_spectrum(model: &Model) -> Vec<f64> {
             for r in 0..3 {
                 for c in 0..3 {
                     k[(3 * a + r, 3 * b + c)] += sign * block[(r, c)];
+                }
+            }
+        }
+    }
+    // Hinges: k_b g gᵀ with g the fold angle's gradient (Gauss–Newton part).
+    for h in &model.hinges {
+        let (_, g) = leafmagic::force::dihedral(&model.rest_position, h).unwrap();
+        let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
+        for (pa, &a) in ids.iter().enumerate() {
+            for (pb, &b) in ids.iter().enumerate() {
+                for r in 0..3 {
+                    for c in 0..3 {
+                        k[(3 * a + r, 3 * b + c)] += h.stiffness * g[pa][r] * g[pb][c];
+                    }
                 }
             }
         }

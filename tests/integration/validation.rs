@@ -200,7 +200,7 @@ fn cli_divergence_exits_non_zero_and_names_the_cause() {
             "--integrator",
             "symplectic",
             "--dt",
-            "0.004",
+            "0.0042",
             "--seconds",
             "1",
         ])
