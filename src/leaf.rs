@@ -159,14 +159,18 @@ pub struct FoldSpec {
     pub angle_deg: f64,
 }
 
-/// Physical bounds for variation (issue 7's genome clamps to these).
+/// Physical bounds for variation: [`crate::genome::mutate`] clamps every
+/// gene to these, so no variant is an invalid model.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Bounds {
-    /// Range of |fold angle|, degrees (kept away from 0 where a flat hinge is floppy).
+    /// Range of each fold angle, degrees (signed: a flap may go from up to
+    /// down; bending hinges keep a flat flap stiff).
     pub fold_deg: [f64; 2],
-    /// Range of each particle's mass relative to the prototype.
+    /// Range of each particle's mass factor (mass distribution).
     pub mass_factor: [f64; 2],
+    /// Range of the total mass factor (areal density).
+    pub total_mass_factor: [f64; 2],
     /// Range of each spring group's stiffness relative to the prototype.
     pub stiffness_factor: [f64; 2],
     /// Range of the overall size relative to the prototype.
@@ -176,11 +180,43 @@ pub struct Bounds {
 impl Default for Bounds {
     fn default() -> Self {
         Bounds {
-            fold_deg: [5.0, 60.0],
+            fold_deg: [-60.0, 60.0],
             mass_factor: [0.25, 4.0],
+            total_mass_factor: [0.5, 2.0],
             stiffness_factor: [0.5, 4.0],
             size_factor: [0.5, 2.0],
         }
+    }
+}
+
+impl Bounds {
+    /// Each range finite and ordered; factor ranges positive.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let ranges = [
+            ("fold_deg", self.fold_deg, false),
+            ("mass_factor", self.mass_factor, true),
+            ("total_mass_factor", self.total_mass_factor, true),
+            ("stiffness_factor", self.stiffness_factor, true),
+            ("size_factor", self.size_factor, true),
+        ];
+        for (name, [lo, hi], positive) in ranges {
+            let reason = if !(lo.is_finite() && hi.is_finite()) {
+                Some(format!("must be finite, got [{lo}, {hi}]"))
+            } else if lo > hi {
+                Some(format!("minimum {lo} exceeds maximum {hi}"))
+            } else if positive && lo <= 0.0 {
+                Some(format!("factors must be > 0, got minimum {lo}"))
+            } else {
+                None
+            };
+            if let Some(reason) = reason {
+                return Err(ModelError {
+                    item: format!("bounds.{name}"),
+                    reason,
+                });
+            }
+        }
+        Ok(())
     }
 }
 
@@ -367,6 +403,7 @@ impl LeafSpec {
 
     /// Builds and validates the model of this leaf.
     pub fn model(&self) -> Result<Model, ModelError> {
+        self.bounds.validate()?;
         let rest = self.folded_positions()?;
         let n = rest.len();
         let mut springs = Vec::with_capacity(self.springs.len());

@@ -12,6 +12,7 @@
 pub mod classify;
 pub mod field;
 pub mod force;
+pub mod genome;
 pub mod integrate;
 pub mod io;
 pub mod leaf;

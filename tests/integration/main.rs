@@ -3,6 +3,7 @@
 
 mod alloc;
 mod common;
+mod genome;
 mod integrators;
 mod invariants;
 mod leaves;
