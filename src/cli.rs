@@ -3,7 +3,8 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
-use leafmagic::classify::{self, Classification};
+use leafmagic::breed::{self, BreedSettings, GenerationSummary, Run};
+use leafmagic::classify::{self, Classification, MotionClass};
 use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::sim::{self, DropParams, TimeStep};
@@ -24,12 +25,64 @@ pub struct Cli {
 /// The subcommands.
 #[derive(Subcommand, Debug)]
 pub enum Command {
+    /// Breed leaf variants toward a motion class (the paper's section 4.1, automated).
+    Breed(BreedArgs),
+    /// Write chosen leaves of a breeding run as leaf files.
+    Export(ExportArgs),
     /// Drop a leaf from rest in still air and record its fall.
     Drop(DropArgs),
     /// Report the stable time step of a leaf for each integrator, with warnings.
     Check(CheckArgs),
     /// Name the motion of a recorded fall (pose CSV t,x,y,z,qw,qx,qy,qz).
     Classify(ClassifyArgs),
+}
+
+/// Arguments of `breed`.
+#[derive(clap::Args, Debug)]
+pub struct BreedArgs {
+    /// Prototype: `a`, `b` (embedded) or a leaf file.
+    #[arg(long, default_value = "a")]
+    pub prototype: String,
+    /// Motion class to breed toward: floater, spinner or lilter.
+    #[arg(long, default_value = "floater")]
+    pub target: MotionClass,
+    /// Individuals per generation.
+    #[arg(long, default_value_t = 100)]
+    pub population: usize,
+    /// Generations bred after the first.
+    #[arg(long, default_value_t = 8)]
+    pub generations: usize,
+    /// Seed of every random stream (same seed, same bytes).
+    #[arg(long, default_value_t = 1991)]
+    pub seed: u64,
+    /// Simulated seconds of each drop.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Run directory (default: runs/<prototype>-<target>-s<seed>-n<population>-g<generations>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out"])]
+    pub resume: Option<PathBuf>,
+}
+
+/// Arguments of `export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    /// A breeding run directory.
+    pub run: PathBuf,
+    /// Export the K best of the last generation.
+    #[arg(long, conflicts_with = "ids")]
+    pub top: Option<usize>,
+    /// Export these individuals of the last generation (comma-separated ids).
+    #[arg(long, value_delimiter = ',')]
+    pub ids: Option<Vec<u64>>,
+    /// Output directory for the leaf files and index.csv.
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 /// Arguments of `classify`.
@@ -118,6 +171,8 @@ fn parse_tilt(s: &str) -> Result<[f64; 2], String> {
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<()> {
     match cli.command {
+        Command::Breed(args) => breed(args),
+        Command::Export(args) => export(args),
         Command::Drop(args) => drop(args),
         Command::Check(args) => check(args),
         Command::Classify(args) => classify(args),
@@ -332,5 +387,180 @@ fn check(args: CheckArgs) -> Result<()> {
     for w in &est.warnings {
         println!("warning: {w}");
     }
+    Ok(())
+}
+
+/// A progress bar per generation on a terminal; nothing when piped.
+struct Bar {
+    bar: Option<indicatif::ProgressBar>,
+    counts: [std::sync::atomic::AtomicUsize; 5],
+    best: std::sync::Mutex<f64>,
+    start: std::time::Instant,
+}
+
+impl Bar {
+    fn new() -> Bar {
+        use std::io::IsTerminal;
+        Bar {
+            bar: std::io::stderr()
+                .is_terminal()
+                .then(indicatif::ProgressBar::hidden),
+            counts: Default::default(),
+            best: std::sync::Mutex::new(f64::NEG_INFINITY),
+            start: std::time::Instant::now(),
+        }
+    }
+}
+
+impl breed::Progress for Bar {
+    fn start_generation(&self, generation: usize, size: usize) {
+        for c in &self.counts {
+            c.store(0, std::sync::atomic::Ordering::Relaxed);
+        }
+        *self.best.lock().expect("progress lock") = f64::NEG_INFINITY;
+        if let Some(bar) = &self.bar {
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+            bar.reset();
+            bar.set_length(size as u64);
+            bar.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "gen {prefix:>3} [{bar:30}] {pos}/{len} {msg} ({elapsed})",
+                )
+                .expect("valid template")
+                .progress_chars("=> "),
+            );
+            bar.set_prefix(generation.to_string());
+        }
+    }
+
+    fn individual_done(&self, class: &str, score: f64) {
+        use std::sync::atomic::Ordering::Relaxed;
+        let k = ["floater", "spinner", "lilter", "undetermined", "diverged"]
+            .iter()
+            .position(|c| *c == class)
+            .unwrap_or(3);
+        self.counts[k].fetch_add(1, Relaxed);
+        let best = {
+            let mut b = self.best.lock().expect("progress lock");
+            *b = b.max(score);
+            *b
+        };
+        if let Some(bar) = &self.bar {
+            let c: Vec<usize> = self.counts.iter().map(|c| c.load(Relaxed)).collect();
+            bar.set_message(format!(
+                "F{} S{} L{} U{} D{} best {best:.3}",
+                c[0], c[1], c[2], c[3], c[4]
+            ));
+            bar.inc(1);
+        }
+    }
+
+    fn finish_generation(&self, _: &GenerationSummary) {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+    }
+}
+
+fn default_run_dir(s: &BreedSettings) -> PathBuf {
+    let proto = std::path::Path::new(&s.prototype)
+        .file_stem()
+        .map_or_else(|| s.prototype.clone(), |f| f.to_string_lossy().into_owned());
+    PathBuf::from("runs").join(format!(
+        "{proto}-{}-s{}-n{}-g{}",
+        s.target, s.seed, s.population, s.generations
+    ))
+}
+
+fn breed(args: BreedArgs) -> Result<()> {
+    let mut run = match &args.resume {
+        Some(dir) => Run::open(dir)?,
+        None => {
+            let settings = BreedSettings {
+                prototype: args.prototype.clone(),
+                target: args.target,
+                population: args.population,
+                generations: args.generations,
+                seed: args.seed,
+                seconds: args.seconds,
+                ..BreedSettings::default_run()
+            };
+            // Keep elites at a tenth of the population (at least one).
+            let settings = BreedSettings {
+                elites: (settings.population / 10).max(1),
+                ..settings
+            };
+            settings.validate().map_err(anyhow::Error::msg)?;
+            let dir = args
+                .out
+                .clone()
+                .unwrap_or_else(|| default_run_dir(&settings));
+            Run::create(&dir, settings)?
+        }
+    };
+    let threads = args.threads.unwrap_or(0);
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start the worker threads")?;
+    let bar = Bar::new();
+    pool.install(|| run.run(&bar))?;
+    print_generations(run.history());
+    println!("run directory: {}", run.dir.display());
+    let _ = bar.start;
+    Ok(())
+}
+
+fn print_generations(history: &[GenerationSummary]) {
+    println!(
+        "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10} {:>10} {:>6}",
+        "gen", "floater", "spinner", "lilter", "undet.", "diverg", "best", "mean", "scale"
+    );
+    for h in history {
+        let c = h.counts;
+        println!(
+            "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10.4} {:>10.4} {:>6.3}",
+            h.generation, c[0], c[1], c[2], c[3], c[4], h.best_score, h.mean_score, h.scale
+        );
+    }
+}
+
+fn export(args: ExportArgs) -> Result<()> {
+    let run = Run::open(&args.run)?;
+    let Some(cp) = &run.checkpoint else {
+        bail!(
+            "{}: the run has no completed generation yet",
+            args.run.display()
+        );
+    };
+    let ranked = breed::rank(&cp.population);
+    let chosen: Vec<&breed::Individual> = match (&args.top, &args.ids) {
+        (Some(k), None) => {
+            if *k == 0 {
+                bail!("--top must be at least 1");
+            }
+            ranked.into_iter().take(*k).collect()
+        }
+        (None, Some(ids)) => ids
+            .iter()
+            .map(|id| {
+                cp.population.iter().find(|i| i.id == *id).ok_or_else(|| {
+                    anyhow::anyhow!(
+                        "--ids: individual {id} is not in the last generation ({})",
+                        cp.generation
+                    )
+                })
+            })
+            .collect::<Result<_>>()?,
+        _ => bail!("give either --top K or --ids ID,..."),
+    };
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create {}", args.out.display()))?;
+    breed::export_leaves(&run.proto, &chosen, &args.out)?;
+    println!(
+        "wrote {} leaves and index.csv to {}",
+        chosen.len(),
+        args.out.display()
+    );
     Ok(())
 }

@@ -9,6 +9,7 @@
 //! poses ([`pose`]) into a trajectory.
 #![warn(missing_docs)]
 
+pub mod breed;
 pub mod classify;
 pub mod field;
 pub mod force;

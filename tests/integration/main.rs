@@ -2,6 +2,7 @@
 //! per topic. Oracles are exact where the notes give one (numerics notes §3).
 
 mod alloc;
+mod breeding;
 mod common;
 mod genome;
 mod integrators;

@@ -1,0 +1,47 @@
+//! `generation`: evaluating one generation of the default breed (100 variants
+//! of prototype A, 10 s drops, classified) on 1 and on 2 threads. The ratio
+//! of the two times is the parallel speed-up.
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use leafmagic::breed::{BreedSettings, evaluate, stream_seed};
+use leafmagic::genome::{Genome, mutate};
+use leafmagic::leaf::LeafSpec;
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+use rayon::prelude::*;
+use std::hint::black_box;
+
+fn generation(c: &mut Criterion) {
+    let settings = BreedSettings::default_run();
+    let proto = LeafSpec::load(&settings.prototype).unwrap();
+    let g0 = Genome::of_prototype(&proto);
+    let genomes: Vec<Genome> = (0..settings.population as u64)
+        .map(|id| {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(settings.seed, 0, id));
+            mutate(&g0, &proto.bounds, settings.initial_scale, &mut rng)
+        })
+        .collect();
+    let mut group = c.benchmark_group("generation");
+    group.sample_size(10);
+    for threads in [1, 2] {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        group.bench_function(format!("threads_{threads}"), |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    let evals: Vec<_> = genomes
+                        .par_iter()
+                        .map(|g| evaluate(&proto, g, &settings))
+                        .collect();
+                    black_box(evals)
+                })
+            })
+        });
+    }
+    group.finish();
+}
+
+criterion_group!(benches, generation);
+criterion_main!(benches);

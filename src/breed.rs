@@ -1,0 +1,818 @@
+//! Breeding: the paper's section 4.1 loop, automated. A prototype is copied
+//! into a population of variants ([`crate::genome`]), each is dropped in
+//! still air ([`crate::sim::drop_leaf`]) on the rayon pool, every fall is
+//! classified ([`crate::classify`]), the best are kept and the next
+//! generation is bred from them with a variation scale that shrinks as the
+//! population converges.
+//!
+//! Reproducibility: every random draw comes from a stream seeded by
+//! (seed, generation, id) or (seed, generation, "selection"), never from a
+//! shared generator, and results are gathered in id order; so the same seed
+//! gives the same bytes whatever the number of threads. Every file is
+//! written atomically, and a checkpoint after each generation lets
+//! `--resume` finish a killed run with the same bytes as an uninterrupted one.
+
+use crate::classify::{MotionClass, classify};
+use crate::genome::{Genome, mutate};
+use crate::io::write_atomic;
+use crate::leaf::LeafSpec;
+use crate::sim::{DropParams, TimeStep, drop_leaf};
+use rand::RngExt;
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// Everything that defines a breeding run (written to `run.toml`).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BreedSettings {
+    /// Prototype name as given (`a`, `b` or a path).
+    pub prototype: String,
+    /// The motion class bred for.
+    pub target: MotionClass,
+    /// Individuals per generation.
+    pub population: usize,
+    /// Generations after the first (generation 0 is the prototype's copies).
+    pub generations: usize,
+    /// Seed of every random stream.
+    pub seed: u64,
+    /// Simulated seconds of each drop.
+    pub seconds: f64,
+    /// Variation scale of generation 0 (the paper's first round).
+    pub initial_scale: f64,
+    /// Individuals copied unchanged into the next generation.
+    pub elites: usize,
+    /// Tournament size for parent selection.
+    pub tournament: usize,
+}
+
+impl BreedSettings {
+    /// The embedded default: prototype A, floaters, 100 × 8 generations of
+    /// 10 s falls, seed 1991 (the year of the paper).
+    pub fn default_run() -> BreedSettings {
+        BreedSettings {
+            prototype: "a".to_string(),
+            target: MotionClass::Floater,
+            population: 100,
+            generations: 8,
+            seed: 1991,
+            seconds: 10.0,
+            initial_scale: 1.0,
+            elites: 10,
+            tournament: 3,
+        }
+    }
+
+    /// Checks the settings, naming the bad one.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.population < 2 {
+            return Err(format!(
+                "--population must be at least 2, got {}",
+                self.population
+            ));
+        }
+        if self.generations == 0 {
+            return Err("--generations must be at least 1".to_string());
+        }
+        if self.target == MotionClass::Undetermined {
+            return Err("--target must be floater, spinner or lilter".to_string());
+        }
+        if !(self.seconds > 0.0 && self.seconds.is_finite()) {
+            return Err(format!(
+                "--seconds must be a positive number, got {}",
+                self.seconds
+            ));
+        }
+        if !(self.initial_scale > 0.0 && self.initial_scale.is_finite()) {
+            return Err(format!(
+                "the initial scale must be positive, got {}",
+                self.initial_scale
+            ));
+        }
+        if self.elites >= self.population {
+            return Err(format!(
+                "elites ({}) must be fewer than the population ({})",
+                self.elites, self.population
+            ));
+        }
+        if self.tournament == 0 {
+            return Err("the tournament size must be at least 1".to_string());
+        }
+        Ok(())
+    }
+}
+
+/// What one drop of one individual showed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Evaluation {
+    /// `floater`, `spinner`, `lilter`, `undetermined`, or `diverged`.
+    pub class: String,
+    /// The sub-regime (empty when diverged).
+    pub regime: String,
+    /// Selection score (see [`score`]).
+    pub score: f64,
+    /// The classifier's distance from the nearest class boundary, 0–1.
+    pub margin: f64,
+    /// Mean descent speed, m/s.
+    pub descent_m_s: f64,
+    /// Horizontal drift over fall.
+    pub drift_ratio: f64,
+    /// Net turns about the dominant horizontal axis.
+    pub net_turns: f64,
+    /// Turns about the vertical.
+    pub yaw_turns: f64,
+    /// Pitch reversals in the analysis window.
+    pub reversals: usize,
+    /// Normal flips in the analysis window.
+    pub flips: usize,
+    /// Mean tilt of the leaf plane from horizontal, degrees.
+    pub tilt_deg: f64,
+    /// The time step used, s.
+    pub dt: f64,
+    /// The simulator's error for a diverged fall.
+    pub error: String,
+}
+
+/// Score of a fall for a target class: diverged −1 (worst), undetermined 0,
+/// another class 0.1 × its margin (a clear motion is a better parent than
+/// none, but never as good as the target), the target 1 + margin, so that
+/// among members of the target class those far from every class boundary
+/// (robust to small changes) rank first.
+pub fn score(class: &str, margin: f64, target: MotionClass) -> f64 {
+    if class == "diverged" {
+        -1.0
+    } else if class == target.to_string() {
+        1.0 + margin
+    } else if class == "undetermined" {
+        0.0
+    } else {
+        0.1 * margin
+    }
+}
+
+/// One member of a generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Individual {
+    /// Unique within the run, assigned in order.
+    pub id: u64,
+    /// The individual it was bred from (none for the first generation's
+    /// copies of the prototype... which name the prototype as `None`).
+    pub parent: Option<u64>,
+    /// Copied unchanged from the previous generation.
+    pub elite: bool,
+    /// Its genes.
+    pub genome: Genome,
+    /// Its fall.
+    pub eval: Evaluation,
+}
+
+/// Per-generation summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GenerationSummary {
+    /// Generation index.
+    pub generation: usize,
+    /// Counts of floater, spinner, lilter, undetermined, diverged.
+    pub counts: [usize; 5],
+    /// Best score.
+    pub best_score: f64,
+    /// Mean score.
+    pub mean_score: f64,
+    /// Id of the best individual.
+    pub best_id: u64,
+    /// Variation scale used to breed this generation.
+    pub scale: f64,
+    /// Fraction of children that scored at least as well as their parent.
+    pub success_rate: f64,
+}
+
+/// The resumable state after a completed generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The settings of the run.
+    pub settings: BreedSettings,
+    /// The last completed generation.
+    pub generation: usize,
+    /// Its population, in id order.
+    pub population: Vec<Individual>,
+    /// Variation scale for the next generation.
+    pub scale: f64,
+    /// Next id to assign.
+    pub next_id: u64,
+    /// Summaries of all completed generations.
+    pub history: Vec<GenerationSummary>,
+}
+
+/// Variation scale rule (Rechenberg's 1/5 success rule): after each
+/// generation, if more than a fifth of the children scored at least as well
+/// as their parents, widen the variation by 1.22 (e^0.2), else narrow it by
+/// 0.82 (e^-0.2); clamped to [`MIN_SCALE`, `MAX_SCALE`]. As the population
+/// converges on the target fewer children improve, so the variation shrinks
+/// as the paper's second round did by hand.
+pub const SUCCESS_TARGET: f64 = 0.2;
+/// Smallest variation scale.
+pub const MIN_SCALE: f64 = 0.05;
+/// Largest variation scale.
+pub const MAX_SCALE: f64 = 2.0;
+
+fn next_scale(scale: f64, success_rate: f64) -> f64 {
+    let factor = if success_rate > SUCCESS_TARGET {
+        0.2f64.exp()
+    } else {
+        (-0.2f64).exp()
+    };
+    (scale * factor).clamp(MIN_SCALE, MAX_SCALE)
+}
+
+/// A well-mixed 64-bit seed for one random stream (SplitMix64 finaliser).
+pub fn stream_seed(seed: u64, generation: u64, id: u64) -> u64 {
+    let mut z = seed
+        .wrapping_add(generation.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+        .wrapping_add(id.wrapping_mul(0xBF58_476D_1CE4_E5B9))
+        .wrapping_add(0x94D0_49BB_1331_11EB);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The stream id used for parent selection (never an individual's id).
+const SELECTION_STREAM: u64 = u64::MAX;
+
+/// Drops one variant and scores its fall.
+pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> Evaluation {
+    let failed = |class: &str, error: String| Evaluation {
+        class: class.to_string(),
+        regime: String::new(),
+        score: score(class, 0.0, settings.target),
+        margin: 0.0,
+        descent_m_s: 0.0,
+        drift_ratio: 0.0,
+        net_turns: 0.0,
+        yaw_turns: 0.0,
+        reversals: 0,
+        flips: 0,
+        tilt_deg: 0.0,
+        dt: 0.0,
+        error,
+    };
+    let model = match genome.model(proto) {
+        Ok(m) => m,
+        Err(e) => return failed("diverged", format!("invalid model: {e}")),
+    };
+    let params = DropParams {
+        seconds: settings.seconds,
+        dt: TimeStep::Auto,
+        ..Default::default()
+    };
+    match drop_leaf(&model, &params) {
+        Err(e) => failed("diverged", e.to_string()),
+        Ok(result) => {
+            let c = classify(&result.trajectory, model.chord());
+            let class = c.class.to_string();
+            let f = &c.features;
+            Evaluation {
+                score: score(&class, f.margin, settings.target),
+                class,
+                regime: c.regime.to_string(),
+                margin: f.margin,
+                descent_m_s: f.mean_descent_speed_m_s,
+                drift_ratio: f.drift_ratio,
+                net_turns: f.net_turns,
+                yaw_turns: f.yaw_turns,
+                reversals: f.reversals,
+                flips: f.normal_flips,
+                tilt_deg: f.tilt_mean_deg,
+                dt: result.stats.dt,
+                error: String::new(),
+            }
+        }
+    }
+}
+
+/// Why a run could not start or go on.
+#[derive(Debug)]
+pub struct BreedError(pub String);
+
+impl std::fmt::Display for BreedError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BreedError {}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> BreedError {
+    BreedError(format!("{}: {e}", path.display()))
+}
+
+/// Observer of progress (the CLI draws a progress bar with it).
+pub trait Progress: Sync {
+    /// A generation starts with `size` individuals to evaluate.
+    fn start_generation(&self, generation: usize, size: usize);
+    /// One individual finished with this class.
+    fn individual_done(&self, class: &str, score: f64);
+    /// The generation is complete.
+    fn finish_generation(&self, summary: &GenerationSummary);
+}
+
+/// A [`Progress`] that shows nothing.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn start_generation(&self, _: usize, _: usize) {}
+    fn individual_done(&self, _: &str, _: f64) {}
+    fn finish_generation(&self, _: &GenerationSummary) {}
+}
+
+/// A breeding run bound to its directory.
+pub struct Run {
+    /// The run directory.
+    pub dir: PathBuf,
+    /// The prototype leaf.
+    pub proto: LeafSpec,
+    /// The state after the last completed generation (None before gen 0).
+    pub checkpoint: Option<Checkpoint>,
+    settings: BreedSettings,
+    /// Wall seconds per completed generation. Kept out of the checkpoint so
+    /// that every file but timing.csv is identical between identical runs.
+    timing: Vec<f64>,
+}
+
+const RUN_FILE: &str = "run.toml";
+const CHECKPOINT_FILE: &str = "checkpoint.json";
+
+/// `run.toml`: the settings, the tool version and the prototype itself.
+#[derive(Serialize, Deserialize)]
+struct RunFile {
+    tool: String,
+    version: String,
+    settings: BreedSettings,
+    integrator: String,
+    dt: String,
+    prototype_leaf: LeafSpec,
+}
+
+impl Run {
+    /// Prepares a new run in `dir`, or picks up the same run there. A
+    /// directory holding a different run (or other files) is refused and
+    /// left untouched.
+    pub fn create(dir: &Path, settings: BreedSettings) -> Result<Run, BreedError> {
+        settings.validate().map_err(BreedError)?;
+        let proto = LeafSpec::load(&settings.prototype)
+            .map_err(|e| BreedError(format!("--prototype: {e}")))?;
+        if dir.join(RUN_FILE).exists() {
+            let existing = Run::open(dir)?;
+            if existing.settings != settings {
+                return Err(BreedError(format!(
+                    "{} holds a different run (its run.toml has other settings); choose another --out or --resume it",
+                    dir.display()
+                )));
+            }
+            return Ok(existing);
+        }
+        if dir.exists() {
+            let non_empty = std::fs::read_dir(dir)
+                .map_err(|e| io_err(dir, e))?
+                .next()
+                .is_some();
+            if non_empty {
+                return Err(BreedError(format!(
+                    "{} exists and is not a leafmagic run (no run.toml); refusing to write into it",
+                    dir.display()
+                )));
+            }
+        }
+        std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+        let run_file = RunFile {
+            tool: "leafmagic".to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            settings: settings.clone(),
+            integrator: DropParams::default().integrator.to_string(),
+            dt: "auto (per leaf, from its stability estimate)".to_string(),
+            prototype_leaf: proto.clone(),
+        };
+        let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
+        write_atomic(&dir.join(RUN_FILE), text.as_bytes())
+            .map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
+        Ok(Run {
+            dir: dir.to_path_buf(),
+            proto,
+            checkpoint: None,
+            settings,
+            timing: Vec::new(),
+        })
+    }
+
+    /// Opens an existing run directory (for `--resume`). Temporary files left
+    /// by a writer that was killed mid-write are removed: the rename never
+    /// happened, so they hold nothing the run needs.
+    pub fn open(dir: &Path) -> Result<Run, BreedError> {
+        for d in [dir.to_path_buf(), dir.join("best")] {
+            remove_stale_temporaries(&d);
+        }
+        let path = dir.join(RUN_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
+        run_file.settings.validate().map_err(|e| io_err(&path, e))?;
+        let cp_path = dir.join(CHECKPOINT_FILE);
+        let checkpoint = if cp_path.exists() {
+            let text = std::fs::read_to_string(&cp_path).map_err(|e| io_err(&cp_path, e))?;
+            let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| io_err(&cp_path, e))?;
+            if cp.settings != run_file.settings {
+                return Err(io_err(
+                    &cp_path,
+                    "checkpoint does not belong to this run.toml",
+                ));
+            }
+            Some(cp)
+        } else {
+            None
+        };
+        // Timing of the generations done before (lost rows read as NaN: the
+        // file is informative only).
+        let done = checkpoint.as_ref().map_or(0, |c| c.generation + 1);
+        let previous: Vec<f64> = std::fs::read_to_string(dir.join("timing.csv"))
+            .unwrap_or_default()
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.split(',').nth(1)?.parse().ok())
+            .collect();
+        let timing = (0..done)
+            .map(|g| previous.get(g).copied().unwrap_or(f64::NAN))
+            .collect();
+        Ok(Run {
+            dir: dir.to_path_buf(),
+            proto: run_file.prototype_leaf,
+            checkpoint,
+            settings: run_file.settings,
+            timing,
+        })
+    }
+
+    /// The run's settings.
+    pub fn settings(&self) -> &BreedSettings {
+        &self.settings
+    }
+
+    /// Whether every generation is done.
+    pub fn is_complete(&self) -> bool {
+        self.checkpoint
+            .as_ref()
+            .is_some_and(|c| c.generation >= self.settings.generations)
+    }
+
+    /// Runs the remaining generations, writing each one's files and then the
+    /// checkpoint.
+    pub fn run(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        while !self.is_complete() {
+            self.step(progress)?;
+        }
+        self.write_best()?;
+        Ok(())
+    }
+
+    /// Breeds, evaluates and records one generation.
+    pub fn step(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        let start = std::time::Instant::now();
+        let s = &self.settings;
+        let (generation, scale, mut next_id, children) = match &self.checkpoint {
+            None => {
+                // Generation 0: copies of the prototype with the first round's variation.
+                let g0 = Genome::of_prototype(&self.proto);
+                let children: Vec<(u64, Option<u64>, Genome, f64)> = (0..s.population as u64)
+                    .map(|id| {
+                        let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
+                        (
+                            id,
+                            None,
+                            mutate(&g0, &self.proto.bounds, s.initial_scale, &mut rng),
+                            f64::NAN,
+                        )
+                    })
+                    .collect();
+                (0, s.initial_scale, s.population as u64, children)
+            }
+            Some(cp) => {
+                let generation = cp.generation + 1;
+                let parents = rank(&cp.population);
+                let mut sel = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+                    s.seed,
+                    generation as u64,
+                    SELECTION_STREAM,
+                ));
+                let mut next_id = cp.next_id;
+                let mut children = Vec::with_capacity(s.population - s.elites);
+                for _ in 0..s.population - s.elites {
+                    // Tournament: the best of `tournament` uniformly drawn members.
+                    let pick = (0..s.tournament)
+                        .map(|_| sel.random_range(0..parents.len()))
+                        .min()
+                        .expect("tournament size ≥ 1");
+                    let parent = parents[pick];
+                    let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+                        s.seed,
+                        generation as u64,
+                        next_id,
+                    ));
+                    let genome = mutate(&parent.genome, &self.proto.bounds, cp.scale, &mut rng);
+                    children.push((next_id, Some(parent.id), genome, parent.eval.score));
+                    next_id += 1;
+                }
+                (generation, cp.scale, next_id, children)
+            }
+        };
+        let elites: Vec<Individual> = match &self.checkpoint {
+            None => Vec::new(),
+            Some(cp) => rank(&cp.population)
+                .into_iter()
+                .take(s.elites)
+                .map(|i| Individual {
+                    elite: true,
+                    ..i.clone()
+                })
+                .collect(),
+        };
+        progress.start_generation(generation, children.len());
+        let proto = &self.proto;
+        let evaluated: Vec<(Individual, f64)> = children
+            .into_par_iter()
+            .map(|(id, parent, genome, parent_score)| {
+                let eval = evaluate(proto, &genome, s);
+                progress.individual_done(&eval.class, eval.score);
+                (
+                    Individual {
+                        id,
+                        parent,
+                        elite: false,
+                        genome,
+                        eval,
+                    },
+                    parent_score,
+                )
+            })
+            .collect();
+        let successes = evaluated
+            .iter()
+            .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
+            .count();
+        let success_rate = successes as f64 / evaluated.len().max(1) as f64;
+        let mut population: Vec<Individual> = elites;
+        population.extend(evaluated.into_iter().map(|(i, _)| i));
+        population.sort_by_key(|i| i.id);
+        let summary = summarise(generation, &population, scale, success_rate);
+        let mut history = match &self.checkpoint {
+            None => Vec::new(),
+            Some(cp) => cp.history.clone(),
+        };
+        history.push(summary.clone());
+        self.timing.truncate(generation);
+        self.timing.push(start.elapsed().as_secs_f64());
+        next_id = next_id.max(population.iter().map(|i| i.id + 1).max().unwrap_or(0));
+        let checkpoint = Checkpoint {
+            settings: s.clone(),
+            generation,
+            population,
+            // Generation 0 is the prototype's copies: its successes say
+            // nothing about parents, so the scale rule starts from gen 1.
+            scale: if generation == 0 {
+                scale
+            } else {
+                next_scale(scale, success_rate)
+            },
+            next_id,
+            history,
+        };
+        self.write_generation(&checkpoint)?;
+        progress.finish_generation(&summary);
+        self.checkpoint = Some(checkpoint);
+        Ok(())
+    }
+
+    fn write(&self, name: &str, bytes: &[u8]) -> Result<(), BreedError> {
+        let path = self.dir.join(name);
+        write_atomic(&path, bytes).map_err(|e| io_err(&path, e))
+    }
+
+    /// Writes gen-NNN.csv, generations.csv, timing.csv, then the checkpoint
+    /// (last, so a kill between them only repeats this generation).
+    fn write_generation(&self, cp: &Checkpoint) -> Result<(), BreedError> {
+        self.write(
+            &format!("gen-{:03}.csv", cp.generation),
+            population_csv(cp.generation, &cp.population).as_bytes(),
+        )?;
+        self.write("generations.csv", generations_csv(&cp.history).as_bytes())?;
+        let mut timing = String::from("generation,wall_s\n");
+        for (g, t) in self.timing.iter().enumerate() {
+            let _ = writeln!(timing, "{g},{t}");
+        }
+        self.write("timing.csv", timing.as_bytes())?;
+        let json = serde_json::to_string(cp).map_err(|e| BreedError(e.to_string()))?;
+        self.write(CHECKPOINT_FILE, json.as_bytes())
+    }
+
+    /// The best individuals of the last generation as leaf files that `drop`
+    /// and scenes accept (`best/leaf-<id>.toml`), best first, with an index.
+    pub fn write_best(&self) -> Result<(), BreedError> {
+        let Some(cp) = &self.checkpoint else {
+            return Ok(());
+        };
+        let best: Vec<&Individual> = rank(&cp.population).into_iter().take(5).collect();
+        let dir = self.dir.join("best");
+        std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+        export_leaves(&self.proto, &best, &dir)
+    }
+
+    /// Summaries of the completed generations.
+    pub fn history(&self) -> &[GenerationSummary] {
+        self.checkpoint.as_ref().map_or(&[], |c| &c.history)
+    }
+}
+
+/// Removes `.<name>.<pid>.tmp` files (see [`crate::io::write_atomic`]).
+fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}
+
+/// Writes each individual as `leaf-<id>.toml` plus `index.csv` into `dir`.
+pub fn export_leaves(
+    proto: &LeafSpec,
+    chosen: &[&Individual],
+    dir: &Path,
+) -> Result<(), BreedError> {
+    let mut index = String::from("rank,id,file,class,regime,score,descent_m_s\n");
+    for (rank, ind) in chosen.iter().enumerate() {
+        let mut leaf = ind.genome.to_leaf(proto);
+        leaf.name = format!("{}-{}", proto.name, ind.id);
+        let file = format!("leaf-{}.toml", ind.id);
+        let text = format!(
+            "# Bred by leafmagic from {}: individual {} ({} / {}, score {}).\n{}",
+            proto.name,
+            ind.id,
+            ind.eval.class,
+            ind.eval.regime,
+            ind.eval.score,
+            leaf.to_toml()
+        );
+        let path = dir.join(&file);
+        write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))?;
+        let _ = writeln!(
+            index,
+            "{},{},{},{},{},{},{}",
+            rank + 1,
+            ind.id,
+            file,
+            ind.eval.class,
+            ind.eval.regime,
+            ind.eval.score,
+            ind.eval.descent_m_s
+        );
+    }
+    let path = dir.join("index.csv");
+    write_atomic(&path, index.as_bytes()).map_err(|e| io_err(&path, e))
+}
+
+/// Members best first; ties broken by id so the order is deterministic.
+pub fn rank(population: &[Individual]) -> Vec<&Individual> {
+    let mut v: Vec<&Individual> = population.iter().collect();
+    v.sort_by(|a, b| b.eval.score.total_cmp(&a.eval.score).then(a.id.cmp(&b.id)));
+    v
+}
+
+const CLASSES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
+
+fn summarise(
+    generation: usize,
+    population: &[Individual],
+    scale: f64,
+    success_rate: f64,
+) -> GenerationSummary {
+    let mut counts = [0; 5];
+    for i in population {
+        if let Some(k) = CLASSES.iter().position(|c| *c == i.eval.class) {
+            counts[k] += 1;
+        }
+    }
+    let best = rank(population)[0];
+    GenerationSummary {
+        generation,
+        counts,
+        best_score: best.eval.score,
+        mean_score: population.iter().map(|i| i.eval.score).sum::<f64>() / population.len() as f64,
+        best_id: best.id,
+        scale,
+        success_rate,
+    }
+}
+
+/// generations.csv: one row per completed generation.
+pub fn generations_csv(history: &[GenerationSummary]) -> String {
+    let mut out = String::from(
+        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate\n",
+    );
+    for h in history {
+        let c = h.counts;
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{}",
+            h.generation,
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4],
+            h.best_score,
+            h.mean_score,
+            h.best_id,
+            h.scale,
+            h.success_rate
+        );
+    }
+    out
+}
+
+/// gen-NNN.csv: one row per individual, in id order.
+pub fn population_csv(generation: usize, population: &[Individual]) -> String {
+    let mut out = String::from("generation,id,parent,elite");
+    if let Some(first) = population.first() {
+        for (name, _) in first.genome.values() {
+            let _ = write!(out, ",{name}");
+        }
+    }
+    out.push_str(
+        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,error\n",
+    );
+    for i in population {
+        let parent = i.parent.map_or(String::new(), |p| p.to_string());
+        let _ = write!(out, "{generation},{},{parent},{}", i.id, i.elite);
+        for (_, v) in i.genome.values() {
+            let _ = write!(out, ",{v}");
+        }
+        let e = &i.eval;
+        // Errors may contain commas: quote them for CSV.
+        let error = if e.error.is_empty() {
+            String::new()
+        } else {
+            format!("\"{}\"", e.error.replace('"', "\"\""))
+        };
+        let _ = writeln!(
+            out,
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            e.class,
+            e.regime,
+            e.score,
+            e.margin,
+            e.descent_m_s,
+            e.drift_ratio,
+            e.net_turns,
+            e.yaw_turns,
+            e.reversals,
+            e.flips,
+            e.tilt_deg,
+            e.dt,
+            error
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn score_orders_diverged_undetermined_other_target() {
+        let t = MotionClass::Floater;
+        let s = |c: &str, m: f64| score(c, m, t);
+        assert!(s("diverged", 0.0) < s("undetermined", 0.0));
+        assert!(s("undetermined", 0.0) <= s("spinner", 0.0));
+        assert!(s("spinner", 1.0) < s("floater", 0.0));
+        assert!(s("floater", 0.2) < s("floater", 0.9));
+    }
+
+    #[test]
+    fn one_fifth_rule_widens_on_success_and_narrows_otherwise() {
+        assert!(next_scale(1.0, 0.5) > 1.0);
+        assert!(next_scale(1.0, 0.1) < 1.0);
+        assert_eq!(next_scale(MIN_SCALE, 0.0), MIN_SCALE);
+        assert_eq!(next_scale(MAX_SCALE, 1.0), MAX_SCALE);
+    }
+
+    #[test]
+    fn streams_differ_by_generation_and_id() {
+        let a = stream_seed(1, 0, 0);
+        assert_ne!(a, stream_seed(1, 0, 1));
+        assert_ne!(a, stream_seed(1, 1, 0));
+        assert_ne!(a, stream_seed(2, 0, 0));
+        assert_eq!(a, stream_seed(1, 0, 0));
+    }
+}

@@ -1,0 +1,218 @@
+//! Breeding runs: same seed, same bytes with 1 or 2 threads; a run killed
+//! with SIGKILL and resumed ends byte-identical to an uninterrupted one; bad
+//! input is refused without touching anything.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+fn leafmagic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("leafmagic-breed-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Every file of a run directory except timing.csv (the only one allowed to
+/// differ), by relative path.
+fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+                if rel != "timing.csv" {
+                    out.insert(rel, std::fs::read(&p).unwrap());
+                }
+            }
+        }
+    }
+    out
+}
+
+fn breed(args: &[&str], out: &Path) -> std::process::Output {
+    leafmagic()
+        .arg("breed")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+const SMALL: [&str; 6] = ["--population", "12", "--generations", "2", "--seconds", "2"];
+
+#[test]
+fn same_seed_same_bytes_with_one_or_two_threads() {
+    let dir = scratch("threads");
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    let a = breed(&[&SMALL[..], &["--threads", "1"]].concat(), &one);
+    let b = breed(&[&SMALL[..], &["--threads", "2"]].concat(), &two);
+    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
+    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
+    let (ca, cb) = (contents(&one), contents(&two));
+    assert!(
+        ca.contains_key("gen-002.csv") && ca.contains_key("best/index.csv"),
+        "{:?}",
+        ca.keys()
+    );
+    assert_eq!(ca.keys().collect::<Vec<_>>(), cb.keys().collect::<Vec<_>>());
+    for (k, v) in &ca {
+        assert!(v == &cb[k], "{k} differs between 1 and 2 threads");
+    }
+    // A different seed gives a different run.
+    let c = breed(&[&SMALL[..], &["--seed", "7"]].concat(), &dir.join("seven"));
+    assert!(c.status.success());
+    assert_ne!(
+        contents(&dir.join("seven"))["gen-001.csv"],
+        ca["gen-001.csv"]
+    );
+}
+
+#[test]
+fn killed_run_resumes_to_the_same_bytes() {
+    let dir = scratch("resume");
+    let args = [
+        "--population",
+        "24",
+        "--generations",
+        "6",
+        "--seconds",
+        "4",
+        "--threads",
+        "2",
+    ];
+    let whole = dir.join("whole");
+    assert!(breed(&args, &whole).status.success());
+
+    let killed = dir.join("killed");
+    let mut child = leafmagic()
+        .arg("breed")
+        .args(args)
+        .arg("--out")
+        .arg(&killed)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !killed.join("gen-001.csv").exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL on Unix
+    child.wait().unwrap();
+    let checkpoint = std::fs::read_to_string(killed.join("checkpoint.json")).unwrap_or_default();
+    assert!(
+        !checkpoint.contains("\"generation\":6"),
+        "the run finished before it could be killed; the test did not test resuming"
+    );
+    let resumed = leafmagic()
+        .arg("breed")
+        .arg("--resume")
+        .arg(&killed)
+        .output()
+        .unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    let (a, b) = (contents(&whole), contents(&killed));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (k, v) in &a {
+        assert!(v == &b[k], "{k} differs after kill and resume");
+    }
+}
+
+#[test]
+fn bad_input_is_refused_and_nothing_is_overwritten() {
+    let dir = scratch("bad");
+    let cases: [(&[&str], &str); 4] = [
+        (&["--population", "1"], "--population"),
+        (&["--generations", "0"], "--generations"),
+        (&["--prototype", "no-such-leaf.toml"], "no-such-leaf.toml"),
+        (&["--target", "undetermined"], "--target"),
+    ];
+    for (args, needle) in cases {
+        let out = dir.join("never");
+        let r = breed(args, &out);
+        assert!(!r.status.success(), "{args:?} was accepted");
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!out.exists(), "{args:?} created its output directory");
+    }
+    // An invalid prototype file names the file and field.
+    let bad_leaf = dir.join("bad.toml");
+    std::fs::write(
+        &bad_leaf,
+        leafmagic::leaf::PROTOTYPE_A.replacen("mass = ", "mass = -", 1),
+    )
+    .unwrap();
+    let r = breed(
+        &["--prototype", bad_leaf.to_str().unwrap()],
+        &dir.join("never"),
+    );
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("particle[0].mass"));
+
+    // A directory holding a different run is left alone.
+    let run = dir.join("run");
+    assert!(breed(&SMALL, &run).status.success());
+    let before = contents(&run);
+    let r = breed(&[&SMALL[..], &["--seed", "99"]].concat(), &run);
+    assert!(!r.status.success());
+    assert!(String::from_utf8_lossy(&r.stderr).contains("different run"));
+    assert_eq!(before, contents(&run));
+    // A directory with other files is not a run: refused.
+    let other = dir.join("other");
+    std::fs::create_dir_all(&other).unwrap();
+    std::fs::write(other.join("notes.txt"), "mine").unwrap();
+    assert!(!breed(&SMALL, &other).status.success());
+    assert_eq!(
+        std::fs::read_to_string(other.join("notes.txt")).unwrap(),
+        "mine"
+    );
+}
+
+#[test]
+fn exported_leaves_drop_with_their_bred_class() {
+    let dir = scratch("export");
+    let run = dir.join("run");
+    assert!(breed(&SMALL, &run).status.success());
+    let out = dir.join("leaves");
+    let r = leafmagic()
+        .arg("export")
+        .arg(&run)
+        .args(["--top", "2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let index = std::fs::read_to_string(out.join("index.csv")).unwrap();
+    let rows: Vec<&str> = index.lines().skip(1).collect();
+    assert_eq!(rows.len(), 2);
+    for row in rows {
+        let cols: Vec<&str> = row.split(',').collect();
+        let (file, class) = (cols[2], cols[3]);
+        let drop = leafmagic()
+            .args([
+                "drop",
+                out.join(file).to_str().unwrap(),
+                "--seconds",
+                "2",
+                "--json",
+            ])
+            .output()
+            .unwrap();
+        assert!(drop.status.success());
+        let v: serde_json::Value = serde_json::from_slice(&drop.stdout).unwrap();
+        assert_eq!(v["class"], class, "{file}");
+    }
+}
