@@ -9,6 +9,7 @@
 //! poses ([`pose`]) into a trajectory.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod classify;
 pub mod field;
 pub mod force;
@@ -16,6 +17,7 @@ pub mod integrate;
 pub mod io;
 pub mod leaf;
 pub mod model;
+pub mod plot;
 pub mod pose;
 pub mod sim;
 pub mod stability;
