@@ -11,6 +11,7 @@ use leafmagic::model::Model;
 use leafmagic::sim::{self, DropParams, TimeStep};
 use leafmagic::stability;
 use leafmagic::state::State;
+use leafmagic::stress::{self, ExplicitPolicy, Outcome};
 use leafmagic::trajectory::Trajectory;
 use serde_json::json;
 use std::path::PathBuf;
@@ -108,9 +109,22 @@ pub struct DropArgs {
 pub struct CheckArgs {
     /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
     pub leaf: String,
-    /// Print one JSON object instead of a table.
+    /// Print JSON instead of a table (with --stress: an array of one object per row).
     #[arg(long)]
     pub json: bool,
+    /// Run the stiff and extreme matrix: every stress case with every integrator.
+    #[arg(long)]
+    pub stress: bool,
+    /// With --stress: what explicit integrators do with a step above their stable estimate.
+    #[arg(long, default_value = "substep", value_parser = parse_policy)]
+    pub explicit: ExplicitPolicy,
+    /// With --stress --explicit substep: the most sub-steps per step (a warning says when it clamps).
+    #[arg(long, default_value_t = stress::DEFAULT_SUBSTEP_CAP)]
+    pub substep_cap: u64,
+}
+
+fn parse_policy(s: &str) -> Result<ExplicitPolicy, String> {
+    s.parse()
 }
 
 fn parse_dt(s: &str) -> Result<TimeStep, String> {
@@ -278,6 +292,9 @@ fn classify(args: ClassifyArgs) -> Result<()> {
 }
 
 fn check(args: CheckArgs) -> Result<()> {
+    if args.stress {
+        return check_stress(args);
+    }
     let spec = LeafSpec::load(&args.leaf)?;
     let model = spec
         .model()
@@ -366,7 +383,7 @@ fn check(args: CheckArgs) -> Result<()> {
     Ok(())
 }
 
-/// What `accuracy` runs: a named model and its initial
+/// What `accuracy` and `check --stress` run: a named model and its initial
 /// state. A leaf is dropped as `drop` drops it; a scene file, once scenes
 /// exist, brings its own model and state through this same function.
 fn load_problem(arg: &str) -> Result<(String, Model, State)> {
@@ -661,5 +678,81 @@ fn accuracy_long(
     println!();
     println!("wrote        {}", path.display());
     println!("finished in  {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn check_stress(args: CheckArgs) -> Result<()> {
+    let started = Instant::now();
+    let (name, model, initial) = load_problem(&args.leaf)?;
+    let cases = stress::cases(&model, &initial)
+        .map_err(|e| anyhow::anyhow!("{}: cannot build a stress case: {e}", args.leaf))?;
+    let rows = stress::run_matrix(&cases, args.explicit, args.substep_cap);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!(
+        "leaf        {name}: {} cases × {} integrators, {} s each (one step at least); explicit above dt_max: {}",
+        cases.len(),
+        Integrator::ALL.len(),
+        stress::STRESS_SECONDS,
+        args.explicit
+    );
+    for c in &cases {
+        println!("  {:<19} {}", c.name, c.description);
+    }
+    println!();
+    println!(
+        "{:<19} {:<10} {:<6} {:>10} {:>11} {:>5} {:>11} {:>10}  detail",
+        "case", "integrator", "result", "dt (s)", "dt_max (s)", "sub", "energy", "strain"
+    );
+    for r in &rows {
+        let dt_max = match r.dt_max {
+            None => "unbounded".to_string(),
+            Some(m) if m <= 0.0 => "none".to_string(),
+            Some(m) => format!("{m:.3e}"),
+        };
+        let detail = match (&r.failure, r.outcome) {
+            (Some(f), _) => format!(
+                "{} at step {}{}",
+                f.cause,
+                f.step,
+                f.particle
+                    .map_or(String::new(), |p| format!(", particle {p}"))
+            ),
+            (None, Outcome::Ok) => r.warnings.join("; "),
+            (None, Outcome::Error) => r.message.clone(),
+        };
+        println!(
+            "{:<19} {:<10} {:<6} {:>10.1e} {:>11} {:>5} {:>11} {:>10}  {}",
+            r.case,
+            r.integrator.name(),
+            match r.outcome {
+                Outcome::Ok => "ok",
+                Outcome::Error => "error",
+            },
+            r.dt,
+            dt_max,
+            r.substeps,
+            r.energy_drift
+                .map_or("—".to_string(), |d| format!("{d:+.1e}")),
+            r.max_strain.map_or("—".to_string(), |s| format!("{s:.2e}")),
+            detail
+        );
+    }
+    let ok = rows.iter().filter(|r| r.outcome == Outcome::Ok).count();
+    let finite = rows.iter().filter(|r| r.all_finite).count();
+    println!();
+    println!(
+        "{} rows: {ok} finished finite, {} stopped with a diagnosis; all numbers finite in {finite}/{} rows",
+        rows.len(),
+        rows.len() - ok,
+        rows.len()
+    );
+    println!(
+        "energy = drift (E(T) − E(0) − W_air+dashpots) / energy turnover, E = kinetic + gravitational + spring"
+    );
+    println!("strain = largest |l − L|/L of any spring during the run; sub = sub-steps per step");
+    println!("finished in {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }

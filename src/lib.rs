@@ -22,4 +22,5 @@ pub mod pose;
 pub mod sim;
 pub mod stability;
 pub mod state;
+pub mod stress;
 pub mod trajectory;

@@ -1,15 +1,18 @@
 //! The accuracy machinery (work-precision sweeps, reference validation, the
-//! cached error estimate, the long-horizon comparison).
+//! cached error estimate, the long-horizon comparison) and the stiff and
+//! extreme matrix of `check --stress`.
 
 use crate::common::*;
 use leafmagic::accuracy::{
     self, ErrorCache, SweepRange, SweepSettings, long::LongSettings, smooth_model,
 };
+use leafmagic::field::Flow;
 use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::model::Model;
 use leafmagic::stability;
 use leafmagic::state::State;
+use leafmagic::stress::{self, ExplicitPolicy, Outcome, StressRow};
 use std::collections::HashSet;
 use std::process::Command;
 
@@ -397,8 +400,203 @@ fn long_comparison_reports_where_the_class_settles() {
     }
 }
 
+// ------------------------------------------------------------ stress matrix
+
+const CASES: [&str; 19] = [
+    "stiff-1e4",
+    "stiff-1e5",
+    "stiff-1e6",
+    "stiff-1e7",
+    "stiff-1e8",
+    "light-particle",
+    "tiny-mass-1e-6",
+    "tiny-mass-1e-9",
+    "dt-1e-5",
+    "dt-1e-3",
+    "dt-1e-1",
+    "dt-1e1",
+    "wind-1e1",
+    "wind-1e2",
+    "wind-1e3",
+    "vortex-axis",
+    "coincident",
+    "collinear-triangle",
+    "zero-length-spring",
+];
+
+fn assert_clear(row: &StressRow) {
+    assert!(row.all_finite, "{row:?}");
+    for word in row.message.split(|c: char| !c.is_ascii_alphanumeric()) {
+        assert!(
+            !word.eq_ignore_ascii_case("nan") && !word.eq_ignore_ascii_case("inf"),
+            "{}: {}",
+            row.case,
+            row.message
+        );
+    }
+    match row.outcome {
+        Outcome::Ok => {
+            assert!(row.failure.is_none());
+            let drift = row.energy_drift.unwrap();
+            assert!(drift.is_finite() && drift.abs() <= 1.0 + 1e-12, "{row:?}");
+            assert!(row.max_strain.unwrap().is_finite());
+        }
+        Outcome::Error => {
+            let f = row.failure.as_ref().expect("an error says where");
+            assert!(!f.cause.is_empty());
+            assert!(row.message.contains("step"), "{}", row.message);
+            assert!(row.message.contains("dt_max"), "{}", row.message);
+            if !row.message.contains("implicit solver") {
+                assert!(f.particle.is_some() && row.message.contains("particle"));
+            }
+        }
+    }
+}
+
+/// Each case is built as described: the oracles are the numbers the case
+/// names.
+#[test]
+fn stress_cases_are_what_they_say() {
+    let model = leaf_a();
+    let initial = accuracy::default_release(&model);
+    let cases = stress::cases(&model, &initial).unwrap();
+    let names: Vec<&str> = cases.iter().map(|c| c.name.as_str()).collect();
+    assert_eq!(names, CASES);
+    let case = |name: &str| cases.iter().find(|c| c.name == name).unwrap();
+    for (name, rate) in CASES[..5].iter().zip(stress::STIFF_RATES) {
+        let est = stability::estimate(&case(name).model);
+        assert!(
+            (est.omega_lower.powi(2) / rate - 1.0).abs() < 1e-9,
+            "{name}"
+        );
+    }
+    let light = &case("light-particle").model;
+    let est = stability::estimate(light);
+    assert_eq!(est.lightest_particle, 0);
+    assert!(est.warnings.iter().any(|w| w.starts_with("particle[0]")));
+    for (name, m) in [("tiny-mass-1e-6", 1e-6), ("tiny-mass-1e-9", 1e-9)] {
+        let lightest = case(name).model.mass.iter().copied().fold(1.0, f64::min);
+        assert!((lightest / m - 1.0).abs() < 1e-12);
+        assert!(!case(name).model.wind.is_still());
+    }
+    for (name, dt) in [("dt-1e-5", 1e-5), ("dt-1e1", 10.0)] {
+        assert_eq!(case(name).dt, dt);
+        assert!(case(name).seconds >= dt);
+    }
+    let w = &case("wind-1e3").model.wind;
+    assert!((w.velocity(&V3::zeros(), 0.0).norm() - 1e3).abs() < 1e-9);
+    let v = case("vortex-axis");
+    let prim = &v.model.wind.primitives()[0];
+    assert!(matches!(prim.flow(), Flow::LineVortex { .. }));
+    let on_axis = v.model.wind.velocity(&v.initial.position[0], 0.0);
+    assert!(on_axis.norm() < 1e-9, "{on_axis:?}");
+    let c = case("coincident");
+    let s0 = &c.model.springs[0];
+    assert_eq!(c.initial.position[s0.i], c.initial.position[s0.j]);
+    let t = case("collinear-triangle");
+    let [a, b, cc] = t.model.triangles[0].corners;
+    let x = &t.initial.position;
+    assert!((x[b] - x[a]).cross(&(x[cc] - x[a])).norm() < 1e-18);
+    let z = case("zero-length-spring");
+    assert_eq!(z.model.springs[0].rest_length, 0.0);
+}
+
+/// Every case × integrator ends finite with its energy drift and strain, or
+/// with a clear error — under both policies for steps above the estimate.
+/// Refusing: exactly the explicit runs above dt_max refuse. Sub-stepping:
+/// n = ⌈h / (0.7 dt_max)⌉ sub-steps, and every run of the leaf finishes.
+#[test]
+fn stress_matrix_is_finite_or_clearly_refused() {
+    let model = leaf_a();
+    let initial = accuracy::default_release(&model);
+    let cases = stress::cases(&model, &initial).unwrap();
+    for policy in [ExplicitPolicy::Refuse, ExplicitPolicy::Substep] {
+        let rows = stress::run_matrix(&cases, policy, stress::DEFAULT_SUBSTEP_CAP);
+        assert_eq!(rows.len(), cases.len() * Integrator::ALL.len());
+        for row in &rows {
+            assert_clear(row);
+            let above =
+                row.integrator != Integrator::Implicit && row.dt_max.is_some_and(|m| row.dt > m);
+            match policy {
+                ExplicitPolicy::Refuse => {
+                    assert_eq!(row.outcome == Outcome::Error, above, "{row:?}");
+                    if above {
+                        assert!(row.message.contains("exceeds the stability estimate"));
+                        assert_eq!(row.steps, 0);
+                    }
+                }
+                ExplicitPolicy::Substep => {
+                    assert_eq!(row.outcome, Outcome::Ok, "{row:?}");
+                    let expected = if above {
+                        (row.dt / (stability::AUTO_SAFETY * row.dt_max.unwrap())).ceil() as u64
+                    } else {
+                        1
+                    };
+                    assert_eq!(row.substeps, expected, "{}", row.case);
+                }
+            }
+        }
+    }
+}
+
+/// Too few sub-steps allowed: the clamp is warned about and the runs that
+/// then blow up stop with a diagnosis naming step, particle and dt_max.
+#[test]
+fn clamped_substeps_warn_and_diverge_with_a_diagnosis() {
+    let model = leaf_a();
+    let initial = accuracy::default_release(&model);
+    let cases: Vec<_> = stress::cases(&model, &initial)
+        .unwrap()
+        .into_iter()
+        .filter(|c| c.name == "stiff-1e8" || c.name == "light-particle")
+        .collect();
+    let rows = stress::run_matrix(&cases, ExplicitPolicy::Substep, 10);
+    let mut diverged = 0;
+    for row in &rows {
+        assert_clear(row);
+        if row.integrator != Integrator::Implicit {
+            assert_eq!(row.substeps, 10);
+            assert!(row.warnings.iter().any(|w| w.contains("clamped")));
+        }
+        if row.outcome == Outcome::Error {
+            diverged += 1;
+            assert!(row.message.contains("diverged"), "{}", row.message);
+        }
+    }
+    assert!(diverged >= 6, "{rows:?}");
+}
+
 fn binary() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+}
+
+/// `check --stress --json`: an array of objects with the documented fields.
+#[test]
+fn stress_json_has_the_documented_fields() {
+    let out = binary()
+        .args(["check", "a", "--stress", "--json", "--explicit", "refuse"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(rows.len(), CASES.len() * Integrator::ALL.len());
+    for r in &rows {
+        assert!(CASES.contains(&r["case"].as_str().unwrap()));
+        assert!(
+            r["integrator"]
+                .as_str()
+                .unwrap()
+                .parse::<Integrator>()
+                .is_ok()
+        );
+        assert!(matches!(r["outcome"].as_str(), Some("ok" | "error")));
+        assert!(!r["message"].as_str().unwrap().is_empty());
+        assert_eq!(r["all_finite"].as_bool(), Some(true));
+    }
 }
 
 /// `accuracy` end to end on a short fall: CSV and SVG written, the table
