@@ -529,8 +529,8 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
     }
     println!();
     println!(
-        "{:<11} {:<40} {:<40}",
-        "integrator", "cheapest run to error ≤ 1e-3", "cheapest run to error ≤ 1e-6"
+        "{:<11} {:<44} cheapest run to error ≤ 1e-6",
+        "integrator", "cheapest run to error ≤ 1e-3"
     );
     for s in &report.summaries {
         let cells: Vec<String> = s
@@ -553,12 +553,7 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
                 (None, None) => "not reached".to_string(),
             })
             .collect();
-        println!(
-            "{:<11} {:<40} {:<40}",
-            s.integrator.name(),
-            cells[0],
-            cells[1]
-        );
+        println!("{:<11} {:<44} {}", s.integrator.name(), cells[0], cells[1]);
     }
     for w in &report.warnings {
         println!("warning: {w}");
@@ -723,7 +718,7 @@ fn check_stress(args: CheckArgs) -> Result<()> {
             (None, Outcome::Ok) => r.warnings.join("; "),
             (None, Outcome::Error) => r.message.clone(),
         };
-        println!(
+        let line = format!(
             "{:<19} {:<10} {:<6} {:>10.1e} {:>11} {:>5} {:>11} {:>10}  {}",
             r.case,
             r.integrator.name(),
@@ -739,6 +734,7 @@ fn check_stress(args: CheckArgs) -> Result<()> {
             r.max_strain.map_or("—".to_string(), |s| format!("{s:.2e}")),
             detail
         );
+        println!("{}", line.trim_end());
     }
     let ok = rows.iter().filter(|r| r.outcome == Outcome::Ok).count();
     let finite = rows.iter().filter(|r| r.all_finite).count();
