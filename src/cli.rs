@@ -3,15 +3,20 @@
 
 use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand};
+use leafmagic::accuracy::{self, SweepSettings, long::LongSettings};
 use leafmagic::breed::{self, BreedSettings, GenerationSummary, Run};
 use leafmagic::classify::{self, Classification, MotionClass};
 use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
+use leafmagic::model::Model;
 use leafmagic::sim::{self, DropParams, TimeStep};
 use leafmagic::stability;
+use leafmagic::state::State;
+use leafmagic::stress::{self, ExplicitPolicy, Outcome};
 use leafmagic::trajectory::Trajectory;
 use serde_json::json;
 use std::path::PathBuf;
+use std::time::Instant;
 
 /// Breed falling-leaf motion in a mass-spring simulator with potential-flow wind.
 #[derive(Parser, Debug)]
@@ -35,6 +40,32 @@ pub enum Command {
     Check(CheckArgs),
     /// Name the motion of a recorded fall (pose CSV t,x,y,z,qw,qx,qy,qz).
     Classify(ClassifyArgs),
+    /// Error against cost of every integrator over a sweep of time steps
+    /// (work-precision), or with --long, classes and statistics across steps.
+    Accuracy(AccuracyArgs),
+}
+
+/// Arguments of `accuracy`.
+#[derive(clap::Args, Debug)]
+pub struct AccuracyArgs {
+    /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
+    #[arg(default_value = "a")]
+    pub leaf: String,
+    /// Simulated seconds T [default: 1, or 10 with --long].
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Directory for accuracy.csv and accuracy.svg (accuracy-long.csv with --long); created if missing.
+    #[arg(long, default_value = ".")]
+    pub out: PathBuf,
+    /// Compare motion classes and statistics (descent speed, rotation rate) across steps for a long fall.
+    #[arg(long)]
+    pub long: bool,
+    /// Timed runs per point (the median is reported; at least 5 for published figures).
+    #[arg(long, default_value_t = leafmagic::accuracy::DEFAULT_RUNS)]
+    pub runs: usize,
+    /// Use RK4 at T/2^J as the reference instead of the default (it is validated either way).
+    #[arg(long, value_name = "J")]
+    pub reference_j: Option<u32>,
 }
 
 /// Arguments of `breed`.
@@ -131,9 +162,22 @@ pub struct DropArgs {
 pub struct CheckArgs {
     /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
     pub leaf: String,
-    /// Print one JSON object instead of a table.
+    /// Print JSON instead of a table (with --stress: an array of one object per row).
     #[arg(long)]
     pub json: bool,
+    /// Run the stiff and extreme matrix: every stress case with every integrator.
+    #[arg(long)]
+    pub stress: bool,
+    /// With --stress: what explicit integrators do with a step above their stable estimate.
+    #[arg(long, default_value = "substep", value_parser = parse_policy)]
+    pub explicit: ExplicitPolicy,
+    /// With --stress --explicit substep: the most sub-steps per step (a warning says when it clamps).
+    #[arg(long, default_value_t = stress::DEFAULT_SUBSTEP_CAP)]
+    pub substep_cap: u64,
+}
+
+fn parse_policy(s: &str) -> Result<ExplicitPolicy, String> {
+    s.parse()
 }
 
 fn parse_dt(s: &str) -> Result<TimeStep, String> {
@@ -176,6 +220,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Drop(args) => drop(args),
         Command::Check(args) => check(args),
         Command::Classify(args) => classify(args),
+        Command::Accuracy(args) => accuracy(args),
     }
 }
 
@@ -302,6 +347,9 @@ fn classify(args: ClassifyArgs) -> Result<()> {
 }
 
 fn check(args: CheckArgs) -> Result<()> {
+    if args.stress {
+        return check_stress(args);
+    }
     let spec = LeafSpec::load(&args.leaf)?;
     let model = spec
         .model()
@@ -562,5 +610,375 @@ fn export(args: ExportArgs) -> Result<()> {
         chosen.len(),
         args.out.display()
     );
+    Ok(())
+}
+
+/// What `accuracy` and `check --stress` run: a named model and its initial
+/// state. A leaf is dropped as `drop` drops it; a scene file, once scenes
+/// exist, brings its own model and state through this same function.
+fn load_problem(arg: &str) -> Result<(String, Model, State)> {
+    let spec = LeafSpec::load(arg)?;
+    let model = spec
+        .model()
+        .with_context(|| format!("{arg}: invalid leaf"))?;
+    let initial = accuracy::default_release(&model);
+    Ok((spec.name, model, initial))
+}
+
+fn ms(seconds: f64) -> String {
+    if seconds >= 1.0 {
+        format!("{seconds:.2} s")
+    } else {
+        format!("{:.3} ms", seconds * 1e3)
+    }
+}
+
+fn accuracy(args: AccuracyArgs) -> Result<()> {
+    let started = Instant::now();
+    let (name, model, initial) = load_problem(&args.leaf)?;
+    let seconds = args.seconds.unwrap_or(if args.long { 10.0 } else { 1.0 });
+    if !(seconds > 0.0 && seconds.is_finite()) {
+        bail!("--seconds must be a positive number, got {seconds}");
+    }
+    std::fs::create_dir_all(&args.out)
+        .with_context(|| format!("cannot create the output directory {}", args.out.display()))?;
+    if args.long {
+        return accuracy_long(&args, &name, &model, seconds, started);
+    }
+    if args.runs == 0 {
+        bail!("--runs must be at least 1");
+    }
+    let mut settings = SweepSettings::for_model(&model, seconds);
+    settings.runs = args.runs;
+    if let Some(j) = args.reference_j {
+        settings.reference_j = j;
+    }
+    let report = accuracy::sweep_leaf(&model, &initial, &settings)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;
+    let csv_path = args.out.join("accuracy.csv");
+    leafmagic::io::write_atomic(&csv_path, accuracy::csv(&report.rows).as_bytes())
+        .with_context(|| format!("cannot write {}", csv_path.display()))?;
+    let svg_path = args.out.join("accuracy.svg");
+    let title = format!("work-precision: {name}, T = {seconds} s");
+    let svg = leafmagic::plot::work_precision_svg(&report, &title)
+        .map_err(|e| anyhow::anyhow!("cannot draw {}: {e}", svg_path.display()))?;
+    leafmagic::io::write_atomic(&svg_path, svg.as_bytes())
+        .with_context(|| format!("cannot write {}", svg_path.display()))?;
+
+    let r = &report.reference;
+    println!(
+        "leaf         {name} ({} particles, chord {:.4} m), released as `drop` releases it; T = {seconds} s",
+        model.len(),
+        report.chord
+    );
+    println!("error        RMS particle position error at T / chord, against the reference");
+    println!(
+        "reference    RK4 at h = {:.4e} s; against h = {:.4e} s it differs by {:.2e} chords, \
+         {} 0.1 × the smallest error plotted ({}): {}",
+        r.dt,
+        2.0 * r.dt,
+        r.self_difference,
+        if report.reference_valid {
+            "below"
+        } else {
+            "NOT below"
+        },
+        report
+            .smallest_error
+            .map_or("none".to_string(), |e| format!("{e:.2e}")),
+        if report.reference_valid {
+            "valid"
+        } else {
+            "NOT VALIDATED"
+        }
+    );
+    println!(
+        "events       {}",
+        if report.breaking_disabled > 0 {
+            format!(
+                "spring breaking switched off for the sweep ({} breakable springs); no ground",
+                report.breaking_disabled
+            )
+        } else {
+            "none (no breakable springs, no ground)".to_string()
+        }
+    );
+    println!(
+        "work         median wall time of {} runs per point (stepping only), force evaluations",
+        settings.runs
+    );
+    println!();
+    println!(
+        "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
+        "integrator",
+        "order",
+        "exp.",
+        "pts",
+        "pairwise (finest 3)",
+        "stable dt",
+        "diverged at",
+        "check dt_max",
+        "ratio"
+    );
+    for s in &report.summaries {
+        let pairwise: Vec<String> = s
+            .pairwise_orders
+            .iter()
+            .rev()
+            .take(3)
+            .rev()
+            .map(|p| format!("{p:.2}"))
+            .collect();
+        let predicted = match s.predicted_dt_max {
+            None => "unbounded".to_string(),
+            Some(m) if m <= 0.0 => "none".to_string(),
+            Some(m) => format!("{m:.4e}"),
+        };
+        let ratio = match (
+            s.largest_stable_dt,
+            s.predicted_dt_max,
+            s.smallest_diverged_dt,
+        ) {
+            (Some(found), Some(m), Some(_)) if m > 0.0 => format!("{:.3}", found / m),
+            _ => "—".to_string(),
+        };
+        println!(
+            "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
+            s.integrator.name(),
+            s.order.map_or("—".to_string(), |p| format!("{p:.3}")),
+            s.expected_order,
+            s.fit_points,
+            pairwise.join(" "),
+            s.largest_stable_dt
+                .map_or("—".to_string(), |h| format!("{h:.4e}")),
+            s.smallest_diverged_dt
+                .map_or("none".to_string(), |h| format!("{h:.4e}")),
+            predicted,
+            ratio
+        );
+    }
+    println!();
+    println!(
+        "{:<11} {:<44} cheapest run to error ≤ 1e-6",
+        "integrator", "cheapest run to error ≤ 1e-3"
+    );
+    for s in &report.summaries {
+        let cells: Vec<String> = s
+            .cheapest
+            .iter()
+            .zip(&s.extrapolated)
+            .map(|(c, x)| match (c, x) {
+                (Some(c), _) => format!(
+                    "h {:.3e}: {:.1e} in {} ({} f)",
+                    c.dt,
+                    c.error,
+                    ms(c.wall_s),
+                    c.force_evals
+                ),
+                (None, Some(x)) => format!(
+                    "not reached; ≈ h {:.1e}, ≈ {} (extrap.)",
+                    x.dt,
+                    ms(x.wall_s)
+                ),
+                (None, None) => "not reached".to_string(),
+            })
+            .collect();
+        println!("{:<11} {:<44} {}", s.integrator.name(), cells[0], cells[1]);
+    }
+    for w in &report.warnings {
+        println!("warning: {w}");
+    }
+    println!();
+    println!(
+        "wrote        {} ({} rows), {}",
+        csv_path.display(),
+        report.rows.len(),
+        svg_path.display()
+    );
+    println!("finished in  {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn accuracy_long(
+    args: &AccuracyArgs,
+    name: &str,
+    model: &Model,
+    seconds: f64,
+    started: Instant,
+) -> Result<()> {
+    use std::fmt::Write as _;
+    let settings = LongSettings {
+        seconds,
+        ..LongSettings::default()
+    };
+    let report = accuracy::long::long_sweep(model, &settings)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;
+    let mut csv = String::from(
+        "integrator,dt,drops,diverged,class,agreement,descent_m_s,descent_ci95,rotation_turns_s,rotation_ci95\n",
+    );
+    let stat = |s: Option<accuracy::long::Stat>| {
+        s.map_or((String::new(), String::new()), |s| {
+            (s.mean.to_string(), s.ci95.to_string())
+        })
+    };
+    for r in &report.rows {
+        let (d, dc) = stat(r.descent_speed);
+        let (w, wc) = stat(r.rotation_rate);
+        let _ = writeln!(
+            csv,
+            "{},{},{},{},{},{},{d},{dc},{w},{wc}",
+            r.integrator,
+            r.dt,
+            r.classes.len() + r.diverged,
+            r.diverged,
+            r.majority.map_or(String::new(), |c| c.to_string()),
+            r.agreement
+        );
+    }
+    let path = args.out.join("accuracy-long.csv");
+    leafmagic::io::write_atomic(&path, csv.as_bytes())
+        .with_context(|| format!("cannot write {}", path.display()))?;
+    println!(
+        "leaf         {name}: {} drops per step, tilts {:.2}°…{:.2}° about x, {seconds} s each",
+        settings.ensemble,
+        10.0 - settings.tilt_spread_deg / 2.0,
+        10.0 + settings.tilt_spread_deg / 2.0
+    );
+    match report.horizon_s {
+        Some(t) => println!(
+            "horizon      twin RK4 drops {:.0e} chords apart separate by {:.0e} chords at t = {t:.2} s \
+             (h = {:.3e} s): pointwise error means nothing after that",
+            accuracy::long::TWIN_SEPARATION,
+            accuracy::long::HORIZON_SEPARATION,
+            report.horizon_dt
+        ),
+        None => println!(
+            "horizon      twin RK4 drops {:.0e} chords apart stay within {:.0e} chords for the whole {seconds} s",
+            accuracy::long::TWIN_SEPARATION,
+            accuracy::long::HORIZON_SEPARATION
+        ),
+    }
+    println!();
+    println!(
+        "{:<11} {:>11}  {:<22} {:>22} {:>22}",
+        "integrator", "dt (s)", "class (agreement)", "descent m/s (±95 %)", "rotation turns/s"
+    );
+    let fmt_stat = |s: Option<accuracy::long::Stat>| {
+        s.map_or("—".to_string(), |s| {
+            format!("{:.4} ± {:.4}", s.mean, s.ci95)
+        })
+    };
+    for r in &report.rows {
+        let class = match r.majority {
+            Some(c) if r.diverged == 0 => format!("{c} ({:.0} %)", 100.0 * r.agreement),
+            Some(c) => format!("{c} ({:.0} %), {} div.", 100.0 * r.agreement, r.diverged),
+            None => format!("diverged ({}/{})", r.diverged, r.diverged),
+        };
+        println!(
+            "{:<11} {:>11.4e}  {:<22} {:>22} {:>22}",
+            r.integrator.name(),
+            r.dt,
+            class,
+            fmt_stat(r.descent_speed),
+            fmt_stat(r.rotation_rate)
+        );
+    }
+    println!();
+    for s in &report.summaries {
+        let class = s
+            .finest_class
+            .map_or("no class".to_string(), |c| c.to_string());
+        let from = |h: Option<f64>| {
+            h.map_or("never (not even the finest)".to_string(), |h| {
+                format!("dt ≤ {h:.4e} s")
+            })
+        };
+        println!(
+            "{:<11} class {class} from {}; descent speed and rotation rate agree from {}",
+            s.integrator.name(),
+            from(s.class_stable_from),
+            from(s.stats_stable_from)
+        );
+    }
+    println!();
+    println!("wrote        {}", path.display());
+    println!("finished in  {:.1} s", started.elapsed().as_secs_f64());
+    Ok(())
+}
+
+fn check_stress(args: CheckArgs) -> Result<()> {
+    let started = Instant::now();
+    let (name, model, initial) = load_problem(&args.leaf)?;
+    let cases = stress::cases(&model, &initial)
+        .map_err(|e| anyhow::anyhow!("{}: cannot build a stress case: {e}", args.leaf))?;
+    let rows = stress::run_matrix(&cases, args.explicit, args.substep_cap);
+    if args.json {
+        println!("{}", serde_json::to_string_pretty(&rows)?);
+        return Ok(());
+    }
+    println!(
+        "leaf        {name}: {} cases × {} integrators, {} s each (one step at least); explicit above dt_max: {}",
+        cases.len(),
+        Integrator::ALL.len(),
+        stress::STRESS_SECONDS,
+        args.explicit
+    );
+    for c in &cases {
+        println!("  {:<19} {}", c.name, c.description);
+    }
+    println!();
+    println!(
+        "{:<19} {:<10} {:<6} {:>10} {:>11} {:>5} {:>11} {:>10}  detail",
+        "case", "integrator", "result", "dt (s)", "dt_max (s)", "sub", "energy", "strain"
+    );
+    for r in &rows {
+        let dt_max = match r.dt_max {
+            None => "unbounded".to_string(),
+            Some(m) if m <= 0.0 => "none".to_string(),
+            Some(m) => format!("{m:.3e}"),
+        };
+        let detail = match (&r.failure, r.outcome) {
+            (Some(f), _) => format!(
+                "{} at step {}{}",
+                f.cause,
+                f.step,
+                f.particle
+                    .map_or(String::new(), |p| format!(", particle {p}"))
+            ),
+            (None, Outcome::Ok) => r.warnings.join("; "),
+            (None, Outcome::Error) => r.message.clone(),
+        };
+        let line = format!(
+            "{:<19} {:<10} {:<6} {:>10.1e} {:>11} {:>5} {:>11} {:>10}  {}",
+            r.case,
+            r.integrator.name(),
+            match r.outcome {
+                Outcome::Ok => "ok",
+                Outcome::Error => "error",
+            },
+            r.dt,
+            dt_max,
+            r.substeps,
+            r.energy_drift
+                .map_or("—".to_string(), |d| format!("{d:+.1e}")),
+            r.max_strain.map_or("—".to_string(), |s| format!("{s:.2e}")),
+            detail
+        );
+        println!("{}", line.trim_end());
+    }
+    let ok = rows.iter().filter(|r| r.outcome == Outcome::Ok).count();
+    let finite = rows.iter().filter(|r| r.all_finite).count();
+    println!();
+    println!(
+        "{} rows: {ok} finished finite, {} stopped with a diagnosis; all numbers finite in {finite}/{} rows",
+        rows.len(),
+        rows.len() - ok,
+        rows.len()
+    );
+    println!(
+        "energy = drift (E(T) − E(0) − W_air+dashpots) / energy turnover, E = kinetic + gravitational + spring"
+    );
+    println!("strain = largest |l − L|/L of any spring during the run; sub = sub-steps per step");
+    println!("finished in {:.1} s", started.elapsed().as_secs_f64());
     Ok(())
 }

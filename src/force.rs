@@ -60,6 +60,10 @@ pub fn dihedral(x: &[V3], hinge: &Hinge) -> Option<(f64, [V3; 4])> {
     fold_sin_cos(x, hinge).map(|(sin, cos, grad)| (sin.atan2(cos), grad))
 }
 
+/// Smallest apex height, relative to the hinge's edge length, used for the
+/// fold-angle gradient (see `fold_sin_cos`).
+pub const MIN_HINGE_HEIGHT_RATIO: f64 = 0.1;
+
 /// sin θ and cos θ of the fold angle (see [`dihedral`]) and its gradient,
 /// without the arctangent: the hot path needs only sin(θ − θ₀). Written with
 /// the unnormalised normals N_p = e × (x_p − x_a), N_q = e × (x_q − x_a),
@@ -81,8 +85,12 @@ fn fold_sin_cos(x: &[V3], hinge: &Hinge) -> Option<(f64, f64, [V3; 4])> {
     let inv_norms = 1.0 / (np2 * nq2).sqrt();
     let sin = np.cross(&nq).dot(&e) * (inv_norms / len);
     let cos = -np.dot(&nq) * inv_norms;
-    let gp = np * (len / np2);
-    let gq = nq * (-len / nq2);
+    // |∇_p θ| = 1/h_p grows without bound as a triangle collapses onto the
+    // hinge; bound the lever at a tenth of the edge (as ARCSim clamps its
+    // bending "height"), so a crumpled leaf gets finite forces.
+    let floor = MIN_HINGE_HEIGHT_RATIO * MIN_HINGE_HEIGHT_RATIO * len2 * len2;
+    let gp = np * (len / np2.max(floor));
+    let gq = nq * (-len / nq2.max(floor));
     let inv_len2 = 1.0 / len2;
     let (tp, tq) = (rp.dot(&e) * inv_len2, rq.dot(&e) * inv_len2);
     let ga = -gp * (1.0 - tp) - gq * (1.0 - tq);

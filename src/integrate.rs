@@ -137,30 +137,52 @@ impl fmt::Display for SimError {
                 time,
                 iterations,
                 residual,
-            } => write!(
-                f,
-                "implicit solver did not converge at step {step} (t = {time:.6} s): \
-                 relative residual {residual:.2e} after {iterations} CG iterations; \
-                 the system is ill-conditioned, try a smaller --dt"
-            ),
+            } => {
+                write!(
+                    f,
+                    "implicit solver did not converge at step {step} (t = {time:.6} s): "
+                )?;
+                if residual.is_finite() {
+                    write!(f, "relative residual {residual:.2e}")?;
+                } else {
+                    // pᵀAp ≤ 0 or overflowed: the linearised system is no
+                    // longer positive definite; there is no residual to show.
+                    write!(f, "the system matrix lost positive definiteness")?;
+                }
+                write!(
+                    f,
+                    " after {iterations} CG iterations; \
+                     the system is ill-conditioned, try a smaller --dt"
+                )
+            }
             SimError::Diverged(d) => {
                 let kind = if d.value.is_finite() {
                     "ran away"
                 } else {
                     "became non-finite"
                 };
+                // Non-finite magnitudes are said in words: a diagnosis never
+                // prints NaN.
+                let magnitude = |v: f64, unit: &str| {
+                    if v.is_finite() {
+                        format!("{v:.3e}{unit}")
+                    } else {
+                        "non-finite".to_string()
+                    }
+                };
                 write!(
                     f,
-                    "simulation diverged at step {} (t = {:.6} s): particle {} {} {} ({:.3e}); \
-                     dominant force term: {} ({:.3e} N); integrator {}, dt = {:.3e} s",
-                    d.step,
-                    d.time,
-                    d.particle,
-                    d.quantity,
-                    kind,
-                    d.value,
+                    "simulation diverged at step {} (t = {:.6} s): particle {} {} {}",
+                    d.step, d.time, d.particle, d.quantity, kind
+                )?;
+                if d.value.is_finite() {
+                    write!(f, " ({:.3e})", d.value)?;
+                }
+                write!(
+                    f,
+                    "; dominant force term: {} ({}); integrator {}, dt = {:.3e} s",
                     d.dominant_force.0,
-                    d.dominant_force.1,
+                    magnitude(d.dominant_force.1, " N"),
                     d.integrator,
                     d.dt
                 )?;

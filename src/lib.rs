@@ -9,6 +9,7 @@
 //! poses ([`pose`]) into a trajectory.
 #![warn(missing_docs)]
 
+pub mod accuracy;
 pub mod breed;
 pub mod classify;
 pub mod field;
@@ -18,8 +19,10 @@ pub mod integrate;
 pub mod io;
 pub mod leaf;
 pub mod model;
+pub mod plot;
 pub mod pose;
 pub mod sim;
 pub mod stability;
 pub mod state;
+pub mod stress;
 pub mod trajectory;

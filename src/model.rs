@@ -350,6 +350,22 @@ impl Model {
         })
     }
 
+    /// The parts this model was built from (to build a changed copy).
+    pub fn to_parts(&self) -> ModelParts {
+        ModelParts {
+            mass: self.mass.clone(),
+            fixed: self.fixed.clone(),
+            particle_drag: self.particle_drag.clone(),
+            rest_position: self.rest_position.clone(),
+            springs: self.springs.clone(),
+            triangles: self.triangles.clone(),
+            hinges: self.hinges.clone(),
+            aero: self.aero,
+            wind: self.wind.clone(),
+            gravity: self.gravity,
+        }
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.mass.len()

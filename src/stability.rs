@@ -399,7 +399,10 @@ pub fn step_matrix(integrator: Integrator, h: f64, omega2: f64, c: f64) -> Matri
 pub fn spectral_radius(m: &Matrix3<f64>) -> f64 {
     let coupled = m[(2, 0)] != 0.0 || m[(2, 1)] != 0.0 || m[(2, 2)] != 0.0;
     if coupled {
-        return m
+        // (x, v, a) differ in scale by powers of ω and 1/h; unbalanced, the
+        // eigenvalue solver's round-off (≈ ε‖M‖) can push a root that lies
+        // just inside the unit circle (a strongly overdamped mode) outside it.
+        return balanced(m)
             .complex_eigenvalues()
             .iter()
             .map(|z| z.norm())
@@ -419,6 +422,36 @@ pub fn spectral_radius(m: &Matrix3<f64>) -> f64 {
     } else {
         det.abs().sqrt()
     }
+}
+
+/// A diagonal similarity D⁻¹ M D (so the same eigenvalues) with power-of-two
+/// factors chosen so that each row and column have comparable off-diagonal
+/// norms (Parlett & Reinsch's balancing, as LAPACK's `gebal` does before an
+/// eigenvalue solve). Powers of two keep the scaling exact.
+fn balanced(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let mut a = *m;
+    for _ in 0..64 {
+        let mut changed = false;
+        for i in 0..3 {
+            let col: f64 = (0..3).filter(|&j| j != i).map(|j| a[(j, i)].abs()).sum();
+            let row: f64 = (0..3).filter(|&j| j != i).map(|j| a[(i, j)].abs()).sum();
+            if col == 0.0 || row == 0.0 {
+                continue;
+            }
+            let f = 2f64.powi((row / col).sqrt().log2().round() as i32);
+            if col * f + row / f < 0.95 * (col + row) {
+                changed = true;
+                for j in 0..3 {
+                    a[(j, i)] *= f;
+                    a[(i, j)] /= f;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    a
 }
 
 /// Amplification above 1 by less than this counts as neutral (round-off).

@@ -369,3 +369,36 @@ fn force_terms_sum_to_the_total() {
         assert!((sum - total_p).norm() < 1e-15 + 1e-12 * total_p.norm());
     }
 }
+
+/// A diagnosis never prints NaN: non-finite magnitudes are said in words.
+#[test]
+fn diagnoses_say_non_finite_in_words() {
+    let diverged = SimError::Diverged(Box::new(leafmagic::integrate::Divergence {
+        step: 3,
+        time: 0.01,
+        particle: 2,
+        quantity: "position",
+        value: f64::NAN,
+        integrator: Integrator::Euler,
+        dt: 1e-3,
+        dt_max: Some(1e-4),
+        dominant_force: ("spring", f64::INFINITY),
+        stiffest_spring: Some(0),
+    }));
+    let failed = SimError::SolverFailed {
+        step: 7,
+        time: 0.5,
+        iterations: 12,
+        residual: f64::NAN,
+    };
+    for e in [diverged, failed] {
+        let msg = e.to_string();
+        for word in msg.split(|c: char| !c.is_ascii_alphanumeric()) {
+            assert!(
+                !word.eq_ignore_ascii_case("nan") && !word.eq_ignore_ascii_case("inf"),
+                "{msg}"
+            );
+        }
+        assert!(msg.contains("step"), "{msg}");
+    }
+}

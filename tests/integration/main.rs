@@ -1,6 +1,7 @@
 //! Integration tests: one binary (one link on a 2-core machine), one module
 //! per topic. Oracles are exact where the notes give one (numerics notes §3).
 
+mod accuracy;
 mod alloc;
 mod breeding;
 mod common;

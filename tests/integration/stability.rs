@@ -128,3 +128,33 @@ fn warnings_name_the_light_particle_and_stiff_spring() {
             .is_empty()
     );
 }
+
+/// A strongly overdamped top mode (ζ ≈ 11–17, as a 1e-4 light particle or
+/// 1e-9 kg masses in air give) still has a Verlet limit: about 1/c, where
+/// c = 2ζω is the mode's damping rate (for drag alone Verlet is stable for
+/// h c < 1). Unbalanced, the (x, v, a) step matrix lost that root to
+/// round-off and the estimate read "no stable step".
+#[test]
+fn overdamped_modes_keep_a_verlet_limit() {
+    for zeta in [3.0, 11.0, 17.0] {
+        let w: f64 = 7e4;
+        let c = 2.0 * zeta * w;
+        let limit = stability::largest_stable_step(Integrator::Verlet, w * w, c).unwrap();
+        assert!(limit > 0.0, "ζ = {zeta}");
+        assert!(
+            (limit * c - 1.0).abs() < 0.1,
+            "ζ = {zeta}: h c = {}",
+            limit * c
+        );
+        // The simulator agrees: below the limit a run stays finite, above it diverges.
+        let model = crate::common::oscillator(1.0, w * w, c);
+        for (factor, stable) in [(0.9, true), (1.2, false)] {
+            let mut s = leafmagic::state::State::at_rest(&model);
+            s.position[1].x += 1e-3;
+            let mut sim = leafmagic::integrate::Simulator::new(&model, Integrator::Verlet);
+            let h = factor * limit;
+            let failed = (0..20_000).any(|_| sim.step(&model, &mut s, h).is_err());
+            assert_eq!(!failed, stable, "ζ = {zeta}, h = {factor} × limit");
+        }
+    }
+}
