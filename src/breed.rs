@@ -351,8 +351,18 @@ struct RunFile {
     settings: BreedSettings,
     integrator: String,
     dt: String,
+    /// How far the prototype's own fall, at the integrator and step breeding
+    /// uses, is from a converged reference after 1 s (issue 3's machinery):
+    /// how much to trust the run's trajectories pointwise.
+    prototype_error: crate::accuracy::ErrorEstimate,
     prototype_leaf: LeafSpec,
 }
+
+/// Simulated seconds over which the prototype's integration error is
+/// estimated for run.toml: long enough to include the fall's transient,
+/// short enough to stay inside the horizon where pointwise error means
+/// something (falls may be chaotic later).
+pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
 
 impl Run {
     /// Prepares a new run in `dir`, or picks up the same run there. A
@@ -384,13 +394,28 @@ impl Run {
                 )));
             }
         }
+        let model = proto
+            .model()
+            .map_err(|e| BreedError(format!("--prototype: {e}")))?;
+        let integrator = DropParams::default().integrator;
+        let dt = crate::sim::resolve_dt(
+            &model,
+            integrator,
+            TimeStep::Auto,
+            1.0 / crate::sim::FRAME_RATE,
+        )
+        .map_err(BreedError)?;
+        let prototype_error =
+            crate::accuracy::error_estimate(&model, integrator, dt, ERROR_ESTIMATE_SECONDS)
+                .map_err(|e| BreedError(format!("error estimate of the prototype: {e}")))?;
         std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
         let run_file = RunFile {
             tool: "leafmagic".to_string(),
             version: env!("CARGO_PKG_VERSION").to_string(),
             settings: settings.clone(),
-            integrator: DropParams::default().integrator.to_string(),
-            dt: "auto (per leaf, from its stability estimate)".to_string(),
+            integrator: integrator.to_string(),
+            dt: format!("auto: each leaf its own, from its stability estimate (prototype: {dt} s)"),
+            prototype_error,
             prototype_leaf: proto.clone(),
         };
         let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;

@@ -20,7 +20,7 @@ use crate::integrate::Integrator;
 use crate::model::Model;
 use crate::stability;
 use crate::state::State;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use std::collections::{HashMap, VecDeque};
 use std::sync::{LazyLock, Mutex};
 
@@ -33,7 +33,7 @@ pub const MAX_REFERENCE_LOG2: u32 = 22;
 pub const GLOBAL_CACHE_CAPACITY: usize = 64;
 
 /// How accurate a run of a model is, and how well that is known.
-#[derive(Clone, Debug, PartialEq, Serialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct ErrorEstimate {
     /// The integrator of the run.
     pub integrator: Integrator,

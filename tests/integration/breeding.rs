@@ -216,3 +216,25 @@ fn exported_leaves_drop_with_their_bred_class() {
         assert_eq!(v["class"], class, "{file}");
     }
 }
+
+/// run.toml says how far to trust the run: the integrator, the step and the
+/// prototype's integration error against a converged reference.
+#[test]
+fn run_file_records_settings_and_the_error_estimate() {
+    let dir = scratch("runfile");
+    let run = dir.join("run");
+    assert!(breed(&SMALL, &run).status.success());
+    let text = std::fs::read_to_string(run.join("run.toml")).unwrap();
+    let v: toml::Table = toml::from_str(&text).unwrap();
+    assert_eq!(v["settings"]["population"].as_integer(), Some(12));
+    assert_eq!(v["settings"]["seed"].as_integer(), Some(1991));
+    assert_eq!(v["version"].as_str(), Some(env!("CARGO_PKG_VERSION")));
+    let e = &v["prototype_error"];
+    assert_eq!(e["integrator"].as_str(), Some("verlet"));
+    let error = e["error"].as_float().unwrap();
+    assert!(
+        error > 0.0 && error < 1e-3,
+        "prototype error {error} chords"
+    );
+    assert_eq!(e["reference_valid"].as_bool(), Some(true));
+}
