@@ -620,7 +620,8 @@ impl Run {
         write_atomic(&path, bytes).map_err(|e| io_err(&path, e))
     }
 
-    /// Writes gen-NNN.csv, generations.csv, timing.csv, then the checkpoint
+    /// Writes gen-NNN.csv, generations.csv, timing.csv, generations.svg
+    /// (class counts per generation), then the checkpoint
     /// (last, so a kill between them only repeats this generation).
     fn write_generation(&self, cp: &Checkpoint) -> Result<(), BreedError> {
         self.write(
@@ -633,6 +634,12 @@ impl Run {
             let _ = writeln!(timing, "{g},{t}");
         }
         self.write("timing.csv", timing.as_bytes())?;
+        let title = format!(
+            "{}: breeding toward {} (population {}, seed {})",
+            self.proto.name, self.settings.target, self.settings.population, self.settings.seed
+        );
+        let svg = crate::plot::generations_svg(&cp.history, &title).map_err(BreedError)?;
+        self.write("generations.svg", svg.as_bytes())?;
         let json = serde_json::to_string(cp).map_err(|e| BreedError(e.to_string()))?;
         self.write(CHECKPOINT_FILE, json.as_bytes())
     }

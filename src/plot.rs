@@ -1,7 +1,8 @@
-//! The work-precision plot of a sweep as SVG, drawn with plotters' SVG
-//! backend. Text goes into the file as `<text>` elements for the viewer to
-//! render, so no font files are read and none need be installed (plotters
-//! is built without its `ttf` feature; text extents are estimated).
+//! SVG plots drawn with plotters' SVG backend: the work-precision plot of an
+//! accuracy sweep and the class counts of a breeding run. Text goes into the
+//! file as `<text>` elements for the viewer to render, so no font files are
+//! read and none need be installed (plotters is built without its `ttf`
+//! feature; text extents are estimated).
 
 use crate::accuracy::{SweepReport, TOLERANCES};
 use crate::integrate::Integrator;
@@ -165,4 +166,86 @@ fn min_max(values: &[f64]) -> Option<(f64, f64)> {
         .filter(|v| v.is_finite())
         .reduce(f64::max)?;
     Some((lo, hi))
+}
+
+/// The SVG text of a breeding run's class counts per generation: one line
+/// per outcome (floater, spinner, lilter, undetermined, diverged).
+///
+/// # Errors
+/// A message if plotters fails (it writes to memory, so only on a bug).
+pub fn generations_svg(
+    history: &[crate::breed::GenerationSummary],
+    title: &str,
+) -> Result<String, String> {
+    const NAMES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
+    const COLOURS: [RGBColor; 5] = [
+        RGBColor(0, 114, 178),
+        RGBColor(213, 94, 0),
+        RGBColor(0, 158, 115),
+        RGBColor(120, 120, 120),
+        RGBColor(0, 0, 0),
+    ];
+    let last = history.last().map_or(1, |h| h.generation.max(1));
+    let top = history
+        .iter()
+        .flat_map(|h| h.counts)
+        .max()
+        .unwrap_or(1)
+        .max(1);
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (800, 480)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 20))
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..last as f64, 0.0..(top as f64 * 1.1))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("generation")
+            .y_desc("individuals")
+            .x_labels(last + 1)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
+            .light_line_style(WHITE.mix(0.0))
+            .axis_desc_style(("sans-serif", 16))
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for (k, (name, colour)) in NAMES.iter().zip(COLOURS).enumerate() {
+            if history.iter().all(|h| h.counts[k] == 0) {
+                continue;
+            }
+            let points: Vec<(f64, f64)> = history
+                .iter()
+                .map(|h| (h.generation as f64, h.counts[k] as f64))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(
+                    points
+                        .into_iter()
+                        .map(|p| Circle::new(p, 3, colour.filled())),
+                )
+                .map_err(|e| e.to_string())?;
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
 }
