@@ -976,7 +976,7 @@ fn check_stress(args: CheckArgs) -> Result<()> {
         rows.len()
     );
     println!(
-        "energy = drift (E(T) − E(0) − W_air+dashpots) / energy turnover, E = kinetic + gravitational + spring"
+        "energy = drift (E(T) − E(0) − W_air+dampers) / energy turnover, E = kinetic + gravitational + spring + bending"
     );
     println!("strain = largest |l − L|/L of any spring during the run; sub = sub-steps per step");
     println!("finished in {:.1} s", started.elapsed().as_secs_f64());

@@ -363,12 +363,14 @@ pub struct Energy {
     pub gravitational: f64,
     /// Σ ½ k (l − L)² over intact springs.
     pub spring: f64,
+    /// Σ k_b (1 − cos(θ − θ₀)) over hinges (the potential of `force::hinges`).
+    pub bending: f64,
 }
 
 impl Energy {
-    /// The sum of the three.
+    /// The sum of the four.
     pub fn total(&self) -> f64 {
-        self.kinetic + self.gravitational + self.spring
+        self.kinetic + self.gravitational + self.spring + self.bending
     }
 }
 
@@ -388,12 +390,17 @@ pub fn energy(model: &Model, state: &State) -> Energy {
             e.spring += 0.5 * spring.stiffness * (l - spring.rest_length).powi(2);
         }
     }
+    for hinge in &model.hinges {
+        if let Some((theta, _)) = force::dihedral(&state.position, hinge) {
+            e.bending += hinge.stiffness * (1.0 - (theta - hinge.rest_angle).cos());
+        }
+    }
     e
 }
 
 /// The power of the non-conservative forces, Σ F·v over particles, W: the
 /// paper's aerodynamics (eq. 9–10) and particle drag (eq. 7) in the wind at
-/// the state's time, and the springs' dashpots. `wind` and `force` are
+/// the state's time, the springs' dashpots and the hinges' dampers. `wind` and `force` are
 /// scratch buffers (resized as needed).
 pub fn nonconservative_power(
     model: &Model,
@@ -432,6 +439,19 @@ pub fn nonconservative_power(
         // F_i = −c (n·v_ij) n, F_j = −F_i: power −c (n·v_ij)².
         let rate = (v[sp.i] - v[sp.j]).dot(&(d / l));
         power -= sp.damping * rate * rate;
+    }
+    // Hinge dampers: torque −c_b θ̇ against the fold rate, power −c_b θ̇².
+    for hinge in model.hinges.iter().filter(|h| h.damping != 0.0) {
+        if let Some((_, grad)) = force::dihedral(x, hinge) {
+            let ids = [
+                hinge.edge[0],
+                hinge.edge[1],
+                hinge.apexes[0],
+                hinge.apexes[1],
+            ];
+            let rate: f64 = ids.iter().zip(&grad).map(|(&i, g)| g.dot(&v[i])).sum();
+            power -= hinge.damping * rate * rate;
+        }
     }
     power
 }
@@ -636,8 +656,10 @@ pub fn run_case(
                 + turnover_work
                 + e0.kinetic
                 + e0.spring
+                + e0.bending
                 + e1.kinetic
-                + e1.spring;
+                + e1.spring
+                + e1.bending;
             row.energy_change_j = Some(change);
             row.nonconservative_work_j = Some(work);
             row.energy_drift = (turnover > 0.0).then(|| (change - work) / turnover);
