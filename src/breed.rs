@@ -47,6 +47,10 @@ pub struct BreedSettings {
     pub elites: usize,
     /// Tournament size for parent selection.
     pub tournament: usize,
+    /// Keep a MAP-Elites archive: the best leaf of every cell of descent
+    /// speed × rotation rate seen over the whole run.
+    #[serde(default)]
+    pub archive: bool,
 }
 
 impl BreedSettings {
@@ -63,6 +67,7 @@ impl BreedSettings {
             initial_scale: 1.0,
             elites: 10,
             tournament: 3,
+            archive: false,
         }
     }
 
@@ -124,6 +129,10 @@ pub struct Evaluation {
     pub net_turns: f64,
     /// Turns about the vertical.
     pub yaw_turns: f64,
+    /// Rotation rate, rad/s: 2π (|net turns| + |yaw turns|) over the
+    /// classifier's analysis window (an archive descriptor).
+    #[serde(default)]
+    pub spin_rad_s: f64,
     /// Pitch reversals in the analysis window.
     pub reversals: usize,
     /// Normal flips in the analysis window.
@@ -203,6 +212,72 @@ pub struct Checkpoint {
     pub next_id: u64,
     /// Summaries of all completed generations.
     pub history: Vec<GenerationSummary>,
+    /// The MAP-Elites archive (empty unless `settings.archive`).
+    #[serde(default)]
+    pub archive: Vec<ArchiveEntry>,
+}
+
+/// Edges of the archive's descent-speed bins, m/s (log-spaced: gentle
+/// floaters at 0.2–0.5 m/s, edge-on divers at 3–10 m/s).
+pub const ARCHIVE_DESCENT_EDGES: [f64; 9] = [0.0, 0.25, 0.4, 0.6, 0.9, 1.4, 2.2, 3.5, 5.5];
+/// Edges of the archive's rotation-rate bins, rad/s (steady floaters below
+/// 0.5; autorotating spinners at 5–70, notes §4e).
+pub const ARCHIVE_SPIN_EDGES: [f64; 9] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
+
+/// One occupied cell of the archive.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArchiveEntry {
+    /// Descent-speed bin (index into [`ARCHIVE_DESCENT_EDGES`]).
+    pub descent_bin: usize,
+    /// Rotation-rate bin (index into [`ARCHIVE_SPIN_EDGES`]).
+    pub spin_bin: usize,
+    /// Generation in which the occupant was evaluated.
+    pub generation: usize,
+    /// The occupant (the best-scoring leaf that fell into this cell).
+    pub individual: Individual,
+}
+
+fn bin(edges: &[f64], value: f64) -> usize {
+    edges.iter().rposition(|&e| value >= e).unwrap_or(0)
+}
+
+/// Adds a generation's evaluated individuals to the archive: each cell keeps
+/// the highest score (ties: the lower id). Diverged falls have no
+/// descriptors and are not archived. Entries stay sorted by cell.
+fn update_archive(archive: &mut Vec<ArchiveEntry>, generation: usize, population: &[Individual]) {
+    for ind in population
+        .iter()
+        .filter(|i| !i.elite && i.eval.class != "diverged")
+    {
+        let cell = (
+            bin(&ARCHIVE_DESCENT_EDGES, ind.eval.descent_m_s),
+            bin(&ARCHIVE_SPIN_EDGES, ind.eval.spin_rad_s),
+        );
+        let better = |e: &ArchiveEntry| {
+            ind.eval.score > e.individual.eval.score
+                || (ind.eval.score == e.individual.eval.score && ind.id < e.individual.id)
+        };
+        match archive.binary_search_by_key(&cell, |e| (e.descent_bin, e.spin_bin)) {
+            Ok(k) if better(&archive[k]) => {
+                archive[k] = ArchiveEntry {
+                    descent_bin: cell.0,
+                    spin_bin: cell.1,
+                    generation,
+                    individual: ind.clone(),
+                }
+            }
+            Ok(_) => {}
+            Err(k) => archive.insert(
+                k,
+                ArchiveEntry {
+                    descent_bin: cell.0,
+                    spin_bin: cell.1,
+                    generation,
+                    individual: ind.clone(),
+                },
+            ),
+        }
+    }
 }
 
 /// Variation scale rule (Rechenberg's 1/5 success rule): after each
@@ -251,6 +326,7 @@ pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> 
         drift_ratio: 0.0,
         net_turns: 0.0,
         yaw_turns: 0.0,
+        spin_rad_s: 0.0,
         reversals: 0,
         flips: 0,
         tilt_deg: 0.0,
@@ -281,6 +357,8 @@ pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> 
                 drift_ratio: f.drift_ratio,
                 net_turns: f.net_turns,
                 yaw_turns: f.yaw_turns,
+                spin_rad_s: std::f64::consts::TAU * (f.net_turns.abs() + f.yaw_turns.abs())
+                    / (f.t_end_s - f.t_start_s).max(f64::MIN_POSITIVE),
                 reversals: f.reversals,
                 flips: f.normal_flips,
                 tilt_deg: f.tilt_mean_deg,
@@ -595,6 +673,13 @@ impl Run {
         self.timing.truncate(generation);
         self.timing.push(start.elapsed().as_secs_f64());
         next_id = next_id.max(population.iter().map(|i| i.id + 1).max().unwrap_or(0));
+        let mut archive = self
+            .checkpoint
+            .as_ref()
+            .map_or_else(Vec::new, |c| c.archive.clone());
+        if s.archive {
+            update_archive(&mut archive, generation, &population);
+        }
         let checkpoint = Checkpoint {
             settings: s.clone(),
             generation,
@@ -608,6 +693,7 @@ impl Run {
             },
             next_id,
             history,
+            archive,
         };
         self.write_generation(&checkpoint)?;
         progress.finish_generation(&summary);
@@ -645,11 +731,47 @@ impl Run {
     }
 
     /// The best individuals of the last generation as leaf files that `drop`
-    /// and scenes accept (`best/leaf-<id>.toml`), best first, with an index.
+    /// and scenes accept (`best/leaf-<id>.toml`), best first, with an index;
+    /// with an archive, also `archive/` (one leaf per occupied cell) and
+    /// `archive.csv`.
     pub fn write_best(&self) -> Result<(), BreedError> {
         let Some(cp) = &self.checkpoint else {
             return Ok(());
         };
+        if self.settings.archive {
+            let dir = self.dir.join("archive");
+            std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+            let members: Vec<&Individual> = cp.archive.iter().map(|e| &e.individual).collect();
+            export_leaves(&self.proto, &members, &dir)?;
+            let mut csv = String::from(
+                "descent_min_m_s,descent_max_m_s,spin_min_rad_s,spin_max_rad_s,generation,id,class,regime,score,descent_m_s,spin_rad_s,file\n",
+            );
+            let edge = |edges: &[f64], k: usize| {
+                edges
+                    .get(k + 1)
+                    .map_or(String::from("inf"), |e| e.to_string())
+            };
+            for e in &cp.archive {
+                let i = &e.individual;
+                let _ = writeln!(
+                    csv,
+                    "{},{},{},{},{},{},{},{},{},{},{},archive/leaf-{}.toml",
+                    ARCHIVE_DESCENT_EDGES[e.descent_bin],
+                    edge(&ARCHIVE_DESCENT_EDGES, e.descent_bin),
+                    ARCHIVE_SPIN_EDGES[e.spin_bin],
+                    edge(&ARCHIVE_SPIN_EDGES, e.spin_bin),
+                    e.generation,
+                    i.id,
+                    i.eval.class,
+                    i.eval.regime,
+                    i.eval.score,
+                    i.eval.descent_m_s,
+                    i.eval.spin_rad_s,
+                    i.id
+                );
+            }
+            self.write("archive.csv", csv.as_bytes())?;
+        }
         let best: Vec<&Individual> = rank(&cp.population).into_iter().take(5).collect();
         let dir = self.dir.join("best");
         std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;

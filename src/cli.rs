@@ -95,8 +95,11 @@ pub struct BreedArgs {
     /// Run directory (default: runs/<prototype>-<target>-s<seed>-n<population>-g<generations>).
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Keep a MAP-Elites archive: the best leaf per cell of descent speed × rotation rate.
+    #[arg(long)]
+    pub archive: bool,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
-    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out"])]
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive"])]
     pub resume: Option<PathBuf>,
 }
 
@@ -531,6 +534,7 @@ fn breed(args: BreedArgs) -> Result<()> {
                 generations: args.generations,
                 seed: args.seed,
                 seconds: args.seconds,
+                archive: args.archive,
                 ..BreedSettings::default_run()
             };
             // Keep elites at a tenth of the population (at least one).

@@ -238,3 +238,30 @@ fn run_file_records_settings_and_the_error_estimate() {
     );
     assert_eq!(e["reference_valid"].as_bool(), Some(true));
 }
+
+/// The MAP-Elites archive holds one leaf per occupied cell, each inside its
+/// cell's descent-speed and rotation-rate range, and is resumable like the
+/// rest of the run (it lives in the checkpoint).
+#[test]
+fn archive_keeps_one_leaf_per_cell() {
+    let dir = scratch("archive");
+    let run = dir.join("run");
+    let r = breed(&[&SMALL[..], &["--archive"]].concat(), &run);
+    assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+    let csv = std::fs::read_to_string(run.join("archive.csv")).unwrap();
+    let mut cells = std::collections::BTreeSet::new();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert!(rows.len() >= 2, "{csv}");
+    for row in rows {
+        let c: Vec<&str> = row.split(',').collect();
+        let num = |k: usize| c[k].parse::<f64>().unwrap_or(f64::INFINITY);
+        assert!(
+            cells.insert((c[0].to_string(), c[2].to_string())),
+            "cell twice: {row}"
+        );
+        let (descent, spin) = (num(9), num(10));
+        assert!(num(0) <= descent && descent < num(1), "{row}");
+        assert!(num(2) <= spin && spin < num(3), "{row}");
+        assert!(run.join(c[11]).exists(), "{row}");
+    }
+}
