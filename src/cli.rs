@@ -446,7 +446,6 @@ struct Bar {
     bar: Option<indicatif::ProgressBar>,
     counts: [std::sync::atomic::AtomicUsize; 5],
     best: std::sync::Mutex<f64>,
-    start: std::time::Instant,
 }
 
 impl Bar {
@@ -458,7 +457,6 @@ impl Bar {
                 .then(indicatif::ProgressBar::hidden),
             counts: Default::default(),
             best: std::sync::Mutex::new(f64::NEG_INFINITY),
-            start: std::time::Instant::now(),
         }
     }
 }
@@ -559,7 +557,6 @@ fn breed(args: BreedArgs) -> Result<()> {
     pool.install(|| run.run(&bar))?;
     print_generations(run.history());
     println!("run directory: {}", run.dir.display());
-    let _ = bar.start;
     Ok(())
 }
 
