@@ -1,6 +1,8 @@
 //! `leaf_fall`: prototype A falling 1 simulated second in still air, with
-//! the integrator and step that `drop --dt auto` picks. Reports wall time per
-//! simulated second (criterion's time for one iteration is exactly that).
+//! the integrator and step that `drop --dt auto` picks. `drop_1s` is the wall
+//! time per simulated second (criterion's time for one iteration is exactly
+//! that); `stability_estimate` is the one-off cost of choosing the step,
+//! which `drop_1s_with_auto_dt` includes.
 //! Before timing, checks that this run is within 1e-3 chord of a fine
 //! reference, so the speed is that of an accurate run.
 

@@ -3,7 +3,7 @@
 //! squares), so a mass-spring leaf can be read like a rigid body.
 
 use crate::model::Model;
-use nalgebra::{Matrix3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 
 /// Iterations of the rotation fit per call; Newton's method warm-started
 /// from the previous frame converges in two or three.
@@ -68,17 +68,22 @@ impl PoseTracker {
             );
             let trace = m.trace();
             let h = Matrix3::identity() * trace - (m + m.transpose()) * 0.5;
-            let delta = match h.cholesky() {
-                Some(c) => c.solve(&g),
-                // Far from the optimum the Hessian may be indefinite: take a
-                // scaled gradient step instead.
-                None => g / (trace.abs() + 1e-300),
+            // A 3×3 inverse by cofactors (no square roots); far from the
+            // optimum the Hessian may be indefinite, and then the Newton step
+            // is no ascent direction: take a scaled gradient step instead.
+            let delta = match h.try_inverse().map(|inv| inv * g) {
+                Some(d) if d.dot(&g) > 0.0 => d,
+                _ => g / (trace.abs() + 1e-300),
             };
             let angle = delta.norm();
             if angle.is_nan() || angle < ANGLE_TOLERANCE {
                 break;
             }
-            q = UnitQuaternion::from_axis_angle(&Unit::new_unchecked(delta / angle), angle) * q;
+            // Turn by δ with the first-order quaternion (1, δ/2), normalised:
+            // a rotation by 2 atan(|δ|/2) = |δ| − O(|δ|³) about δ̂, which keeps
+            // Newton's quadratic convergence without a sine or cosine.
+            let turn = Quaternion::new(1.0, 0.5 * delta.x, 0.5 * delta.y, 0.5 * delta.z);
+            q = UnitQuaternion::new_normalize(turn * q.into_inner());
         }
         let q = UnitQuaternion::new_normalize(*q.quaternion());
         // Keep the hemisphere of the previous frame so the CSV has no sign flips.
