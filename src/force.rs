@@ -4,6 +4,7 @@
 //! reproducible bit for bit.
 
 use crate::model::{Hinge, Model};
+use crate::terms::Terms;
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
@@ -221,28 +222,43 @@ impl ForceTerms {
     }
 }
 
-/// Sums all force terms of a model with preallocated scratch space, so that
-/// evaluating forces inside the step loop never allocates.
+/// Sums the force terms of a model that its [`Terms`] keep, with
+/// preallocated scratch space, so that evaluating forces inside the step
+/// loop never allocates.
 #[derive(Clone, Debug)]
 pub struct Forces {
     wind: Vec<V3>,
     scratch: Vec<V3>,
     evaluations: u64,
-    /// Whether any particle has eq. 7 drag; most leaves have none.
-    any_particle_drag: bool,
+    terms: Terms,
     hinge_rest: Vec<(f64, f64)>,
 }
 
 impl Forces {
-    /// Scratch space sized for `model`.
+    /// The terms `model` needs ([`Terms::needed`]), scratch space sized for it.
     pub fn new(model: &Model) -> Forces {
+        Forces::with_terms(model, Terms::needed(model))
+    }
+
+    /// Evaluates exactly `terms` (a term the model gives nothing to do adds
+    /// zeros; a term left out is not evaluated).
+    pub fn with_terms(model: &Model, terms: Terms) -> Forces {
         Forces {
-            wind: vec![V3::zeros(); model.len()],
+            wind: if terms.wind {
+                vec![V3::zeros(); model.len()]
+            } else {
+                Vec::new()
+            },
             scratch: vec![V3::zeros(); model.len()],
             evaluations: 0,
-            any_particle_drag: model.particle_drag.iter().any(|&a| a != 0.0),
+            terms,
             hinge_rest: hinge_rest(model),
         }
+    }
+
+    /// The terms evaluated.
+    pub fn terms(&self) -> Terms {
+        self.terms
     }
 
     /// Number of full force evaluations so far (a machine-independent
@@ -252,7 +268,7 @@ impl Forces {
     }
 
     fn sample_wind(&mut self, model: &Model, x: &[V3], t: f64) -> Option<&[V3]> {
-        if model.wind.is_still() {
+        if !self.terms.wind {
             return None;
         }
         for (g, p) in self.wind.iter_mut().zip(x) {
@@ -272,17 +288,27 @@ impl Forces {
         force: &mut [V3],
     ) {
         self.evaluations += 1;
+        let terms = self.terms;
         // Start from gravity rather than zero: one pass fewer than
         // `fill(0)` followed by `gravity`, same sums in the same order.
-        for (f, &m) in force.iter_mut().zip(&model.mass) {
-            *f = m * model.gravity;
+        if terms.gravity {
+            for (f, &m) in force.iter_mut().zip(&model.mass) {
+                *f = m * model.gravity;
+            }
+        } else {
+            force.fill(V3::zeros());
         }
-        springs(model, x, v, alive, force);
-        hinges(model, &self.hinge_rest, x, v, force);
-        let any_particle_drag = self.any_particle_drag;
+        if terms.springs {
+            springs(model, x, v, alive, force);
+        }
+        if terms.hinges {
+            hinges(model, &self.hinge_rest, x, v, force);
+        }
         let wind = self.sample_wind(model, x, t);
-        triangle_aero(model, x, v, wind, force);
-        if any_particle_drag {
+        if terms.aero {
+            triangle_aero(model, x, v, wind, force);
+        }
+        if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
     }
@@ -298,6 +324,9 @@ impl Forces {
         acc: &mut [V3],
     ) {
         self.total(model, x, v, alive, t, acc);
+        if self.terms.rigid {
+            crate::rigid::accelerations(&model.rigid, x, v, acc);
+        }
         for (a, &w) in acc.iter_mut().zip(&model.inv_mass) {
             *a *= w;
         }

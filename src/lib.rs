@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod classify;
+pub mod contact;
 pub mod field;
 pub mod force;
 pub mod integrate;
@@ -17,7 +18,9 @@ pub mod io;
 pub mod leaf;
 pub mod model;
 pub mod pose;
+pub mod rigid;
 pub mod sim;
 pub mod stability;
 pub mod state;
+pub mod terms;
 pub mod trajectory;

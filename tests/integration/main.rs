@@ -3,8 +3,10 @@
 
 mod alloc;
 mod common;
+mod contact;
 mod integrators;
 mod invariants;
 mod leaves;
+mod rigid;
 mod stability;
 mod validation;
