@@ -118,6 +118,22 @@ pub fn hinges(model: &Model, rest: &[(f64, f64)], x: &[V3], v: &[V3], force: &mu
     }
 }
 
+/// For each triangle, the spring (if any) along each of its three edges.
+pub fn edge_springs(model: &Model) -> Vec<[Option<usize>; 3]> {
+    let mut by_pair = std::collections::HashMap::new();
+    for (k, s) in model.springs.iter().enumerate() {
+        by_pair.insert((s.i.min(s.j), s.i.max(s.j)), k);
+    }
+    model
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.corners;
+            [(a, b), (b, c), (c, a)].map(|(i, j)| by_pair.get(&(i.min(j), i.max(j))).copied())
+        })
+        .collect()
+}
+
 /// (sin θ₀, cos θ₀) of every hinge's rest angle, for [`hinges`].
 pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
     model
@@ -143,7 +159,25 @@ pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
 ///
 /// `wind` holds G at every particle, or is `None` in still air.
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
-    for tri in &model.triangles {
+    triangle_aero_intact(model, x, v, wind, &[], force);
+}
+
+/// [`triangle_aero`] on the triangles that are not torn (`torn[t]`; an empty
+/// mask tears none). A triangle whose edge spring has broken is no longer a
+/// surface: left in, its corners, held by nothing, would be spread by the
+/// wind, whose force grows with the area it spreads (a runaway).
+pub fn triangle_aero_intact(
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+) {
+    for (t, tri) in model.triangles.iter().enumerate() {
+        if torn.get(t).copied().unwrap_or(false) {
+            continue;
+        }
         let [a, b, c] = tri.corners;
         let e1 = x[b] - x[a];
         let e2 = x[c] - x[a];
@@ -232,6 +266,10 @@ pub struct Forces {
     evaluations: u64,
     terms: Terms,
     hinge_rest: Vec<(f64, f64)>,
+    /// For each triangle, the springs along its edges (with breaking on).
+    edge_springs: Vec<[Option<usize>; 3]>,
+    /// Triangles torn by a broken edge spring (empty until one breaks).
+    torn: Vec<bool>,
 }
 
 impl Forces {
@@ -253,7 +291,33 @@ impl Forces {
             evaluations: 0,
             terms,
             hinge_rest: hinge_rest(model),
+            edge_springs: if terms.breaking {
+                edge_springs(model)
+            } else {
+                Vec::new()
+            },
+            torn: Vec::new(),
         }
+    }
+
+    /// Marks the triangles whose edge springs have broken (`alive[s]` false)
+    /// as torn; they feel no more wind. Call after springs break.
+    pub fn tear(&mut self, alive: &[bool]) {
+        let torn: Vec<bool> = self
+            .edge_springs
+            .iter()
+            .map(|edges| edges.iter().flatten().any(|&s| !alive[s]))
+            .collect();
+        self.torn = if torn.iter().any(|&t| t) {
+            torn
+        } else {
+            Vec::new()
+        };
+    }
+
+    /// Which triangles are torn (empty: none).
+    pub fn torn(&self) -> &[bool] {
+        &self.torn
     }
 
     /// The terms evaluated.
@@ -304,13 +368,16 @@ impl Forces {
         if terms.hinges {
             hinges(model, &self.hinge_rest, x, v, force);
         }
+        // Moved out for the call (no allocation): the wind borrows self.
+        let torn = std::mem::take(&mut self.torn);
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
-            triangle_aero(model, x, v, wind, force);
+            triangle_aero_intact(model, x, v, wind, &torn, force);
         }
         if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
+        self.torn = torn;
     }
 
     /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.

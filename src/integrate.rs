@@ -346,6 +346,7 @@ impl Simulator {
             }
         }
         if !self.breakable.is_empty() && break_springs(model, state, &self.breakable) > 0 {
+            self.forces.tear(&state.spring_alive);
             self.acc_valid = false;
         }
         let step = self.steps;
@@ -475,7 +476,7 @@ impl Simulator {
             s.time,
             &mut self.acc,
         );
-        imp.linearise(model, s, h);
+        imp.linearise(model, s, h, self.forces.torn());
         // b = h (f0 + h K v0), K = ∂f/∂x = −Σ S_k (see linearise).
         let b = &mut imp.b;
         for (bi, f) in b.iter_mut().zip(&self.acc) {
@@ -694,7 +695,7 @@ impl ImplicitScratch {
         }
     }
 
-    fn linearise(&mut self, model: &Model, s: &State, h: f64) {
+    fn linearise(&mut self, model: &Model, s: &State, h: f64, torn: &[bool]) {
         for (k, spring) in model.springs.iter().enumerate() {
             let d = s.position[spring.i] - s.position[spring.j];
             let l = d.norm();
@@ -736,7 +737,10 @@ impl ImplicitScratch {
         for (i, blk) in self.particle_blocks.iter_mut().enumerate() {
             *blk = Matrix3::identity() * (model.mass[i] + h * model.particle_drag[i]);
         }
-        for tri in &model.triangles {
+        for (t, tri) in model.triangles.iter().enumerate() {
+            if torn.get(t).copied().unwrap_or(false) {
+                continue;
+            }
             let [a, b, c] = tri.corners;
             let x = &s.position;
             let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));

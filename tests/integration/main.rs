@@ -9,4 +9,5 @@ mod invariants;
 mod leaves;
 mod rigid;
 mod stability;
+mod tearing;
 mod validation;
