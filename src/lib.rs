@@ -19,6 +19,7 @@ pub mod leaf;
 pub mod model;
 pub mod pose;
 pub mod rigid;
+pub mod scene;
 pub mod sim;
 pub mod stability;
 pub mod state;
