@@ -79,30 +79,45 @@ fn segments(path: &str) -> Vec<(&str, Vec<usize>)> {
 /// 1-based line of the field `path` in `text`; when the field itself is
 /// absent (a default was used), the line of its nearest enclosing table.
 pub fn line_of_path(text: &str, path: &str) -> Option<usize> {
+    lookup(text, path).map(|(line, _)| line)
+}
+
+/// 1-based line of the field `path` only if it is present in `text`.
+pub fn line_of_present(text: &str, path: &str) -> Option<usize> {
+    lookup(text, path).and_then(|(line, exact)| exact.then_some(line))
+}
+
+/// The line of `path` (or of its nearest present ancestor) and whether the
+/// path itself is present.
+fn lookup(text: &str, path: &str) -> Option<(usize, bool)> {
     let root = DeTable::parse(text).ok()?;
     let mut table: &DeTable<'_> = root.get_ref();
     let mut best: Option<usize> = None;
-    for (key, indices) in segments(path) {
+    let steps = segments(path);
+    let last = steps.len().saturating_sub(1);
+    for (n, (key, indices)) in steps.into_iter().enumerate() {
         let Some((k, mut value)) = table.iter().find(|(k, _)| k.get_ref() == key) else {
-            return best.map(|o| line_of_offset(text, o));
+            return best.map(|o| (line_of_offset(text, o), false));
         };
         best = Some(k.span().start);
         for i in indices {
-            let DeValue::Array(items) = value.get_ref() else {
-                break;
+            let item = match value.get_ref() {
+                DeValue::Array(items) => items.get(i),
+                _ => None,
             };
-            let Some(item) = items.get(i) else {
-                break;
+            let Some(item) = item else {
+                return best.map(|o| (line_of_offset(text, o), false));
             };
             value = item;
             best = Some(item.span().start);
         }
         match value.get_ref() {
             DeValue::Table(t) => table = t,
-            _ => break,
+            _ if n < last => return best.map(|o| (line_of_offset(text, o), false)),
+            _ => {}
         }
     }
-    best.map(|o| line_of_offset(text, o))
+    best.map(|o| (line_of_offset(text, o), true))
 }
 
 #[cfg(test)]
@@ -120,6 +135,9 @@ mod tests {
         assert_eq!(line_of_path(TEXT, "leaf[1].count"), Some(8));
         assert_eq!(line_of_path(TEXT, "ground.restitution"), Some(12));
         assert_eq!(line_of_path(TEXT, "ground.static_friction"), Some(13));
+        assert_eq!(line_of_present(TEXT, "leaf[1].count"), None);
+        assert_eq!(line_of_present(TEXT, "leaf[0].count"), Some(6));
+        assert_eq!(line_of_present(TEXT, "leaf[2].count"), None);
         let offset = TEXT.find("0.2").unwrap();
         assert_eq!(path_at(TEXT, offset).as_deref(), Some("leaf[1].spread[1]"));
         let offset = TEXT.find("count").unwrap();

@@ -176,13 +176,21 @@ impl Scene {
     /// paths are relative to `base`.
     pub fn from_toml(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
         let spec: SceneSpec = toml::from_str(text).map_err(|e| {
-            let (line, field) = match e.span() {
+            let (mut line, mut field) = match e.span() {
                 Some(span) => (
                     Some(locate::line_of_offset(text, span.start)),
                     locate::path_at(text, span.start).unwrap_or_else(|| "(document)".into()),
                 ),
                 None => (None, "(document)".to_string()),
             };
+            // Errors raised for a whole table (a key that does not apply to
+            // its kind) name the key in backticks: point at that key.
+            if let Some(key) = e.message().split('`').nth(1) {
+                let path = format!("{field}.{key}");
+                if let Some(l) = locate::line_of_present(text, &path) {
+                    (line, field) = (Some(l), path);
+                }
+            }
             SceneError {
                 file: file.to_string(),
                 line,
@@ -191,6 +199,19 @@ impl Scene {
             }
         })?;
         compile(&spec, &Ctx { text, file, base })
+    }
+
+    /// Compiles an already parsed scene (for programs that build or edit
+    /// one); errors name the field but no line.
+    pub fn from_spec(spec: &SceneSpec, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        compile(
+            spec,
+            &Ctx {
+                text: "",
+                file,
+                base,
+            },
+        )
     }
 
     /// The terms and passes the compiled model needs.
