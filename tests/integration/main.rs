@@ -8,6 +8,8 @@ mod integrators;
 mod invariants;
 mod leaves;
 mod rigid;
+mod scene_files;
+mod scenes;
 mod stability;
 mod tearing;
 mod validation;
