@@ -303,16 +303,21 @@ impl Forces {
     /// Marks the triangles whose edge springs have broken (`alive[s]` false)
     /// as torn; they feel no more wind. Call after springs break.
     pub fn tear(&mut self, alive: &[bool]) {
-        let torn: Vec<bool> = self
+        // Sized at the first tear only; refilled in place afterwards.
+        if !self
             .edge_springs
             .iter()
-            .map(|edges| edges.iter().flatten().any(|&s| !alive[s]))
-            .collect();
-        self.torn = if torn.iter().any(|&t| t) {
-            torn
-        } else {
-            Vec::new()
-        };
+            .flatten()
+            .flatten()
+            .any(|&s| !alive[s])
+        {
+            self.torn.clear();
+            return;
+        }
+        self.torn.resize(self.edge_springs.len(), false);
+        for (torn, edges) in self.torn.iter_mut().zip(&self.edge_springs) {
+            *torn = edges.iter().flatten().any(|&s| !alive[s]);
+        }
     }
 
     /// Which triangles are torn (empty: none).
