@@ -233,3 +233,33 @@ fn degenerate_rigid_groups_are_rejected() {
     let e = Model::new(p).unwrap_err();
     assert!(e.reason.contains("fixed"), "{e}");
 }
+
+/// A rigid leaf (a scene leaf with `rigid = true`) moved by the summed
+/// aerodynamic force of its triangles reaches the exact terminal speed of the
+/// paper's linear law: falling level at speed u, each triangle's corners take
+/// 3 A (αⁿ n_z² + αᵗ (1 − n_z²)) u upwards in all, which balances M g.
+#[test]
+fn a_rigid_leaf_falls_at_the_linear_laws_terminal_speed() {
+    let text = "name = \"rigid-leaf\"\nduration = 20.0\n\n[[leaf]]\nname = \"leaf\"\nleaf = \"a\"\nrigid = true\nrotation_deg = [10.0, 2.0, 0.0]\n";
+    let scene =
+        leafmagic::scene::Scene::from_toml(text, "rigid-leaf.toml", std::path::Path::new("."))
+            .unwrap();
+    assert!(scene.model.springs.is_empty() && scene.model.hinges.is_empty());
+    let (_, s) = scene.run_with(None, |_, _| {}).unwrap();
+    let m = &scene.model;
+    let mut balance = 0.0;
+    for t in &m.triangles {
+        let [a, b, c] = t.corners;
+        let n = (s.position[b] - s.position[a]).cross(&(s.position[c] - s.position[a]));
+        let (area, nz) = (0.5 * n.norm(), n.z / n.norm());
+        balance += 3.0 * area * (t.alpha_n * nz * nz + t.alpha_t * (1.0 - nz * nz));
+    }
+    let terminal = m.total_mass() * m.gravity.norm() / balance;
+    let (_, v) = m.rigid[0].centre(&s.position, &s.velocity);
+    assert!(
+        (-v.z - terminal).abs() < 1e-9 * terminal,
+        "descends at {} m/s, the law gives {terminal} m/s",
+        -v.z
+    );
+    assert!(v.xy().norm() < 1e-5, "still gliding: {v:?}");
+}
