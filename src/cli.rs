@@ -9,6 +9,7 @@ use leafmagic::classify::{self, Classification, MotionClass};
 use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::model::Model;
+use leafmagic::scene::{self, Scene};
 use leafmagic::sim::{self, DropParams, TimeStep};
 use leafmagic::stability;
 use leafmagic::state::State;
@@ -43,6 +44,8 @@ pub enum Command {
     /// Error against cost of every integrator over a sweep of time steps
     /// (work-precision), or with --long, classes and statistics across steps.
     Accuracy(AccuracyArgs),
+    /// Run a scene file and write per-object trajectories and a summary.
+    Scene(SceneArgs),
 }
 
 /// Arguments of `accuracy`.
@@ -117,6 +120,25 @@ pub struct ExportArgs {
     /// Output directory for the leaf files and index.csv.
     #[arg(long)]
     pub out: PathBuf,
+}
+
+/// Arguments of `scene`.
+#[derive(clap::Args, Debug)]
+pub struct SceneArgs {
+    /// Scene file (TOML, see scenes/README.md).
+    pub file: PathBuf,
+    /// Output directory (default runs/scene-<name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Simulated seconds (default: the scene's duration).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// List what the compiled scene keeps and leaves out, then stop.
+    #[arg(long)]
+    pub explain: bool,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `classify`.
@@ -224,7 +246,106 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Check(args) => check(args),
         Command::Classify(args) => classify(args),
         Command::Accuracy(args) => accuracy(args),
+        Command::Scene(args) => run_scene(args),
     }
+}
+
+fn run_scene(args: SceneArgs) -> Result<()> {
+    let scene = Scene::load(&args.file)?;
+    let decisions = scene.explain();
+    let frame = 1.0 / scene.frame_rate;
+    if args.explain {
+        let dt = sim::resolve_dt(&scene.model, scene.integrator, scene.dt, frame);
+        if args.json {
+            let out = json!({
+                "scene": scene.name,
+                "particles": scene.model.len(),
+                "springs": scene.model.springs.len(),
+                "triangles": scene.model.triangles.len(),
+                "hinges": scene.model.hinges.len(),
+                "rigid_bodies": scene.model.rigid.len(),
+                "integrator": scene.integrator,
+                "dt": dt.as_ref().ok(),
+                "kept": decisions.iter().filter(|d| d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
+                "left_out": decisions.iter().filter(|d| !d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
+                "pruned": scene.pruned,
+            });
+            println!("{}", serde_json::to_string_pretty(&out)?);
+            return Ok(());
+        }
+        println!(
+            "scene       {} ({}): {} objects, {} particles, {} springs, {} triangles, {} hinges, {} rigid bodies",
+            scene.name,
+            scene.source,
+            scene.objects.len(),
+            scene.model.len(),
+            scene.model.springs.len(),
+            scene.model.triangles.len(),
+            scene.model.hinges.len(),
+            scene.model.rigid.len()
+        );
+        match dt {
+            Ok(dt) => println!("integrator  {} (dt = {dt:.4e} s)", scene.integrator),
+            Err(e) => println!("integrator  {} ({e})", scene.integrator),
+        }
+        for d in &decisions {
+            let verdict = if d.kept { "kept" } else { "left out" };
+            println!("{verdict:<11} {:<29} {}", d.name, d.reason);
+        }
+        for p in &scene.pruned {
+            println!("{:<11} {p}", "pruned");
+        }
+        return Ok(());
+    }
+    let run = scene
+        .run(args.seconds)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
+    let dir = args
+        .out
+        .clone()
+        .unwrap_or_else(|| scene::default_out_dir(&scene));
+    let written = run
+        .write(&scene, &dir)
+        .with_context(|| format!("cannot write to {}", dir.display()))?;
+    let s = &run.stats;
+    if args.json {
+        let out = json!({
+            "scene": scene.name,
+            "stats": s,
+            "wall_s": s.wall_s,
+            "wall_per_simulated_s": s.wall_s / s.simulated_s,
+            "out": dir,
+            "files": written,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!(
+        "scene           {} ({} objects, {} particles)",
+        scene.name,
+        scene.objects.len(),
+        scene.model.len()
+    );
+    println!(
+        "integrator      {} (dt = {:.4e} s, {} steps, {} force evaluations)",
+        s.integrator, s.dt, s.steps, s.force_evaluations
+    );
+    println!(
+        "simulated       {:.3} s in {:.4} s wall ({:.2e} wall s per simulated s)",
+        s.simulated_s,
+        s.wall_s,
+        s.wall_s / s.simulated_s
+    );
+    println!(
+        "events          {} ground contacts resolved, {} springs broken",
+        s.contacts_resolved, s.broken_springs
+    );
+    println!(
+        "output          {} ({} files)",
+        dir.display(),
+        written.len()
+    );
+    Ok(())
 }
 
 fn drop(args: DropArgs) -> Result<()> {

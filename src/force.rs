@@ -4,6 +4,7 @@
 //! reproducible bit for bit.
 
 use crate::model::{Hinge, Model};
+use crate::terms::Terms;
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
@@ -125,6 +126,22 @@ pub fn hinges(model: &Model, rest: &[(f64, f64)], x: &[V3], v: &[V3], force: &mu
     }
 }
 
+/// For each triangle, the spring (if any) along each of its three edges.
+pub fn edge_springs(model: &Model) -> Vec<[Option<usize>; 3]> {
+    let mut by_pair = std::collections::HashMap::new();
+    for (k, s) in model.springs.iter().enumerate() {
+        by_pair.insert((s.i.min(s.j), s.i.max(s.j)), k);
+    }
+    model
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.corners;
+            [(a, b), (b, c), (c, a)].map(|(i, j)| by_pair.get(&(i.min(j), i.max(j))).copied())
+        })
+        .collect()
+}
+
 /// (sin θ₀, cos θ₀) of every hinge's rest angle, for [`hinges`].
 pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
     model
@@ -150,7 +167,25 @@ pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
 ///
 /// `wind` holds G at every particle, or is `None` in still air.
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
-    for tri in &model.triangles {
+    triangle_aero_intact(model, x, v, wind, &[], force);
+}
+
+/// [`triangle_aero`] on the triangles that are not torn (`torn[t]`; an empty
+/// mask tears none). A triangle whose edge spring has broken is no longer a
+/// surface: left in, its corners, held by nothing, would be spread by the
+/// wind, whose force grows with the area it spreads (a runaway).
+pub fn triangle_aero_intact(
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+) {
+    for (t, tri) in model.triangles.iter().enumerate() {
+        if torn.get(t).copied().unwrap_or(false) {
+            continue;
+        }
         let [a, b, c] = tri.corners;
         let e1 = x[b] - x[a];
         let e2 = x[c] - x[a];
@@ -229,28 +264,78 @@ impl ForceTerms {
     }
 }
 
-/// Sums all force terms of a model with preallocated scratch space, so that
-/// evaluating forces inside the step loop never allocates.
+/// Sums the force terms of a model that its [`Terms`] keep, with
+/// preallocated scratch space, so that evaluating forces inside the step
+/// loop never allocates.
 #[derive(Clone, Debug)]
 pub struct Forces {
     wind: Vec<V3>,
     scratch: Vec<V3>,
     evaluations: u64,
-    /// Whether any particle has eq. 7 drag; most leaves have none.
-    any_particle_drag: bool,
+    terms: Terms,
     hinge_rest: Vec<(f64, f64)>,
+    /// For each triangle, the springs along its edges (with breaking on).
+    edge_springs: Vec<[Option<usize>; 3]>,
+    /// Triangles torn by a broken edge spring (empty until one breaks).
+    torn: Vec<bool>,
 }
 
 impl Forces {
-    /// Scratch space sized for `model`.
+    /// The terms `model` needs ([`Terms::needed`]), scratch space sized for it.
     pub fn new(model: &Model) -> Forces {
+        Forces::with_terms(model, Terms::needed(model))
+    }
+
+    /// Evaluates exactly `terms` (a term the model gives nothing to do adds
+    /// zeros; a term left out is not evaluated).
+    pub fn with_terms(model: &Model, terms: Terms) -> Forces {
         Forces {
-            wind: vec![V3::zeros(); model.len()],
+            wind: if terms.wind {
+                vec![V3::zeros(); model.len()]
+            } else {
+                Vec::new()
+            },
             scratch: vec![V3::zeros(); model.len()],
             evaluations: 0,
-            any_particle_drag: model.particle_drag.iter().any(|&a| a != 0.0),
+            terms,
             hinge_rest: hinge_rest(model),
+            edge_springs: if terms.breaking {
+                edge_springs(model)
+            } else {
+                Vec::new()
+            },
+            torn: Vec::new(),
         }
+    }
+
+    /// Marks the triangles whose edge springs have broken (`alive[s]` false)
+    /// as torn; they feel no more wind. Call after springs break.
+    pub fn tear(&mut self, alive: &[bool]) {
+        // Sized at the first tear only; refilled in place afterwards.
+        if !self
+            .edge_springs
+            .iter()
+            .flatten()
+            .flatten()
+            .any(|&s| !alive[s])
+        {
+            self.torn.clear();
+            return;
+        }
+        self.torn.resize(self.edge_springs.len(), false);
+        for (torn, edges) in self.torn.iter_mut().zip(&self.edge_springs) {
+            *torn = edges.iter().flatten().any(|&s| !alive[s]);
+        }
+    }
+
+    /// Which triangles are torn (empty: none).
+    pub fn torn(&self) -> &[bool] {
+        &self.torn
+    }
+
+    /// The terms evaluated.
+    pub fn terms(&self) -> Terms {
+        self.terms
     }
 
     /// Number of full force evaluations so far (a machine-independent
@@ -260,7 +345,7 @@ impl Forces {
     }
 
     fn sample_wind(&mut self, model: &Model, x: &[V3], t: f64) -> Option<&[V3]> {
-        if model.wind.is_still() {
+        if !self.terms.wind {
             return None;
         }
         for (g, p) in self.wind.iter_mut().zip(x) {
@@ -280,19 +365,32 @@ impl Forces {
         force: &mut [V3],
     ) {
         self.evaluations += 1;
+        let terms = self.terms;
         // Start from gravity rather than zero: one pass fewer than
         // `fill(0)` followed by `gravity`, same sums in the same order.
-        for (f, &m) in force.iter_mut().zip(&model.mass) {
-            *f = m * model.gravity;
+        if terms.gravity {
+            for (f, &m) in force.iter_mut().zip(&model.mass) {
+                *f = m * model.gravity;
+            }
+        } else {
+            force.fill(V3::zeros());
         }
-        springs(model, x, v, alive, force);
-        hinges(model, &self.hinge_rest, x, v, force);
-        let any_particle_drag = self.any_particle_drag;
+        if terms.springs {
+            springs(model, x, v, alive, force);
+        }
+        if terms.hinges {
+            hinges(model, &self.hinge_rest, x, v, force);
+        }
+        // Moved out for the call (no allocation): the wind borrows self.
+        let torn = std::mem::take(&mut self.torn);
         let wind = self.sample_wind(model, x, t);
-        triangle_aero(model, x, v, wind, force);
-        if any_particle_drag {
+        if terms.aero {
+            triangle_aero_intact(model, x, v, wind, &torn, force);
+        }
+        if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
+        self.torn = torn;
     }
 
     /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.
@@ -306,6 +404,9 @@ impl Forces {
         acc: &mut [V3],
     ) {
         self.total(model, x, v, alive, t, acc);
+        if self.terms.rigid {
+            crate::rigid::accelerations(&model.rigid, x, v, acc);
+        }
         for (a, &w) in acc.iter_mut().zip(&model.inv_mass) {
             *a *= w;
         }

@@ -2,9 +2,12 @@
 //! all sharing one force evaluation path ([`Forces`]), plus spring breaking
 //! and divergence detection after every step.
 
+use crate::contact::ContactSolver;
 use crate::force::{ForceTerms, Forces};
 use crate::model::Model;
+use crate::rigid::RigidProjector;
 use crate::state::State;
+use crate::terms::Terms;
 use nalgebra::{Matrix3, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -52,6 +55,20 @@ impl Integrator {
             Integrator::Verlet => "verlet",
             Integrator::Rk4 => "rk4",
             Integrator::Implicit => "implicit",
+        }
+    }
+
+    /// How far, in units of dt, the new position moves per unit of velocity
+    /// gained from a force constant over the step: x_{n+1} gains c h Δv with
+    /// Δv = a h. Forward Euler 0 (its position uses the old velocity),
+    /// symplectic and backward Euler 1, Verlet and RK4 ½ (h²/2 a). An
+    /// impulse applied after the step (ground contact) moves positions by the
+    /// same amount, as if it had acted within the step.
+    pub fn impulse_position_factor(self) -> f64 {
+        match self {
+            Integrator::Euler => 0.0,
+            Integrator::Symplectic | Integrator::Implicit => 1.0,
+            Integrator::Verlet | Integrator::Rk4 => 0.5,
         }
     }
 
@@ -234,35 +251,73 @@ pub struct Simulator {
     k_acc: [Vec<V3>; 4],
     k_vel: [Vec<V3>; 3],
     implicit: Option<ImplicitScratch>,
+    rigid: Option<RigidProjector>,
+    contact: Option<ContactSolver>,
 }
 
 impl Simulator {
-    /// A simulator for `model` with the chosen integrator.
+    /// A simulator for `model` with the chosen integrator, evaluating the
+    /// terms the model needs ([`Terms::needed`]).
     pub fn new(model: &Model, integrator: Integrator) -> Simulator {
+        Simulator::with_terms(model, integrator, Terms::needed(model))
+    }
+
+    /// A simulator that evaluates exactly `terms`, holding scratch space only
+    /// for them and for the chosen integrator.
+    pub fn with_terms(model: &Model, integrator: Integrator, terms: Terms) -> Simulator {
         let n = model.len();
-        let zeros = || vec![V3::zeros(); n];
-        let breakable = model
-            .springs
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| s.break_strain.is_some())
-            .map(|(i, _)| i)
-            .collect();
+        let zeros_if = |used: bool| {
+            if used {
+                vec![V3::zeros(); n]
+            } else {
+                Vec::new()
+            }
+        };
+        let rk4 = integrator == Integrator::Rk4;
+        let breakable = if terms.breaking {
+            model
+                .springs
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| s.break_strain.is_some())
+                .map(|(i, _)| i)
+                .collect()
+        } else {
+            Vec::new()
+        };
         let speed_limit = RUNAWAY_SPEED + 10.0 * model.wind.speed_bound();
         Simulator {
             integrator,
-            forces: Forces::new(model),
+            forces: Forces::with_terms(model, terms),
             steps: 0,
             breakable,
             speed_limit2: speed_limit * speed_limit,
-            acc: zeros(),
+            acc: zeros_if(true),
             acc_valid: false,
-            x_tmp: zeros(),
-            v_tmp: zeros(),
-            k_acc: [zeros(), zeros(), zeros(), zeros()],
-            k_vel: [zeros(), zeros(), zeros()],
+            x_tmp: zeros_if(rk4),
+            v_tmp: zeros_if(integrator == Integrator::Verlet),
+            k_acc: std::array::from_fn(|_| zeros_if(rk4)),
+            k_vel: std::array::from_fn(|_| zeros_if(rk4)),
             implicit: (integrator == Integrator::Implicit).then(|| ImplicitScratch::new(model)),
+            rigid: terms.rigid.then(|| RigidProjector::new(&model.rigid)),
+            contact: terms.contact.then(|| ContactSolver::new(model)),
         }
+    }
+
+    /// The terms this simulator evaluates.
+    pub fn terms(&self) -> Terms {
+        self.forces.terms()
+    }
+
+    /// The rigid-body projector (its last fitted rotations), if rigid bodies
+    /// are simulated.
+    pub fn rigid(&self) -> Option<&RigidProjector> {
+        self.rigid.as_ref()
+    }
+
+    /// Point contacts with the ground resolved so far.
+    pub fn contacts_resolved(&self) -> u64 {
+        self.contact.as_ref().map_or(0, ContactSolver::resolved)
     }
 
     /// The integrator in use.
@@ -286,9 +341,12 @@ impl Simulator {
         self.acc_valid = false;
     }
 
-    /// Advances `state` by `dt`: integrate, break over-stretched springs, then
-    /// check the new state. On divergence the state holds the bad values and
-    /// the error names the step, particle and likely cause.
+    /// Advances `state` by `dt`. The stages, each present only if its term
+    /// is kept: integrate (forces, with rigid-body accelerations); put rigid
+    /// bodies back on their shape; resolve ground contact; break
+    /// over-stretched springs; then check the new state. On divergence the
+    /// state holds the bad values and the error names the step, particle and
+    /// likely cause.
     pub fn step(&mut self, model: &Model, state: &mut State, dt: f64) -> Result<(), SimError> {
         match self.integrator {
             Integrator::Euler => self.step_euler(model, state, dt),
@@ -298,7 +356,19 @@ impl Simulator {
             Integrator::Implicit => self.step_implicit(model, state, dt)?,
         }
         state.time += dt;
+        if let Some(rigid) = &mut self.rigid {
+            rigid.project(&model.rigid, state);
+        }
+        // Contact impulses change velocities: Verlet's carried acceleration
+        // (which depends on them through drag and dashpots) is then stale.
+        if let Some(contact) = &mut self.contact {
+            let shift = dt * self.integrator.impulse_position_factor();
+            if contact.resolve(model, state, dt, shift) {
+                self.acc_valid = false;
+            }
+        }
         if !self.breakable.is_empty() && break_springs(model, state, &self.breakable) > 0 {
+            self.forces.tear(&state.spring_alive);
             self.acc_valid = false;
         }
         let step = self.steps;
@@ -428,7 +498,7 @@ impl Simulator {
             s.time,
             &mut self.acc,
         );
-        imp.linearise(model, s, h);
+        imp.linearise(model, s, h, self.forces.torn());
         // b = h (f0 + h K v0), K = ∂f/∂x = −Σ S_k (see linearise).
         let b = &mut imp.b;
         for (bi, f) in b.iter_mut().zip(&self.acc) {
@@ -647,7 +717,7 @@ impl ImplicitScratch {
         }
     }
 
-    fn linearise(&mut self, model: &Model, s: &State, h: f64) {
+    fn linearise(&mut self, model: &Model, s: &State, h: f64, torn: &[bool]) {
         for (k, spring) in model.springs.iter().enumerate() {
             let d = s.position[spring.i] - s.position[spring.j];
             let l = d.norm();
@@ -689,7 +759,10 @@ impl ImplicitScratch {
         for (i, blk) in self.particle_blocks.iter_mut().enumerate() {
             *blk = Matrix3::identity() * (model.mass[i] + h * model.particle_drag[i]);
         }
-        for tri in &model.triangles {
+        for (t, tri) in model.triangles.iter().enumerate() {
+            if torn.get(t).copied().unwrap_or(false) {
+                continue;
+            }
             let [a, b, c] = tri.corners;
             let x = &s.position;
             let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));

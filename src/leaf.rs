@@ -463,6 +463,7 @@ impl LeafSpec {
             aero: self.aero.law,
             wind: self.wind.clone(),
             gravity: Vector3::from(self.gravity),
+            ..Default::default()
         })
     }
 }

@@ -6,7 +6,9 @@
 //! [`crate::state::State`]. Construction validates every item, so the
 //! simulator can assume finite masses, stiffnesses and in-range indices.
 
+use crate::contact::Ground;
 use crate::field::WindField;
+use crate::rigid::{RigidBody, RigidGroup};
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 use std::collections::HashSet;
@@ -104,6 +106,10 @@ pub struct Model {
     pub wind: WindField,
     /// Gravitational acceleration, m/s².
     pub gravity: Vector3<f64>,
+    /// The ground plane, if any (scenes).
+    pub ground: Option<Ground>,
+    /// Particle sets moved as rigid bodies (scenes).
+    pub rigid: Vec<RigidBody>,
 }
 
 /// The raw parts of a model, before validation.
@@ -129,6 +135,10 @@ pub struct ModelParts {
     pub wind: WindField,
     /// See [`Model::gravity`].
     pub gravity: Vector3<f64>,
+    /// See [`Model::ground`].
+    pub ground: Option<Ground>,
+    /// Member lists of the rigid bodies (see [`Model::rigid`]).
+    pub rigid: Vec<RigidGroup>,
 }
 
 /// A reason a model is invalid, naming the offending item.
@@ -329,6 +339,23 @@ impl Model {
             .wind
             .validate()
             .map_err(|e| err(e.item.clone(), e.reason.clone()))?;
+        if let Some(ground) = &parts.ground {
+            ground.validate()?;
+        }
+        let mut owner: Vec<Option<usize>> = vec![None; n];
+        let mut rigid = Vec::with_capacity(parts.rigid.len());
+        for (b, group) in parts.rigid.iter().enumerate() {
+            let body = RigidBody::new(b, group, &parts.mass, &parts.fixed, &parts.rest_position)?;
+            for &i in &body.members {
+                if let Some(other) = owner[i].replace(b) {
+                    return Err(err(
+                        format!("rigid[{b}].members"),
+                        format!("particle {i} already belongs to rigid[{other}]"),
+                    ));
+                }
+            }
+            rigid.push(body);
+        }
         let inv_mass = parts
             .mass
             .iter()
@@ -347,6 +374,8 @@ impl Model {
             aero: parts.aero,
             wind: parts.wind,
             gravity: parts.gravity,
+            ground: parts.ground,
+            rigid,
         })
     }
 
@@ -363,6 +392,14 @@ impl Model {
             aero: self.aero,
             wind: self.wind.clone(),
             gravity: self.gravity,
+            ground: self.ground,
+            rigid: self
+                .rigid
+                .iter()
+                .map(|b| crate::rigid::RigidGroup {
+                    members: b.members.clone(),
+                })
+                .collect(),
         }
     }
 

@@ -52,47 +52,56 @@ impl PoseTracker {
         for (p, r) in position.iter().zip(&self.weighted_rest) {
             a += (p - com) * r.transpose();
         }
-        let mut q = self.rotation;
-        for _ in 0..MAX_ITERATIONS {
-            // Maximise f(R) = tr(Rᵀ A) over rotations R ← exp(δ̂) R. With
-            // M = A Rᵀ: gradient g = Σₖ rₖ × aₖ (the vector part of M − Mᵀ) and
-            // Hessian −(tr M · I − sym M). Newton's step δ = (tr M · I − sym M)⁻¹ g
-            // converges quadratically, also for a flat leaf whose A has rank 2
-            // (a plain gradient step would crawl there).
-            let r = q.to_rotation_matrix();
-            let m = a * r.matrix().transpose();
-            let g = Vector3::new(
-                m[(2, 1)] - m[(1, 2)],
-                m[(0, 2)] - m[(2, 0)],
-                m[(1, 0)] - m[(0, 1)],
-            );
-            let trace = m.trace();
-            let h = Matrix3::identity() * trace - (m + m.transpose()) * 0.5;
-            // A 3×3 inverse by cofactors (no square roots); far from the
-            // optimum the Hessian may be indefinite, and then the Newton step
-            // is no ascent direction: take a scaled gradient step instead.
-            let delta = match h.try_inverse().map(|inv| inv * g) {
-                Some(d) if d.dot(&g) > 0.0 => d,
-                _ => g / (trace.abs() + 1e-300),
-            };
-            let angle = delta.norm();
-            if angle.is_nan() || angle < ANGLE_TOLERANCE {
-                break;
-            }
-            // Turn by δ with the first-order quaternion (1, δ/2), normalised:
-            // a rotation by 2 atan(|δ|/2) = |δ| − O(|δ|³) about δ̂, which keeps
-            // Newton's quadratic convergence without a sine or cosine.
-            let turn = Quaternion::new(1.0, 0.5 * delta.x, 0.5 * delta.y, 0.5 * delta.z);
-            q = UnitQuaternion::new_normalize(turn * q.into_inner());
-        }
-        let q = UnitQuaternion::new_normalize(*q.quaternion());
-        // Keep the hemisphere of the previous frame so the CSV has no sign flips.
-        let q = if q.coords.dot(&self.rotation.coords) < 0.0 {
-            UnitQuaternion::new_unchecked(-q.into_inner())
-        } else {
-            q
-        };
+        let q = best_rotation(&a, self.rotation);
         self.rotation = q;
         (com, q)
+    }
+}
+
+/// The rotation R (body to world) that maximises tr(Rᵀ A) for
+/// A = Σ mᵢ (pᵢ − c) rᵢᵀ, i.e. best maps rest offsets rᵢ onto current
+/// offsets pᵢ − c in the mass-weighted least-squares sense; Newton's method on
+/// the rotation group, warm-started at `start`. The result lies in the
+/// quaternion hemisphere of `start`, so successive frames have no sign flips.
+pub fn best_rotation(a: &Matrix3<f64>, start: UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+    let mut q = start;
+    for _ in 0..MAX_ITERATIONS {
+        // Maximise f(R) = tr(Rᵀ A) over rotations R ← exp(δ̂) R. With
+        // M = A Rᵀ: gradient g = Σₖ rₖ × aₖ (the vector part of M − Mᵀ) and
+        // Hessian −(tr M · I − sym M). Newton's step δ = (tr M · I − sym M)⁻¹ g
+        // converges quadratically, also for a flat leaf whose A has rank 2
+        // (a plain gradient step would crawl there).
+        let r = q.to_rotation_matrix();
+        let m = a * r.matrix().transpose();
+        let g = Vector3::new(
+            m[(2, 1)] - m[(1, 2)],
+            m[(0, 2)] - m[(2, 0)],
+            m[(1, 0)] - m[(0, 1)],
+        );
+        let trace = m.trace();
+        let h = Matrix3::identity() * trace - (m + m.transpose()) * 0.5;
+        // A 3×3 inverse by cofactors (no square roots); far from the
+        // optimum the Hessian may be indefinite, and then the Newton step is
+        // no ascent direction: take a scaled gradient step instead.
+        let delta = match h.try_inverse().map(|inv| inv * g) {
+            Some(d) if d.dot(&g) > 0.0 => d,
+            _ => g / (trace.abs() + 1e-300),
+        };
+        let angle = delta.norm();
+        if angle.is_nan() || angle < ANGLE_TOLERANCE {
+            break;
+        }
+        // Turn by δ with the first-order quaternion (1, δ/2), normalised: a
+        // rotation by 2 atan(|δ|/2) = |δ| − O(|δ|³) about δ̂, which keeps
+        // Newton's quadratic convergence without a sine or cosine.
+        let turn = Quaternion::new(1.0, 0.5 * delta.x, 0.5 * delta.y, 0.5 * delta.z);
+        q = UnitQuaternion::new_normalize(turn * q.into_inner());
+    }
+    let q = UnitQuaternion::new_normalize(*q.quaternion());
+    // Keep the hemisphere of the previous frame so the CSV has no sign flips.
+    if q.coords.dot(&start.coords) < 0.0 {
+        UnitQuaternion::new_unchecked(-q.into_inner())
+    } else {
+        q
     }
 }

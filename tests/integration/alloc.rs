@@ -67,3 +67,36 @@ fn stepping_allocates_nothing() {
         }
     }
 }
+
+/// Scenes with ground contact, rigid bodies, ropes, wind and breaking springs
+/// step without allocating once their scratch space has grown (the first
+/// steps size the contact lists; the first break sizes the torn mask).
+#[test]
+fn scene_stepping_allocates_nothing() {
+    for name in ["rocking-bin", "inhale", "swings", "tear"] {
+        let scene = crate::scenes::load(name);
+        let dt = leafmagic::sim::resolve_dt(
+            &scene.model,
+            scene.integrator,
+            scene.dt,
+            1.0 / scene.frame_rate,
+        )
+        .unwrap();
+        let mut state = scene.initial.clone();
+        let mut sim = Simulator::new(&scene.model, scene.integrator);
+        // Warm up through the tear scene's first breaks (from t = 1.37 s).
+        let warm = (1.7 / dt) as usize;
+        for _ in 0..warm {
+            sim.step(&scene.model, &mut state, dt).unwrap();
+        }
+        let before = allocations();
+        for _ in 0..500 {
+            sim.step(&scene.model, &mut state, dt).unwrap();
+        }
+        assert_eq!(
+            allocations() - before,
+            0,
+            "{name} allocated in the step loop"
+        );
+    }
+}

@@ -19,6 +19,7 @@ pub fn parts(n: usize) -> ModelParts {
         aero: AeroLaw::Linear,
         wind: WindField::still(),
         gravity: V3::zeros(),
+        ..Default::default()
     }
 }
 

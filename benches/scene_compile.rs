@@ -1,0 +1,146 @@
+//! `scene_compile`: what the scene compiler saves. Prototype A falls one
+//! simulated second in still air (Verlet, the `--dt auto` step):
+//!
+//! - `compiled`: the terms the model needs ([`Terms::needed`]): gravity,
+//!   springs, hinges, still-air aerodynamics;
+//! - `all_terms`: the same drop with every term switched on but
+//!   contributing zero: the wind sampled from a zero uniform primitive,
+//!   particle drag with α = 0, a ground 1 km below, break strains no spring
+//!   reaches, the rigid-body pass (over no bodies);
+//! - `all_terms_scene_wind`: as `all_terms`, but the wind is the field of
+//!   `scenes/inhale.toml` (uniform, Lamb–Oseen vortex, point sink, bounded
+//!   uniform, keyframed) with every strength set to 0, which the compiler
+//!   prunes: the cost of evaluating a scene-sized field that contributes
+//!   nothing.
+//!
+//! Before timing, the runs are checked bit-identical, so the difference is
+//! pure overhead. The ratio of the times is the compiler's gain. On a shared
+//! machine criterion's means drift with the neighbours' load, so the bench
+//! first times the variants interleaved, round after round, and prints the
+//! ratios of their minimum times (the least disturbed runs).
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use leafmagic::contact::Ground;
+use leafmagic::field::{Primitive, WindField};
+use leafmagic::integrate::{Integrator, Simulator};
+use leafmagic::leaf::LeafSpec;
+use leafmagic::model::Model;
+use leafmagic::sim::{self, TimeStep};
+use leafmagic::state::State;
+use leafmagic::terms::Terms;
+use nalgebra::Vector3;
+use std::hint::black_box;
+
+fn fall(model: &Model, terms: Terms, dt: f64, steps: usize) -> State {
+    let mut state = State::released(model, sim::release_rotation([10.0, 2.0]), Vector3::zeros());
+    let mut simulator = Simulator::with_terms(model, Integrator::Verlet, terms);
+    for _ in 0..steps {
+        simulator.step(model, &mut state, dt).unwrap();
+    }
+    state
+}
+
+fn scene_compile(c: &mut Criterion) {
+    let plain = LeafSpec::load("a").unwrap().model().unwrap();
+    let mut everything = plain.clone();
+    everything.wind = WindField::new(vec![Primitive::uniform(Vector3::zeros())]);
+    everything.particle_drag = vec![0.0; everything.len()];
+    everything.ground = Some(Ground {
+        height: -1000.0,
+        static_friction: 0.5,
+        kinetic_friction: 0.4,
+        restitution: 0.0,
+    });
+    for s in &mut everything.springs {
+        s.break_strain = Some(1e9);
+    }
+    let dt = sim::resolve_dt(
+        &plain,
+        Integrator::Verlet,
+        TimeStep::Auto,
+        1.0 / sim::FRAME_RATE,
+    )
+    .unwrap();
+    let steps = (1.0 / dt).round() as usize;
+    let needed = Terms::needed(&plain);
+    assert!(!needed.wind && !needed.contact && !needed.breaking && !needed.rigid);
+    let a = fall(&plain, needed, dt, steps);
+    let b = fall(&everything, Terms::all(), dt, steps);
+    assert_eq!(a, b, "the extra terms must contribute exactly zero");
+
+    let mut scene_wind = everything.clone();
+    scene_wind.wind = zero_inhale_wind();
+    let c2 = fall(&scene_wind, Terms::all(), dt, steps);
+    assert_eq!(
+        a, c2,
+        "the zero-strength scene wind must contribute exactly zero"
+    );
+
+    let variants: [(&str, &Model, Terms); 3] = [
+        ("compiled", &plain, needed),
+        ("all_terms", &everything, Terms::all()),
+        ("all_terms_scene_wind", &scene_wind, Terms::all()),
+    ];
+    let mut best = [f64::INFINITY; 3];
+    for _ in 0..300 {
+        for (k, (_, model, terms)) in variants.iter().enumerate() {
+            let start = std::time::Instant::now();
+            black_box(fall(model, *terms, dt, steps));
+            best[k] = best[k].min(start.elapsed().as_secs_f64());
+        }
+    }
+    for (k, (name, _, _)) in variants.iter().enumerate() {
+        eprintln!(
+            "scene_compile: {name:<21} minimum {:7.1} µs per simulated second, {:.2}x the compiled run",
+            best[k] * 1e6,
+            best[k] / best[0]
+        );
+    }
+
+    let mut group = c.benchmark_group("scene_compile");
+    group.bench_function("compiled", |bench| {
+        bench.iter(|| black_box(fall(&plain, needed, dt, steps)))
+    });
+    group.bench_function("all_terms", |bench| {
+        bench.iter(|| black_box(fall(&everything, Terms::all(), dt, steps)))
+    });
+    group.bench_function("all_terms_scene_wind", |bench| {
+        bench.iter(|| black_box(fall(&scene_wind, Terms::all(), dt, steps)))
+    });
+    group.finish();
+}
+
+/// The wind of `scenes/inhale.toml` with every strength 0.
+fn zero_inhale_wind() -> WindField {
+    #[derive(serde::Deserialize)]
+    struct Wind {
+        wind: WindField,
+    }
+    let text = r#"
+        [[wind]]
+        kind = "uniform"
+        velocity = [0.0, 0.0, 0.0]
+        [[wind]]
+        kind = "line_vortex"
+        point = [0.0, 0.0, 0.0]
+        axis = [0.0, 0.0, 1.0]
+        circulation = 0.0
+        core_radius = 0.2
+        keys = [[0.5, 0.0], [3.0, 1.0]]
+        [[wind]]
+        kind = "point_sink"
+        point = [0.0, 0.0, 0.6]
+        flux = 0.0
+        core_radius = 0.3
+        keys = [[0.5, 0.0], [3.0, 1.0]]
+        [[wind]]
+        kind = "uniform"
+        velocity = [0.0, 0.0, 0.0]
+        keys = [[0.5, 0.0], [3.0, 1.0]]
+        bounds = { shape = "cylinder", point = [0.0, 0.0, 0.0], axis = [0.0, 0.0, 1.0], radius = 0.12, falloff = 0.1 }
+    "#;
+    toml::from_str::<Wind>(text).unwrap().wind
+}
+
+criterion_group!(benches, scene_compile);
+criterion_main!(benches);

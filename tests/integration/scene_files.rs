@@ -1,0 +1,336 @@
+//! Scene files: errors name the file, the line and the field; the compiler
+//! keeps exactly the terms a scene uses and leaving the others out changes
+//! nothing; the command writes the same bytes for the same input.
+
+use crate::common::V3;
+use crate::scenes::{load, scene_path};
+use leafmagic::integrate::{SimError, Simulator};
+use leafmagic::scene::{RunError, Scene, SceneError};
+use leafmagic::state::State;
+use leafmagic::terms::Terms;
+use std::path::Path;
+use std::process::Command;
+
+const MINIMAL: &str = r#"name = "t"
+duration = 1.0
+
+[[leaf]]
+name = "l"
+leaf = "a"
+position = [0.0, 0.0, 1.0]
+"#;
+
+fn compile(text: &str) -> Result<Scene, SceneError> {
+    Scene::from_toml(text, "test.toml", Path::new(env!("CARGO_MANIFEST_DIR")))
+}
+
+fn error(text: &str) -> SceneError {
+    compile(text).expect_err("the scene should be rejected")
+}
+
+/// 1-based line of the first line of `text` containing `needle`.
+fn line_of(text: &str, needle: &str) -> usize {
+    text.lines().position(|l| l.contains(needle)).unwrap() + 1
+}
+
+#[test]
+fn errors_name_the_file_the_line_and_the_field() {
+    assert!(compile(MINIMAL).is_ok());
+    // (scene text, text on the expected line, expected field)
+    let cases: Vec<(String, &str, &str)> = vec![
+        // Unknown key (deny_unknown_fields).
+        (
+            format!("{MINIMAL}colour = \"red\"\n"),
+            "colour",
+            "leaf[0].colour",
+        ),
+        // Wrong type.
+        (
+            MINIMAL.replace("duration = 1.0", "duration = \"long\""),
+            "duration",
+            "duration",
+        ),
+        // Out of range, found by the compiler.
+        (format!("{MINIMAL}count = 0\n"), "count", "leaf[0].count"),
+        (
+            format!("{MINIMAL}\n[ground]\nstatic_friction = 0.2\nkinetic_friction = 0.5\n"),
+            "static_friction",
+            "ground.static_friction",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[wind]]\nkind = \"line_vortex\"\npoint = [0.0, 0.0, 0.0]\naxis = [0.0, 0.0, 1.0]\ncirculation = 1.0\ncore_radius = -0.1\n"
+            ),
+            "core_radius",
+            "wind[0].core_radius",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[rigid]]\nname = \"b\"\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\nmass = -2.0\n"
+            ),
+            "mass = -2.0",
+            "rigid[0].mass",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[rigid]]\nname = \"b\"\nshape = \"box\"\nsize = [1.0, 1.0, 1.0]\nradius = 2.0\nmass = 2.0\n"
+            ),
+            "radius",
+            "rigid[0].radius",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[fixed]]\nname = \"p\"\nposition = [0.0, 0.0, 2.0]\n\n[[rope]]\nname = \"r\"\nfrom = \"p\"\nto = \"nowhere:1\"\nsegments = 4\nmass = 0.1\nstiffness = 10.0\n"
+            ),
+            "nowhere",
+            "rope[0].to",
+        ),
+        (
+            MINIMAL.replace("leaf = \"a\"", "leaf = \"no/such/leaf.toml\""),
+            "no/such",
+            "leaf[0].leaf",
+        ),
+        // A duplicate name, on the second leaf's name line.
+        (
+            format!("{MINIMAL}\n[[leaf]]\nname = \"l\" # again\nleaf = \"b\"\n"),
+            "# again",
+            "leaf[1].name",
+        ),
+        (
+            MINIMAL.replace("name = \"l\"", "name = \"a/b\""),
+            "a/b",
+            "leaf[0].name",
+        ),
+        // A key of another kind of wind primitive: on the key's own line.
+        (
+            format!(
+                "{MINIMAL}\n[[wind]]\nkind = \"uniform\"\nflux = 2.0\nvelocity = [1.0, 0.0, 0.0]\n"
+            ),
+            "flux",
+            "wind[0].flux",
+        ),
+    ];
+    for (text, needle, field) in cases {
+        let e = error(&text);
+        let line = line_of(&text, needle);
+        assert_eq!(e.file, "test.toml");
+        assert_eq!(e.field, field, "{e}");
+        assert_eq!(e.line, Some(line), "{e}");
+        let shown = e.to_string();
+        assert!(
+            shown.starts_with(&format!("test.toml:{line}: {field}: ")),
+            "{shown}"
+        );
+    }
+    // A missing required key: named, on its table's line.
+    let text = MINIMAL.replace("leaf = \"a\"\n", "");
+    let e = error(&text);
+    assert!(e.message.contains("leaf"), "{e}");
+    assert_eq!(e.line, Some(line_of(&text, "[[leaf]]")), "{e}");
+}
+
+#[test]
+fn the_compiler_keeps_what_each_scene_uses() {
+    let kept = |scene: &Scene, term: &str| {
+        scene
+            .explain()
+            .iter()
+            .find(|d| d.name == term)
+            .unwrap_or_else(|| panic!("no decision on {term}"))
+            .kept
+    };
+    let hover = load("hover");
+    assert!(kept(&hover, "wind evaluation"));
+    assert!(!kept(&hover, "ground contact") && !kept(&hover, "rigid bodies"));
+    assert!(!kept(&hover, "spring breaking") && !kept(&hover, "particle drag"));
+    let bin = load("rocking-bin");
+    assert!(kept(&bin, "rigid bodies") && kept(&bin, "ground contact"));
+    assert!(!kept(&bin, "wind evaluation") && !kept(&bin, "triangle aerodynamics"));
+    assert!(!kept(&bin, "springs") && !kept(&bin, "spring breaking"));
+    assert!(bin.pruned.iter().any(|p| p.contains("surface triangles")));
+    let tear = load("tear");
+    assert!(kept(&tear, "spring breaking") && !kept(&tear, "ground contact"));
+    let swings = load("swings");
+    assert!(kept(&swings, "rigid bodies") && kept(&swings, "particle drag"));
+    // A rigid leaf has no internal springs or hinges left, and zero-strength
+    // wind is dropped: in still air nothing samples the wind.
+    let text = format!(
+        "{}rigid = true\n\n[[wind]]\nkind = \"uniform\"\nvelocity = [0.0, 0.0, 0.0]\n",
+        MINIMAL
+    );
+    let s = compile(&text).unwrap();
+    assert!(s.model.springs.is_empty() && s.model.hinges.is_empty());
+    assert!(s.model.wind.is_still() && !kept(&s, "wind evaluation"));
+    assert_eq!(s.pruned.len(), 2, "{:?}", s.pruned);
+}
+
+/// Every term switched on, on a scene that gives the extra ones nothing to
+/// do, yields bit-identical states: what the compiler leaves out never
+/// contributed.
+#[test]
+fn leaving_terms_out_changes_nothing() {
+    for name in ["hover", "rocking-bin", "swings"] {
+        let scene = load(name);
+        let dt = leafmagic::sim::resolve_dt(
+            &scene.model,
+            scene.integrator,
+            scene.dt,
+            1.0 / scene.frame_rate,
+        )
+        .unwrap();
+        let mut states: Vec<State> = Vec::new();
+        for terms in [Terms::needed(&scene.model), Terms::all()] {
+            let mut s = scene.initial.clone();
+            let mut sim = Simulator::with_terms(&scene.model, scene.integrator, terms);
+            for _ in 0..600 {
+                sim.step(&scene.model, &mut s, dt).unwrap();
+            }
+            states.push(s);
+        }
+        assert_eq!(states[0], states[1], "{name}: the all-terms run differs");
+        assert_ne!(states[0].position, scene.initial.position);
+    }
+}
+
+/// A run that diverges stops with the simulator's diagnosis.
+#[test]
+fn a_diverging_scene_stops_with_the_simulators_error() {
+    // Forward Euler is unstable on the leaf's lightly damped springs.
+    let text = MINIMAL.replace(
+        "duration = 1.0",
+        "duration = 1.0\ndt = 0.004\nintegrator = \"euler\"",
+    );
+    let scene = compile(&text).unwrap();
+    match scene.run(None) {
+        Err(RunError::Sim(SimError::Diverged(d))) => assert!(d.step > 0),
+        other => panic!("expected a divergence, got {other:?}"),
+    }
+}
+
+fn leafmagic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+}
+
+#[test]
+fn the_scene_command_writes_the_same_bytes_for_the_same_input() {
+    let root = std::env::temp_dir().join(format!("leafmagic-scene-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let mut listings = Vec::new();
+    for run in ["one", "two"] {
+        let out = root.join(run);
+        let status = leafmagic()
+            .args([
+                "scene",
+                scene_path("swings").to_str().unwrap(),
+                "--seconds",
+                "0.5",
+                "--out",
+            ])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(
+            status.status.success(),
+            "{}",
+            String::from_utf8_lossy(&status.stderr)
+        );
+        let mut files: Vec<_> = std::fs::read_dir(&out)
+            .unwrap()
+            .map(|e| e.unwrap().path())
+            .collect();
+        files.sort();
+        listings.push(files);
+    }
+    let names = |files: &Vec<std::path::PathBuf>| -> Vec<String> {
+        files
+            .iter()
+            .map(|f| f.file_name().unwrap().to_string_lossy().into_owned())
+            .collect()
+    };
+    assert_eq!(names(&listings[0]), names(&listings[1]));
+    for (a, b) in listings[0].iter().zip(&listings[1]) {
+        assert_eq!(
+            std::fs::read(a).unwrap(),
+            std::fs::read(b).unwrap(),
+            "{a:?} differs"
+        );
+    }
+    let names = names(&listings[0]);
+    for expected in ["summary.toml", "seat-1.csv", "rope-1lf-particles.csv"] {
+        assert!(
+            names.contains(&expected.to_string()),
+            "{expected} missing: {names:?}"
+        );
+    }
+    assert!(
+        !names.iter().any(|n| n.starts_with("beam")),
+        "fixed points need no file"
+    );
+    let dir = root.join("one");
+    let pose = std::fs::read_to_string(dir.join("seat-1.csv")).unwrap();
+    assert!(pose.starts_with("t,x,y,z,qw,qx,qy,qz\n"));
+    assert_eq!(pose.lines().count(), 1 + 31, "0.5 s at 60 fps is 31 frames");
+    let traj = leafmagic::trajectory::Trajectory::read_csv(&dir.join("seat-1.csv")).unwrap();
+    assert_eq!(traj.len(), 31);
+    let rope = std::fs::read_to_string(dir.join("rope-1lf-particles.csv")).unwrap();
+    assert!(rope.starts_with("t,x0,y0,z0,"), "{}", &rope[..40]);
+    let summary: toml::Table =
+        toml::from_str(&std::fs::read_to_string(dir.join("summary.toml")).unwrap()).unwrap();
+    assert_eq!(summary["scene"].as_str(), Some("swings"));
+    assert_eq!(summary["frames"].as_integer(), Some(31));
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+#[test]
+fn the_scene_command_reports_bad_files_and_fails() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("bad.toml");
+    std::fs::write(&file, format!("{MINIMAL}speed = 3\n")).unwrap();
+    let out = leafmagic()
+        .args(["scene", file.to_str().unwrap(), "--explain"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    let line = line_of(&format!("{MINIMAL}speed = 3\n"), "speed");
+    assert!(
+        err.contains(&format!(
+            "bad.toml:{line}: leaf[0].speed: unknown field `speed`"
+        )),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Copies are placed by the seed: the same seed gives the same layout, another
+/// seed another one, and every copy stays within its spread.
+#[test]
+fn seeded_copies_are_reproducible_and_within_their_spread() {
+    let text = MINIMAL.replace(
+        "position = [0.0, 0.0, 1.0]",
+        "position = [0.0, 0.0, 1.0]\ncount = 5\nspread = [0.5, 0.2, 0.1]\ntilt_deg = 20.0\nrandom_yaw = true",
+    );
+    let a = compile(&text).unwrap();
+    let b = compile(&text).unwrap();
+    let c = compile(&text.replace("duration = 1.0", "duration = 1.0\nseed = 9")).unwrap();
+    assert_eq!(a.initial, b.initial);
+    assert_ne!(a.initial.position, c.initial.position);
+    assert_eq!(a.objects.len(), 5);
+    assert_eq!(a.objects[3].name, "l-003");
+    for o in &a.objects {
+        let n = o.particles.len() as f64;
+        let centre: V3 = o
+            .particles
+            .iter()
+            .map(|&i| a.model.rest_position[i])
+            .sum::<V3>()
+            / n;
+        // The mass centre sits within the spread; the plain centroid is close to it.
+        assert!(
+            centre.x.abs() < 0.5 + 0.02 && centre.y.abs() < 0.2 + 0.02,
+            "{centre:?}"
+        );
+        assert!((centre.z - 1.0).abs() < 0.1 + 0.02, "{centre:?}");
+    }
+}
