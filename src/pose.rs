@@ -8,8 +8,9 @@ use nalgebra::{Matrix3, Quaternion, UnitQuaternion, Vector3};
 /// Iterations of the rotation fit per call; Newton's method warm-started
 /// from the previous frame converges in two or three.
 const MAX_ITERATIONS: usize = 30;
-/// Stop when the correcting rotation is below this angle, rad.
-const ANGLE_TOLERANCE: f64 = 1e-13;
+/// Stop after a correction smaller than this angle, rad: the error left is
+/// of order its square, below 1e-13 rad.
+const FINAL_CORRECTION: f64 = 3e-7;
 
 /// Tracks the best-fit rotation of a model's particles frame by frame.
 #[derive(Clone, Debug)]
@@ -17,6 +18,9 @@ pub struct PoseTracker {
     /// Rest positions relative to the rest centre of mass, times mass.
     weighted_rest: Vec<Vector3<f64>>,
     rotation: UnitQuaternion<f64>,
+    /// The turn from the frame before the last to the last, to predict the
+    /// next rotation (a constant-rate guess saves a Newton iteration).
+    last_turn: UnitQuaternion<f64>,
 }
 
 impl PoseTracker {
@@ -33,6 +37,7 @@ impl PoseTracker {
         PoseTracker {
             weighted_rest,
             rotation: initial,
+            last_turn: UnitQuaternion::identity(),
         }
     }
 
@@ -52,7 +57,14 @@ impl PoseTracker {
         for (p, r) in position.iter().zip(&self.weighted_rest) {
             a += (p - com) * r.transpose();
         }
-        let q = best_rotation(&a, self.rotation);
+        let guess = self.last_turn * self.rotation;
+        let mut q = best_rotation(&a, guess);
+        // Keep the hemisphere of the previous frame so the CSV has no sign
+        // flips (the guess may have crossed it).
+        if q.coords.dot(&self.rotation.coords) < 0.0 {
+            q = UnitQuaternion::new_unchecked(-q.into_inner());
+        }
+        self.last_turn = q * self.rotation.inverse();
         self.rotation = q;
         (com, q)
     }
@@ -88,7 +100,7 @@ pub fn best_rotation(a: &Matrix3<f64>, start: UnitQuaternion<f64>) -> UnitQuater
             _ => g / (trace.abs() + 1e-300),
         };
         let angle = delta.norm();
-        if angle.is_nan() || angle < ANGLE_TOLERANCE {
+        if angle.is_nan() {
             break;
         }
         // Turn by δ with the first-order quaternion (1, δ/2), normalised: a
@@ -96,6 +108,11 @@ pub fn best_rotation(a: &Matrix3<f64>, start: UnitQuaternion<f64>) -> UnitQuater
         // Newton's quadratic convergence without a sine or cosine.
         let turn = Quaternion::new(1.0, 0.5 * delta.x, 0.5 * delta.y, 0.5 * delta.z);
         q = UnitQuaternion::new_normalize(turn * q.into_inner());
+        // Newton converges quadratically: after a correction of |δ| the
+        // remaining error is of order |δ|², so stop once that is negligible.
+        if angle < FINAL_CORRECTION {
+            break;
+        }
     }
     let q = UnitQuaternion::new_normalize(*q.quaternion());
     // Keep the hemisphere of the previous frame so the CSV has no sign flips.
