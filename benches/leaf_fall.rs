@@ -66,8 +66,28 @@ fn leaf_fall(c: &mut Criterion) {
     );
 
     let mut group = c.benchmark_group("leaf_fall");
+    // The rate: a drop at the step `--dt auto` picks, given as a fixed step
+    // so that choosing it (a one-off cost per leaf, timed below) is not
+    // charged to the simulated second.
+    let at_auto_dt = DropParams {
+        dt: TimeStep::Fixed(dt),
+        ..defaults
+    };
     group.bench_function("drop_1s", |b| {
+        b.iter(|| black_box(drop_leaf(&model, &at_auto_dt).unwrap()))
+    });
+    group.bench_function("drop_1s_with_auto_dt", |b| {
         b.iter(|| black_box(drop_leaf(&model, &defaults).unwrap()))
+    });
+    group.bench_function("stability_estimate", |b| {
+        b.iter(|| {
+            black_box(sim::resolve_dt(
+                &model,
+                defaults.integrator,
+                TimeStep::Auto,
+                1.0 / sim::FRAME_RATE,
+            ))
+        })
     });
     // The stepping alone, without pose extraction and recording.
     group.bench_function("steps_1s", |b| {
