@@ -112,13 +112,8 @@ pub fn hinges(model: &Model, rest: &[(f64, f64)], x: &[V3], v: &[V3], force: &mu
             continue;
         };
         let sin_delta = sin * rest_cos - cos * rest_sin;
-        let ids = [
-            hinge.edge[0],
-            hinge.edge[1],
-            hinge.apexes[0],
-            hinge.apexes[1],
-        ];
-        let rate: f64 = ids.iter().zip(&grad).map(|(&i, g)| g.dot(&v[i])).sum();
+        let ids = hinge.particles();
+        let rate = fold_rate(&ids, &grad, v);
         let torque = -hinge.stiffness * sin_delta - hinge.damping * rate;
         for (&i, g) in ids.iter().zip(&grad) {
             force[i] += g * torque;
@@ -140,6 +135,12 @@ pub fn edge_springs(model: &Model) -> Vec<[Option<usize>; 3]> {
             [(a, b), (b, c), (c, a)].map(|(i, j)| by_pair.get(&(i.min(j), i.max(j))).copied())
         })
         .collect()
+}
+
+/// The fold rate θ̇ = Σ ∇_j θ · v_j of a hinge over its particles `ids`.
+#[inline]
+pub fn fold_rate(ids: &[usize; 4], grad: &[V3; 4], v: &[V3]) -> f64 {
+    ids.iter().zip(grad).map(|(&i, g)| g.dot(&v[i])).sum()
 }
 
 /// (sin θ₀, cos θ₀) of every hinge's rest angle, for [`hinges`].

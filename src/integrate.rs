@@ -515,12 +515,7 @@ impl Simulator {
         }
         for blk in &imp.hinge_blocks {
             if blk.active {
-                let rate: f64 = blk
-                    .ids
-                    .iter()
-                    .zip(&blk.grad)
-                    .map(|(&i, g)| g.dot(&s.velocity[i]))
-                    .sum();
+                let rate = crate::force::fold_rate(&blk.ids, &blk.grad, &s.velocity);
                 for (&i, g) in blk.ids.iter().zip(&blk.grad) {
                     b[i] -= g * (h * h * blk.stiffness * rate);
                 }
@@ -743,12 +738,7 @@ impl ImplicitScratch {
             *blk = match crate::force::dihedral(&s.position, hinge) {
                 Some((_, grad)) => HingeBlock {
                     active: true,
-                    ids: [
-                        hinge.edge[0],
-                        hinge.edge[1],
-                        hinge.apexes[0],
-                        hinge.apexes[1],
-                    ],
+                    ids: hinge.particles(),
                     grad,
                     alpha: h * hinge.damping + h * h * hinge.stiffness,
                     stiffness: hinge.stiffness,

@@ -69,6 +69,14 @@ pub struct Hinge {
     pub damping: f64,
 }
 
+impl Hinge {
+    /// The four particles in the order of the fold angle's gradient:
+    /// edge a, edge b, apex p, apex q.
+    pub fn particles(&self) -> [usize; 4] {
+        [self.edge[0], self.edge[1], self.apexes[0], self.apexes[1]]
+    }
+}
+
 /// Which aerodynamic law turns relative wind into force on triangles.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -299,12 +307,7 @@ impl Model {
         }
         for (h, hinge) in parts.hinges.iter().enumerate() {
             let item = |f: &str| format!("hinge[{h}].{f}");
-            let ids = [
-                hinge.edge[0],
-                hinge.edge[1],
-                hinge.apexes[0],
-                hinge.apexes[1],
-            ];
+            let ids = hinge.particles();
             if let Some(&bad) = ids.iter().find(|&&i| i >= n) {
                 return Err(err(
                     item("particles"),

@@ -125,14 +125,8 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         .hinges
         .iter()
         .filter_map(|h| {
-            crate::force::dihedral(&model.rest_position, h).map(|(_, g)| {
-                (
-                    [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]],
-                    g,
-                    h.stiffness,
-                    h.damping,
-                )
-            })
+            crate::force::dihedral(&model.rest_position, h)
+                .map(|(_, g)| (h.particles(), g, h.stiffness, h.damping))
         })
         .collect();
     for (ids, g, k, _) in &hinge_grads {

@@ -443,13 +443,8 @@ pub fn nonconservative_power(
     // Hinge dampers: torque −c_b θ̇ against the fold rate, power −c_b θ̇².
     for hinge in model.hinges.iter().filter(|h| h.damping != 0.0) {
         if let Some((_, grad)) = force::dihedral(x, hinge) {
-            let ids = [
-                hinge.edge[0],
-                hinge.edge[1],
-                hinge.apexes[0],
-                hinge.apexes[1],
-            ];
-            let rate: f64 = ids.iter().zip(&grad).map(|(&i, g)| g.dot(&v[i])).sum();
+            let ids = hinge.particles();
+            let rate = force::fold_rate(&ids, &grad, v);
             power -= hinge.damping * rate * rate;
         }
     }
