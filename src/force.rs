@@ -3,7 +3,7 @@
 //! each doc comment; [`Forces`] sums them in a fixed order so results are
 //! reproducible bit for bit.
 
-use crate::model::{Hinge, Model};
+use crate::model::{AeroLaw, Hinge, Model};
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
@@ -140,8 +140,13 @@ pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
 /// Written with the unnormalised normal N = e₁ × e₂ (|N| = 2A) so that a
 /// triangle squeezed to zero area gets no force instead of NaN.
 ///
-/// `wind` holds G at every particle, or is `None` in still air.
+/// `wind` holds G at every particle, or is `None` in still air. A model
+/// with [`AeroLaw::Quadratic`] gets that law instead
+/// ([`crate::aero::quadratic_forces`]).
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
+    if let AeroLaw::Quadratic(law) = &model.aero {
+        return crate::aero::quadratic_forces(law, model, x, v, wind, force);
+    }
     for tri in &model.triangles {
         let [a, b, c] = tri.corners;
         let e1 = x[b] - x[a];

@@ -9,6 +9,7 @@
 //! poses ([`pose`]) into a trajectory.
 #![warn(missing_docs)]
 
+pub mod aero;
 pub mod classify;
 pub mod field;
 pub mod force;
@@ -17,6 +18,7 @@ pub mod integrate;
 pub mod io;
 pub mod leaf;
 pub mod model;
+pub mod plates;
 pub mod pose;
 pub mod sim;
 pub mod stability;
