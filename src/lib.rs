@@ -20,6 +20,7 @@ pub mod leaf;
 pub mod model;
 pub mod plates;
 pub mod pose;
+pub mod recipes;
 pub mod sim;
 pub mod stability;
 pub mod state;
