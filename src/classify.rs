@@ -21,13 +21,17 @@
 //!    reversals. The plate normal is body z; a flip is the normal crossing the
 //!    horizontal plane with ±30° hysteresis.
 //! 4. **Rules**, first match wins (notes §6, reordered as §4e demands: flips
-//!    and reversals are looked at before vertical spin):
+//!    and reversals are looked at before a *slow* turn about the vertical —
+//!    lilters yaw at 1–9 rad/s — but a rotation that is mostly about the
+//!    vertical, vertical share ≥ 0.7, i.e. an axis within ~45° of it, is
+//!    autorotation even when its leaning axis makes the normal cross the
+//!    horizontal: such a leaf spins, it does not turn end over end):
 //!
 //! | # | class / regime | conditions |
 //! |---|---|---|
 //! | 1 | spinner / tumble | net turns about the horizontal axis ≥ 1, rotation consistency ≥ 0.9, vertical share of ω < 0.7 |
-//! | 2 | lilter / chaotic | ≥ 1 normal flip, ≥ 2 pitch reversals |
-//! | 3 | spinner / autorotation | yaw turns ≥ 1, yaw consistency ≥ 0.9, vertical share of ω ≥ 0.7, mean plate tilt ≥ 30° |
+//! | 2 | spinner / autorotation | yaw turns ≥ 1, yaw consistency ≥ 0.9, vertical share of ω ≥ 0.7, mean plate tilt ≥ 30° |
+//! | 3 | lilter / chaotic | ≥ 1 normal flip, ≥ 2 pitch reversals |
 //! | 4 | undetermined | ≥ 1 flip but < 2 reversals (one flip, no rocking: transient) |
 //! | 5 | undetermined / dive | plate within 30° of edge-on 90 % of the time (10th percentile tilt ≥ 60°) |
 //! | 6 | floater / flutter | rocking amplitude ≥ 10°, ≥ 3 periods, 10th percentile tilt < 30° (swings through flat) |
@@ -878,23 +882,27 @@ fn rules(f: &Features) -> Vec<Rule> {
             ],
         ),
         rule(
+            RuleId::Autorotation,
+            C::Spinner,
+            Regime::Autorotation,
+            // Before the lilt rule: a leaf whose rotation is mostly about the
+            // vertical is seen to spin, even if its spin axis leans enough
+            // for the normal to cross the horizontal twice a turn (a
+            // wobbling spinner "flips" without turning end over end).
+            vec![
+                Cond::ge(f.yaw_turns.abs(), AUTOROTATION_MIN_YAW_TURNS, 1.0),
+                Cond::ge(f.yaw_consistency, AUTOROTATION_MIN_YAW_CONSISTENCY, 0.1),
+                Cond::ge(f.vertical_spin_share, AUTOROTATION_MIN_VERTICAL_SHARE, 0.3),
+                Cond::ge(f.tilt_mean_deg, AUTOROTATION_MIN_TILT_DEG, 30.0),
+            ],
+        ),
+        rule(
             RuleId::Lilt,
             C::Lilter,
             Regime::Chaotic,
             vec![
                 Cond::ge(flip_progress, 1.0, 1.0),
                 Cond::ge(reversals, lilt_rev, lilt_rev),
-            ],
-        ),
-        rule(
-            RuleId::Autorotation,
-            C::Spinner,
-            Regime::Autorotation,
-            vec![
-                Cond::ge(f.yaw_turns.abs(), AUTOROTATION_MIN_YAW_TURNS, 1.0),
-                Cond::ge(f.yaw_consistency, AUTOROTATION_MIN_YAW_CONSISTENCY, 0.1),
-                Cond::ge(f.vertical_spin_share, AUTOROTATION_MIN_VERTICAL_SHARE, 0.3),
-                Cond::ge(f.tilt_mean_deg, AUTOROTATION_MIN_TILT_DEG, 30.0),
             ],
         ),
         rule(
@@ -1215,6 +1223,21 @@ mod tests {
             move |t| UnitQuaternion::from_axis_angle(&axis, 20.0 * t) * rx(60f64.to_radians()),
         )
     }
+    /// A leaf spinning about the vertical at 14 rad/s with its plane near
+    /// vertical and wobbling ±38° once a turn (measured on a prototype-B
+    /// variant): its normal crosses the horizontal twice a turn and the
+    /// wobble reverses, yet nothing turns end over end — autorotation.
+    fn wobbling_spin() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.02 * (14.0 * t).cos(), 0.02 * (14.0 * t).sin(), -2.3 * t),
+            |t| {
+                rz(14.0 * t)
+                    * rx((90.0 - 38.0 * (14.0 * t + 0.3 * (2.1 * t).sin()).sin()).to_radians())
+            },
+        )
+    }
     /// End-over-end tumble about the leaf's own span while the leaf turns
     /// slowly about the vertical (the span axis precesses by > 180°).
     fn precessing_tumble() -> Trajectory {
@@ -1262,6 +1285,12 @@ mod tests {
             (
                 "tilted_spin",
                 tilted_spin(),
+                C::Spinner,
+                Regime::Autorotation,
+            ),
+            (
+                "wobbling_spin",
+                wobbling_spin(),
                 C::Spinner,
                 Regime::Autorotation,
             ),
@@ -1336,6 +1365,11 @@ mod tests {
         assert!((f.mean_yaw_rate_rad_s - 15.0).abs() < 1e-6);
         assert!((f.tilt_mean_deg - 60.0).abs() < 1e-6);
         assert!(f.vertical_spin_share > 0.999);
+        // The wobbling spinner flips and reverses like a lilter would; only
+        // its vertical share tells it apart.
+        let f = classify(&wobbling_spin(), CHORD).features;
+        assert!(f.normal_flips >= 10 && f.reversals >= 10, "{f:#?}");
+        assert!(f.vertical_spin_share > 0.85, "{}", f.vertical_spin_share);
         let f = classify(&steady(), CHORD).features;
         assert!((f.mean_descent_speed_m_s - 0.5).abs() < 1e-9);
         assert!((f.descent_chords - 60.0).abs() < 1e-6);
@@ -1447,7 +1481,7 @@ mod tests {
             /// position leave the class and regime unchanged.
             #[test]
             fn class_is_invariant_under_yaw_and_shifts(
-                case in 0usize..11,
+                case in 0usize..12,
                 yaw in -PI..PI,
                 dt in -1000.0f64..1000.0,
                 dx in -100.0f64..100.0,

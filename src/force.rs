@@ -3,7 +3,7 @@
 //! each doc comment; [`Forces`] sums them in a fixed order so results are
 //! reproducible bit for bit.
 
-use crate::model::{Hinge, Model};
+use crate::model::{AeroLaw, Hinge, Model};
 use crate::terms::Terms;
 use nalgebra::Vector3;
 
@@ -166,7 +166,9 @@ pub fn hinge_rest(model: &Model) -> Vec<(f64, f64)> {
 /// Written with the unnormalised normal N = e₁ × e₂ (|N| = 2A) so that a
 /// triangle squeezed to zero area gets no force instead of NaN.
 ///
-/// `wind` holds G at every particle, or is `None` in still air.
+/// `wind` holds G at every particle, or is `None` in still air. A model
+/// with [`AeroLaw::Quadratic`] gets that law instead
+/// ([`crate::aero::quadratic_forces`]).
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
     triangle_aero_intact(model, x, v, wind, &[], force);
 }
@@ -183,6 +185,9 @@ pub fn triangle_aero_intact(
     torn: &[bool],
     force: &mut [V3],
 ) {
+    if let AeroLaw::Quadratic(law) = &model.aero {
+        return crate::aero::quadratic_forces(law, model, x, v, wind, torn, force);
+    }
     for (t, tri) in model.triangles.iter().enumerate() {
         if torn.get(t).copied().unwrap_or(false) {
             continue;

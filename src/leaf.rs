@@ -3,6 +3,7 @@
 //! prototypes (figure 4) are embedded so the tool runs without any file.
 //! Every field is documented in `prototypes/README.md`.
 
+use crate::aero::QuadraticAero;
 use crate::field::WindField;
 use crate::model::{
     AeroLaw, Hinge, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle,
@@ -56,17 +57,137 @@ fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -STANDARD_GRAVITY]
 }
 
-/// The aerodynamic law of a leaf (eq. 9–10 by default).
+/// The aerodynamic law of a leaf: `[aero] law = "linear"` (eq. 9–10, the
+/// default) with `alpha_n`, `alpha_t`; or `law = "quadratic"`
+/// ([`crate::aero`]) with optional overrides of its literature coefficients.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AeroSpec {
     /// Which law; `linear` is the paper's.
     #[serde(default)]
-    pub law: AeroLaw,
-    /// Normal coefficient αⁿ, kg/(m²·s).
-    pub alpha_n: f64,
-    /// Tangential coefficient αᵗ, kg/(m²·s).
-    pub alpha_t: f64,
+    pub law: AeroLawName,
+    /// Normal coefficient αⁿ, kg/(m²·s) (linear law; required there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_n: Option<f64>,
+    /// Tangential coefficient αᵗ, kg/(m²·s) (linear law; required there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_t: Option<f64>,
+    /// Air density ρ, kg/m³ (quadratic law; default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub air_density: Option<f64>,
+    /// C_D edge-on (quadratic law; default 0.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd_parallel: Option<f64>,
+    /// C_D face-on (quadratic law; default 2.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd_normal: Option<f64>,
+    /// C_L★ in C_L = C_L★ sin 2α (quadratic law; default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cl_amplitude: Option<f64>,
+    /// Centre of pressure at small angle of attack, fraction of the chord
+    /// behind the leading edge (quadratic law; default 0.25).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cop_leading: Option<f64>,
+    /// C_R of the rotational lift (quadratic law; default π).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotational_lift: Option<f64>,
+}
+
+/// The name of an aerodynamic law in a leaf file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AeroLawName {
+    /// The paper's linear law, eq. 9–10.
+    #[default]
+    Linear,
+    /// Quadratic drag with lift and a moving centre of pressure.
+    Quadratic,
+}
+
+impl AeroSpec {
+    /// The paper's linear law with these coefficients.
+    pub fn linear(alpha_n: f64, alpha_t: f64) -> AeroSpec {
+        AeroSpec {
+            law: AeroLawName::Linear,
+            alpha_n: Some(alpha_n),
+            alpha_t: Some(alpha_t),
+            air_density: None,
+            cd_parallel: None,
+            cd_normal: None,
+            cl_amplitude: None,
+            cop_leading: None,
+            rotational_lift: None,
+        }
+    }
+
+    /// The quadratic law with the literature's coefficients.
+    pub fn quadratic() -> AeroSpec {
+        AeroSpec {
+            law: AeroLawName::Quadratic,
+            alpha_n: None,
+            alpha_t: None,
+            ..AeroSpec::linear(0.0, 0.0)
+        }
+    }
+
+    /// The model's law. Each law's own fields are required or defaulted,
+    /// the other law's fields are rejected by name (a coefficient that
+    /// would be silently ignored is a mistake).
+    pub fn resolve(&self) -> Result<AeroLaw, ModelError> {
+        let field = |name: &str, reason: String| ModelError {
+            item: format!("aero.{name}"),
+            reason,
+        };
+        let quadratic_fields = [
+            ("air_density", self.air_density),
+            ("cd_parallel", self.cd_parallel),
+            ("cd_normal", self.cd_normal),
+            ("cl_amplitude", self.cl_amplitude),
+            ("cop_leading", self.cop_leading),
+            ("rotational_lift", self.rotational_lift),
+        ];
+        match self.law {
+            AeroLawName::Linear => {
+                if let Some((name, _)) = quadratic_fields.iter().find(|(_, v)| v.is_some()) {
+                    return Err(field(
+                        name,
+                        "belongs to law = \"quadratic\"; the linear law takes alpha_n and alpha_t"
+                            .to_string(),
+                    ));
+                }
+                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
+                    if value.is_none() {
+                        return Err(field(
+                            name,
+                            "required by law = \"linear\" (kg/(m²·s))".to_string(),
+                        ));
+                    }
+                }
+                Ok(AeroLaw::Linear)
+            }
+            AeroLawName::Quadratic => {
+                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
+                    if value.is_some() {
+                        return Err(field(
+                            name,
+                            "not used by law = \"quadratic\" (remove it; its coefficients are air_density, cd_parallel, cd_normal, cl_amplitude, cop_leading)".to_string(),
+                        ));
+                    }
+                }
+                let d = QuadraticAero::default();
+                let law = QuadraticAero {
+                    air_density: self.air_density.unwrap_or(d.air_density),
+                    cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
+                    cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
+                    cl_amplitude: self.cl_amplitude.unwrap_or(d.cl_amplitude),
+                    cop_leading: self.cop_leading.unwrap_or(d.cop_leading),
+                    rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
+                };
+                law.validate()?;
+                Ok(AeroLaw::Quadratic(law))
+            }
+        }
+    }
 }
 
 /// Bending hinges on every edge shared by two triangles, resisting changes of
@@ -443,15 +564,30 @@ impl LeafSpec {
                 self.hinges(&rest, b)
             }
         };
-        let triangles = self
-            .triangles
-            .iter()
-            .map(|t| Triangle {
+        let aero = self.aero.resolve()?;
+        let mut triangles = Vec::with_capacity(self.triangles.len());
+        for (k, t) in self.triangles.iter().enumerate() {
+            let (alpha_n, alpha_t) = match aero {
+                AeroLaw::Linear => (
+                    t.alpha_n.or(self.aero.alpha_n).unwrap_or_default(),
+                    t.alpha_t.or(self.aero.alpha_t).unwrap_or_default(),
+                ),
+                AeroLaw::Quadratic(_) => {
+                    if t.alpha_n.is_some() || t.alpha_t.is_some() {
+                        return Err(ModelError {
+                            item: format!("triangle[{k}].alpha_n"),
+                            reason: "per-triangle α is not used by law = \"quadratic\"".to_string(),
+                        });
+                    }
+                    (0.0, 0.0)
+                }
+            };
+            triangles.push(Triangle {
                 corners: t.corners,
-                alpha_n: t.alpha_n.unwrap_or(self.aero.alpha_n),
-                alpha_t: t.alpha_t.unwrap_or(self.aero.alpha_t),
-            })
-            .collect();
+                alpha_n,
+                alpha_t,
+            });
+        }
         Model::new(ModelParts {
             mass: self.particles.iter().map(|p| p.mass).collect(),
             fixed: self.particles.iter().map(|p| p.fixed).collect(),
@@ -460,7 +596,7 @@ impl LeafSpec {
             springs,
             triangles,
             hinges,
-            aero: self.aero.law,
+            aero,
             wind: self.wind.clone(),
             gravity: Vector3::from(self.gravity),
             ..Default::default()

@@ -10,6 +10,7 @@
 #![warn(missing_docs)]
 
 pub mod accuracy;
+pub mod aero;
 pub mod breed;
 pub mod classify;
 pub mod contact;
@@ -20,8 +21,10 @@ pub mod integrate;
 pub mod io;
 pub mod leaf;
 pub mod model;
+pub mod plates;
 pub mod plot;
 pub mod pose;
+pub mod recipes;
 pub mod rigid;
 pub mod scene;
 pub mod sim;

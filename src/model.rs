@@ -78,12 +78,15 @@ impl Hinge {
 }
 
 /// Which aerodynamic law turns relative wind into force on triangles.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum AeroLaw {
     /// The paper's linear law, eq. 9–10: F = αⁿ A vⁿ + αᵗ A vᵗ at each corner.
     #[default]
     Linear,
+    /// Quadratic drag with lift and a moving centre of pressure, per
+    /// triangle ([`crate::aero`]); the triangles' α must then be 0.
+    Quadratic(crate::aero::QuadraticAero),
 }
 
 /// Everything that stays fixed during a run. Fields are public for reading;
@@ -337,6 +340,20 @@ impl Model {
         }
         for (axis, value) in parts.gravity.iter().enumerate() {
             finite(&format!("gravity[{axis}]"), *value)?;
+        }
+        if let AeroLaw::Quadratic(law) = &parts.aero {
+            law.validate()?;
+            // The quadratic law replaces the linear one: leftover α would be
+            // ignored by the forces yet damp the implicit step and the
+            // stability estimate.
+            for (t, tri) in parts.triangles.iter().enumerate() {
+                if tri.alpha_n != 0.0 || tri.alpha_t != 0.0 {
+                    return Err(err(
+                        format!("triangle[{t}].alpha_n"),
+                        "the quadratic aerodynamic law uses no αⁿ, αᵗ: they must be 0",
+                    ));
+                }
+            }
         }
         parts
             .wind

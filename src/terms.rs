@@ -112,7 +112,13 @@ impl Terms {
             Decision {
                 name: "triangle aerodynamics",
                 kept: self.aero,
-                reason: count(model.triangles.len(), "triangles"),
+                reason: match model.aero {
+                    crate::model::AeroLaw::Linear => count(model.triangles.len(), "triangles"),
+                    crate::model::AeroLaw::Quadratic(_) => format!(
+                        "{}, quadratic law",
+                        count(model.triangles.len(), "triangles")
+                    ),
+                },
             },
             Decision {
                 name: "wind evaluation",

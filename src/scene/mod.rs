@@ -27,7 +27,7 @@ pub use spec::{
 use crate::field::{Flow, WindField};
 use crate::integrate::Integrator;
 use crate::leaf::LeafSpec;
-use crate::model::{Model, ModelError, ModelParts, Spring, Triangle};
+use crate::model::{AeroLaw, Model, ModelError, ModelParts, Spring, Triangle};
 use crate::rigid::RigidGroup;
 use crate::sim::TimeStep;
 use crate::state::State;
@@ -339,6 +339,9 @@ struct Builder {
     rigid_owner: Vec<String>,
     objects: Vec<SceneObject>,
     pruned: Vec<String>,
+    /// The first leaf that set the scene's aerodynamic law: a model has one
+    /// law, so every leaf must share it.
+    aero_from: Option<String>,
 }
 
 impl Builder {
@@ -540,6 +543,23 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
         return Err(ctx.err("(document)", "the scene has no objects"));
     }
 
+    if let (AeroLaw::Quadratic(_), Some(first)) = (&b.parts.aero, &b.aero_from) {
+        // Rigid bodies and sheets carry linear-law coefficients; under the
+        // quadratic law they would be silently ignored, so say so instead.
+        if let Some(t) = b
+            .parts
+            .triangles
+            .iter()
+            .position(|t| t.alpha_n != 0.0 || t.alpha_t != 0.0)
+        {
+            return Err(ctx.err(
+                b.triangle_owner[t].clone(),
+                format!(
+                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the quadratic law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)"
+                ),
+            ));
+        }
+    }
     b.parts.gravity = V3::from(spec.gravity);
     b.parts.wind = WindField::new(primitives);
     b.parts.ground = spec.ground;
@@ -615,6 +635,24 @@ fn add_leaf(
     let leaf = spec
         .model()
         .map_err(|e| ctx.err(field("leaf"), format!("invalid leaf '{}': {e}", obj.leaf)))?;
+    match &b.aero_from {
+        None => {
+            b.aero_from = Some(path.clone());
+            b.parts.aero = leaf.aero;
+        }
+        Some(first) if b.parts.aero != leaf.aero => {
+            return Err(ctx.err(
+                field("leaf"),
+                format!(
+                    "leaf '{}' uses the {} aerodynamic law but {first} uses the {}; a scene has one law for all its leaves",
+                    obj.leaf,
+                    law_name(&leaf.aero),
+                    law_name(&b.parts.aero)
+                ),
+            ));
+        }
+        Some(_) => {}
+    }
     let com = leaf.centre_of_mass(&leaf.rest_position);
     let part = Part {
         mass: leaf.mass.clone(),
@@ -1033,4 +1071,12 @@ fn add_rope(
 /// The default output directory of a scene: `runs/scene-<name>`.
 pub fn default_out_dir(scene: &Scene) -> PathBuf {
     PathBuf::from("runs").join(format!("scene-{}", scene.name))
+}
+
+/// The name of an aerodynamic law as leaf files spell it.
+fn law_name(law: &AeroLaw) -> &'static str {
+    match law {
+        AeroLaw::Linear => "linear",
+        AeroLaw::Quadratic(_) => "quadratic",
+    }
 }

@@ -2,8 +2,10 @@
 //! per topic. Oracles are exact where the notes give one (numerics notes §3).
 
 mod accuracy;
+mod aero_law;
 mod alloc;
 mod breeding;
+mod classes;
 mod common;
 mod contact;
 mod genome;
