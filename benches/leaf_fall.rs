@@ -49,7 +49,7 @@ fn leaf_fall(c: &mut Criterion) {
         / fast.len() as f64)
         .sqrt();
     let error = rms / model.chord();
-    let dt = sim::resolve_dt(
+    let dt = sim::resolve_step(
         &model,
         defaults.integrator,
         TimeStep::Auto,
@@ -81,7 +81,7 @@ fn leaf_fall(c: &mut Criterion) {
     });
     group.bench_function("stability_estimate", |b| {
         b.iter(|| {
-            black_box(sim::resolve_dt(
+            black_box(sim::resolve_step(
                 &model,
                 defaults.integrator,
                 TimeStep::Auto,

@@ -482,12 +482,24 @@ fn check(args: CheckArgs) -> Result<()> {
     let frame = 1.0 / sim::FRAME_RATE;
     let rows: Vec<_> = Integrator::ALL
         .iter()
-        .map(|&i| (i, est.dt_max(i), est.auto_dt(i, frame)))
+        .map(|&i| {
+            (
+                i,
+                est.dt_max(i),
+                est.auto_step(i, frame),
+                est.auto_dt(i, frame),
+            )
+        })
         .collect();
     if args.json {
         let per: serde_json::Map<String, serde_json::Value> = rows
             .iter()
-            .map(|(i, m, a)| (i.name().to_string(), json!({ "dt_max": m, "dt_auto": a })))
+            .map(|(i, m, a, snapped)| {
+                (
+                    i.name().to_string(),
+                    json!({ "dt_max": m, "dt_auto": a, "dt_auto_frame_divisor": snapped }),
+                )
+            })
             .collect();
         let out = json!({
             "leaf": spec.name,
@@ -543,18 +555,21 @@ fn check(args: CheckArgs) -> Result<()> {
         est.drag_rate
     );
     println!();
+    // Drops interpolate their frames and take the auto step as it is;
+    // scenes step onto every frame and take the largest divisor below it.
     println!(
-        "{:<12} {:>14} {:>14}",
-        "integrator", "dt_max (s)", "dt auto (s)"
+        "{:<12} {:>14} {:>14} {:>14}",
+        "integrator", "dt_max (s)", "drop auto (s)", "scene auto (s)"
     );
-    for (i, m, a) in rows {
+    for (i, m, a, snapped) in rows {
         let m = match m {
             None => "unbounded".to_string(),
             Some(v) if v <= 0.0 => "unstable".to_string(),
             Some(v) => format!("{v:.4e}"),
         };
         let a = a.map_or("none".to_string(), |v| format!("{v:.4e}"));
-        println!("{:<12} {:>14} {:>14}", i.name(), m, a);
+        let snapped = snapped.map_or("none".to_string(), |v| format!("{v:.4e}"));
+        println!("{:<12} {:>14} {:>14} {:>14}", i.name(), m, a, snapped);
     }
     for w in &est.warnings {
         println!("warning: {w}");

@@ -95,6 +95,25 @@ impl StabilityEstimate {
             Some(m) => Some(snap_to_frame(AUTO_SAFETY * m, frame_dt)),
         }
     }
+
+    /// The step a drop takes with `--dt auto`: [`AUTO_SAFETY`] × dt_max,
+    /// at most `frame_dt`, not snapped to divide the frame (drops sample
+    /// their frames by interpolation, [`crate::sim::run_sampled`], so
+    /// snapping would only shorten the step). Steps per frame are rounded
+    /// up to a multiple of 1/64 (a step at most 1.6 % shorter): the power
+    /// iteration's last bits depend on the particles' order, and a step
+    /// that moved with them would make a renumbered leaf fall differently.
+    /// `None` as for [`Self::auto_dt`].
+    pub fn auto_step(&self, integrator: Integrator, frame_dt: f64) -> Option<f64> {
+        match self.dt_max(integrator) {
+            None => Some(frame_dt),
+            Some(m) if m <= 0.0 => None,
+            Some(m) => {
+                let per_frame = (frame_dt / (AUTO_SAFETY * m) * 64.0).ceil().max(64.0) / 64.0;
+                Some(frame_dt / per_frame)
+            }
+        }
+    }
 }
 
 /// The largest step ≤ `dt` that divides `frame_dt` a whole number of times.

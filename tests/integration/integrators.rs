@@ -289,3 +289,45 @@ fn convergence_orders() {
         );
     }
 }
+
+/// Dense output: a projectile under gravity alone moves on a parabola,
+/// which velocity Verlet follows exactly at any step and the cubic Hermite
+/// interpolant reproduces exactly between steps; so frames sampled with a
+/// step that does not divide the frame (3.7 steps per frame, and one step
+/// spanning 2.5 frames) land on the closed form to round-off.
+#[test]
+fn frames_between_steps_are_interpolated_exactly_on_a_parabola() {
+    use leafmagic::sim::run_sampled;
+    let mut parts = crate::common::parts(1);
+    parts.gravity = V3::new(0.0, 0.0, -9.81);
+    let model = Model::new(parts).unwrap();
+    let frame = 1.0 / 240.0;
+    for steps_per_frame in [3.7, 0.4] {
+        let mut state = State::at_rest(&model);
+        let v0 = V3::new(0.3, -0.2, 2.0);
+        state.velocity[0] = v0;
+        let mut seen = 0;
+        run_sampled(
+            &model,
+            &mut state,
+            Integrator::Verlet,
+            frame / steps_per_frame,
+            frame,
+            240,
+            |k, x| {
+                let t = k as f64 * frame;
+                let exact = v0 * t + 0.5 * model.gravity * t * t;
+                assert!(
+                    (x[0] - exact).norm() < 1e-13,
+                    "frame {k} at {steps_per_frame} steps/frame: {:?} vs {exact:?}",
+                    x[0]
+                );
+                assert_eq!(k, seen);
+                seen += 1;
+            },
+        )
+        .unwrap();
+        assert_eq!(seen, 241, "every frame 0..=240 is sampled once");
+        assert!(state.time >= 1.0 - 1e-12 && state.time < 1.0 + frame / steps_per_frame);
+    }
+}
