@@ -35,7 +35,8 @@ pub struct BreedSettings {
     pub target: MotionClass,
     /// Individuals per generation.
     pub population: usize,
-    /// Generations after the first (generation 0 is the prototype's copies).
+    /// Generations in all, numbered from 0: generation 0 is the prototype's
+    /// copies, each later one is bred from the one before.
     pub generations: usize,
     /// Seed of every random stream.
     pub seed: u64,
@@ -431,8 +432,11 @@ struct RunFile {
     dt: String,
     /// How far the prototype's own fall, at the integrator and step breeding
     /// uses, is from a converged reference after 1 s (issue 3's machinery):
-    /// how much to trust the run's trajectories pointwise.
-    prototype_error: crate::accuracy::ErrorEstimate,
+    /// how much to trust the run's trajectories pointwise. Computed alongside
+    /// generation 0 and added to run.toml before generation 0's files are
+    /// written (absent only while generation 0 runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    prototype_error: Option<crate::accuracy::ErrorEstimate>,
     prototype_leaf: LeafSpec,
 }
 
@@ -441,6 +445,27 @@ struct RunFile {
 /// short enough to stay inside the horizon where pointwise error means
 /// something (falls may be chaotic later).
 pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
+
+/// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
+/// at the integrator and auto step its drops use.
+fn prototype_error(proto: &LeafSpec) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
+    let model = proto
+        .model()
+        .map_err(|e| BreedError(format!("--prototype: {e}")))?;
+    let integrator = DropParams::default().integrator;
+    let dt = crate::sim::resolve_step(
+        &model,
+        integrator,
+        TimeStep::Auto,
+        1.0 / crate::sim::FRAME_RATE,
+    )
+    .map_err(BreedError)?;
+    // The drop's step need not divide a second: estimate over the whole
+    // number of steps nearest to ERROR_ESTIMATE_SECONDS.
+    let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
+    crate::accuracy::error_estimate(&model, integrator, dt, seconds)
+        .map_err(|e| BreedError(format!("error estimate of the prototype: {e}")))
+}
 
 impl Run {
     /// Prepares a new run in `dir`, or picks up the same run there. A
@@ -476,16 +501,13 @@ impl Run {
             .model()
             .map_err(|e| BreedError(format!("--prototype: {e}")))?;
         let integrator = DropParams::default().integrator;
-        let dt = crate::sim::resolve_dt(
+        let dt = crate::sim::resolve_step(
             &model,
             integrator,
             TimeStep::Auto,
             1.0 / crate::sim::FRAME_RATE,
         )
         .map_err(BreedError)?;
-        let prototype_error =
-            crate::accuracy::error_estimate(&model, integrator, dt, ERROR_ESTIMATE_SECONDS)
-                .map_err(|e| BreedError(format!("error estimate of the prototype: {e}")))?;
         std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
         let run_file = RunFile {
             tool: "leafmagic".to_string(),
@@ -493,7 +515,7 @@ impl Run {
             settings: settings.clone(),
             integrator: integrator.to_string(),
             dt: format!("auto: each leaf its own, from its stability estimate (prototype: {dt} s)"),
-            prototype_error,
+            prototype_error: None,
             prototype_leaf: proto.clone(),
         };
         let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
@@ -563,7 +585,7 @@ impl Run {
     pub fn is_complete(&self) -> bool {
         self.checkpoint
             .as_ref()
-            .is_some_and(|c| c.generation >= self.settings.generations)
+            .is_some_and(|c| c.generation + 1 >= self.settings.generations)
     }
 
     /// Runs the remaining generations, writing each one's files and then the
@@ -639,23 +661,34 @@ impl Run {
         };
         progress.start_generation(generation, children.len());
         let proto = &self.proto;
-        let evaluated: Vec<(Individual, f64)> = children
-            .into_par_iter()
-            .map(|(id, parent, genome, parent_score)| {
-                let eval = evaluate(proto, &genome, s);
-                progress.individual_done(&eval.class, eval.score);
-                (
-                    Individual {
-                        id,
-                        parent,
-                        elite: false,
-                        genome,
-                        eval,
-                    },
-                    parent_score,
-                )
-            })
-            .collect();
+        let evaluate_all = || -> Vec<(Individual, f64)> {
+            children
+                .into_par_iter()
+                .map(|(id, parent, genome, parent_score)| {
+                    let eval = evaluate(proto, &genome, s);
+                    progress.individual_done(&eval.class, eval.score);
+                    (
+                        Individual {
+                            id,
+                            parent,
+                            elite: false,
+                            genome,
+                            eval,
+                        },
+                        parent_score,
+                    )
+                })
+                .collect()
+        };
+        // run.toml's error estimate is serial work: do it beside generation 0
+        // rather than before it, and complete run.toml before gen-000.csv.
+        let evaluated = if generation == 0 {
+            let (evaluated, estimate) = rayon::join(evaluate_all, || prototype_error(proto));
+            self.complete_run_file(estimate?)?;
+            evaluated
+        } else {
+            evaluate_all()
+        };
         let successes = evaluated
             .iter()
             .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
@@ -699,6 +732,23 @@ impl Run {
         progress.finish_generation(&summary);
         self.checkpoint = Some(checkpoint);
         Ok(())
+    }
+
+    /// Adds the prototype's error estimate to run.toml (if it is not there
+    /// yet: a run resumed from generation 0 may have written it already).
+    fn complete_run_file(
+        &self,
+        estimate: crate::accuracy::ErrorEstimate,
+    ) -> Result<(), BreedError> {
+        let path = self.dir.join(RUN_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let mut run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
+        if run_file.prototype_error.is_some() {
+            return Ok(());
+        }
+        run_file.prototype_error = Some(estimate);
+        let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
+        write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))
     }
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), BreedError> {

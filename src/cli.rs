@@ -83,7 +83,7 @@ pub struct BreedArgs {
     /// Individuals per generation.
     #[arg(long, default_value_t = 100)]
     pub population: usize,
-    /// Generations bred after the first.
+    /// Generations in all (generation 0, the prototype's varied copies, counts).
     #[arg(long, default_value_t = 8)]
     pub generations: usize,
     /// Seed of every random stream (same seed, same bytes).
