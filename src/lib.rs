@@ -14,6 +14,7 @@ pub mod aero;
 pub mod breed;
 pub mod classify;
 pub mod contact;
+pub mod describe;
 pub mod field;
 pub mod force;
 pub mod genome;
