@@ -13,10 +13,12 @@
 //! `--resume` finish a killed run with the same bytes as an uninterrupted one.
 
 use crate::classify::{MotionClass, classify};
+use crate::describe::{Descriptors, MotionTarget};
 use crate::genome::{Genome, mutate};
 use crate::io::write_atomic;
 use crate::leaf::LeafSpec;
 use crate::sim::{DropParams, TimeStep, drop_leaf};
+use crate::trajectory::Trajectory;
 use rand::RngExt;
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
@@ -52,6 +54,10 @@ pub struct BreedSettings {
     /// speed × rotation rate seen over the whole run.
     #[serde(default)]
     pub archive: bool,
+    /// Breed toward motion descriptors (`--like`, `--target-features`)
+    /// instead of toward the class alone; see [`crate::describe`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub like: Option<MotionTarget>,
 }
 
 impl BreedSettings {
@@ -69,6 +75,7 @@ impl BreedSettings {
             elites: 10,
             tournament: 3,
             archive: false,
+            like: None,
         }
     }
 
@@ -144,6 +151,23 @@ pub struct Evaluation {
     pub dt: f64,
     /// The simulator's error for a diverged fall.
     pub error: String,
+    /// Distance to the run's motion target ([`crate::describe`]), when it
+    /// has one and the fall passes its class gate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distance: Option<f64>,
+}
+
+/// Score of a fall bred toward motion descriptors: as [`score`] for the
+/// gate's class, but within it 1 + 1/(1 + d), so that the closest falls
+/// rank first and every fall that passes the class gate outranks every one
+/// that does not.
+pub fn like_score(class: &str, margin: f64, distance: Option<f64>) -> f64 {
+    match distance {
+        Some(d) if d.is_finite() => 1.0 + 1.0 / (1.0 + d),
+        _ if class == "diverged" => -1.0,
+        _ if class == "undetermined" => 0.0,
+        _ => 0.1 * margin,
+    }
 }
 
 /// Score of a fall for a target class: diverged −1 (worst), undetermined 0,
@@ -196,6 +220,10 @@ pub struct GenerationSummary {
     pub scale: f64,
     /// Fraction of children that scored at least as well as their parent.
     pub success_rate: f64,
+    /// The best individual's distance to the motion target, if the run has
+    /// one and the best passes its class gate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_distance: Option<f64>,
 }
 
 /// The resumable state after a completed generation.
@@ -333,6 +361,7 @@ pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> 
         tilt_deg: 0.0,
         dt: 0.0,
         error,
+        distance: None,
     };
     let model = match genome.model(proto) {
         Ok(m) => m,
@@ -349,8 +378,17 @@ pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> 
             let c = classify(&result.trajectory, model.chord());
             let class = c.class.to_string();
             let f = &c.features;
+            let distance = settings.like.as_ref().and_then(|target| {
+                let d = target.distance(&Descriptors::of(&c).ok()?);
+                d.is_finite().then_some(d)
+            });
+            let score = match &settings.like {
+                Some(_) => like_score(&class, f.margin, distance),
+                None => score(&class, f.margin, settings.target),
+            };
             Evaluation {
-                score: score(&class, f.margin, settings.target),
+                score,
+                distance,
                 class,
                 regime: c.regime.to_string(),
                 margin: f.margin,
@@ -420,6 +458,10 @@ pub struct Run {
 }
 
 const RUN_FILE: &str = "run.toml";
+/// The example fall of a `--like` run.
+const EXAMPLE_FILE: &str = "example.csv";
+/// The overlay of the example's and the best leaf's falls.
+const LIKE_PLOT_FILE: &str = "like.svg";
 const CHECKPOINT_FILE: &str = "checkpoint.json";
 
 /// `run.toml`: the settings, the tool version and the prototype itself.
@@ -508,6 +550,15 @@ impl Run {
             1.0 / crate::sim::FRAME_RATE,
         )
         .map_err(BreedError)?;
+        // The example of a --like run is copied in, so the run keeps what it
+        // bred toward even if the original moves.
+        let example = match &settings.like {
+            Some(t) if t.source != "features" => {
+                let path = Path::new(&t.source);
+                Some(Trajectory::read_csv(path).map_err(|e| io_err(path, e))?)
+            }
+            _ => None,
+        };
         std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
         let run_file = RunFile {
             tool: "leafmagic".to_string(),
@@ -521,6 +572,13 @@ impl Run {
         let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
         write_atomic(&dir.join(RUN_FILE), text.as_bytes())
             .map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
+        // After run.toml, so a directory holding only the example is never
+        // left behind; a run killed before this plots the best alone.
+        if let Some(example) = example {
+            let path = dir.join(EXAMPLE_FILE);
+            let bytes = example.try_to_csv_bytes().map_err(|e| io_err(&path, e))?;
+            write_atomic(&path, &bytes).map_err(|e| io_err(&path, e))?;
+        }
         Ok(Run {
             dir: dir.to_path_buf(),
             proto,
@@ -693,7 +751,20 @@ impl Run {
             .iter()
             .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
             .count();
-        let success_rate = successes as f64 / evaluated.len().max(1) as f64;
+        let mut success_rate = successes as f64 / evaluated.len().max(1) as f64;
+        if s.like.is_some() {
+            // Toward descriptors the step size should follow local progress:
+            // only children of parents inside the class gate (score > 1)
+            // count, and a success is a child strictly closer than its
+            // parent. Children crossing into the class would otherwise keep
+            // the rate high and the variation coarse for ever.
+            let inside: Vec<&(Individual, f64)> =
+                evaluated.iter().filter(|(_, ps)| *ps > 1.0).collect();
+            if !inside.is_empty() {
+                let closer = inside.iter().filter(|(i, ps)| i.eval.score > *ps).count();
+                success_rate = closer as f64 / inside.len() as f64;
+            }
+        }
         let mut population: Vec<Individual> = elites;
         population.extend(evaluated.into_iter().map(|(i, _)| i));
         population.sort_by_key(|i| i.id);
@@ -825,7 +896,47 @@ impl Run {
         let best: Vec<&Individual> = rank(&cp.population).into_iter().take(5).collect();
         let dir = self.dir.join("best");
         std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
-        export_leaves(&self.proto, &best, &dir)
+        export_leaves(&self.proto, &best, &dir)?;
+        if let (Some(target), Some(first)) = (&self.settings.like, best.first()) {
+            let fall = self.best_fall(first)?;
+            let example = self.example();
+            let title = format!(
+                "{} bred like {}: leaf {} ({}, distance {})",
+                self.proto.name,
+                target.source,
+                first.id,
+                first.eval.class,
+                first
+                    .eval
+                    .distance
+                    .map_or("∞, another class".to_string(), |d| format!("{d:.3}"))
+            );
+            let svg = crate::plot::like_svg(example.as_ref(), &fall, &title).map_err(BreedError)?;
+            self.write(LIKE_PLOT_FILE, svg.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// The fall of a member, dropped again exactly as it was evaluated.
+    pub fn best_fall(&self, member: &Individual) -> Result<Trajectory, BreedError> {
+        let model = member
+            .genome
+            .model(&self.proto)
+            .map_err(|e| BreedError(format!("leaf {}: {e}", member.id)))?;
+        let params = DropParams {
+            seconds: self.settings.seconds,
+            dt: TimeStep::Auto,
+            ..Default::default()
+        };
+        drop_leaf(&model, &params)
+            .map(|r| r.trajectory)
+            .map_err(|e| BreedError(format!("leaf {}: {e}", member.id)))
+    }
+
+    /// The example fall of a `--like` run, as copied into the run directory
+    /// (none for `--target-features`, or if it could not be read).
+    pub fn example(&self) -> Option<Trajectory> {
+        Trajectory::read_csv(&self.dir.join(EXAMPLE_FILE)).ok()
     }
 
     /// Summaries of the completed generations.
@@ -915,19 +1026,20 @@ fn summarise(
         best_id: best.id,
         scale,
         success_rate,
+        best_distance: best.eval.distance,
     }
 }
 
 /// generations.csv: one row per completed generation.
 pub fn generations_csv(history: &[GenerationSummary]) -> String {
     let mut out = String::from(
-        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate\n",
+        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance\n",
     );
     for h in history {
         let c = h.counts;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
             h.generation,
             c[0],
             c[1],
@@ -938,7 +1050,8 @@ pub fn generations_csv(history: &[GenerationSummary]) -> String {
             h.mean_score,
             h.best_id,
             h.scale,
-            h.success_rate
+            h.success_rate,
+            h.best_distance.map_or(String::new(), |d| d.to_string())
         );
     }
     out
@@ -953,7 +1066,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         }
     }
     out.push_str(
-        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,error\n",
+        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,error\n",
     );
     for i in population {
         let parent = i.parent.map_or(String::new(), |p| p.to_string());
@@ -970,7 +1083,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         };
         let _ = writeln!(
             out,
-            ",{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             e.class,
             e.regime,
             e.score,
@@ -983,6 +1096,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
             e.flips,
             e.tilt_deg,
             e.dt,
+            e.distance.map_or(String::new(), |d| d.to_string()),
             error
         );
     }

@@ -6,6 +6,7 @@ use clap::{Parser, Subcommand};
 use leafmagic::accuracy::{self, SweepSettings, long::LongSettings};
 use leafmagic::breed::{self, BreedSettings, GenerationSummary, Run};
 use leafmagic::classify::{self, Classification, MotionClass};
+use leafmagic::describe::{self, Descriptors, MotionTarget};
 use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::model::Model;
@@ -46,6 +47,8 @@ pub enum Command {
     Accuracy(AccuracyArgs),
     /// Run a scene file and write per-object trajectories and a summary.
     Scene(SceneArgs),
+    /// Motion descriptors of two falls side by side, and their distance.
+    Compare(CompareArgs),
 }
 
 /// Arguments of `accuracy`.
@@ -101,9 +104,35 @@ pub struct BreedArgs {
     /// Keep a MAP-Elites archive: the best leaf per cell of descent speed × rotation rate.
     #[arg(long)]
     pub archive: bool,
+    /// Breed toward the motion of this fall (pose CSV t,x,y,z,qw,qx,qy,qz): its class and
+    /// descriptors (descent, spin, tumble, flips, reversals, drift, period, spreads).
+    #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
+    pub like: Option<PathBuf>,
+    /// The example's chord, metres, for --like [default: the prototype's chord].
+    #[arg(long, requires = "like")]
+    pub size: Option<f64>,
+    /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
+    /// unset ones are free), within the class of --target.
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub target_features: Option<String>,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
-    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive"])]
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features"])]
     pub resume: Option<PathBuf>,
+}
+
+/// Arguments of `compare`.
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    /// First fall (pose CSV t,x,y,z,qw,qx,qy,qz).
+    pub a: PathBuf,
+    /// Second fall.
+    pub b: PathBuf,
+    /// The leaves' chord, metres (both falls).
+    #[arg(long, default_value_t = 0.05)]
+    pub size: f64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `export`.
@@ -247,6 +276,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Classify(args) => classify(args),
         Command::Accuracy(args) => accuracy(args),
         Command::Scene(args) => run_scene(args),
+        Command::Compare(args) => compare(args),
     }
 }
 
@@ -648,13 +678,98 @@ impl breed::Progress for Bar {
 }
 
 fn default_run_dir(s: &BreedSettings) -> PathBuf {
-    let proto = std::path::Path::new(&s.prototype)
-        .file_stem()
-        .map_or_else(|| s.prototype.clone(), |f| f.to_string_lossy().into_owned());
+    let stem = |p: &str| {
+        std::path::Path::new(p)
+            .file_stem()
+            .map_or_else(|| p.to_string(), |f| f.to_string_lossy().into_owned())
+    };
+    let aim = match &s.like {
+        None => s.target.to_string(),
+        Some(t) if t.source == "features" => format!("{}-features", s.target),
+        Some(t) => format!("like-{}", stem(&t.source)),
+    };
     PathBuf::from("runs").join(format!(
-        "{proto}-{}-s{}-n{}-g{}",
-        s.target, s.seed, s.population, s.generations
+        "{}-{aim}-s{}-n{}-g{}",
+        stem(&s.prototype),
+        s.seed,
+        s.population,
+        s.generations
     ))
+}
+
+/// Reads and describes a fall, or says why it cannot be described.
+fn describe_file(path: &std::path::Path, size: f64) -> Result<Descriptors> {
+    if !(size > 0.0 && size.is_finite()) {
+        bail!("--size must be a positive number of metres, got {size}");
+    }
+    let traj = Trajectory::read_csv(path)?;
+    Descriptors::of(&classify::classify(&traj, size))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}
+
+/// The motion target of `breed --like` / `--target-features`, checked
+/// before anything is bred or written.
+fn motion_target(args: &BreedArgs) -> Result<Option<MotionTarget>> {
+    if let Some(path) = &args.like {
+        let size = match args.size {
+            Some(s) => s,
+            None => LeafSpec::load(&args.prototype)?.model()?.chord(),
+        };
+        let example = describe_file(path, size)?;
+        return Ok(Some(MotionTarget::like(
+            &path.to_string_lossy(),
+            size,
+            &example,
+        )));
+    }
+    match &args.target_features {
+        Some(text) => Ok(Some(
+            MotionTarget::parse_features(text, args.target).map_err(anyhow::Error::msg)?,
+        )),
+        None => Ok(None),
+    }
+}
+
+fn compare(args: CompareArgs) -> Result<()> {
+    let a = describe_file(&args.a, args.size)?;
+    let b = describe_file(&args.b, args.size)?;
+    let d = describe::distance(&a, &b);
+    if args.json {
+        let side = |d: &Descriptors| {
+            let mut m = serde_json::Map::new();
+            m.insert("class".into(), json!(d.class.as_str()));
+            m.insert("regime".into(), json!(d.regime.as_str()));
+            for (k, name) in describe::NAMES.iter().enumerate() {
+                let v = d.values[k];
+                m.insert(
+                    (*name).into(),
+                    if v.is_finite() { json!(v) } else { json!(null) },
+                );
+            }
+            serde_json::Value::Object(m)
+        };
+        let out = json!({
+            "a": { "file": args.a.display().to_string(), "descriptors": side(&a) },
+            "b": { "file": args.b.display().to_string(), "descriptors": side(&b) },
+            "distance": if d.is_finite() { json!(d) } else { json!(null) },
+            "same_class": a.class == b.class,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    println!("a: {}\nb: {}\n", args.a.display(), args.b.display());
+    print!("{}", describe::table(&[("a", &a), ("b", &b)]));
+    if d.is_finite() {
+        println!(
+            "\ndistance    {d:.4} (RMS over descriptors, each in units of its reference spread)"
+        );
+    } else {
+        println!(
+            "\ndistance    ∞: different classes ({} vs {}) are never close",
+            a.class, b.class
+        );
+    }
+    Ok(())
 }
 
 fn breed(args: BreedArgs) -> Result<()> {
@@ -672,8 +787,14 @@ fn breed(args: BreedArgs) -> Result<()> {
                 ..BreedSettings::default_run()
             };
             // Keep elites at a tenth of the population (at least one).
+            let like = motion_target(&args)?;
             let settings = BreedSettings {
                 elites: (settings.population / 10).max(1),
+                target: like
+                    .as_ref()
+                    .and_then(|t| t.class)
+                    .unwrap_or(settings.target),
+                like,
                 ..settings
             };
             settings.validate().map_err(anyhow::Error::msg)?;
@@ -691,22 +812,78 @@ fn breed(args: BreedArgs) -> Result<()> {
         .context("cannot start the worker threads")?;
     let bar = Bar::new();
     pool.install(|| run.run(&bar))?;
-    print_generations(run.history());
+    print_generations(run.history(), run.settings().like.is_some());
+    if let Some(target) = &run.settings().like {
+        print_like(&run, target)?;
+    }
     println!("run directory: {}", run.dir.display());
     Ok(())
 }
 
-fn print_generations(history: &[GenerationSummary]) {
-    println!(
+/// The example's (or the target's) descriptors beside the best leaf's.
+fn print_like(run: &Run, target: &MotionTarget) -> Result<()> {
+    let Some(cp) = &run.checkpoint else {
+        return Ok(());
+    };
+    let best = breed::rank(&cp.population)[0];
+    let fall = run.best_fall(best)?;
+    let chord = best.genome.model(&run.proto)?.chord();
+    let c = classify::classify(&fall, chord);
+    let Ok(best_d) = Descriptors::of(&c) else {
+        println!("best leaf {}: undetermined, no descriptors", best.id);
+        return Ok(());
+    };
+    let label = format!("leaf {}", best.id);
+    println!();
+    match run.example() {
+        Some(example) => {
+            let size = target.size_m.unwrap_or(chord);
+            let ex = Descriptors::of(&classify::classify(&example, size))
+                .map_err(|e| anyhow::anyhow!("example: {e}"))?;
+            print!(
+                "{}",
+                describe::table(&[("example", &ex), (label.as_str(), &best_d)])
+            );
+        }
+        None => {
+            let mut wanted = best_d.clone();
+            for (k, name) in describe::NAMES.iter().enumerate() {
+                wanted.values[k] = target.descriptors.get(*name).copied().unwrap_or(f64::NAN);
+            }
+            wanted.class = target.class.unwrap_or(best_d.class);
+            print!(
+                "{}",
+                describe::table(&[("target", &wanted), (label.as_str(), &best_d)])
+            );
+        }
+    }
+    match best.eval.distance {
+        Some(d) => println!("distance    {d:.4}"),
+        None => println!("distance    ∞ (the best is not of the target's class)"),
+    }
+    Ok(())
+}
+
+fn print_generations(history: &[GenerationSummary], like: bool) {
+    print!(
         "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10} {:>10} {:>6}",
         "gen", "floater", "spinner", "lilter", "undet.", "diverg", "best", "mean", "scale"
     );
+    println!("{}", if like { "  best dist." } else { "" });
     for h in history {
         let c = h.counts;
-        println!(
+        print!(
             "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10.4} {:>10.4} {:>6.3}",
             h.generation, c[0], c[1], c[2], c[3], c[4], h.best_score, h.mean_score, h.scale
         );
+        if like {
+            print!(
+                "  {:>11}",
+                h.best_distance
+                    .map_or("∞".to_string(), |d| format!("{d:.4}"))
+            );
+        }
+        println!();
     }
 }
 

@@ -249,3 +249,167 @@ pub fn generations_svg(
     }
     Ok(svg)
 }
+
+/// Rotation rates of a fall, rad/s, averaged over 0.1 s windows: (time,
+/// rate about the vertical, rate about the horizontal axes). From the
+/// world-frame rotation between successive orientations, ω ≈ log(q₁ q₀⁻¹)/Δt.
+fn rotation_rates(fall: &crate::trajectory::Trajectory) -> Vec<(f64, f64, f64)> {
+    let mut out = Vec::new();
+    let mut k = 0;
+    while k + 1 < fall.len() {
+        let t0 = fall.time[k];
+        let mut j = k + 1;
+        while j + 1 < fall.len() && fall.time[j] - t0 < 0.1 {
+            j += 1;
+        }
+        let (mut vertical, mut horizontal) = (0.0, 0.0);
+        for i in k..j {
+            let w = (fall.orientation[i + 1] * fall.orientation[i].inverse()).scaled_axis();
+            vertical += w.z;
+            horizontal += w.xy().norm();
+        }
+        let span = (fall.time[j] - t0).max(f64::MIN_POSITIVE);
+        out.push((
+            0.5 * (t0 + fall.time[j]),
+            vertical / span,
+            horizontal / span,
+        ));
+        k = j;
+    }
+    out
+}
+
+/// The SVG text overlaying an example fall and the best bred leaf's fall:
+/// height against time (each from its own start) above, and the rotation
+/// rates about the vertical and the horizontal axes below.
+///
+/// # Errors
+/// A message if plotters fails (it writes to memory, so only on a bug).
+pub fn like_svg(
+    example: Option<&crate::trajectory::Trajectory>,
+    best: &crate::trajectory::Trajectory,
+    title: &str,
+) -> Result<String, String> {
+    const EXAMPLE: RGBColor = RGBColor(213, 94, 0);
+    const BEST: RGBColor = RGBColor(0, 114, 178);
+    let falls: Vec<(&str, RGBColor, &crate::trajectory::Trajectory)> = example
+        .map(|e| ("example", EXAMPLE, e))
+        .into_iter()
+        .chain([("best leaf", BEST, best)])
+        .collect();
+    let heights: Vec<Vec<(f64, f64)>> = falls
+        .iter()
+        .map(|(_, _, f)| {
+            let z0 = f.position.first().map_or(0.0, |p| p.z);
+            f.time
+                .iter()
+                .zip(&f.position)
+                .map(|(&t, p)| (t, p.z - z0))
+                .collect()
+        })
+        .collect();
+    let rates: Vec<Vec<(f64, f64, f64)>> =
+        falls.iter().map(|(_, _, f)| rotation_rates(f)).collect();
+    let t_max = falls
+        .iter()
+        .filter_map(|(_, _, f)| f.time.last().copied())
+        .fold(1e-3, f64::max);
+    let z_min = heights.iter().flatten().map(|p| p.1).fold(-1e-3, f64::min);
+    let (r_min, r_max) = rates
+        .iter()
+        .flatten()
+        .fold((0.0f64, 1e-3f64), |(lo, hi), r| {
+            (lo.min(r.1).min(r.2), hi.max(r.1).max(r.2))
+        });
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (900, 720)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        let root = root
+            .titled(title, ("sans-serif", 20))
+            .map_err(|e| e.to_string())?;
+        let (upper, lower) = root.split_vertically(330);
+        let mut chart = ChartBuilder::on(&upper)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_max, (z_min * 1.05)..0.0)
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("time, s")
+            .y_desc("height fallen, m")
+            .light_line_style(WHITE.mix(0.0))
+            .axis_desc_style(("sans-serif", 16))
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for ((name, colour, _), points) in falls.iter().zip(&heights) {
+            let colour = *colour;
+            chart
+                .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(*name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+
+        let pad = 0.05 * (r_max - r_min);
+        let mut chart = ChartBuilder::on(&lower)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(60)
+            .build_cartesian_2d(0.0..t_max, (r_min - pad)..(r_max + pad))
+            .map_err(|e| e.to_string())?;
+        chart
+            .configure_mesh()
+            .x_desc("time, s")
+            .y_desc("rotation rate, rad/s (0.1 s means)")
+            .light_line_style(WHITE.mix(0.0))
+            .axis_desc_style(("sans-serif", 16))
+            .label_style(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        for ((name, colour, _), r) in falls.iter().zip(&rates) {
+            let colour = *colour;
+            let vertical: Vec<(f64, f64)> = r.iter().map(|p| (p.0, p.1)).collect();
+            let horizontal: Vec<(f64, f64)> = r.iter().map(|p| (p.0, p.2)).collect();
+            chart
+                .draw_series(LineSeries::new(vertical, colour.stroke_width(2)))
+                .map_err(|e| e.to_string())?
+                .label(format!("{name}: about the vertical"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
+            chart
+                .draw_series(DashedLineSeries::new(
+                    horizontal,
+                    6,
+                    4,
+                    colour.stroke_width(1),
+                ))
+                .map_err(|e| e.to_string())?
+                .label(format!("{name}: about the horizontal (|ω_h|)"))
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(1))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()
+            .map_err(|e| e.to_string())?;
+        root.present().map_err(|e| e.to_string())?;
+    }
+    Ok(svg)
+}

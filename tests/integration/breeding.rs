@@ -7,11 +7,11 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
 
-fn leafmagic() -> Command {
+pub fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
 }
 
-fn scratch(name: &str) -> PathBuf {
+pub fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("leafmagic-breed-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
@@ -20,7 +20,7 @@ fn scratch(name: &str) -> PathBuf {
 
 /// Every file of a run directory except timing.csv (the only one allowed to
 /// differ), by relative path.
-fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+pub fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     let mut out = BTreeMap::new();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
@@ -39,7 +39,7 @@ fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     out
 }
 
-fn breed(args: &[&str], out: &Path) -> std::process::Output {
+pub fn breed(args: &[&str], out: &Path) -> std::process::Output {
     leafmagic()
         .arg("breed")
         .args(args)

@@ -12,6 +12,7 @@ mod genome;
 mod integrators;
 mod invariants;
 mod leaves;
+mod like;
 mod rigid;
 mod scene_files;
 mod scenes;
