@@ -6,6 +6,7 @@
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use leafmagic::classify::{MotionClass, classify};
+use leafmagic::describe::{Descriptors, MotionTarget};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::sim::{DropParams, drop_leaf};
 use std::hint::black_box;
@@ -28,6 +29,19 @@ fn classify_fall(c: &mut Criterion) {
         assert_eq!(classify(&fall, chord).class, class, "{leaf}");
         group.bench_function(class.as_str(), |b| {
             b.iter(|| black_box(classify(black_box(&fall), chord)))
+        });
+        // What `breed --like` adds per fall: the descriptors and the
+        // distance to an example (here the fall itself).
+        let target = MotionTarget::like(
+            leaf,
+            chord,
+            &Descriptors::of(&classify(&fall, chord)).unwrap(),
+        );
+        group.bench_function(format!("{}_described", class.as_str()), |b| {
+            b.iter(|| {
+                let d = Descriptors::of(&classify(black_box(&fall), chord)).unwrap();
+                black_box(target.distance(&d))
+            })
         });
     }
     group.finish();

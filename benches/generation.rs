@@ -1,11 +1,17 @@
 //! `generation`: evaluating one generation of the default breed (100 variants
 //! of prototype A, 10 s drops, classified) on 1 and on 2 threads. The ratio
-//! of the two times is the parallel speed-up.
+//! of the two times is the parallel speed-up. `like_threads_2` evaluates the
+//! same 100 genomes scored toward an example fall (`breed --like`, the
+//! tumbling fixture) instead of a class: the same drops, so the difference is
+//! the cost of describing each fall and measuring its distance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use leafmagic::breed::{BreedSettings, evaluate, stream_seed};
+use leafmagic::classify::classify;
+use leafmagic::describe::{Descriptors, MotionTarget};
 use leafmagic::genome::{Genome, mutate};
 use leafmagic::leaf::LeafSpec;
+use leafmagic::sim::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -21,6 +27,23 @@ fn generation(c: &mut Criterion) {
             mutate(&g0, &proto.bounds, settings.initial_scale, &mut rng)
         })
         .collect();
+    let example_leaf = LeafSpec::load(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/fixtures/a-tumbler.toml"
+    ))
+    .unwrap()
+    .model()
+    .unwrap();
+    let example = drop_leaf(&example_leaf, &DropParams::default()).unwrap();
+    let described = Descriptors::of(&classify(&example.trajectory, example_leaf.chord())).unwrap();
+    let like = BreedSettings {
+        like: Some(MotionTarget::like(
+            "a-tumbler",
+            example_leaf.chord(),
+            &described,
+        )),
+        ..settings.clone()
+    };
     let mut group = c.benchmark_group("generation");
     group.sample_size(10);
     for threads in [1, 2] {
@@ -40,6 +63,21 @@ fn generation(c: &mut Criterion) {
             })
         });
     }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    group.bench_function("like_threads_2", |b| {
+        b.iter(|| {
+            pool.install(|| {
+                let evals: Vec<_> = genomes
+                    .par_iter()
+                    .map(|g| evaluate(&proto, g, &like))
+                    .collect();
+                black_box(evals)
+            })
+        })
+    });
     group.finish();
 }
 
