@@ -113,6 +113,11 @@
   }
   fitDistance();
   const R0 = st.dist;
+  // Where the objects start: line primitives are drawn along their axis
+  // nearest to it (an axis is infinite; its glyph should be in view).
+  update(0);
+  const C0 = target();
+  update(st.t);
 
   // ----- math -----
   function sub(a, b) { return [a[0] - b[0], a[1] - b[1], a[2] - b[2]]; }
@@ -179,7 +184,9 @@
           if (sink) arrow(add(p, e, 0.6 * S), add(p, e, 0.1 * S)); else arrow(add(p, e, 0.1 * S), add(p, e, 0.6 * S));
         });
       } else {
-        seg(add(p, d, -2 * S), add(p, d, 2 * S));
+        const along = dot(sub(C0, p), d);
+        const o = add(p, d, along);
+        seg(add(o, d, -2 * S), add(o, d, 2 * S));
         let u = norm(cross(d, [0, 0, 1]));
         if (!isFinite(u[0]) || Math.abs(dot(d, [0, 0, 1])) > 0.99) u = norm(cross(d, [1, 0, 0]));
         const v = cross(d, u);
@@ -188,14 +195,14 @@
           let prev = null;
           for (let i = 0; i <= n; i++) {
             const a = sign * 2 * Math.PI * i / n;
-            const q = add(add(p, u, r * Math.cos(a)), v, r * Math.sin(a));
+            const q = add(add(o, u, r * Math.cos(a)), v, r * Math.sin(a));
             if (prev) { if (i === n) arrow(prev, q); else seg(prev, q); }
             prev = q;
           }
         } else {
           const sink = (g.kind === 'line_sink') === out;
           [u, v, [-u[0], -u[1], -u[2]], [-v[0], -v[1], -v[2]]].forEach(function (e) {
-            if (sink) arrow(add(p, e, 0.6 * S), add(p, e, 0.1 * S)); else arrow(add(p, e, 0.1 * S), add(p, e, 0.6 * S));
+            if (sink) arrow(add(o, e, 0.6 * S), add(o, e, 0.1 * S)); else arrow(add(o, e, 0.1 * S), add(o, e, 0.6 * S));
           });
         }
       }

@@ -6,6 +6,7 @@ mod alloc;
 mod breeding;
 mod common;
 mod contact;
+mod export;
 mod genome;
 mod integrators;
 mod invariants;
