@@ -461,12 +461,9 @@ fn scene_export_to_pc2_keeps_the_obj_vertex_order_of_the_cache() {
         let v = obj_vertices(&mesh);
         assert_eq!(v.len(), points, "{}: OBJ vertices = cache points", obj.name);
         for (i, p) in v.iter().enumerate() {
-            for d in 0..3 {
+            for (d, x) in p.iter().enumerate() {
                 // Bit for bit: OBJ vertex i is cache point i of sample 0.
-                assert_eq!(
-                    p[d].to_bits(),
-                    le_f32(&cache, 32 + 12 * i + 4 * d).to_bits()
-                );
+                assert_eq!(x.to_bits(), le_f32(&cache, 32 + 12 * i + 4 * d).to_bits());
             }
         }
         // And the cache's last sample is the exported last frame.
