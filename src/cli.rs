@@ -341,18 +341,25 @@ fn run_scene(args: SceneArgs) -> Result<()> {
         .write(&scene, &dir)
         .with_context(|| format!("cannot write to {}", dir.display()))?;
     let mut written = written;
+    let mut export_note = None;
     if let Some(format) = args.export {
         let started = Instant::now();
         let clip = leafmagic::export::from_scene_run(&scene, &run, args.export_fps)?;
-        written.extend(write_clip(&clip, format, &dir, &scene.name)?);
-        if !args.json {
-            println!(
-                "export          {format}, {} frames at {} fps in {:.3} s",
-                clip.frames,
-                clip.fps,
-                started.elapsed().as_secs_f64()
-            );
-        }
+        let files = write_clip(&clip, format, &dir, &scene.name)?;
+        let bytes: u64 = files
+            .iter()
+            .filter_map(|f| std::fs::metadata(f).ok())
+            .map(|m| m.len())
+            .sum();
+        export_note = Some(format!(
+            "{format}: {} files, {:.2} MB, {} frames at {} fps, in {:.3} s",
+            files.len(),
+            bytes as f64 / 1e6,
+            clip.frames,
+            clip.fps,
+            started.elapsed().as_secs_f64()
+        ));
+        written.extend(files);
     }
     let s = &run.stats;
     if args.json {
@@ -362,6 +369,7 @@ fn run_scene(args: SceneArgs) -> Result<()> {
             "wall_s": s.wall_s,
             "wall_per_simulated_s": s.wall_s / s.simulated_s,
             "out": dir,
+            "export": export_note,
             "files": written,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
@@ -392,6 +400,9 @@ fn run_scene(args: SceneArgs) -> Result<()> {
         dir.display(),
         written.len()
     );
+    if let Some(note) = export_note {
+        println!("export          {note}");
+    }
     Ok(())
 }
 
