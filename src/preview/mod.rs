@@ -18,7 +18,7 @@ const VIEWER: &str = include_str!("viewer.js");
 
 /// Bred leaves are laid side by side this many of their largest extents
 /// apart, so that drifting falls rarely overlap.
-pub const GRID_SPACING_CHORDS: f64 = 4.0;
+pub const GRID_SPACING_CHORDS: f64 = 3.0;
 
 /// The clip to preview from `input` and whether it is a grid of bred leaves:
 ///

@@ -40,7 +40,7 @@
     st.playing = false;
   }
   // A grid of bred leaves is laid along x: look along +y so it reads left to right.
-  if (data.grid) { st.yaw = -Math.PI / 2; st.pitch = 0.35; }
+  if (data.grid) { st.yaw = -Math.PI / 2; st.pitch = 0.6; }
   if (P.speed && isFinite(parseFloat(P.speed))) st.speed = parseFloat(P.speed);
   if (P.yaw && isFinite(parseFloat(P.yaw))) st.yaw = parseFloat(P.yaw) * Math.PI / 180;
   if (P.pitch && isFinite(parseFloat(P.pitch))) st.pitch = parseFloat(P.pitch) * Math.PI / 180;
@@ -109,7 +109,7 @@
       r = Math.max(r, d);
     });
     // One object: leave room to see it move; all: fit them in the view.
-    st.dist = Math.max(st.follow ? 4 * r : 2.4 * r, 0.12);
+    st.dist = Math.max(st.follow ? 4 * r : (data.grid ? 1.7 : 2.4) * r, 0.12);
   }
   fitDistance();
   const R0 = st.dist;
