@@ -49,6 +49,25 @@ pub enum Command {
     Scene(SceneArgs),
     /// Motion descriptors of two falls side by side, and their distance.
     Compare(CompareArgs),
+    /// Write one self-contained HTML page that plays a breeding run's best
+    /// leaves, a scene's output or a .glb file in 3-D (works offline).
+    Preview(PreviewArgs),
+}
+
+/// Arguments of `preview`.
+#[derive(clap::Args, Debug)]
+pub struct PreviewArgs {
+    /// A breeding run directory, a scene output directory or a .glb file.
+    pub input: PathBuf,
+    /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// For a breeding run: show the K best leaves of the last generation.
+    #[arg(long, default_value_t = 5)]
+    pub top: usize,
+    /// Frames per second of the embedded motion [default: 30, or the .glb's own].
+    #[arg(long)]
+    pub fps: Option<f64>,
 }
 
 /// Arguments of `accuracy`.
@@ -149,6 +168,13 @@ pub struct ExportArgs {
     /// Output directory for the leaf files and index.csv.
     #[arg(long)]
     pub out: PathBuf,
+    /// Also re-drop each leaf as breeding dropped it and write its fall:
+    /// `glb` (leaf-<id>.glb) or `pc2` (leaf-<id>.pc2 + leaf-<id>.obj).
+    #[arg(long)]
+    pub format: Option<leafmagic::export::Format>,
+    /// Frames per second of the exported motion.
+    #[arg(long, default_value_t = leafmagic::export::DEFAULT_FPS)]
+    pub fps: f64,
 }
 
 /// Arguments of `scene`.
@@ -165,6 +191,12 @@ pub struct SceneArgs {
     /// List what the compiled scene keeps and leaves out, then stop.
     #[arg(long)]
     pub explain: bool,
+    /// Also export the run: `glb` (DIR/<scene>.glb) or `pc2` (DIR/<object>.pc2 + .obj).
+    #[arg(long)]
+    pub export: Option<leafmagic::export::Format>,
+    /// Frames per second of the exported motion.
+    #[arg(long, default_value_t = leafmagic::export::DEFAULT_FPS)]
+    pub export_fps: f64,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -277,6 +309,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Accuracy(args) => accuracy(args),
         Command::Scene(args) => run_scene(args),
         Command::Compare(args) => compare(args),
+        Command::Preview(args) => preview(args),
     }
 }
 
@@ -337,6 +370,27 @@ fn run_scene(args: SceneArgs) -> Result<()> {
     let written = run
         .write(&scene, &dir)
         .with_context(|| format!("cannot write to {}", dir.display()))?;
+    let mut written = written;
+    let mut export_note = None;
+    if let Some(format) = args.export {
+        let started = Instant::now();
+        let clip = leafmagic::export::from_scene_run(&scene, &run, args.export_fps)?;
+        let files = write_clip(&clip, format, &dir, &scene.name)?;
+        let bytes: u64 = files
+            .iter()
+            .filter_map(|f| std::fs::metadata(f).ok())
+            .map(|m| m.len())
+            .sum();
+        export_note = Some(format!(
+            "{format}: {} files, {:.2} MB, {} frames at {} fps, in {:.3} s",
+            files.len(),
+            bytes as f64 / 1e6,
+            clip.frames,
+            clip.fps,
+            started.elapsed().as_secs_f64()
+        ));
+        written.extend(files);
+    }
     let s = &run.stats;
     if args.json {
         let out = json!({
@@ -345,6 +399,7 @@ fn run_scene(args: SceneArgs) -> Result<()> {
             "wall_s": s.wall_s,
             "wall_per_simulated_s": s.wall_s / s.simulated_s,
             "out": dir,
+            "export": export_note,
             "files": written,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
@@ -375,6 +430,9 @@ fn run_scene(args: SceneArgs) -> Result<()> {
         dir.display(),
         written.len()
     );
+    if let Some(note) = export_note {
+        println!("export          {note}");
+    }
     Ok(())
 }
 
@@ -923,6 +981,75 @@ fn export(args: ExportArgs) -> Result<()> {
         "wrote {} leaves and index.csv to {}",
         chosen.len(),
         args.out.display()
+    );
+    if let Some(format) = args.format {
+        let started = Instant::now();
+        let objects = leafmagic::export::drop_individuals(&run, &chosen, args.fps)?;
+        let mut files = 0;
+        for o in objects {
+            let name = o.name.clone();
+            let clip = leafmagic::export::side_by_side(&name, vec![o], args.fps, 0.0)?;
+            files += write_clip(&clip, format, &args.out, &name)?.len();
+        }
+        println!(
+            "wrote {files} {format} files of their falls (re-dropped for {} s, {} fps) in {:.2} s",
+            run.settings().seconds,
+            args.fps,
+            started.elapsed().as_secs_f64()
+        );
+    }
+    Ok(())
+}
+
+/// Writes `clip` into `dir` in `format` (`<stem>.glb`, or a `.pc2` and an
+/// `.obj` per object); returns the paths.
+fn write_clip(
+    clip: &leafmagic::export::Clip,
+    format: leafmagic::export::Format,
+    dir: &std::path::Path,
+    stem: &str,
+) -> Result<Vec<PathBuf>> {
+    use leafmagic::export::{Format, glb, pc2};
+    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
+    Ok(match format {
+        Format::Glb => {
+            let path = dir.join(format!("{stem}.glb"));
+            glb::write_glb(clip, &path)?;
+            vec![path]
+        }
+        Format::Pc2 => pc2::write_pc2(clip, dir)?,
+    })
+}
+
+fn preview(args: PreviewArgs) -> Result<()> {
+    if let Some(f) = args.fps
+        && !(f > 0.0 && f.is_finite())
+    {
+        bail!("--fps must be a positive number, got {f}");
+    }
+    if args.top == 0 {
+        bail!("--top must be at least 1");
+    }
+    let started = Instant::now();
+    let (clip, grid) = leafmagic::preview::load(&args.input, args.top, args.fps)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        if args.input.is_dir() {
+            args.input.join("preview.html")
+        } else {
+            args.input.with_extension("html")
+        }
+    });
+    let html = leafmagic::preview::html(&clip, grid)?;
+    leafmagic::io::write_atomic(&out, html.as_bytes())
+        .with_context(|| format!("cannot write {}", out.display()))?;
+    println!(
+        "wrote {} ({:.2} MB: {} objects, {} frames at {} fps) in {:.2} s",
+        out.display(),
+        html.len() as f64 / 1e6,
+        clip.objects.len(),
+        clip.frames,
+        clip.fps,
+        started.elapsed().as_secs_f64()
     );
     Ok(())
 }

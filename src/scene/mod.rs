@@ -115,6 +115,11 @@ pub struct SceneObject {
     pub pose: Option<PoseFrame>,
     /// Index of its rigid body in the model, if rigid.
     pub rigid_body: Option<usize>,
+    /// Its surface triangles for display and export, as indices into
+    /// `particles`. Kept apart from the model's triangles because the
+    /// compiler drops surfaces that feel no wind (a rigid bin with zero
+    /// aerodynamic coefficients still has to be drawn).
+    pub surface: Vec<[usize; 3]>,
 }
 
 impl SceneObject {
@@ -436,7 +441,15 @@ impl Builder {
             particles,
             pose,
             rigid_body,
+            surface: Vec::new(),
         });
+    }
+
+    /// Sets the display surface of the object pushed last (local indices).
+    fn set_surface(&mut self, triangles: Vec<[usize; 3]>) {
+        if let Some(o) = self.objects.last_mut() {
+            o.surface = triangles;
+        }
     }
 
     /// The scene path of a model item named by [`ModelError`].
@@ -742,6 +755,7 @@ fn add_leaf(
             initial: rotation,
         };
         b.push_object(name, ObjectKind::Leaf, ids, Some(pose), obj.rigid, &path);
+        b.set_surface(leaf.triangles.iter().map(|t| t.corners).collect());
     }
     Ok(())
 }
@@ -864,6 +878,7 @@ fn add_rigid(
         true,
         &path,
     );
+    b.set_surface(part.triangles.clone());
     Ok(())
 }
 
@@ -952,6 +967,7 @@ fn add_sheet(
         V3::zeros(),
     );
     b.push_object(obj.name.clone(), ObjectKind::Sheet, ids, None, false, &path);
+    b.set_surface(part.triangles.clone());
     Ok(())
 }
 

@@ -8,6 +8,7 @@ mod breeding;
 mod classes;
 mod common;
 mod contact;
+mod export;
 mod genome;
 mod integrators;
 mod invariants;

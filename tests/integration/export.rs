@@ -1,0 +1,935 @@
+//! Export and preview (issue 5): the .glb layout against the glTF 2.0
+//! specification and the Khronos validator, PC2 byte for byte against its
+//! specification and the OBJ in the same vertex order, resampling exact for
+//! linear motion, the HTML page drawn by headless Chromium at two times.
+
+use leafmagic::export::{
+    self, Clip, ClipObject, DEFAULT_FPS, ExportError, Format, Motion, glb, pc2,
+};
+use leafmagic::leaf::LeafSpec;
+use leafmagic::scene::Scene;
+use nalgebra::Vector3;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+type V3 = Vector3<f64>;
+
+fn leafmagic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("leafmagic-export-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// A scene with one of everything that is exported differently: a
+/// deforming leaf (morph targets), a tumbling rigid box (TRS channels), a
+/// rope (lines), a fixed point (not exported), ground and wind (extras).
+const MIXED: &str = r#"
+name = "mixed"
+duration = 1.0
+frame_rate = 60
+
+[ground]
+height = 0.0
+static_friction = 0.5
+kinetic_friction = 0.4
+
+[[wind]]
+kind = "uniform"
+velocity = [0.4, 0.0, 0.0]
+
+[[wind]]
+kind = "line_vortex"
+point = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+circulation = 0.5
+core_radius = 0.2
+
+[[leaf]]
+name = "leaf"
+leaf = "a"
+position = [0.0, 0.0, 1.0]
+tilt_deg = 20.0
+
+[[rigid]]
+name = "box"
+shape = "box"
+size = [0.2, 0.1, 0.05]
+mass = 0.1
+position = [0.5, 0.0, 0.6]
+angular_velocity = [1.0, 2.0, 3.0]
+
+[[fixed]]
+name = "anchor"
+position = [-0.5, 0.0, 1.5]
+
+[[rope]]
+name = "rope"
+from = "anchor"
+to = "box:0"
+segments = 4
+mass = 0.01
+stiffness = 50.0
+slack = 0.3
+"#;
+
+fn mixed_clip(fps: f64) -> Clip {
+    let scene = Scene::from_toml(MIXED, "mixed.toml", Path::new(".")).unwrap();
+    let run = scene.run(None).unwrap();
+    export::from_scene_run(&scene, &run, fps).unwrap()
+}
+
+/// The GLB's parts: (JSON document, BIN chunk), after checking the
+/// container layout of the glTF 2.0 specification §4.4 byte for byte.
+fn split_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().unwrap()) as usize;
+    assert_eq!(&bytes[0..4], b"glTF", "magic");
+    assert_eq!(u32_at(4), 2, "container version");
+    assert_eq!(u32_at(8), bytes.len(), "header length = file length");
+    let json_len = u32_at(12);
+    assert_eq!(&bytes[16..20], b"JSON", "first chunk is JSON");
+    assert_eq!(json_len % 4, 0, "JSON chunk padded to 4 bytes");
+    let json_bytes = &bytes[20..20 + json_len];
+    let text = std::str::from_utf8(json_bytes).unwrap();
+    // Padding of the JSON chunk is spaces (0x20), which JSON ignores.
+    assert!(
+        json_bytes[text.trim_end().len()..]
+            .iter()
+            .all(|&b| b == b' ')
+    );
+    let bin_at = 20 + json_len;
+    let bin_len = u32_at(bin_at);
+    assert_eq!(
+        &bytes[bin_at + 4..bin_at + 8],
+        b"BIN\0",
+        "second chunk is BIN"
+    );
+    assert_eq!(bin_len % 4, 0, "BIN chunk padded to 4 bytes");
+    assert_eq!(
+        bin_at + 8 + bin_len,
+        bytes.len(),
+        "nothing after the BIN chunk"
+    );
+    let doc: Value = serde_json::from_str(text.trim_end()).unwrap();
+    (doc, bytes[bin_at + 8..].to_vec())
+}
+
+/// An accessor's floats (tightly packed f32, as we write them).
+fn floats(doc: &Value, bin: &[u8], accessor: usize) -> Vec<f32> {
+    let a = &doc["accessors"][accessor];
+    assert_eq!(a["componentType"], 5126, "FLOAT");
+    let view = &doc["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
+    let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize
+        + a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let width = match a["type"].as_str().unwrap() {
+        "SCALAR" => 1,
+        "VEC3" => 3,
+        "VEC4" => 4,
+        t => panic!("unexpected type {t}"),
+    };
+    let n = a["count"].as_u64().unwrap() as usize * width;
+    assert!(
+        offset + 4 * n
+            <= view["byteOffset"].as_u64().unwrap() as usize
+                + view["byteLength"].as_u64().unwrap() as usize
+    );
+    (0..n)
+        .map(|i| f32::from_le_bytes(bin[offset + 4 * i..offset + 4 * i + 4].try_into().unwrap()))
+        .collect()
+}
+
+#[test]
+fn glb_layout_accessors_targets_and_quaternions_follow_the_specification() {
+    let clip = mixed_clip(30.0);
+    assert_eq!(clip.frames, 31, "1 s at 30 fps, t = 0 included");
+    assert_eq!(
+        clip.objects.len(),
+        3,
+        "leaf, box, rope; the fixed point is not exported"
+    );
+    let bytes = glb::glb_bytes(&clip).unwrap();
+    let (doc, bin) = split_glb(&bytes);
+    assert_eq!(doc["asset"]["version"], "2.0");
+    assert_eq!(
+        doc["buffers"][0]["byteLength"].as_u64().unwrap() as usize,
+        bin.len()
+    );
+    for v in doc["bufferViews"].as_array().unwrap() {
+        let o = v["byteOffset"].as_u64().unwrap_or(0);
+        assert_eq!(o % 4, 0, "every view starts on a 4-byte boundary");
+        assert!(o + v["byteLength"].as_u64().unwrap() <= bin.len() as u64);
+    }
+    // Every accessor with min/max (positions, morph targets, times) holds
+    // exactly those extremes, per component.
+    let mut checked = 0;
+    for (i, a) in doc["accessors"].as_array().unwrap().iter().enumerate() {
+        let (Some(min), Some(max)) = (a["min"].as_array(), a["max"].as_array()) else {
+            continue;
+        };
+        let w = min.len();
+        let v = floats(&doc, &bin, i);
+        for d in 0..w {
+            let lo = v
+                .iter()
+                .skip(d)
+                .step_by(w)
+                .copied()
+                .fold(f32::INFINITY, f32::min);
+            let hi = v
+                .iter()
+                .skip(d)
+                .step_by(w)
+                .copied()
+                .fold(f32::NEG_INFINITY, f32::max);
+            assert_eq!(min[d].as_f64().unwrap() as f32, lo, "accessor {i} min[{d}]");
+            assert_eq!(max[d].as_f64().unwrap() as f32, hi, "accessor {i} max[{d}]");
+        }
+        checked += 1;
+    }
+    assert!(
+        checked > clip.frames,
+        "positions, every morph target and the times"
+    );
+    let nodes = doc["nodes"].as_array().unwrap();
+    let node = |name: &str| nodes.iter().position(|n| n["name"] == name).unwrap();
+    let mesh_of = |n: usize| &doc["meshes"][nodes[n]["mesh"].as_u64().unwrap() as usize];
+    // Deforming leaf and rope: one morph target per frame.
+    for name in ["leaf", "rope"] {
+        let targets = mesh_of(node(name))["primitives"][0]["targets"]
+            .as_array()
+            .unwrap();
+        assert_eq!(targets.len(), clip.frames, "{name}: morph targets = frames");
+    }
+    assert!(mesh_of(node("box"))["primitives"][0]["targets"].is_null());
+    assert_eq!(
+        mesh_of(node("rope"))["primitives"][0]["mode"],
+        1,
+        "rope drawn as LINES"
+    );
+    // Channels: times k/fps; weights one-hot; rotations unit.
+    let anim = &doc["animations"][0];
+    let samplers = anim["samplers"].as_array().unwrap();
+    let mut paths = Vec::new();
+    for ch in anim["channels"].as_array().unwrap() {
+        let s = &samplers[ch["sampler"].as_u64().unwrap() as usize];
+        assert_eq!(s["interpolation"], "LINEAR");
+        let t = floats(&doc, &bin, s["input"].as_u64().unwrap() as usize);
+        assert_eq!(t.len(), clip.frames);
+        for (k, x) in t.iter().enumerate() {
+            assert_eq!(*x, (k as f64 / 30.0) as f32);
+        }
+        let out = floats(&doc, &bin, s["output"].as_u64().unwrap() as usize);
+        let path = ch["target"]["path"].as_str().unwrap().to_string();
+        let n = ch["target"]["node"].as_u64().unwrap() as usize;
+        match path.as_str() {
+            "rotation" => {
+                assert_eq!(n, node("box"));
+                for q in out.chunks(4) {
+                    let norm = q.iter().map(|x| (*x as f64).powi(2)).sum::<f64>().sqrt();
+                    assert!((norm - 1.0).abs() < 1e-6, "rotation key not unit: {norm}");
+                }
+                // The box tumbles: its rotation changes.
+                assert_ne!(out[..4], out[out.len() - 4..]);
+            }
+            "weights" => {
+                let f = clip.frames;
+                assert_eq!(out.len(), f * f);
+                for k in 0..f {
+                    for j in 0..f {
+                        assert_eq!(out[k * f + j], if j == k { 1.0 } else { 0.0 });
+                    }
+                }
+            }
+            "translation" => assert_eq!(out.len(), 3 * clip.frames),
+            p => panic!("unexpected channel {p}"),
+        }
+        paths.push((n, path));
+    }
+    paths.sort();
+    let mut want = vec![
+        (node("leaf"), "weights".to_string()),
+        (node("box"), "translation".to_string()),
+        (node("box"), "rotation".to_string()),
+        (node("rope"), "weights".to_string()),
+    ];
+    want.sort();
+    assert_eq!(paths, want);
+    // Ground and wind travel in the scene's extras.
+    let extras = &doc["scenes"][0]["extras"]["leafmagic"];
+    assert_eq!(extras["ground"], 0.0);
+    assert_eq!(extras["wind"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn glb_reads_back_to_the_exported_positions_at_every_frame() {
+    // Through the glTF semantics (TRS of the node applied to the mesh;
+    // base + Σ weight × target): every vertex at every frame within f32
+    // rounding of what was exported, in the simulator's z-up axes.
+    let clip = mixed_clip(30.0);
+    let back = export::from_glb_bytes(&glb::glb_bytes(&clip).unwrap(), "mixed", None).unwrap();
+    assert_eq!(back.frames, clip.frames);
+    assert_eq!(back.fps, 30.0, "the frame rate travels in the extras");
+    assert_eq!(back.ground, Some(0.0));
+    assert_eq!(back.wind, clip.wind);
+    for (a, b) in clip.objects.iter().zip(&back.objects) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(a.kind, b.kind);
+        assert_eq!(a.triangles, b.triangles);
+        assert_eq!(a.segments, b.segments);
+        assert_eq!(
+            matches!(a.motion, Motion::Rigid { .. }),
+            matches!(b.motion, Motion::Rigid { .. })
+        );
+        for k in 0..clip.frames {
+            for (p, q) in a.positions(k).iter().zip(b.positions(k)) {
+                assert!(
+                    (p - q).norm() < 2e-6,
+                    "{} frame {k}: {p:?} vs {q:?}",
+                    a.name
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn resampling_reproduces_a_linear_motion_exactly() {
+    // A rigid box coasting in free space (no gravity, no wind, no spin):
+    // its centre moves as x0 + v t; recorded at 60 Hz, exported at 30 and
+    // at 24 fps (keys between recorded frames), the keys are that line.
+    let text = r#"
+name = "coast"
+duration = 2.0
+frame_rate = 60
+gravity = [0.0, 0.0, 0.0]
+[[rigid]]
+name = "box"
+shape = "box"
+size = [0.2, 0.1, 0.05]
+mass = 0.1
+position = [0.25, -0.5, 2.0]
+velocity = [0.75, 0.5, -1.25]
+"#;
+    let scene = Scene::from_toml(text, "coast.toml", Path::new(".")).unwrap();
+    let run = scene.run(None).unwrap();
+    for fps in [30.0, 24.0] {
+        let clip = export::from_scene_run(&scene, &run, fps).unwrap();
+        assert_eq!(clip.frames, (2.0 * fps) as usize + 1);
+        let Motion::Rigid {
+            translation,
+            rotation,
+            ..
+        } = &clip.objects[0].motion
+        else {
+            panic!("a rigid box is exported by its pose");
+        };
+        for k in 0..clip.frames {
+            let t = k as f64 / fps;
+            let want = V3::new(0.25, -0.5, 2.0) + V3::new(0.75, 0.5, -1.25) * t;
+            assert!(
+                (translation[k] - want).norm() < 1e-12,
+                "{fps} fps frame {k}"
+            );
+            assert!(rotation[k].angle() < 1e-12);
+        }
+        // And the file keys hold it to f32 rounding, in glTF axes (x, z, −y).
+        let (doc, bin) = split_glb(&glb::glb_bytes(&clip).unwrap());
+        let anim = &doc["animations"][0];
+        let ch = anim["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["target"]["path"] == "translation")
+            .unwrap();
+        let s = &anim["samplers"][ch["sampler"].as_u64().unwrap() as usize];
+        let out = floats(&doc, &bin, s["output"].as_u64().unwrap() as usize);
+        for k in 0..clip.frames {
+            let t = k as f64 / fps;
+            let want = [0.25 + 0.75 * t, 2.0 - 1.25 * t, 0.5 - 0.5 * t];
+            for d in 0..3 {
+                // To f32 rounding (a 1e-15 residue of the f64 line is a
+                // tiny non-zero f32 where the exact value is 0).
+                let err = (out[3 * k + d] as f64 - want[d]).abs();
+                assert!(
+                    err <= 1e-7 * (1.0 + want[d].abs()),
+                    "{fps} fps key {k}[{d}]: {err}"
+                );
+            }
+        }
+    }
+}
+
+fn le_i32(b: &[u8], o: usize) -> i32 {
+    i32::from_le_bytes(b[o..o + 4].try_into().unwrap())
+}
+
+fn le_f32(b: &[u8], o: usize) -> f32 {
+    f32::from_le_bytes(b[o..o + 4].try_into().unwrap())
+}
+
+#[test]
+fn pc2_is_byte_for_byte_the_specified_layout() {
+    // Two points, three samples, values chosen by hand; the expected file
+    // is spelled out from the specification, not from the writer.
+    let frames = vec![
+        vec![V3::new(0.0, 1.0, 2.0), V3::new(-1.5, 0.25, 8.0)],
+        vec![V3::new(0.5, 1.0, 2.0), V3::new(-1.5, 0.5, 7.0)],
+        vec![V3::new(1.0, 1.0, 2.0), V3::new(-1.5, 0.75, 6.0)],
+    ];
+    let clip = Clip {
+        name: "hand".into(),
+        fps: 30.0,
+        frames: 3,
+        objects: vec![ClipObject {
+            name: "pair".into(),
+            kind: "rope".into(),
+            label: String::new(),
+            triangles: vec![],
+            segments: vec![[0, 1]],
+            motion: Motion::Deforming { frames },
+        }],
+        ground: None,
+        wind: vec![],
+    };
+    let dir = scratch("pc2-hand");
+    let written = pc2::write_pc2(&clip, &dir).unwrap();
+    assert_eq!(written.len(), 2);
+    let got = std::fs::read(dir.join("pair.pc2")).unwrap();
+    let mut want: Vec<u8> = Vec::new();
+    want.extend_from_slice(b"POINTCACHE2\0"); // char[12] signature
+    want.extend_from_slice(&[1, 0, 0, 0]); // int32 version = 1
+    want.extend_from_slice(&[2, 0, 0, 0]); // int32 numPoints = 2
+    want.extend_from_slice(&[0, 0, 0, 0]); // float32 startFrame = 0.0
+    want.extend_from_slice(&[0, 0, 0x80, 0x3f]); // float32 sampleRate = 1.0
+    want.extend_from_slice(&[3, 0, 0, 0]); // int32 numSamples = 3
+    for v in [
+        0.0f32, 1.0, 2.0, -1.5, 0.25, 8.0, //
+        0.5, 1.0, 2.0, -1.5, 0.5, 7.0, //
+        1.0, 1.0, 2.0, -1.5, 0.75, 6.0,
+    ] {
+        want.extend_from_slice(&v.to_le_bytes());
+    }
+    assert_eq!(got, want);
+    assert_eq!(got.len(), 32 + 3 * 2 * 12);
+    let obj = std::fs::read_to_string(dir.join("pair.obj")).unwrap();
+    let body: Vec<&str> = obj.lines().filter(|l| !l.starts_with('#')).collect();
+    assert_eq!(body, ["o pair", "v 0 1 2", "v -1.5 0.25 8", "l 1 2"]);
+}
+
+/// The `v` lines of an OBJ as f32.
+fn obj_vertices(text: &str) -> Vec<[f32; 3]> {
+    text.lines()
+        .filter_map(|l| l.strip_prefix("v "))
+        .map(|l| {
+            let v: Vec<f32> = l.split(' ').map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1], v[2]]
+        })
+        .collect()
+}
+
+#[test]
+fn scene_export_to_pc2_keeps_the_obj_vertex_order_of_the_cache() {
+    let dir = scratch("pc2-scene");
+    let scene_file = dir.join("mixed.toml");
+    std::fs::write(&scene_file, MIXED).unwrap();
+    let out = dir.join("out");
+    let o = leafmagic()
+        .arg("scene")
+        .arg(&scene_file)
+        .args(["--export", "pc2", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let clip = mixed_clip(DEFAULT_FPS);
+    for obj in &clip.objects {
+        let cache = std::fs::read(out.join(format!("{}.pc2", obj.name))).unwrap();
+        assert_eq!(&cache[..12], pc2::SIGNATURE);
+        assert_eq!(le_i32(&cache, 12), 1);
+        let points = le_i32(&cache, 16) as usize;
+        let samples = le_i32(&cache, 28) as usize;
+        assert_eq!(points, obj.vertex_count());
+        assert_eq!(samples, clip.frames);
+        assert_eq!(cache.len(), 32 + samples * points * 12);
+        let mesh = std::fs::read_to_string(out.join(format!("{}.obj", obj.name))).unwrap();
+        let v = obj_vertices(&mesh);
+        assert_eq!(v.len(), points, "{}: OBJ vertices = cache points", obj.name);
+        for (i, p) in v.iter().enumerate() {
+            for (d, x) in p.iter().enumerate() {
+                // Bit for bit: OBJ vertex i is cache point i of sample 0.
+                assert_eq!(x.to_bits(), le_f32(&cache, 32 + 12 * i + 4 * d).to_bits());
+            }
+        }
+        // And the cache's last sample is the exported last frame.
+        let last = obj.positions(clip.frames - 1);
+        for (i, p) in last.iter().enumerate() {
+            let at = 32 + ((samples - 1) * points + i) * 12;
+            assert_eq!(le_f32(&cache, at), p.x as f32);
+            assert_eq!(le_f32(&cache, at + 8), p.z as f32);
+        }
+    }
+}
+
+/// A directory with `gltf-validator` installed (once per target directory),
+/// or None with the reason.
+fn validator() -> Result<PathBuf, String> {
+    if Command::new("node").arg("--version").output().is_err() {
+        return Err("node is not installed".into());
+    }
+    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("gltf-validator");
+    let module = dir.join("node_modules/gltf-validator");
+    if module.join("package.json").exists() {
+        return Ok(dir);
+    }
+    if Command::new("npm").arg("--version").output().is_err() {
+        return Err("npm is not installed".into());
+    }
+    std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+    let o = Command::new("npm")
+        .args(["install", "--no-audit", "--no-fund", "--silent", "--prefix"])
+        .arg(&dir)
+        .arg("gltf-validator@2.0.0-dev.3.10")
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !o.status.success() || !module.exists() {
+        return Err(format!(
+            "npm install gltf-validator failed: {}",
+            String::from_utf8_lossy(&o.stderr).trim()
+        ));
+    }
+    Ok(dir)
+}
+
+const VALIDATE_JS: &str = r#"
+const fs = require('fs');
+const v = require('gltf-validator');
+(async () => {
+  const out = [];
+  for (const f of process.argv.slice(2)) {
+    const r = await v.validateBytes(new Uint8Array(fs.readFileSync(f)), { maxIssues: 100 });
+    out.push({ file: f, errors: r.issues.numErrors, warnings: r.issues.numWarnings,
+      messages: r.issues.messages.map(m => m.severity + ' ' + m.code + ' ' + (m.pointer || '') + ' ' + m.message) });
+  }
+  console.log(JSON.stringify(out));
+})();
+"#;
+
+#[test]
+fn exported_glb_files_pass_the_khronos_validator() {
+    let dir = scratch("validator");
+    let mixed = dir.join("mixed.glb");
+    glb::write_glb(&mixed_clip(30.0), &mixed).unwrap();
+    // A bred-leaf style export: one leaf dropped for 10 s at 30 fps.
+    let model = LeafSpec::load("b").unwrap().model().unwrap();
+    let leaf = export::drop_clip("leaf-b", "spinner", &model, 10.0, 30.0).unwrap();
+    let single = export::side_by_side("leaf-b", vec![leaf], 30.0, 0.0).unwrap();
+    assert_eq!(single.frames, 301);
+    let drop_glb = dir.join("leaf-b.glb");
+    glb::write_glb(&single, &drop_glb).unwrap();
+    let tool = match validator() {
+        Ok(t) => t,
+        Err(why) => {
+            eprintln!("SKIPPED exported_glb_files_pass_the_khronos_validator: {why}");
+            return;
+        }
+    };
+    let script = tool.join("validate.js");
+    std::fs::write(&script, VALIDATE_JS).unwrap();
+    let o = Command::new("node")
+        .arg(&script)
+        .arg(&mixed)
+        .arg(&drop_glb)
+        .current_dir(&tool)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let report: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let report = report.as_array().unwrap();
+    assert_eq!(report.len(), 2);
+    for r in report {
+        assert_eq!(r["errors"], 0, "{}: {:#}", r["file"], r["messages"]);
+        eprintln!(
+            "gltf-validator: {} — {} errors, {} warnings",
+            r["file"], r["errors"], r["warnings"]
+        );
+    }
+}
+
+#[test]
+fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
+    let dir = scratch("breed");
+    let run = dir.join("run");
+    let o = leafmagic()
+        .args([
+            "breed",
+            "--population",
+            "6",
+            "--generations",
+            "1",
+            "--seconds",
+            "3",
+        ])
+        .args(["--threads", "1", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    for format in ["glb", "pc2"] {
+        let out = dir.join(format);
+        let o = leafmagic()
+            .arg("export")
+            .arg(&run)
+            .args(["--top", "2", "--format", format, "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let index = std::fs::read_to_string(out.join("index.csv")).unwrap();
+        let ids: Vec<String> = index
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').nth(1).unwrap().to_string())
+            .collect();
+        assert_eq!(ids.len(), 2);
+        for id in &ids {
+            let stem = out.join(format!("leaf-{id}"));
+            assert!(stem.with_extension("toml").is_file());
+            if format == "glb" {
+                let clip = export::from_glb(&stem.with_extension("glb"), None).unwrap();
+                // 3 s at 30 fps; the leaf falls (it was re-dropped, not posed).
+                assert_eq!(clip.frames, 91);
+                let o = &clip.objects[0];
+                assert!(o.centre(90).z < o.centre(0).z - 0.5, "the leaf falls");
+                let class = index
+                    .lines()
+                    .find(|l| l.split(',').nth(1) == Some(id))
+                    .unwrap();
+                assert!(
+                    class.contains(&format!(",{},", o.label)),
+                    "label = recorded class"
+                );
+            } else {
+                let cache = std::fs::read(stem.with_extension("pc2")).unwrap();
+                assert_eq!(le_i32(&cache, 28), 91);
+                assert!(stem.with_extension("obj").is_file());
+            }
+        }
+    }
+    // The re-drop is the fall that earned the recorded class.
+    let opened = leafmagic::breed::Run::open(&run).unwrap();
+    let cp = opened.checkpoint.as_ref().unwrap();
+    let best = leafmagic::breed::rank(&cp.population)[0];
+    let model = best.genome.model(&opened.proto).unwrap();
+    let params = leafmagic::sim::DropParams {
+        seconds: 3.0,
+        ..Default::default()
+    };
+    let fall = leafmagic::sim::drop_leaf(&model, &params).unwrap();
+    let c = leafmagic::classify::classify(&fall.trajectory, model.chord());
+    assert_eq!(c.class.to_string(), best.eval.class);
+}
+
+#[test]
+fn bad_input_is_refused_with_the_file_and_the_reason() {
+    let dir = scratch("bad");
+    let run = |args: &[&str]| {
+        let o = leafmagic().args(args).output().unwrap();
+        assert!(!o.status.success(), "{args:?} should fail");
+        String::from_utf8_lossy(&o.stderr).into_owned()
+    };
+    let e = run(&["scene", "scenes/hover.toml", "--export", "fbx"]);
+    assert!(e.contains("fbx") && e.contains("glb or pc2"), "{e}");
+    let missing = dir.join("nothing-here");
+    let e = run(&["preview", missing.to_str().unwrap()]);
+    assert!(
+        e.contains("nothing-here") && e.contains("no such file"),
+        "{e}"
+    );
+    let e = run(&["preview", dir.to_str().unwrap()]);
+    assert!(
+        e.contains("neither a breeding run") && e.contains("summary.toml"),
+        "{e}"
+    );
+    let text = dir.join("notes.txt");
+    std::fs::write(&text, "hello").unwrap();
+    let e = run(&["preview", text.to_str().unwrap()]);
+    assert!(e.contains("notes.txt") && e.contains("not a .glb"), "{e}");
+    let fake = dir.join("fake.glb");
+    std::fs::write(&fake, b"glTF but not really").unwrap();
+    let e = run(&["preview", fake.to_str().unwrap()]);
+    assert!(
+        e.contains("fake.glb") && e.contains("not a valid glTF"),
+        "{e}"
+    );
+    // A scene directory whose scene file is gone.
+    let scene_dir = dir.join("scene-out");
+    std::fs::create_dir_all(&scene_dir).unwrap();
+    std::fs::write(
+        scene_dir.join("summary.toml"),
+        "scene = \"gone\"\nsource = \"no/such/scene.toml\"\n",
+    )
+    .unwrap();
+    let e = run(&["preview", scene_dir.to_str().unwrap()]);
+    assert!(
+        e.contains("summary.toml") && e.contains("no/such/scene.toml"),
+        "{e}"
+    );
+    assert!("obj".parse::<Format>().is_err());
+    let empty = Clip {
+        name: "empty".into(),
+        fps: 30.0,
+        frames: 1,
+        objects: vec![],
+        ground: None,
+        wind: vec![],
+    };
+    assert!(
+        matches!(glb::glb_bytes(&empty), Err(ExportError::Data(m)) if m.contains("no objects"))
+    );
+}
+
+/// 100 leaves × 10 s × 30 fps (the issue's size target), each a real fall.
+fn hundred_leaves() -> Clip {
+    let model = LeafSpec::load("a").unwrap().model().unwrap();
+    let one = export::drop_clip("leaf", "floater", &model, 10.0, 30.0).unwrap();
+    let objects = (0..100)
+        .map(|k| {
+            let mut o = one.clone();
+            o.name = format!("leaf-{k:03}");
+            o
+        })
+        .collect();
+    export::side_by_side("hundred", objects, 30.0, 0.2).unwrap()
+}
+
+#[test]
+fn the_page_for_a_hundred_leaves_for_ten_seconds_stays_under_20_mb() {
+    let clip = hundred_leaves();
+    assert_eq!(clip.frames, 301);
+    let page = leafmagic::preview::html(&clip, true).unwrap();
+    // 100 × 301 × 7 vertices × 12 bytes of float32, base64: ≈ 3.4 MB.
+    assert!(page.len() < 20_000_000, "page is {} bytes", page.len());
+    assert!(
+        page.len() > 3_000_000,
+        "page is {} bytes: data missing?",
+        page.len()
+    );
+    eprintln!(
+        "preview page for 100 leaves × 10 s × 30 fps: {} bytes",
+        page.len()
+    );
+}
+
+// ----- the page in headless Chromium -----
+
+fn chromium() -> Option<String> {
+    ["chromium", "chromium-browser", "google-chrome"]
+        .into_iter()
+        .find(|c| {
+            Command::new(c)
+                .arg("--version")
+                .output()
+                .is_ok_and(|o| o.status.success())
+        })
+        .map(str::to_string)
+}
+
+const WIDTH: u32 = 800;
+const HEIGHT: u32 = 600;
+/// Height of the page's control bar, CSS px (page.html #bar).
+const BAR: u32 = 44;
+
+/// RGB pixels of a screenshot of `page#hash`.
+fn screenshot(browser: &str, page: &Path, hash: &str, png: &Path) -> Vec<[u8; 3]> {
+    let profile = png.with_extension("profile");
+    let mut child = Command::new(browser)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--hide-scrollbars",
+            "--force-device-scale-factor=1",
+            "--virtual-time-budget=3000",
+        ])
+        .arg(format!("--user-data-dir={}", profile.display()))
+        .arg(format!("--window-size={WIDTH},{HEIGHT}"))
+        .arg(format!("--screenshot={}", png.display()))
+        .arg(format!("file://{}#{hash}", page.display()))
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(90) {
+            let _ = child.kill();
+            panic!("chromium took over 90 s for {hash}");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    let mut decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(png).unwrap()));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (WIDTH, HEIGHT));
+    let channels = info.line_size / info.width as usize;
+    buf[..info.buffer_size()]
+        .chunks(channels)
+        .map(|p| [p[0], p[1], p[2]])
+        .collect()
+}
+
+/// Leaf green as the page shades it (any light): green well above red and
+/// blue. The background, ground grid (grey), wind glyphs (cyan) and labels
+/// (white) are not.
+fn leafy(p: [u8; 3]) -> bool {
+    let [r, g, b] = p.map(i32::from);
+    g > 40 && g > r + 20 && g > b + 20
+}
+
+#[test]
+fn the_preview_page_draws_the_leaves_at_two_times_in_headless_chromium() {
+    let Some(browser) = chromium() else {
+        eprintln!(
+            "SKIPPED the_preview_page_draws_the_leaves...: no chromium (apt-get install chromium)"
+        );
+        return;
+    };
+    let dir = scratch("chromium");
+    let scene_file = dir.join("fall.toml");
+    // Four leaves released tilted into a vortex over the ground.
+    std::fs::write(
+        &scene_file,
+        r#"
+name = "fall"
+duration = 3.0
+frame_rate = 60
+seed = 3
+[ground]
+height = 0.0
+static_friction = 0.5
+kinetic_friction = 0.4
+[[wind]]
+kind = "line_vortex"
+point = [0.0, 0.0, 0.0]
+axis = [0.0, 0.0, 1.0]
+circulation = 1.0
+core_radius = 0.3
+[[leaf]]
+name = "leaf"
+leaf = "b"
+count = 4
+position = [0.3, 0.0, 2.5]
+spread = [0.2, 0.2, 0.1]
+tilt_deg = 40.0
+random_yaw = true
+"#,
+    )
+    .unwrap();
+    let out = dir.join("out");
+    let o = leafmagic()
+        .arg("scene")
+        .arg(&scene_file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let page = dir.join("page.html");
+    let o = leafmagic()
+        .arg("preview")
+        .arg(&out)
+        .arg("--out")
+        .arg(&page)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The camera centres the followed leaf: it is drawn in the middle of
+    // the view (the canvas above the control bar).
+    let (cx, cy) = (WIDTH as usize / 2, (HEIGHT - BAR) as usize / 2);
+    let mut masks = Vec::new();
+    for (k, hash) in [
+        "t=0.5&follow=leaf-001",
+        "t=2.0&follow=leaf-001",
+        "t=2.0&follow=leaf-001&renderer=2d",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let px = screenshot(&browser, &page, hash, &dir.join(format!("shot-{k}.png")));
+        let mask: Vec<bool> = px.iter().map(|&p| leafy(p)).collect();
+        let total = mask.iter().filter(|&&m| m).count();
+        let near_centre = (cy - 60..cy + 60)
+            .flat_map(|y| (cx - 60..cx + 60).map(move |x| (x, y)))
+            .filter(|&(x, y)| mask[y * WIDTH as usize + x])
+            .count();
+        eprintln!("{hash}: {total} leaf pixels, {near_centre} within 60 px of the centre");
+        assert!(
+            near_centre >= 20,
+            "{hash}: the followed leaf is not drawn at the centre"
+        );
+        masks.push(mask);
+    }
+    let changed = masks[0]
+        .iter()
+        .zip(&masks[1])
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        changed >= 50,
+        "the leaves look the same at t = 0.5 s and 2 s ({changed} px differ)"
+    );
+    // With the camera on all objects, shortly after release, the four
+    // leaves are drawn apart.
+    let px = screenshot(&browser, &page, "t=0.5", &dir.join("shot-all.png"));
+    let mask: Vec<bool> = px.iter().map(|&p| leafy(p)).collect();
+    let n = blobs(&mask, WIDTH as usize, 10);
+    eprintln!("t=0.5, all objects: {n} separate leaves drawn");
+    assert!(n >= 3, "only {n} leaves drawn");
+}
+
+/// Connected groups (4-neighbour) of at least `min` true pixels.
+fn blobs(mask: &[bool], width: usize, min: usize) -> usize {
+    let mut seen = vec![false; mask.len()];
+    let mut count = 0;
+    for start in 0..mask.len() {
+        if !mask[start] || seen[start] {
+            continue;
+        }
+        let (mut size, mut stack) = (0, vec![start]);
+        seen[start] = true;
+        while let Some(i) = stack.pop() {
+            size += 1;
+            let (x, y) = (i % width, i / width);
+            let mut visit = |j: usize| {
+                if mask[j] && !seen[j] {
+                    seen[j] = true;
+                    stack.push(j);
+                }
+            };
+            if x > 0 {
+                visit(i - 1);
+            }
+            if x + 1 < width {
+                visit(i + 1);
+            }
+            if y > 0 {
+                visit(i - width);
+            }
+            if i + width < mask.len() {
+                visit(i + width);
+            }
+        }
+        if size >= min {
+            count += 1;
+        }
+    }
+    count
+}
