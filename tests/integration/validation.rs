@@ -2,7 +2,7 @@
 //! the command line exits non-zero and writes nothing.
 
 use leafmagic::leaf::{LeafSpec, PROTOTYPE_A};
-use std::process::Command;
+use std::process::{Command, Stdio};
 
 /// Prototype A with one edit applied to its TOML tree.
 fn edited(edit: impl FnOnce(&mut toml::Table)) -> String {
@@ -224,4 +224,22 @@ fn cli_check_reports_every_integrator() {
     }
     assert!(v["omega_max"].as_f64().unwrap() > 0.0);
     assert!(v["integrators"]["implicit"]["dt_max"].is_null());
+}
+
+/// A reader that stops early (`leafmagic check a --stress | head -1`)
+/// ends the output: no panic message and no backtrace on stderr. (The
+/// stress matrix prints for seconds, so its output surely meets the closed
+/// pipe.)
+#[test]
+fn closed_stdout_is_not_a_panic() {
+    let mut child = leafmagic()
+        .args(["check", "a", "--stress"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take()); // close the read end before it prints
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!err.contains("panicked"), "{err}");
 }
