@@ -488,24 +488,29 @@ struct RunFile {
 /// something (falls may be chaotic later).
 pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
 
-/// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
-/// at the integrator and auto step its drops use.
-fn prototype_error(proto: &LeafSpec) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
+/// The prototype's model and the auto step its drops take.
+fn prototype_step(proto: &LeafSpec) -> Result<(crate::model::Model, f64), BreedError> {
     let model = proto
         .model()
         .map_err(|e| BreedError(format!("--prototype: {e}")))?;
-    let integrator = DropParams::default().integrator;
     let dt = crate::sim::resolve_step(
         &model,
-        integrator,
+        DropParams::default().integrator,
         TimeStep::Auto,
         1.0 / crate::sim::FRAME_RATE,
     )
     .map_err(BreedError)?;
+    Ok((model, dt))
+}
+
+/// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
+/// at the integrator and auto step its drops use.
+fn prototype_error(proto: &LeafSpec) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
+    let (model, dt) = prototype_step(proto)?;
     // The drop's step need not divide a second: estimate over the whole
     // number of steps nearest to ERROR_ESTIMATE_SECONDS.
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
-    crate::accuracy::error_estimate(&model, integrator, dt, seconds)
+    crate::accuracy::error_estimate(&model, DropParams::default().integrator, dt, seconds)
         .map_err(|e| BreedError(format!("error estimate of the prototype: {e}")))
 }
 
@@ -539,17 +544,8 @@ impl Run {
                 )));
             }
         }
-        let model = proto
-            .model()
-            .map_err(|e| BreedError(format!("--prototype: {e}")))?;
         let integrator = DropParams::default().integrator;
-        let dt = crate::sim::resolve_step(
-            &model,
-            integrator,
-            TimeStep::Auto,
-            1.0 / crate::sim::FRAME_RATE,
-        )
-        .map_err(BreedError)?;
+        let (_, dt) = prototype_step(&proto)?;
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
         let example = match &settings.like {

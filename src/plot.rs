@@ -279,6 +279,38 @@ fn rotation_rates(fall: &crate::trajectory::Trajectory) -> Vec<(f64, f64, f64)> 
     out
 }
 
+/// A chart of something against time, s, with the axes drawn.
+fn time_panel<'a, 'b>(
+    area: &'a DrawingArea<SVGBackend<'b>, plotters::coord::Shift>,
+    t_max: f64,
+    y: std::ops::Range<f64>,
+    y_desc: &str,
+) -> Result<
+    ChartContext<
+        'a,
+        SVGBackend<'b>,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    String,
+> {
+    let mut chart = ChartBuilder::on(area)
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(60)
+        .build_cartesian_2d(0.0..t_max, y)
+        .map_err(|e| e.to_string())?;
+    chart
+        .configure_mesh()
+        .x_desc("time, s")
+        .y_desc(y_desc)
+        .light_line_style(WHITE.mix(0.0))
+        .axis_desc_style(("sans-serif", 16))
+        .label_style(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())?;
+    Ok(chart)
+}
+
 /// The SVG text overlaying an example fall and the best bred leaf's fall:
 /// height against time (each from its own start) above, and the rotation
 /// rates about the vertical and the horizontal axes below.
@@ -329,21 +361,7 @@ pub fn like_svg(
             .titled(title, ("sans-serif", 20))
             .map_err(|e| e.to_string())?;
         let (upper, lower) = root.split_vertically(330);
-        let mut chart = ChartBuilder::on(&upper)
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_max, (z_min * 1.05)..0.0)
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("time, s")
-            .y_desc("height fallen, m")
-            .light_line_style(WHITE.mix(0.0))
-            .axis_desc_style(("sans-serif", 16))
-            .label_style(("sans-serif", 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        let mut chart = time_panel(&upper, t_max, (z_min * 1.05)..0.0, "height fallen, m")?;
         for ((name, colour, _), points) in falls.iter().zip(&heights) {
             let colour = *colour;
             chart
@@ -363,21 +381,12 @@ pub fn like_svg(
             .map_err(|e| e.to_string())?;
 
         let pad = 0.05 * (r_max - r_min);
-        let mut chart = ChartBuilder::on(&lower)
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(60)
-            .build_cartesian_2d(0.0..t_max, (r_min - pad)..(r_max + pad))
-            .map_err(|e| e.to_string())?;
-        chart
-            .configure_mesh()
-            .x_desc("time, s")
-            .y_desc("rotation rate, rad/s (0.1 s means)")
-            .light_line_style(WHITE.mix(0.0))
-            .axis_desc_style(("sans-serif", 16))
-            .label_style(("sans-serif", 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        let mut chart = time_panel(
+            &lower,
+            t_max,
+            (r_min - pad)..(r_max + pad),
+            "rotation rate, rad/s (0.1 s means)",
+        )?;
         for ((name, colour, _), r) in falls.iter().zip(&rates) {
             let colour = *colour;
             let vertical: Vec<(f64, f64)> = r.iter().map(|p| (p.0, p.1)).collect();

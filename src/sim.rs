@@ -52,20 +52,7 @@ pub fn resolve_dt(
     dt: TimeStep,
     frame_dt: f64,
 ) -> Result<f64, String> {
-    match dt {
-        TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => Ok(stability::snap_to_frame(h, frame_dt)),
-        TimeStep::Fixed(h) => Err(format!(
-            "time step must be a positive number of seconds, got {h}"
-        )),
-        TimeStep::Auto => stability::estimate(model)
-            .auto_dt(integrator, frame_dt)
-            .ok_or_else(|| {
-                format!(
-                    "no stable time step exists for {integrator} on this model \
-                 (its stiffest spring mode is undamped); choose another integrator"
-                )
-            }),
-    }
+    resolve(model, integrator, dt, frame_dt, true)
 }
 
 /// Resolves a [`TimeStep`] for a run sampled by [`run_sampled`]: a fixed
@@ -77,19 +64,39 @@ pub fn resolve_step(
     dt: TimeStep,
     frame_dt: f64,
 ) -> Result<f64, String> {
+    resolve(model, integrator, dt, frame_dt, false)
+}
+
+fn resolve(
+    model: &Model,
+    integrator: Integrator,
+    dt: TimeStep,
+    frame_dt: f64,
+    onto_frames: bool,
+) -> Result<f64, String> {
     match dt {
-        TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => Ok(h),
+        TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => Ok(if onto_frames {
+            stability::snap_to_frame(h, frame_dt)
+        } else {
+            h
+        }),
         TimeStep::Fixed(h) => Err(format!(
             "time step must be a positive number of seconds, got {h}"
         )),
-        TimeStep::Auto => stability::estimate(model)
-            .auto_step(integrator, frame_dt)
+        TimeStep::Auto => {
+            let estimate = stability::estimate(model);
+            if onto_frames {
+                estimate.auto_dt(integrator, frame_dt)
+            } else {
+                estimate.auto_step(integrator, frame_dt)
+            }
             .ok_or_else(|| {
                 format!(
                     "no stable time step exists for {integrator} on this model \
-                 (its stiffest spring mode is undamped); choose another integrator"
+                     (its stiffest spring mode is undamped); choose another integrator"
                 )
-            }),
+            })
+        }
     }
 }
 
