@@ -9,7 +9,9 @@
 //!   pose per frame.
 //! - Deforming objects: the mesh holds the frame-0 positions; morph target k
 //!   is the displacement of frame k from frame 0 (one target per frame), and
-//!   the `weights` channel keys a one-hot weight vector per frame. With LINEAR
+//!   the `weights` channel keys a one-hot weight vector per frame (a sparse
+//!   accessor: only the ones are stored, so the size is linear in the frame
+//!   count, see [`one_hot_weights`]). With LINEAR
 //!   interpolation, between keys k and k+1 the weights are (1 − s, s), which
 //!   gives exactly the linear interpolation of the two frames' positions,
 //!   because every target is a displacement from the same base.
@@ -161,6 +163,94 @@ fn vec3_accessor(root: &mut Root, bin: &mut Bin, v: &[[f32; 3]], target: bool) -
         Type::Vec3,
         Some(bounds3(v)),
     )
+}
+
+/// A LINEAR sampler of `output` over the shared frame times, and the
+/// channel that drives `path` of `node` with it.
+fn sampler_channel(
+    samplers: &mut Vec<json::animation::Sampler>,
+    channels: &mut Vec<json::animation::Channel>,
+    input: Index<Accessor>,
+    output: Index<Accessor>,
+    node: Index<json::Node>,
+    path: json::animation::Property,
+) {
+    samplers.push(json::animation::Sampler {
+        extensions: None,
+        extras: None,
+        input,
+        interpolation: Valid(json::animation::Interpolation::Linear),
+        output,
+    });
+    channels.push(json::animation::Channel {
+        sampler: Index::new(samplers.len() as u32 - 1),
+        target: json::animation::Target {
+            extensions: None,
+            extras: None,
+            node,
+            path: Valid(path),
+        },
+        extensions: None,
+        extras: None,
+    });
+}
+
+/// The output of a `weights` channel for `n` keys and `n` morph targets:
+/// key k holds the one-hot vector e_k, so the accessor has n·n scalars, all
+/// zero but the n at flat index k·n + k. It is written as a sparse accessor
+/// (glTF 2.0 §3.6.2.3): no buffer view (all zeros), and the n indices
+/// (unsigned int, strictly increasing) and n ones that replace them, so it
+/// takes 8n bytes of the buffer instead of 4n².
+fn one_hot_weights(
+    root: &mut Root,
+    bin: &mut Bin,
+    n: usize,
+    name: &str,
+) -> Result<Index<Accessor>, ExportError> {
+    let count = n * n;
+    // The last index, n·n − 1, must fit in an unsigned int.
+    if u32::try_from(count.saturating_sub(1)).is_err() {
+        return Err(ExportError::Data(format!(
+            "{name}: {n} frames are too many for the morph-target weights of a .glb \
+             (at most 65536); export fewer frames (--fps)"
+        )));
+    }
+    let indices: Vec<u8> = (0..n)
+        .flat_map(|k| ((k * n + k) as u32).to_le_bytes())
+        .collect();
+    let index_view = bin.view(root, &indices, None);
+    let value_view = bin.view(root, &f32_bytes(&vec![1.0; n]), None);
+    Ok(root.push(Accessor {
+        buffer_view: None,
+        byte_offset: None,
+        count: USize64::from(count),
+        component_type: Valid(GenericComponentType(ComponentType::F32)),
+        extensions: None,
+        extras: None,
+        type_: Valid(Type::Scalar),
+        min: None,
+        max: None,
+        name: None,
+        normalized: false,
+        sparse: Some(json::accessor::sparse::Sparse {
+            count: USize64::from(n),
+            indices: json::accessor::sparse::Indices {
+                buffer_view: index_view,
+                byte_offset: USize64(0),
+                component_type: Valid(json::accessor::IndexComponentType(ComponentType::U32)),
+                extensions: None,
+                extras: None,
+            },
+            values: json::accessor::sparse::Values {
+                buffer_view: value_view,
+                byte_offset: USize64(0),
+                extensions: None,
+                extras: None,
+            },
+            extensions: None,
+            extras: None,
+        }),
+    }))
 }
 
 fn raw_extras(value: serde_json::Value) -> Option<Box<json::extras::RawValue>> {
@@ -323,24 +413,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                            path: json::animation::Property| {
             let view = bin.view(root, &f32_bytes(&output), None);
             let out = accessor(root, view, count, ComponentType::F32, type_, None);
-            samplers.push(json::animation::Sampler {
-                extensions: None,
-                extras: None,
-                input: time_accessor,
-                interpolation: Valid(json::animation::Interpolation::Linear),
-                output: out,
-            });
-            channels.push(json::animation::Channel {
-                sampler: Index::new(samplers.len() as u32 - 1),
-                target: json::animation::Target {
-                    extensions: None,
-                    extras: None,
-                    node,
-                    path: Valid(path),
-                },
-                extensions: None,
-                extras: None,
-            });
+            sampler_channel(&mut samplers, &mut channels, time_accessor, out, node, path);
         };
         match &o.motion {
             Motion::Rigid {
@@ -368,17 +441,13 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 );
             }
             Motion::Deforming { frames } => {
-                let n = frames.len();
-                let mut w = vec![0.0f32; n * n];
-                for k in 0..n {
-                    w[k * n + k] = 1.0;
-                }
-                channel(
-                    &mut root,
-                    &mut bin,
-                    w,
-                    Type::Scalar,
-                    n * n,
+                let out = one_hot_weights(&mut root, &mut bin, frames.len(), &o.name)?;
+                sampler_channel(
+                    &mut samplers,
+                    &mut channels,
+                    time_accessor,
+                    out,
+                    node,
                     json::animation::Property::MorphTargetWeights,
                 );
             }

@@ -285,6 +285,9 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
                 Some(ReadOutputs::Rotations(r)) => (r.into_f32().flatten().collect(), 4),
                 Some(ReadOutputs::Scales(it)) => (it.flatten().collect(), 3),
                 Some(ReadOutputs::MorphTargetWeights(w)) => {
+                    // gltf's accessor iterator applies sparse substitution
+                    // (zeros, or the buffer view, with `sparse.values` at
+                    // `sparse.indices`), as leafmagic writes these weights.
                     let v: Vec<f32> = w.into_f32().collect();
                     let width = v.len() / times.len().max(1);
                     (v, width)

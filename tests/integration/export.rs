@@ -120,28 +120,110 @@ fn split_glb(bytes: &[u8]) -> (Value, Vec<u8>) {
     (doc, bytes[bin_at + 8..].to_vec())
 }
 
-/// An accessor's floats (tightly packed f32, as we write them).
+/// Little-endian unsigned integers of `component_type` (5121, 5123, 5125)
+/// from `count` tightly packed elements at `offset` of `view`.
+fn uints(
+    doc: &Value,
+    bin: &[u8],
+    view: usize,
+    offset: usize,
+    component_type: u64,
+    count: usize,
+) -> Vec<u32> {
+    let view = &doc["bufferViews"][view];
+    let size = match component_type {
+        5121 => 1,
+        5123 => 2,
+        5125 => 4,
+        t => panic!("unexpected index component type {t}"),
+    };
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + offset;
+    assert!(
+        start + size * count
+            <= view["byteOffset"].as_u64().unwrap_or(0) as usize
+                + view["byteLength"].as_u64().unwrap() as usize
+    );
+    (0..count)
+        .map(|i| {
+            let b = &bin[start + size * i..start + size * (i + 1)];
+            b.iter().rev().fold(0u32, |x, &y| (x << 8) | y as u32)
+        })
+        .collect()
+}
+
+/// `n` tightly packed little-endian f32 at `offset` of `view`.
+fn view_floats(doc: &Value, bin: &[u8], view: usize, offset: usize, n: usize) -> Vec<f32> {
+    let view = &doc["bufferViews"][view];
+    let start = view["byteOffset"].as_u64().unwrap_or(0) as usize + offset;
+    assert!(
+        start + 4 * n
+            <= view["byteOffset"].as_u64().unwrap_or(0) as usize
+                + view["byteLength"].as_u64().unwrap() as usize
+    );
+    (0..n)
+        .map(|i| f32::from_le_bytes(bin[start + 4 * i..start + 4 * i + 4].try_into().unwrap()))
+        .collect()
+}
+
+/// An accessor's floats (tightly packed f32, as we write them), with sparse
+/// substitution (glTF 2.0 §3.6.2.3): the base data is the buffer view, or
+/// zeros without one, and `sparse.values[i]` replaces element
+/// `sparse.indices[i]`; the indices must strictly increase.
 fn floats(doc: &Value, bin: &[u8], accessor: usize) -> Vec<f32> {
     let a = &doc["accessors"][accessor];
     assert_eq!(a["componentType"], 5126, "FLOAT");
-    let view = &doc["bufferViews"][a["bufferView"].as_u64().unwrap() as usize];
-    let offset = view["byteOffset"].as_u64().unwrap_or(0) as usize
-        + a["byteOffset"].as_u64().unwrap_or(0) as usize;
     let width = match a["type"].as_str().unwrap() {
         "SCALAR" => 1,
         "VEC3" => 3,
         "VEC4" => 4,
         t => panic!("unexpected type {t}"),
     };
-    let n = a["count"].as_u64().unwrap() as usize * width;
-    assert!(
-        offset + 4 * n
-            <= view["byteOffset"].as_u64().unwrap() as usize
-                + view["byteLength"].as_u64().unwrap() as usize
-    );
-    (0..n)
-        .map(|i| f32::from_le_bytes(bin[offset + 4 * i..offset + 4 * i + 4].try_into().unwrap()))
-        .collect()
+    let count = a["count"].as_u64().unwrap() as usize;
+    let offset = a["byteOffset"].as_u64().unwrap_or(0) as usize;
+    let mut v = match a["bufferView"].as_u64() {
+        Some(view) => view_floats(doc, bin, view as usize, offset, count * width),
+        None => {
+            assert!(
+                a["sparse"].is_object(),
+                "accessor {accessor}: no bufferView and not sparse"
+            );
+            vec![0.0; count * width]
+        }
+    };
+    if let Some(sparse) = a["sparse"].as_object() {
+        let n = sparse["count"].as_u64().unwrap() as usize;
+        assert!(
+            n >= 1 && n <= count,
+            "accessor {accessor}: sparse.count {n}"
+        );
+        let ix = &sparse["indices"];
+        let indices = uints(
+            doc,
+            bin,
+            ix["bufferView"].as_u64().unwrap() as usize,
+            ix["byteOffset"].as_u64().unwrap_or(0) as usize,
+            ix["componentType"].as_u64().unwrap(),
+            n,
+        );
+        assert!(
+            indices.windows(2).all(|w| w[0] < w[1]),
+            "accessor {accessor}: sparse indices strictly increasing"
+        );
+        assert!((*indices.last().unwrap() as usize) < count);
+        let vs = &sparse["values"];
+        let values = view_floats(
+            doc,
+            bin,
+            vs["bufferView"].as_u64().unwrap() as usize,
+            vs["byteOffset"].as_u64().unwrap_or(0) as usize,
+            n * width,
+        );
+        for (i, &k) in indices.iter().enumerate() {
+            let k = k as usize;
+            v[k * width..(k + 1) * width].copy_from_slice(&values[i * width..(i + 1) * width]);
+        }
+    }
+    v
 }
 
 #[test]
@@ -239,6 +321,14 @@ fn glb_layout_accessors_targets_and_quaternions_follow_the_specification() {
             }
             "weights" => {
                 let f = clip.frames;
+                // Stored sparse: f ones over an all-zero f·f, no buffer view.
+                let a = &doc["accessors"][s["output"].as_u64().unwrap() as usize];
+                assert!(a["bufferView"].is_null(), "weights: no bufferView");
+                assert_eq!(a["sparse"]["count"], f);
+                assert_eq!(
+                    a["sparse"]["indices"]["componentType"], 5125,
+                    "UNSIGNED_INT"
+                );
                 assert_eq!(out.len(), f * f);
                 for k in 0..f {
                     for j in 0..f {
@@ -554,11 +644,82 @@ fn exported_glb_files_pass_the_khronos_validator() {
     assert_eq!(report.len(), 2);
     for r in report {
         assert_eq!(r["errors"], 0, "{}: {:#}", r["file"], r["messages"]);
+        assert_eq!(r["warnings"], 0, "{}: {:#}", r["file"], r["messages"]);
         eprintln!(
             "gltf-validator: {} — {} errors, {} warnings",
             r["file"], r["errors"], r["warnings"]
         );
     }
+}
+
+/// Bytes of the BIN chunk an accessor's data takes: its buffer view's, or
+/// for a sparse accessor those of its indices' and values' views.
+fn accessor_bytes(doc: &Value, accessor: usize) -> usize {
+    let a = &doc["accessors"][accessor];
+    let len = |v: &Value| {
+        v.as_u64().map_or(0, |i| {
+            doc["bufferViews"][i as usize]["byteLength"]
+                .as_u64()
+                .unwrap() as usize
+        })
+    };
+    len(&a["bufferView"])
+        + len(&a["sparse"]["indices"]["bufferView"])
+        + len(&a["sparse"]["values"]["bufferView"])
+}
+
+#[test]
+fn a_deforming_object_grows_linearly_with_its_frame_count() {
+    // The same fall of leaf b exported at 15 and 30 fps (151 and 301
+    // frames): the one-hot weights, N·N scalars, are stored as N indices and
+    // N values (8N bytes), and the whole file, N morph targets, about doubles
+    // with N (dense weights made it grow nearly 4×).
+    let model = LeafSpec::load("b").unwrap().model().unwrap();
+    let mut sizes = Vec::new();
+    for fps in [15.0, 30.0] {
+        let leaf = export::drop_clip("leaf-b", "spinner", &model, 10.0, fps).unwrap();
+        let clip = export::side_by_side("leaf-b", vec![leaf], fps, 0.0).unwrap();
+        let n = clip.frames;
+        let bytes = glb::glb_bytes(&clip).unwrap();
+        let (doc, bin) = split_glb(&bytes);
+        let anim = &doc["animations"][0];
+        let ch = &anim["channels"][0];
+        assert_eq!(ch["target"]["path"], "weights");
+        let out = anim["samplers"][ch["sampler"].as_u64().unwrap() as usize]["output"]
+            .as_u64()
+            .unwrap() as usize;
+        assert_eq!(doc["accessors"][out]["count"], n * n);
+        assert_eq!(
+            floats(&doc, &bin, out)
+                .iter()
+                .filter(|&&w| w == 1.0)
+                .count(),
+            n
+        );
+        let w = accessor_bytes(&doc, out);
+        assert_eq!(
+            w,
+            8 * n,
+            "{n} frames: weights take {w} bytes, expected 8N = {} (dense: 4N² = {})",
+            8 * n,
+            4 * n * n
+        );
+        sizes.push((n, w, bytes.len()));
+    }
+    let [(n1, w1, f1), (n2, w2, f2)] = sizes[..] else {
+        unreachable!()
+    };
+    let frames = n2 as f64 / n1 as f64;
+    let weights = w2 as f64 / w1 as f64;
+    let file = f2 as f64 / f1 as f64;
+    let msg = format!(
+        "{n1} → {n2} frames (×{frames:.3}): weights {w1} → {w2} bytes (×{weights:.3}), \
+         file {f1} → {f2} bytes (×{file:.3}); quadratic would be ×{:.3}",
+        frames * frames
+    );
+    eprintln!("{msg}");
+    assert!((weights - frames).abs() < 1e-9, "{msg}");
+    assert!(file > 0.9 * frames && file < 1.1 * frames, "{msg}");
 }
 
 #[test]
