@@ -131,15 +131,19 @@ pub fn run_sampled(
     let mut k = 1;
     let mut steps: u64 = 0;
     while k <= frames {
-        x0.copy_from_slice(&state.position);
-        v0.copy_from_slice(&state.velocity);
+        // Step ends counted from t0, so the clock carries no summed round-off.
+        let begin = steps as f64 * dt;
+        let end = (steps + 1) as f64 * dt;
+        // The start of the step is needed only if a frame falls inside it
+        // (the same test as below, for the earliest frame not yet sampled).
+        if within(k as f64 * frame_dt, begin, dt) < 1.0 - 1e-12 {
+            x0.copy_from_slice(&state.position);
+            v0.copy_from_slice(&state.velocity);
+        }
         sim.step(model, state, dt)?;
         steps += 1;
-        // Step ends counted from t0, so the clock carries no summed round-off.
-        let begin = (steps - 1) as f64 * dt;
-        let end = steps as f64 * dt;
         while k <= frames && k as f64 * frame_dt <= end * (1.0 + 1e-12) {
-            let s = ((k as f64 * frame_dt - begin) / dt).clamp(0.0, 1.0);
+            let s = within(k as f64 * frame_dt, begin, dt);
             if s >= 1.0 - 1e-12 {
                 on_frame(k, &state.position);
             } else {
@@ -167,6 +171,12 @@ pub fn run_sampled(
         force_evals: sim.force_evaluations(),
         broken_springs: state.broken_springs() - broken_before,
     })
+}
+
+/// Where time `t` falls in the step [begin, begin + dt], as s ∈ [0, 1].
+#[inline]
+fn within(t: f64, begin: f64, dt: f64) -> f64 {
+    ((t - begin) / dt).clamp(0.0, 1.0)
 }
 
 /// The cubic Hermite interpolant at s ∈ [0, 1] of a step of length `h`
