@@ -365,68 +365,36 @@ impl Launcher for Slurm {
         missing: &[usize],
         attempt: usize,
     ) -> Result<BTreeMap<usize, String>, BreedError> {
+        let allocated = match self.mode {
+            SlurmMode::Array => {
+                return self.launch_array(run_dir, generation, count, missing, attempt);
+            }
+            SlurmMode::Step { allocated } => allocated,
+        };
         let gen_dir = shard::generation_dir(run_dir, generation);
         let driver_log = gen_dir.join("slurm.log");
-        let name = format!("leafmagic-g{generation:03}");
-        let mut cmd;
-        match self.mode {
-            SlurmMode::Step { allocated } => {
-                // Every shard in one step: a rerun starts them all again and
-                // those already done return at once (--skip-done), which
-                // costs less than a step per missing shard.
-                cmd = Command::new("srun");
-                cmd.arg(format!("--ntasks={count}"))
-                    .arg(format!("--cpus-per-task={}", self.threads))
-                    .arg(format!("--job-name={name}"))
-                    // One failing task must not take the others down.
-                    .arg("--kill-on-bad-exit=0")
-                    .arg(format!(
-                        "--output={}",
-                        gen_dir
-                            .join(format!("shard-%3t-of-{count:03}.log"))
-                            .display()
-                    ))
-                    .arg("--open-mode=append")
-                    .arg("--quiet");
-                if allocated.is_some_and(|a| count > a) {
-                    cmd.arg("--overcommit");
-                }
-                cmd.arg(&self.program).args(shard_args(
-                    run_dir,
-                    generation,
-                    None,
-                    count,
-                    self.threads,
-                ));
-            }
-            SlurmMode::Array => {
-                let list = missing
-                    .iter()
-                    .map(usize::to_string)
-                    .collect::<Vec<_>>()
-                    .join(",");
-                let wrap = std::iter::once(self.program.display().to_string())
-                    .chain(shard_args(run_dir, generation, None, count, self.threads))
-                    .map(|w| sh_quote(&w))
-                    .collect::<Vec<_>>()
-                    .join(" ");
-                cmd = Command::new("sbatch");
-                cmd.arg("--wait")
-                    .arg("--parsable")
-                    .arg(format!("--array={list}"))
-                    .arg("--ntasks=1")
-                    .arg(format!("--cpus-per-task={}", self.threads))
-                    .arg(format!("--job-name={name}"))
-                    .arg(format!(
-                        "--output={}",
-                        gen_dir
-                            .join(format!("shard-%3a-of-{count:03}.log"))
-                            .display()
-                    ))
-                    .arg("--open-mode=append")
-                    .arg(format!("--wrap=exec {wrap}"));
-            }
+        // Every shard in one step: a rerun starts them all again and those
+        // already done return at once (--skip-done), which costs less than a
+        // step per missing shard.
+        let mut cmd = Command::new("srun");
+        cmd.arg(format!("--ntasks={count}"))
+            .arg(format!("--cpus-per-task={}", self.threads))
+            .arg(format!("--job-name=leafmagic-g{generation:03}"))
+            // One failing task must not take the others down.
+            .arg("--kill-on-bad-exit=0")
+            .arg(format!(
+                "--output={}",
+                gen_dir
+                    .join(format!("shard-%3t-of-{count:03}.log"))
+                    .display()
+            ))
+            .arg("--open-mode=append")
+            .arg("--quiet");
+        if allocated.is_some_and(|a| count > a) {
+            cmd.arg("--overcommit");
         }
+        cmd.arg(&self.program)
+            .args(shard_args(run_dir, generation, None, count, self.threads));
         let log = append_line(&driver_log, &format!("== attempt {attempt}: {cmd:?}"))
             .and_then(|f| Ok((f.try_clone()?, f)))
             .map_err(|e| BreedError(format!("{}: {e}", driver_log.display())))?;
@@ -437,8 +405,7 @@ impl Launcher for Slurm {
             .status()
             .map_err(|e| {
                 BreedError(format!(
-                    "cannot run {:?} (is Slurm installed and on PATH?): {e}",
-                    cmd.get_program()
+                    "cannot run srun (is Slurm installed and on PATH?): {e}"
                 ))
             })?;
         let mut failed = BTreeMap::new();
@@ -447,8 +414,7 @@ impl Launcher for Slurm {
                 failed.insert(
                     i,
                     format!(
-                        "{} {}; see also {}",
-                        cmd.get_program().to_string_lossy(),
+                        "srun {}; see also {}",
                         describe(status),
                         driver_log.display()
                     ),
@@ -458,6 +424,108 @@ impl Launcher for Slurm {
         Ok(failed)
     }
 }
+
+impl Slurm {
+    /// One array per attempt: `sbatch --array` of the missing shards, then
+    /// the driver watches the shard files and `squeue` itself every
+    /// [`ARRAY_POLL`] rather than `sbatch --wait`, which polls at seconds.
+    fn launch_array(
+        &self,
+        run_dir: &Path,
+        generation: usize,
+        count: usize,
+        missing: &[usize],
+        attempt: usize,
+    ) -> Result<BTreeMap<usize, String>, BreedError> {
+        let gen_dir = shard::generation_dir(run_dir, generation);
+        let driver_log = gen_dir.join("slurm.log");
+        let list = missing
+            .iter()
+            .map(usize::to_string)
+            .collect::<Vec<_>>()
+            .join(",");
+        let wrap = std::iter::once(self.program.display().to_string())
+            .chain(shard_args(run_dir, generation, None, count, self.threads))
+            .map(|w| sh_quote(&w))
+            .collect::<Vec<_>>()
+            .join(" ");
+        let mut cmd = Command::new("sbatch");
+        cmd.arg("--parsable")
+            .arg(format!("--array={list}"))
+            .arg("--ntasks=1")
+            .arg(format!("--cpus-per-task={}", self.threads))
+            .arg(format!("--job-name=leafmagic-g{generation:03}"))
+            .arg(format!(
+                "--output={}",
+                gen_dir
+                    .join(format!("shard-%3a-of-{count:03}.log"))
+                    .display()
+            ))
+            .arg("--open-mode=append")
+            // The index comes from SLURM_ARRAY_TASK_ID, the count from --count
+            // (a rerun's array holds only the missing shards).
+            .arg(format!("--wrap=exec {wrap}"));
+        let _ = append_line(&driver_log, &format!("== attempt {attempt}: {cmd:?}"));
+        let out = cmd.stdin(Stdio::null()).output().map_err(|e| {
+            BreedError(format!(
+                "cannot run sbatch (is Slurm installed and on PATH?): {e}"
+            ))
+        })?;
+        let _ = append_line(
+            &driver_log,
+            &format!(
+                "{}{}",
+                String::from_utf8_lossy(&out.stdout),
+                String::from_utf8_lossy(&out.stderr)
+            ),
+        );
+        if !out.status.success() {
+            return Err(BreedError(format!(
+                "generation {generation}: sbatch refused the array ({}): {}",
+                describe(out.status),
+                String::from_utf8_lossy(&out.stderr).trim()
+            )));
+        }
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let job = stdout
+            .trim()
+            .split(';')
+            .next()
+            .unwrap_or_default()
+            .to_string();
+        loop {
+            std::thread::sleep(ARRAY_POLL);
+            // Wait for the elements to leave the queue even when every file
+            // is written: the next generation's array is scheduled at
+            // submission only if their CPUs are free by then. Empty (or an error, once the job is purged): no element is
+            // pending or running any more.
+            let q = Command::new("squeue")
+                .args(["-h", "-j", &job, "-o", "%i"])
+                .stdin(Stdio::null())
+                .stderr(Stdio::null())
+                .output();
+            match q {
+                Ok(q) if q.status.success() && !q.stdout.trim_ascii().is_empty() => {}
+                _ => break,
+            }
+        }
+        Ok(missing
+            .iter()
+            .filter(|&&index| {
+                !shard::shard_path(run_dir, generation, Split { index, count }).exists()
+            })
+            .map(|&index| {
+                (
+                    index,
+                    format!("array element {job}_{index} ended without writing its shard file"),
+                )
+            })
+            .collect())
+    }
+}
+
+/// How often the array fallback looks at the shard files and the queue.
+pub const ARRAY_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// The Slurm mode for this process's environment: job steps inside an
 /// allocation, arrays outside one.

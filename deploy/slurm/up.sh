@@ -92,6 +92,9 @@ ProctrackType=proctrack/linuxproc
 TaskPlugin=task/none
 # FIFO, scheduled at submit: the shortest path from sbatch to a running job.
 SchedulerType=sched/builtin
+# Schedule pending jobs (array elements waiting for a CPU) as soon as one
+# ends, not at the default batch_sched_delay of 3 s.
+SchedulerParameters=batch_sched_delay=0
 SelectType=select/cons_tres
 SelectTypeParameters=CR_Core
 ReturnToService=2
@@ -111,10 +114,12 @@ KillWait=5
 NodeName=$host NodeAddr=127.0.0.1 CPUs=$cpus RealMemory=$mem_mb State=UNKNOWN
 PartitionName=debug Nodes=ALL Default=YES MaxTime=INFINITE State=UP OverSubscribe=NO
 CONF
+changed=no
 if [ -f "$CONF" ] && cmp -s "$CONF" "$CONF.new"; then
   rm "$CONF.new"
 else
   mv "$CONF.new" "$CONF"
+  changed=yes
 fi
 mkdir -p /etc/slurm
 if [ -L /etc/slurm/slurm.conf ] || [ ! -e /etc/slurm/slurm.conf ]; then
@@ -134,6 +139,12 @@ if ! running slurmd; then
   say "starting slurmd"
   setsid slurmd -D -f "$CONF" >>"$STATE/log/slurmd.out" 2>&1 &
   echo $! >"$PIDS/slurmd"
+fi
+
+# A cluster already up from an older slurm.conf takes the new one.
+if [ "$changed" = yes ] && running slurmctld && sinfo -h >/dev/null 2>&1; then
+  say "slurm.conf changed: scontrol reconfigure"
+  scontrol reconfigure
 fi
 
 # 5. Wait for the node.
