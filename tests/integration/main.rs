@@ -15,6 +15,7 @@ mod leaves;
 mod rigid;
 mod scene_files;
 mod scenes;
+mod shards;
 mod stability;
 mod tearing;
 mod validation;
