@@ -49,6 +49,22 @@ pub enum Command {
     /// Evaluate one shard of a generation of a breeding run and write its shard file
     /// (what `breed --executor processes|slurm` starts; see the README, "Beyond one machine").
     Shard(ShardArgs),
+    /// Merge the shard files of a generation that something else evaluated (a Kubernetes
+    /// Indexed Job, a Slurm array) into the run: its files and checkpoint, as breed would.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// A breeding run directory.
+    pub run: PathBuf,
+    /// The generation whose shards to merge (the one after the checkpoint's).
+    #[arg(long)]
+    pub generation: usize,
+    /// Shards in the generation.
+    #[arg(long)]
+    pub count: usize,
 }
 
 /// Who evaluates each generation of `breed`.
@@ -293,6 +309,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Accuracy(args) => accuracy(args),
         Command::Scene(args) => run_scene(args),
         Command::Shard(args) => shard(args),
+        Command::Merge(args) => merge(args),
     }
 }
 
@@ -828,6 +845,52 @@ fn shard(args: ShardArgs) -> Result<()> {
             path.display()
         ),
     }
+    Ok(())
+}
+
+fn merge(args: MergeArgs) -> Result<()> {
+    if args.count == 0 {
+        bail!("--count must be at least 1");
+    }
+    let mut run = Run::open(&args.run)?;
+    let next = run.checkpoint.as_ref().map_or(0, |c| c.generation + 1);
+    if args.generation < next {
+        println!(
+            "generation {} is already merged (checkpoint.json holds generation {}): nothing to do",
+            args.generation,
+            next - 1
+        );
+        return Ok(());
+    }
+    if args.generation > next || run.is_complete() {
+        bail!(
+            "{}: generation {} cannot be merged: the next generation is {next} of {}",
+            args.run.display(),
+            args.generation,
+            run.settings().generations
+        );
+    }
+    let merge = leafmagic::executor::Merge { shards: args.count };
+    // Two threads: the prototype's error estimate (generation 0) and the merge.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .context("cannot start the worker threads")?;
+    pool.install(|| run.step_with(&merge, &breed::Quiet))?;
+    if run.is_complete() {
+        run.write_best()?;
+    }
+    let history = run.history();
+    print_generations(&history[history.len() - 1..]);
+    println!(
+        "run directory: {} ({})",
+        run.dir.display(),
+        if run.is_complete() {
+            "complete".to_string()
+        } else {
+            format!("next: generation {}", args.generation + 1)
+        }
+    );
     Ok(())
 }
 

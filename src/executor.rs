@@ -309,6 +309,51 @@ fn shard_args(
     args
 }
 
+/// Merges shard files that something else wrote (a Kubernetes Indexed
+/// Job, a Slurm array submitted by hand): starts nothing, and a missing or
+/// invalid shard is an error naming it.
+pub struct Merge {
+    /// Shards per generation.
+    pub shards: usize,
+}
+
+impl Executor for Merge {
+    fn evaluate(
+        &self,
+        run: &Run,
+        plan: &Plan,
+        progress: &dyn Progress,
+    ) -> Result<Vec<Evaluation>, BreedError> {
+        evaluate_sharded(self, self.shards, run, plan, progress)
+    }
+}
+
+impl Launcher for Merge {
+    fn launch(
+        &self,
+        run_dir: &Path,
+        generation: usize,
+        count: usize,
+        missing: &[usize],
+        _attempt: usize,
+    ) -> Result<BTreeMap<usize, String>, BreedError> {
+        let first = shard::shard_path(
+            run_dir,
+            generation,
+            Split {
+                index: missing[0],
+                count,
+            },
+        );
+        Err(BreedError(format!(
+            "generation {generation}: shards {missing:?} of {count} are missing or invalid ({} and so on); \
+             run them (leafmagic shard {} --generation {generation} --index I --count {count}), then merge again",
+            first.display(),
+            run_dir.display()
+        )))
+    }
+}
+
 /// How the Slurm executor starts a generation's shards.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum SlurmMode {

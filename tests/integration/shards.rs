@@ -600,3 +600,51 @@ fn slurm_executor_gives_the_local_bytes_and_reruns_what_scancel_killed() {
     );
     assert_same_run(&local, &arrays, "slurm arrays with one element cancelled");
 }
+
+/// How a run goes on Kubernetes (deploy/k8s): per generation, an Indexed
+/// Job of N pods (JOB_COMPLETION_INDEX, --count N), then `merge`. A merge
+/// with a shard missing is refused, naming it, and changes nothing.
+#[test]
+fn indexed_jobs_and_merge_give_the_local_bytes() {
+    let dir = scratch("k8s-loop");
+    let run = fresh_run(&dir.join("run"));
+    let merge = |g: usize| {
+        leafmagic()
+            .arg("merge")
+            .arg(&run)
+            .args(["--generation", &g.to_string(), "--count", "4"])
+            .output()
+            .unwrap()
+    };
+    for g in 0..3 {
+        for i in [3, 0, 2] {
+            let r = shard_cmd(&run, g)
+                .args(["--count", "4"])
+                .env("JOB_COMPLETION_INDEX", i.to_string())
+                .output()
+                .unwrap();
+            ok(&r, "indexed shard");
+        }
+        let before = contents(&run);
+        let r = merge(g);
+        assert!(!r.status.success(), "merged with shard 1 missing");
+        let err = String::from_utf8_lossy(&r.stderr);
+        let missing = shard::shard_path(&run, g, Split { index: 1, count: 4 });
+        assert!(err.contains("shards [1] of 4 are missing"), "{err}");
+        assert!(err.contains(&missing.display().to_string()), "{err}");
+        assert_eq!(before, contents(&run), "a refused merge changed the run");
+        let r = shard_cmd(&run, g)
+            .args(["--count", "4"])
+            .env("JOB_COMPLETION_INDEX", "1")
+            .output()
+            .unwrap();
+        ok(&r, "indexed shard");
+        let r = merge(g);
+        ok(&r, "merge");
+        // Merging again (a retried pod) is harmless.
+        let again = merge(g);
+        ok(&again, "second merge");
+        assert!(String::from_utf8_lossy(&again.stdout).contains("already merged"));
+    }
+    assert_same_run(&reference(&dir), &run, "indexed jobs and merge");
+}
