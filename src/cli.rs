@@ -162,6 +162,10 @@ pub struct BreedArgs {
     /// (default: SLURM_NTASKS of the allocation). --threads is then per shard.
     #[arg(long)]
     pub shards: Option<usize>,
+    /// Write the run directory (run.toml) and stop: the generations are then evaluated by
+    /// `leafmagic shard` tasks and merged with `leafmagic merge` (Kubernetes, hand-run arrays).
+    #[arg(long, conflicts_with_all = ["resume", "executor", "shards", "threads"])]
+    pub create_only: bool,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
     #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive"])]
     pub resume: Option<PathBuf>,
@@ -747,6 +751,10 @@ fn breed(args: BreedArgs) -> Result<()> {
             Run::create(&dir, settings)?
         }
     };
+    if args.create_only {
+        println!("run directory: {}", run.dir.display());
+        return Ok(());
+    }
     let executor = executor(&args)?;
     // A driver only waits and merges (and estimates the prototype's error
     // beside generation 0): two threads are plenty.

@@ -607,7 +607,19 @@ fn slurm_executor_gives_the_local_bytes_and_reruns_what_scancel_killed() {
 #[test]
 fn indexed_jobs_and_merge_give_the_local_bytes() {
     let dir = scratch("k8s-loop");
-    let run = fresh_run(&dir.join("run"));
+    let run = dir.join("run");
+    let r = breed(&[&SMALL[..], &["--create-only"]].concat(), &run);
+    ok(&r, "breed --create-only");
+    let files: Vec<_> = std::fs::read_dir(&run)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(
+        files,
+        ["run.toml"],
+        "--create-only wrote more than run.toml"
+    );
     let merge = |g: usize| {
         leafmagic()
             .arg("merge")
