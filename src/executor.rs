@@ -77,6 +77,13 @@ trait Launcher: Sync {
     }
 }
 
+/// `shards/gen-GGG/`, created: the launchers' logs go there.
+fn generation_dir(run_dir: &Path, generation: usize) -> Result<PathBuf, BreedError> {
+    let dir = shard::generation_dir(run_dir, generation);
+    std::fs::create_dir_all(&dir).map_err(|e| BreedError(format!("{}: {e}", dir.display())))?;
+    Ok(dir)
+}
+
 fn note(message: &str) {
     eprintln!("leafmagic: {message}");
 }
@@ -91,9 +98,6 @@ fn evaluate_sharded(
 ) -> Result<Vec<Evaluation>, BreedError> {
     let dir = &run.dir;
     let g = plan.generation;
-    let gen_dir = shard::generation_dir(dir, g);
-    std::fs::create_dir_all(&gen_dir)
-        .map_err(|e| BreedError(format!("{}: {e}", gen_dir.display())))?;
     let mut results: Vec<Option<Vec<Evaluation>>> = vec![None; count];
     let mut why: BTreeMap<usize, String> = BTreeMap::new();
     for attempt in 0..=SHARD_ATTEMPTS {
@@ -234,6 +238,7 @@ impl Launcher for Processes {
         missing: &[usize],
         attempt: usize,
     ) -> Result<BTreeMap<usize, String>, BreedError> {
+        generation_dir(run_dir, generation)?;
         let mut children = Vec::new();
         let mut failed = BTreeMap::new();
         for &index in missing {
@@ -416,7 +421,7 @@ impl Launcher for Slurm {
             }
             SlurmMode::Step { allocated } => allocated,
         };
-        let gen_dir = shard::generation_dir(run_dir, generation);
+        let gen_dir = generation_dir(run_dir, generation)?;
         let driver_log = gen_dir.join("slurm.log");
         // Every shard in one step: a rerun starts them all again and those
         // already done return at once (--skip-done), which costs less than a
@@ -482,7 +487,7 @@ impl Slurm {
         missing: &[usize],
         attempt: usize,
     ) -> Result<BTreeMap<usize, String>, BreedError> {
-        let gen_dir = shard::generation_dir(run_dir, generation);
+        let gen_dir = generation_dir(run_dir, generation)?;
         let driver_log = gen_dir.join("slurm.log");
         let list = missing
             .iter()

@@ -628,6 +628,15 @@ fn indexed_jobs_and_merge_give_the_local_bytes() {
             .output()
             .unwrap()
     };
+    // Nothing to merge yet: refused, and not even a directory is made.
+    let r = merge(0);
+    assert!(!r.status.success());
+    let files: Vec<_> = std::fs::read_dir(&run)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name())
+        .collect();
+    assert_eq!(files, ["run.toml"], "a refused merge wrote into the run");
     for g in 0..3 {
         for i in [3, 0, 2] {
             let r = shard_cmd(&run, g)
@@ -645,6 +654,7 @@ fn indexed_jobs_and_merge_give_the_local_bytes() {
         assert!(err.contains("shards [1] of 4 are missing"), "{err}");
         assert!(err.contains(&missing.display().to_string()), "{err}");
         assert_eq!(before, contents(&run), "a refused merge changed the run");
+
         let r = shard_cmd(&run, g)
             .args(["--count", "4"])
             .env("JOB_COMPLETION_INDEX", "1")
