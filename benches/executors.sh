@@ -4,8 +4,8 @@
 #      of 0.01 s falls (no work to speak of), median of generations 1-10;
 #   2. time per leaf and the throughput of 1, 2, 4 shards: one generation of
 #      200 leaves x 10 s run by `leafmagic shard` processes directly, and
-#      whole breeds (median of generations 1-2, 180 children each) with the
-#      processes and slurm executors;
+#      whole breeds (generations 1-2, 180 children each) with the processes
+#      and slurm executors;
 #   3. the merge (reading the shards, the generation's files, the
 #      checkpoint) at 200 and 10^4 leaves.
 # Usage: cargo build --release && bash benches/executors.sh [WORK_DIR]
@@ -64,36 +64,38 @@ shards() { # count: all shards of generation 0 at once, wall seconds
   wait "${pids[@]}"
   since "$t0"
 }
-# Interleaved repetitions, the fastest of each: the machine may be shared,
-# and other load only ever adds time.
-REPS=${REPS:-5}
-declare -A best
+# Interleaved repetitions: the machine may be shared (or its host busy), so
+# each repetition times 1, 2 and 4 shards back to back and the throughput
+# ratio is taken within it; the table gives the medians.
+REPS=${REPS:-9}
+: >"$W/g200.times"
 for ((r = 0; r < REPS; r++)); do
-  for n in 1 2 4; do
-    t=$(shards "$n")
-    best[$n]=$(awk -v a="${best[$n]:-1e9}" -v b="$t" 'BEGIN {print (b < a) ? b : a}')
-  done
+  echo "$(shards 1) $(shards 2) $(shards 4)" >>"$W/g200.times"
 done
-t1=${best[1]}
-echo "| shards | wall (s), best of $REPS | throughput vs 1 shard |"
+med() { sort -g | awk '{v[NR] = $1} END {print (NR % 2) ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2}'; }
+t1=$(awk '{print $1}' "$W/g200.times" | med)
+echo "| shards | wall (s), median of $REPS | throughput vs 1 shard, median of the per-repetition ratios |"
 echo "|---|---|---|"
-for n in 1 2 4; do
-  echo "| $n | ${best[$n]} | $(awk -v a="$t1" -v b="${best[$n]}" 'BEGIN {printf "%.2fx", a / b}') |"
+for c in 1 2 3; do
+  n=$(( c == 3 ? 4 : c ))
+  t=$(awk -v c="$c" '{print $c}' "$W/g200.times" | med)
+  x=$(awk -v c="$c" '{print $1 / $c}' "$W/g200.times" | med)
+  echo "| $n | $t | $(awk -v x="$x" 'BEGIN {printf "%.2fx", x}') |"
 done
 echo "time per leaf (1 shard, 1 thread): $(awk -v t="$t1" 'BEGIN {printf "%.2f ms", t / 200 * 1000}')"
 
 echo
-echo "## 2b. breeds of 200 x 10 s (median of generations 1-2, 180 children each; best of 3 runs)"
+echo "## 2b. breeds of 200 x 10 s (fastest of generations 1-2 in 3 runs, 180 children each)"
 FULL=(--population 200 --generations 3 --seconds 10)
-run_full() { # the best of 3 runs' medians
+run_full() { # the fastest generation 1 or 2 of 3 runs
   local name=$1 m b=1e9; shift
   for r in 1 2 3; do
     rm -rf "$W/full-$name"
     "$@" "${FULL[@]}" --out "$W/full-$name" >/dev/null 2>&1
-    m=$(median "$W/full-$name" 1 2)
+    m=$(awk -F, 'NR > 1 && ($1 == 1 || $1 == 2) {print $2}' "$W/full-$name/timing.csv" | sort -g | head -n1)
     b=$(awk -v a="$b" -v m="$m" 'BEGIN {print (m < a) ? m : a}')
   done
-  echo "| $name | $b s |"
+  echo "| $name | $(awk -v b="$b" 'BEGIN {printf "%.3f", b}') s |"
 }
 echo "| executor | per generation |"
 echo "|---|---|"
