@@ -372,9 +372,9 @@ pub enum SlurmMode {
         allocated: Option<usize>,
     },
     /// Outside an allocation (sites that only allow arrays): one
-    /// `sbatch --wait --array` per generation, each element's index from
-    /// `SLURM_ARRAY_TASK_ID`. `sbatch --wait` polls, so a generation costs
-    /// seconds more.
+    /// `sbatch --array` per generation, each element's index from
+    /// `SLURM_ARRAY_TASK_ID`, the driver watching `squeue`. Arrays wait
+    /// for the scheduler, so a generation costs a second or more.
     Array,
 }
 
@@ -477,8 +477,8 @@ impl Launcher for Slurm {
 
 impl Slurm {
     /// One array per attempt: `sbatch --array` of the missing shards, then
-    /// the driver watches the shard files and `squeue` itself every
-    /// [`ARRAY_POLL`] rather than `sbatch --wait`, which polls at seconds.
+    /// the driver watches `squeue` itself every [`ARRAY_POLL`] rather than
+    /// `sbatch --wait`, which polls at seconds.
     fn launch_array(
         &self,
         run_dir: &Path,
@@ -545,10 +545,11 @@ impl Slurm {
             .to_string();
         loop {
             std::thread::sleep(ARRAY_POLL);
-            // Wait for the elements to leave the queue even when every file
-            // is written: the next generation's array is scheduled at
-            // submission only if their CPUs are free by then. Empty (or an error, once the job is purged): no element is
-            // pending or running any more.
+            // Wait for the elements to leave the queue, not for the files:
+            // the next generation's array is scheduled at submission only if
+            // their CPUs are free by then. Empty output (or an error, once
+            // the job is purged): no element is pending or running. A failed
+            // squeue only costs a rerun of what is missing, never a merge.
             let q = Command::new("squeue")
                 .args(["-h", "-j", &job, "-o", "%i"])
                 .stdin(Stdio::null())
@@ -574,7 +575,7 @@ impl Slurm {
     }
 }
 
-/// How often the array fallback looks at the shard files and the queue.
+/// How often the array fallback looks at the queue.
 pub const ARRAY_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// The Slurm mode for this process's environment: job steps inside an
