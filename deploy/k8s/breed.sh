@@ -3,7 +3,8 @@
 # `leafmagic merge`. Run it where both kubectl and the run volume are at
 # hand (a driver pod that mounts the claim at /runs and whose service
 # account may create, watch and delete Jobs; or a workstation with the
-# volume mounted at /runs).
+# volume mounted at /runs). Needs leafmagic, kubectl and envsubst (Debian:
+# gettext-base) on PATH.
 #
 #   deploy/k8s/breed.sh RUN SHARDS IMAGE -- BREED_SETTINGS...
 #   e.g. deploy/k8s/breed.sh floaters 64 registry.example/leafmagic:0.1 -- \
