@@ -14,6 +14,7 @@
 
 use crate::classify::{MotionClass, classify};
 use crate::describe::{Descriptors, MotionTarget};
+use crate::executor::Executor;
 use crate::genome::{Genome, mutate};
 use crate::io::write_atomic;
 use crate::leaf::LeafSpec;
@@ -22,7 +23,6 @@ use crate::trajectory::Trajectory;
 use rand::RngExt;
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -201,6 +201,36 @@ pub struct Individual {
     pub genome: Genome,
     /// Its fall.
     pub eval: Evaluation,
+}
+
+/// One child of a generation, bred (or copied from the prototype) but not
+/// yet dropped.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Child {
+    /// Its id (unique within the run).
+    pub id: u64,
+    /// The individual it was bred from (`None` in generation 0).
+    pub parent: Option<u64>,
+    /// Its genes.
+    pub genome: Genome,
+    /// The parent's score (NaN in generation 0), for the 1/5 success rule.
+    pub parent_score: f64,
+}
+
+/// A generation before evaluation: what [`Run::plan`] derives from the
+/// checkpoint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The generation's index.
+    pub generation: usize,
+    /// The variation scale its children were bred with.
+    pub scale: f64,
+    /// The next id to assign after its children.
+    pub next_id: u64,
+    /// The children to evaluate, in id order.
+    pub children: Vec<Child>,
+    /// The previous generation's best, copied unchanged (already evaluated).
+    pub elites: Vec<Individual>,
 }
 
 /// Per-generation summary.
@@ -591,6 +621,13 @@ impl Run {
         for d in [dir.to_path_buf(), dir.join("best")] {
             remove_stale_temporaries(&d);
         }
+        Run::load(dir)
+    }
+
+    /// Reads a run directory without changing anything in it: what a shard
+    /// process uses, since the driver (or other shards) may be writing there
+    /// at the same time and their temporary files are not stale.
+    pub fn load(dir: &Path) -> Result<Run, BreedError> {
         let path = dir.join(RUN_FILE);
         let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
         let run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
@@ -645,8 +682,22 @@ impl Run {
     /// Runs the remaining generations, writing each one's files and then the
     /// checkpoint.
     pub fn run(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        self.run_with(&crate::executor::Local, progress)
+    }
+
+    /// [`Run::run`] with the evaluation of each generation done by
+    /// `executor` (the rayon pool, child processes, Slurm). The files are the
+    /// same bytes whichever does it (all but timing.csv).
+    pub fn run_with(
+        &mut self,
+        executor: &dyn Executor,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
+        // Shard files of generations already merged (left by a driver killed
+        // between its checkpoint and their removal) are of no further use.
+        crate::shard::remove_merged(&self.dir, self.checkpoint.as_ref().map(|c| c.generation));
         while !self.is_complete() {
-            self.step(progress)?;
+            self.step_with(executor, progress)?;
         }
         self.write_best()?;
         Ok(())
@@ -654,21 +705,63 @@ impl Run {
 
     /// Breeds, evaluates and records one generation.
     pub fn step(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        self.step_with(&crate::executor::Local, progress)
+    }
+
+    /// [`Run::step`] in three parts: [`Run::plan`] (the children, from the
+    /// checkpoint), evaluation by `executor`, and [`Run::finish`] (scores,
+    /// elites, summary, files, checkpoint).
+    pub fn step_with(
+        &mut self,
+        executor: &dyn Executor,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
         let start = std::time::Instant::now();
+        let plan = self.plan();
+        progress.start_generation(plan.generation, plan.children.len());
+        let proto = &self.proto;
+        let evaluate_all = || executor.evaluate(self, &plan, progress);
+        // run.toml's error estimate is serial work: do it beside generation 0
+        // rather than before it, and complete run.toml before gen-000.csv.
+        let evals = if plan.generation == 0 {
+            let (evals, estimate) = rayon::join(evaluate_all, || prototype_error(proto));
+            let evals = evals?;
+            self.complete_run_file(estimate?)?;
+            evals
+        } else {
+            evaluate_all()?
+        };
+        if evals.len() != plan.children.len() {
+            return Err(BreedError(format!(
+                "generation {}: {} evaluations for {} children",
+                plan.generation,
+                evals.len(),
+                plan.children.len()
+            )));
+        }
+        self.finish(plan, evals, start, progress)
+    }
+
+    /// The next generation before evaluation: its children, derived
+    /// deterministically from the checkpoint (none: generation 0, copies of
+    /// the prototype), and the elites it keeps. Every random draw comes from
+    /// [`stream_seed`] streams, so any process that holds the run directory
+    /// derives the same plan.
+    pub fn plan(&self) -> Plan {
         let s = &self.settings;
-        let (generation, scale, mut next_id, children) = match &self.checkpoint {
+        let (generation, scale, next_id, children) = match &self.checkpoint {
             None => {
                 // Generation 0: copies of the prototype with the first round's variation.
                 let g0 = Genome::of_prototype(&self.proto);
-                let children: Vec<(u64, Option<u64>, Genome, f64)> = (0..s.population as u64)
+                let children: Vec<Child> = (0..s.population as u64)
                     .map(|id| {
                         let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
-                        (
+                        Child {
                             id,
-                            None,
-                            mutate(&g0, &self.proto.bounds, s.initial_scale, &mut rng),
-                            f64::NAN,
-                        )
+                            parent: None,
+                            genome: mutate(&g0, &self.proto.bounds, s.initial_scale, &mut rng),
+                            parent_score: f64::NAN,
+                        }
                     })
                     .collect();
                 (0, s.initial_scale, s.population as u64, children)
@@ -696,7 +789,12 @@ impl Run {
                         next_id,
                     ));
                     let genome = mutate(&parent.genome, &self.proto.bounds, cp.scale, &mut rng);
-                    children.push((next_id, Some(parent.id), genome, parent.eval.score));
+                    children.push(Child {
+                        id: next_id,
+                        parent: Some(parent.id),
+                        genome,
+                        parent_score: parent.eval.score,
+                    });
                     next_id += 1;
                 }
                 (generation, cp.scale, next_id, children)
@@ -713,36 +811,49 @@ impl Run {
                 })
                 .collect(),
         };
-        progress.start_generation(generation, children.len());
-        let proto = &self.proto;
-        let evaluate_all = || -> Vec<(Individual, f64)> {
-            children
-                .into_par_iter()
-                .map(|(id, parent, genome, parent_score)| {
-                    let eval = evaluate(proto, &genome, s);
-                    progress.individual_done(&eval.class, eval.score);
-                    (
-                        Individual {
-                            id,
-                            parent,
-                            elite: false,
-                            genome,
-                            eval,
-                        },
-                        parent_score,
-                    )
-                })
-                .collect()
-        };
-        // run.toml's error estimate is serial work: do it beside generation 0
-        // rather than before it, and complete run.toml before gen-000.csv.
-        let evaluated = if generation == 0 {
-            let (evaluated, estimate) = rayon::join(evaluate_all, || prototype_error(proto));
-            self.complete_run_file(estimate?)?;
-            evaluated
-        } else {
-            evaluate_all()
-        };
+        Plan {
+            generation,
+            scale,
+            next_id,
+            children,
+            elites,
+        }
+    }
+
+    /// Everything after evaluation: success rate, population, summary,
+    /// archive, the generation's files and the checkpoint. `evals` holds one
+    /// evaluation per child of `plan`, in the plan's order.
+    fn finish(
+        &mut self,
+        plan: Plan,
+        evals: Vec<Evaluation>,
+        start: std::time::Instant,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
+        let s = &self.settings;
+        let Plan {
+            generation,
+            scale,
+            mut next_id,
+            children,
+            elites,
+        } = plan;
+        let evaluated: Vec<(Individual, f64)> = children
+            .into_iter()
+            .zip(evals)
+            .map(|(c, eval)| {
+                (
+                    Individual {
+                        id: c.id,
+                        parent: c.parent,
+                        elite: false,
+                        genome: c.genome,
+                        eval,
+                    },
+                    c.parent_score,
+                )
+            })
+            .collect();
         let successes = evaluated
             .iter()
             .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
@@ -796,6 +907,9 @@ impl Run {
             archive,
         };
         self.write_generation(&checkpoint)?;
+        // The checkpoint now holds the generation: its shard files (if an
+        // executor wrote any) are merged and go.
+        crate::shard::remove_merged(&self.dir, Some(generation));
         progress.finish_generation(&summary);
         self.checkpoint = Some(checkpoint);
         Ok(())

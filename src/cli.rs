@@ -52,6 +52,12 @@ pub enum Command {
     /// Write one self-contained HTML page that plays a breeding run's best
     /// leaves, a scene's output or a .glb file in 3-D (works offline).
     Preview(PreviewArgs),
+    /// Evaluate one shard of a generation of a breeding run and write its shard file
+    /// (what `breed --executor processes|slurm` starts; see the README, "Beyond one machine").
+    Shard(ShardArgs),
+    /// Merge the shard files of a generation that something else evaluated (a Kubernetes
+    /// Indexed Job, a Slurm array) into the run: its files and checkpoint, as breed would.
+    Merge(MergeArgs),
 }
 
 /// Arguments of `preview`.
@@ -68,6 +74,54 @@ pub struct PreviewArgs {
     /// Frames per second of the embedded motion [default: 30, or the .glb's own].
     #[arg(long)]
     pub fps: Option<f64>,
+}
+
+/// Arguments of `merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// A breeding run directory.
+    pub run: PathBuf,
+    /// The generation whose shards to merge (the one after the checkpoint's).
+    #[arg(long)]
+    pub generation: usize,
+    /// Shards in the generation.
+    #[arg(long)]
+    pub count: usize,
+}
+
+/// Who evaluates each generation of `breed`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExecutorKind {
+    /// This process's thread pool.
+    Local,
+    /// `--shards` child processes (`leafmagic shard`) on this machine.
+    Processes,
+    /// Slurm: one `srun` step per generation inside an allocation (sbatch/salloc the driver),
+    /// else one `sbatch --wait --array` per generation.
+    Slurm,
+}
+
+/// Arguments of `shard`.
+#[derive(clap::Args, Debug)]
+pub struct ShardArgs {
+    /// A breeding run directory (run.toml, and checkpoint.json after generation 0).
+    pub run: PathBuf,
+    /// The generation to evaluate: the one after the checkpoint's.
+    #[arg(long)]
+    pub generation: usize,
+    /// This shard's index, from 0 [default: from SLURM_PROCID, SLURM_ARRAY_TASK_ID,
+    /// JOB_COMPLETION_INDEX or AWS_BATCH_JOB_ARRAY_INDEX].
+    #[arg(long, requires = "count")]
+    pub index: Option<usize>,
+    /// Shards in the generation [default: SLURM_NTASKS or SLURM_ARRAY_TASK_COUNT].
+    #[arg(long)]
+    pub count: Option<usize>,
+    /// Worker threads (default: SLURM_CPUS_PER_TASK, else all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Do nothing if a valid shard file is already there (a rerun keeps finished work).
+    #[arg(long)]
+    pub skip_done: bool,
 }
 
 /// Arguments of `accuracy`.
@@ -134,6 +188,17 @@ pub struct BreedArgs {
     /// unset ones are free), within the class of --target.
     #[arg(long, value_name = "NAME=VALUE,...")]
     pub target_features: Option<String>,
+    /// Who evaluates each generation (the run's files are the same bytes with any).
+    #[arg(long, value_enum, default_value_t = ExecutorKind::Local)]
+    pub executor: ExecutorKind,
+    /// Shards per generation with --executor processes (default: the cores) or slurm
+    /// (default: SLURM_NTASKS of the allocation). --threads is then per shard.
+    #[arg(long)]
+    pub shards: Option<usize>,
+    /// Write the run directory (run.toml) and stop: the generations are then evaluated by
+    /// `leafmagic shard` tasks and merged with `leafmagic merge` (Kubernetes, hand-run arrays).
+    #[arg(long, conflicts_with_all = ["resume", "executor", "shards", "threads"])]
+    pub create_only: bool,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
     #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features"])]
     pub resume: Option<PathBuf>,
@@ -310,6 +375,8 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scene(args) => run_scene(args),
         Command::Compare(args) => compare(args),
         Command::Preview(args) => preview(args),
+        Command::Shard(args) => shard(args),
+        Command::Merge(args) => merge(args),
     }
 }
 
@@ -863,13 +930,23 @@ fn breed(args: BreedArgs) -> Result<()> {
             Run::create(&dir, settings)?
         }
     };
-    let threads = args.threads.unwrap_or(0);
+    if args.create_only {
+        println!("run directory: {}", run.dir.display());
+        return Ok(());
+    }
+    let executor = executor(&args)?;
+    // A driver only waits and merges (and estimates the prototype's error
+    // beside generation 0): two threads are plenty.
+    let threads = match args.executor {
+        ExecutorKind::Local => args.threads.unwrap_or(0),
+        _ => 2,
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .context("cannot start the worker threads")?;
     let bar = Bar::new();
-    pool.install(|| run.run(&bar))?;
+    pool.install(|| run.run_with(executor.as_ref(), &bar))?;
     print_generations(run.history(), run.settings().like.is_some());
     if let Some(target) = &run.settings().like {
         print_like(&run, target)?;
@@ -919,6 +996,135 @@ fn print_like(run: &Run, target: &MotionTarget) -> Result<()> {
         Some(d) => println!("distance    {d:.4}"),
         None => println!("distance    ∞ (the best is not of the target's class)"),
     }
+    Ok(())
+}
+
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// The executor `breed` asked for, with its defaults filled in.
+fn executor(args: &BreedArgs) -> Result<Box<dyn leafmagic::executor::Executor>> {
+    use leafmagic::executor::{Local, Processes, Slurm, SlurmMode, slurm_mode_from_env};
+    if args.shards == Some(0) {
+        bail!("--shards must be at least 1");
+    }
+    if args.threads == Some(0) && args.executor != ExecutorKind::Local {
+        bail!("--threads must be at least 1");
+    }
+    let program =
+        || std::env::current_exe().context("cannot find the leafmagic binary to start shards");
+    Ok(match args.executor {
+        ExecutorKind::Local => {
+            if args.shards.is_some() {
+                bail!("--shards needs --executor processes or slurm");
+            }
+            Box::new(Local)
+        }
+        ExecutorKind::Processes => {
+            let shards = args.shards.unwrap_or_else(cores);
+            Box::new(Processes {
+                program: program()?,
+                shards,
+                // Share the cores between the shards.
+                threads: args.threads.unwrap_or((cores() / shards).max(1)),
+            })
+        }
+        ExecutorKind::Slurm => {
+            let mode = slurm_mode_from_env();
+            let shards = match (args.shards, mode) {
+                (Some(n), _) => n,
+                (None, SlurmMode::Step { allocated: Some(n) }) => n,
+                (None, _) => bail!(
+                    "--executor slurm outside an allocation (no SLURM_JOB_ID, SLURM_NTASKS) needs --shards"
+                ),
+            };
+            Box::new(Slurm {
+                program: program()?,
+                shards,
+                threads: args.threads.unwrap_or(1),
+                mode,
+            })
+        }
+    })
+}
+
+fn shard(args: ShardArgs) -> Result<()> {
+    let split = leafmagic::shard::resolve_split(args.index, args.count, |k| std::env::var(k).ok())
+        .map_err(anyhow::Error::msg)?;
+    let threads = match args.threads {
+        Some(t) => t,
+        None => std::env::var("SLURM_CPUS_PER_TASK")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(0),
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .context("cannot start the worker threads")?;
+    let start = Instant::now();
+    let outcome = pool.install(|| {
+        leafmagic::shard::run_shard(&args.run, args.generation, split, args.skip_done)
+    })?;
+    let (g, i, n) = (args.generation, split.index, split.count);
+    match outcome {
+        leafmagic::shard::Outcome::Evaluated(k, path) => println!(
+            "generation {g}, shard {i} of {n}: {k} individuals in {:.3} s -> {}",
+            start.elapsed().as_secs_f64(),
+            path.display()
+        ),
+        leafmagic::shard::Outcome::AlreadyDone(path) => println!(
+            "generation {g}, shard {i} of {n}: already done ({})",
+            path.display()
+        ),
+    }
+    Ok(())
+}
+
+fn merge(args: MergeArgs) -> Result<()> {
+    if args.count == 0 {
+        bail!("--count must be at least 1");
+    }
+    let mut run = Run::open(&args.run)?;
+    let next = run.checkpoint.as_ref().map_or(0, |c| c.generation + 1);
+    if args.generation < next {
+        println!(
+            "generation {} is already merged (checkpoint.json holds generation {}): nothing to do",
+            args.generation,
+            next - 1
+        );
+        return Ok(());
+    }
+    if args.generation > next || run.is_complete() {
+        bail!(
+            "{}: generation {} cannot be merged: the next generation is {next} of {}",
+            args.run.display(),
+            args.generation,
+            run.settings().generations
+        );
+    }
+    let merge = leafmagic::executor::Merge { shards: args.count };
+    // Two threads: the prototype's error estimate (generation 0) and the merge.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .context("cannot start the worker threads")?;
+    pool.install(|| run.step_with(&merge, &breed::Quiet))?;
+    if run.is_complete() {
+        run.write_best()?;
+    }
+    let history = run.history();
+    print_generations(&history[history.len() - 1..], run.settings().like.is_some());
+    println!(
+        "run directory: {} ({})",
+        run.dir.display(),
+        if run.is_complete() {
+            "complete".to_string()
+        } else {
+            format!("next: generation {}", args.generation + 1)
+        }
+    );
     Ok(())
 }
 

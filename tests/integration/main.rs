@@ -17,6 +17,7 @@ mod like;
 mod rigid;
 mod scene_files;
 mod scenes;
+mod shards;
 mod stability;
 mod tearing;
 mod validation;
