@@ -153,9 +153,10 @@ pub struct BreedArgs {
     /// Prototype: `a`, `b` (embedded) or a leaf file.
     #[arg(long, default_value = "a")]
     pub prototype: String,
-    /// Motion class to breed toward: floater, spinner or lilter.
-    #[arg(long, default_value = "floater")]
-    pub target: MotionClass,
+    /// Motion class to breed toward: floater, spinner or lilter [default: floater; with
+    /// --target-features, none: any class may come close].
+    #[arg(long)]
+    pub target: Option<MotionClass>,
     /// Individuals per generation.
     #[arg(long, default_value_t = 100)]
     pub population: usize,
@@ -185,7 +186,7 @@ pub struct BreedArgs {
     #[arg(long, requires = "like")]
     pub size: Option<f64>,
     /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
-    /// unset ones are free), within the class of --target.
+    /// unset ones are free), within the class of --target if given (else any class).
     #[arg(long, value_name = "NAME=VALUE,...")]
     pub target_features: Option<String>,
     /// Who evaluates each generation (the run's files are the same bytes with any).
@@ -810,7 +811,10 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
     };
     let aim = match &s.like {
         None => s.target.to_string(),
-        Some(t) if t.source == "features" => format!("{}-features", s.target),
+        Some(t) if t.source == "features" => match t.class {
+            Some(c) => format!("{c}-features"),
+            None => "features".to_string(),
+        },
         Some(t) => format!("like-{}", stem(&t.source)),
     };
     PathBuf::from("runs").join(format!(
@@ -903,7 +907,7 @@ fn breed(args: BreedArgs) -> Result<()> {
         None => {
             let settings = BreedSettings {
                 prototype: args.prototype.clone(),
-                target: args.target,
+                target: args.target.unwrap_or(MotionClass::Floater),
                 population: args.population,
                 generations: args.generations,
                 seed: args.seed,

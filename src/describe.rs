@@ -165,10 +165,11 @@ impl MotionTarget {
     }
 
     /// The target of `breed --target-features descent=0.6,spin=20`: SI
-    /// values by name, gated to `class` (`breed --target`). Unknown names
-    /// are all listed in the error.
-    pub fn parse_features(text: &str, class: MotionClass) -> Result<MotionTarget, String> {
-        if class == MotionClass::Undetermined {
+    /// values by name, gated to `class` (`breed --target`) if one is given;
+    /// without one every described fall has a distance. Unknown names are
+    /// all listed in the error.
+    pub fn parse_features(text: &str, class: Option<MotionClass>) -> Result<MotionTarget, String> {
+        if class == Some(MotionClass::Undetermined) {
             return Err("--target must be floater, spinner or lilter".to_string());
         }
         let mut descriptors = std::collections::BTreeMap::new();
@@ -210,7 +211,7 @@ impl MotionTarget {
         }
         Ok(MotionTarget {
             source: "features".to_string(),
-            class: Some(class),
+            class,
             regime: None,
             size_m: None,
             descriptors,
@@ -259,17 +260,17 @@ pub fn distance(a: &Descriptors, b: &Descriptors) -> f64 {
 /// A side-by-side table of descriptor vectors (columns), for the terminal.
 pub fn table(columns: &[(&str, &Descriptors)]) -> String {
     let mut out = String::new();
-    let _ = write!(out, "{:<12}", "");
+    let _ = write!(out, "{:<16}", "");
     for (label, _) in columns {
         let _ = write!(out, " {label:>14}");
     }
     out.push('\n');
-    let _ = write!(out, "{:<12}", "class");
+    let _ = write!(out, "{:<16}", "class");
     for (_, d) in columns {
         let _ = write!(out, " {:>14}", d.class.as_str());
     }
     out.push('\n');
-    let _ = write!(out, "{:<12}", "regime");
+    let _ = write!(out, "{:<16}", "regime");
     for (_, d) in columns {
         let _ = write!(out, " {:>14}", d.regime.as_str());
     }
@@ -280,7 +281,7 @@ pub fn table(columns: &[(&str, &Descriptors)]) -> String {
         } else {
             format!("{name} ({})", UNITS[k])
         };
-        let _ = write!(out, "{label:<12}");
+        let _ = write!(out, "{label:<16}");
         for (_, d) in columns {
             let v = d.values[k];
             let cell = if v.is_finite() {
@@ -340,7 +341,8 @@ mod tests {
 
     #[test]
     fn target_features_weigh_only_what_is_set() {
-        let t = MotionTarget::parse_features("descent=0.6, spin=20", MotionClass::Spinner).unwrap();
+        let t = MotionTarget::parse_features("descent=0.6, spin=20", Some(MotionClass::Spinner))
+            .unwrap();
         assert_eq!(t.class, Some(MotionClass::Spinner));
         let mut a = fall(MotionClass::Spinner, A);
         a.values[1] = 20.0;
@@ -348,13 +350,23 @@ mod tests {
         assert_eq!(t.distance(&a), 0.0);
         a.values[0] = 0.6 + SCALES[0];
         assert!((t.distance(&a) - 0.5f64.sqrt()).abs() < 1e-12);
-        let gated = MotionTarget::parse_features("descent=0.6", MotionClass::Floater).unwrap();
+        let gated =
+            MotionTarget::parse_features("descent=0.6", Some(MotionClass::Floater)).unwrap();
         assert_eq!(gated.distance(&a), f64::INFINITY);
+        // Without --target no class is gated: a spinner and a floater with
+        // the same descriptors are equally close.
+        let free = MotionTarget::parse_features("descent=0.6", None).unwrap();
+        let floater = Descriptors {
+            class: MotionClass::Floater,
+            ..a.clone()
+        };
+        assert!(free.distance(&a).is_finite());
+        assert_eq!(free.distance(&a), free.distance(&floater));
     }
 
     #[test]
     fn unknown_names_are_all_listed() {
-        let floater = MotionClass::Floater;
+        let floater = Some(MotionClass::Floater);
         let e = MotionTarget::parse_features("descent=1,speed=2,wobble=3", floater).unwrap_err();
         assert!(
             e.contains("speed") && e.contains("wobble") && e.contains("known"),
@@ -362,7 +374,7 @@ mod tests {
         );
         assert!(MotionTarget::parse_features("descent", floater).is_err());
         assert!(MotionTarget::parse_features("descent=-1", floater).is_err());
-        assert!(MotionTarget::parse_features("spin=1", MotionClass::Undetermined).is_err());
+        assert!(MotionTarget::parse_features("spin=1", Some(MotionClass::Undetermined)).is_err());
         assert!(MotionTarget::parse_features("", floater).is_err());
     }
 }
