@@ -75,6 +75,22 @@ trait Launcher: Sync {
     fn log(&self, run_dir: &Path, generation: usize, split: Split) -> PathBuf {
         shard::log_path(run_dir, generation, split)
     }
+
+    /// Shards per generation.
+    fn shards(&self) -> usize;
+}
+
+/// Every launcher evaluates a generation the same way: launch, check,
+/// rerun, merge ([`evaluate_sharded`]).
+impl<L: Launcher> Executor for L {
+    fn evaluate(
+        &self,
+        run: &Run,
+        plan: &Plan,
+        progress: &dyn Progress,
+    ) -> Result<Vec<Evaluation>, BreedError> {
+        evaluate_sharded(self, self.shards(), run, plan, progress)
+    }
 }
 
 /// `shards/gen-GGG/`, created: the launchers' logs go there.
@@ -207,6 +223,12 @@ fn append_line(path: &Path, line: &str) -> std::io::Result<std::fs::File> {
     Ok(f)
 }
 
+/// [`append_line`], then the log twice: a child's stdout and stderr.
+fn child_log(path: &Path, line: &str) -> std::io::Result<(std::fs::File, std::fs::File)> {
+    let f = append_line(path, line)?;
+    Ok((f.try_clone()?, f))
+}
+
 /// `count` shards per generation, each a `leafmagic shard` child process
 /// on this machine (the protocol of a cluster, without the cluster).
 pub struct Processes {
@@ -218,18 +240,11 @@ pub struct Processes {
     pub threads: usize,
 }
 
-impl Executor for Processes {
-    fn evaluate(
-        &self,
-        run: &Run,
-        plan: &Plan,
-        progress: &dyn Progress,
-    ) -> Result<Vec<Evaluation>, BreedError> {
-        evaluate_sharded(self, self.shards, run, plan, progress)
-    }
-}
-
 impl Launcher for Processes {
+    fn shards(&self) -> usize {
+        self.shards
+    }
+
     fn launch(
         &self,
         run_dir: &Path,
@@ -245,15 +260,14 @@ impl Launcher for Processes {
             let split = Split { index, count };
             let log = shard::log_path(run_dir, generation, split);
             let args = shard_args(run_dir, generation, Some(split), count, self.threads);
-            let out = append_line(
+            let out = child_log(
                 &log,
                 &format!(
                     "== attempt {attempt}: {} {}",
                     self.program.display(),
                     args.join(" ")
                 ),
-            )
-            .and_then(|f| Ok((f.try_clone()?, f)));
+            );
             let (stdout, stderr) = match out {
                 Ok(o) => o,
                 Err(e) => {
@@ -322,18 +336,11 @@ pub struct Merge {
     pub shards: usize,
 }
 
-impl Executor for Merge {
-    fn evaluate(
-        &self,
-        run: &Run,
-        plan: &Plan,
-        progress: &dyn Progress,
-    ) -> Result<Vec<Evaluation>, BreedError> {
-        evaluate_sharded(self, self.shards, run, plan, progress)
-    }
-}
-
 impl Launcher for Merge {
+    fn shards(&self) -> usize {
+        self.shards
+    }
+
     fn launch(
         &self,
         run_dir: &Path,
@@ -390,23 +397,16 @@ pub struct Slurm {
     pub mode: SlurmMode,
 }
 
-impl Executor for Slurm {
-    fn evaluate(
-        &self,
-        run: &Run,
-        plan: &Plan,
-        progress: &dyn Progress,
-    ) -> Result<Vec<Evaluation>, BreedError> {
-        evaluate_sharded(self, self.shards, run, plan, progress)
-    }
-}
-
 /// Quotes a word for `sh` (the `--wrap` of sbatch).
 fn sh_quote(word: &str) -> String {
     format!("'{}'", word.replace('\'', "'\\''"))
 }
 
 impl Launcher for Slurm {
+    fn shards(&self) -> usize {
+        self.shards
+    }
+
     fn launch(
         &self,
         run_dir: &Path,
@@ -426,27 +426,17 @@ impl Launcher for Slurm {
         // Every shard in one step: a rerun starts them all again and those
         // already done return at once (--skip-done), which costs less than a
         // step per missing shard.
-        let mut cmd = Command::new("srun");
+        let mut cmd = self.command("srun", &gen_dir, generation, count, 't');
         cmd.arg(format!("--ntasks={count}"))
-            .arg(format!("--cpus-per-task={}", self.threads))
-            .arg(format!("--job-name=leafmagic-g{generation:03}"))
             // One failing task must not take the others down.
             .arg("--kill-on-bad-exit=0")
-            .arg(format!(
-                "--output={}",
-                gen_dir
-                    .join(format!("shard-%3t-of-{count:03}.log"))
-                    .display()
-            ))
-            .arg("--open-mode=append")
             .arg("--quiet");
         if allocated.is_some_and(|a| count > a) {
             cmd.arg("--overcommit");
         }
         cmd.arg(&self.program)
             .args(shard_args(run_dir, generation, None, count, self.threads));
-        let log = append_line(&driver_log, &format!("== attempt {attempt}: {cmd:?}"))
-            .and_then(|f| Ok((f.try_clone()?, f)))
+        let log = child_log(&driver_log, &format!("== attempt {attempt}: {cmd:?}"))
             .map_err(|e| BreedError(format!("{}: {e}", driver_log.display())))?;
         let status = cmd
             .stdin(Stdio::null())
@@ -476,6 +466,30 @@ impl Launcher for Slurm {
 }
 
 impl Slurm {
+    /// `srun` or `sbatch` with what steps and arrays share: CPUs per task,
+    /// the job name, and each shard's output appended to its own log
+    /// (`%t` is a step's task id, `%a` an array's element).
+    fn command(
+        &self,
+        program: &str,
+        gen_dir: &Path,
+        generation: usize,
+        count: usize,
+        task: char,
+    ) -> Command {
+        let mut cmd = Command::new(program);
+        cmd.arg(format!("--cpus-per-task={}", self.threads))
+            .arg(format!("--job-name=leafmagic-g{generation:03}"))
+            .arg(format!(
+                "--output={}",
+                gen_dir
+                    .join(format!("shard-%3{task}-of-{count:03}.log"))
+                    .display()
+            ))
+            .arg("--open-mode=append");
+        cmd
+    }
+
     /// One array per attempt: `sbatch --array` of the missing shards, then
     /// the driver watches `squeue` itself every [`ARRAY_POLL`] rather than
     /// `sbatch --wait`, which polls at seconds.
@@ -499,19 +513,10 @@ impl Slurm {
             .map(|w| sh_quote(&w))
             .collect::<Vec<_>>()
             .join(" ");
-        let mut cmd = Command::new("sbatch");
+        let mut cmd = self.command("sbatch", &gen_dir, generation, count, 'a');
         cmd.arg("--parsable")
             .arg(format!("--array={list}"))
             .arg("--ntasks=1")
-            .arg(format!("--cpus-per-task={}", self.threads))
-            .arg(format!("--job-name=leafmagic-g{generation:03}"))
-            .arg(format!(
-                "--output={}",
-                gen_dir
-                    .join(format!("shard-%3a-of-{count:03}.log"))
-                    .display()
-            ))
-            .arg("--open-mode=append")
             // The index comes from SLURM_ARRAY_TASK_ID, the count from --count
             // (a rerun's array holds only the missing shards).
             .arg(format!("--wrap=exec {wrap}"));
