@@ -168,6 +168,24 @@ fn min_max(values: &[f64]) -> Option<(f64, f64)> {
     Some((lo, hi))
 }
 
+/// The legend box of the generation and example plots.
+fn legend<'a, 'b: 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, SVGBackend<'b>, CT>,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .background_style(WHITE.mix(0.8))
+        .border_style(BLACK)
+        .label_font(("sans-serif", 14))
+        .draw()
+        .map_err(|e| e.to_string())
+}
+
+/// A legend entry's mark: a short line in the series' colour and width.
+fn legend_mark(colour: RGBColor, width: u32) -> impl Fn((i32, i32)) -> PathElement<(i32, i32)> {
+    move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(width))
+}
+
 /// The SVG text of a breeding run's class counts per generation: one line
 /// per outcome (floater, spinner, lilter, undetermined, diverged).
 ///
@@ -227,9 +245,7 @@ pub fn generations_svg(
                 .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
                 .map_err(|e| e.to_string())?
                 .label(*name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
+                .legend(legend_mark(colour, 2));
             chart
                 .draw_series(
                     points
@@ -238,13 +254,7 @@ pub fn generations_svg(
                 )
                 .map_err(|e| e.to_string())?;
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
@@ -368,17 +378,9 @@ pub fn like_svg(
                 .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
                 .map_err(|e| e.to_string())?
                 .label(*name)
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
+                .legend(legend_mark(colour, 2));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart)?;
 
         let pad = 0.05 * (r_max - r_min);
         let mut chart = time_panel(
@@ -395,9 +397,7 @@ pub fn like_svg(
                 .draw_series(LineSeries::new(vertical, colour.stroke_width(2)))
                 .map_err(|e| e.to_string())?
                 .label(format!("{name}: about the vertical"))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
-                });
+                .legend(legend_mark(colour, 2));
             chart
                 .draw_series(DashedLineSeries::new(
                     horizontal,
@@ -407,17 +407,9 @@ pub fn like_svg(
                 ))
                 .map_err(|e| e.to_string())?
                 .label(format!("{name}: about the horizontal (|ω_h|)"))
-                .legend(move |(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(1))
-                });
+                .legend(legend_mark(colour, 1));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.8))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 14))
-            .draw()
-            .map_err(|e| e.to_string())?;
+        legend(&mut chart)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
