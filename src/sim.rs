@@ -44,6 +44,22 @@ pub struct RunStats {
     pub broken_springs: usize,
 }
 
+impl RunStats {
+    /// The statistics of `sim`'s run since `start` (the wall clock of the
+    /// stepping loop alone).
+    fn of(sim: &Simulator, dt: f64, simulated_s: f64, start: Instant, broken: usize) -> RunStats {
+        RunStats {
+            integrator: sim.integrator(),
+            dt,
+            steps: sim.steps(),
+            simulated_s,
+            wall_s: start.elapsed().as_secs_f64(),
+            force_evals: sim.force_evaluations(),
+            broken_springs: broken,
+        }
+    }
+}
+
 /// Resolves a [`TimeStep`] for `model` to a step that divides `frame_dt`.
 /// Errors when `Auto` finds no stable step (forward Euler on undamped springs).
 pub fn resolve_dt(
@@ -129,11 +145,10 @@ pub fn run_sampled(
     let mut v0 = state.velocity.clone();
     let mut sample = vec![Vector3::zeros(); n];
     let mut k = 1;
-    let mut steps: u64 = 0;
     while k <= frames {
         // Step ends counted from t0, so the clock carries no summed round-off.
-        let begin = steps as f64 * dt;
-        let end = (steps + 1) as f64 * dt;
+        let begin = sim.steps() as f64 * dt;
+        let end = (sim.steps() + 1) as f64 * dt;
         // The start of the step is needed only if a frame falls inside it
         // (the same test as below, for the earliest frame not yet sampled).
         if within(k as f64 * frame_dt, begin, dt) < 1.0 - 1e-12 {
@@ -141,7 +156,6 @@ pub fn run_sampled(
             v0.copy_from_slice(&state.velocity);
         }
         sim.step(model, state, dt)?;
-        steps += 1;
         while k <= frames && k as f64 * frame_dt <= end * (1.0 + 1e-12) {
             let s = within(k as f64 * frame_dt, begin, dt);
             if s >= 1.0 - 1e-12 {
@@ -162,15 +176,13 @@ pub fn run_sampled(
         }
         state.time = t0 + end;
     }
-    Ok(RunStats {
-        integrator,
+    Ok(RunStats::of(
+        &sim,
         dt,
-        steps: sim.steps(),
-        simulated_s: frames as f64 * frame_dt,
-        wall_s: start.elapsed().as_secs_f64(),
-        force_evals: sim.force_evaluations(),
-        broken_springs: state.broken_springs() - broken_before,
-    })
+        frames as f64 * frame_dt,
+        start,
+        state.broken_springs() - broken_before,
+    ))
 }
 
 /// Where time `t` falls in the step [begin, begin + dt], as s ∈ [0, 1].
@@ -227,15 +239,13 @@ pub fn run_frames(
         state.time = t0 + k as f64 * frame_dt;
         on_frame(k, state);
     }
-    Ok(RunStats {
-        integrator,
+    Ok(RunStats::of(
+        &sim,
         dt,
-        steps: sim.steps(),
-        simulated_s: frames as f64 * frame_dt,
-        wall_s: start.elapsed().as_secs_f64(),
-        force_evals: sim.force_evaluations(),
-        broken_springs: state.broken_springs() - broken_before,
-    })
+        frames as f64 * frame_dt,
+        start,
+        state.broken_springs() - broken_before,
+    ))
 }
 
 /// Settings of a drop test.
