@@ -278,18 +278,9 @@ pub fn quadratic_forces(
     let half_rho = 0.5 * law.air_density;
     let k_normal = law.cd_normal - law.cd_parallel - 2.0 * law.cl_amplitude;
     let offset_at_zero = 1.0 - law.cop_leading;
-    for (t, tri) in model.triangles.iter().enumerate() {
-        if torn.get(t).copied().unwrap_or(false) {
-            continue;
-        }
+    for (tri, big_n, n2) in crate::force::surfaces(model, x, torn) {
         let [a, b, c] = tri.corners;
-        let e1 = x[b] - x[a];
-        let e2 = x[c] - x[a];
-        let big_n = e1.cross(&e2);
-        let n2 = big_n.norm_squared();
-        if n2 <= f64::MIN_POSITIVE {
-            continue;
-        }
+        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
         let doubled_area = n2.sqrt();
         let n = big_n / doubled_area;
         let area = 0.5 * doubled_area;

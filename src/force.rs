@@ -188,20 +188,7 @@ pub fn triangle_aero_intact(
     if let AeroLaw::Quadratic(law) = &model.aero {
         return crate::aero::quadratic_forces(law, model, x, v, wind, torn, force);
     }
-    for (t, tri) in model.triangles.iter().enumerate() {
-        if torn.get(t).copied().unwrap_or(false) {
-            continue;
-        }
-        let [a, b, c] = tri.corners;
-        let e1 = x[b] - x[a];
-        let e2 = x[c] - x[a];
-        let big_n = e1.cross(&e2);
-        let n2 = big_n.norm_squared();
-        // F → 0 continuously as |N| → 0; only an exactly flat triangle would
-        // divide by zero below, so it alone is skipped.
-        if n2 <= f64::MIN_POSITIVE {
-            continue;
-        }
+    for (tri, big_n, n2) in surfaces(model, x, torn) {
         let doubled_area = n2.sqrt();
         let area = 0.5 * doubled_area;
         // αᵗ A v_r + (αⁿ − αᵗ) A (n·v_r) n, with A n (n·v) = N (N·v) / (2|N|).
@@ -223,6 +210,30 @@ pub fn triangle_aero_intact(
             }
         }
     }
+}
+
+/// The triangles that act as surfaces, with their unnormalised normal
+/// N = e₁ × e₂ (e₁ = x_b − x_a, e₂ = x_c − x_a) and |N|² = 4A²: those not torn (`torn[t]`; an empty mask tears
+/// none) and not exactly flat. Forces built on N go to zero continuously as
+/// |N| → 0; only an exactly flat triangle would divide by zero, so it alone
+/// is skipped. Shared by both aerodynamic laws.
+#[inline]
+pub(crate) fn surfaces<'m>(
+    model: &'m Model,
+    x: &'m [V3],
+    torn: &'m [bool],
+) -> impl Iterator<Item = (&'m crate::model::Triangle, V3, f64)> + 'm {
+    model
+        .triangles
+        .iter()
+        .enumerate()
+        .filter(|(t, _)| !torn.get(*t).copied().unwrap_or(false))
+        .filter_map(|(_, tri)| {
+            let [a, b, c] = tri.corners;
+            let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));
+            let n2 = big_n.norm_squared();
+            (n2 > f64::MIN_POSITIVE).then_some((tri, big_n, n2))
+        })
 }
 
 /// Linear drag on particles outside any surface, eq. 7: F_i = α (G_i − v_i).
