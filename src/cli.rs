@@ -605,14 +605,7 @@ fn print_class(c: &Classification) {
 }
 
 fn classify(args: ClassifyArgs) -> Result<()> {
-    if !(args.size > 0.0 && args.size.is_finite()) {
-        bail!(
-            "--size must be a positive number of metres, got {}",
-            args.size
-        );
-    }
-    let traj = Trajectory::read_csv(&args.trajectory)?;
-    let c = classify::classify(&traj, args.size);
+    let (traj, c) = classify_file(&args.trajectory, args.size)?;
     if args.json {
         println!("{}", serde_json::to_string_pretty(&c)?);
     } else {
@@ -826,14 +819,20 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
     ))
 }
 
-/// Reads and describes a fall, or says why it cannot be described.
-fn describe_file(path: &std::path::Path, size: f64) -> Result<Descriptors> {
+/// Reads and classifies a recorded fall of a leaf of chord `size`.
+fn classify_file(path: &std::path::Path, size: f64) -> Result<(Trajectory, Classification)> {
     if !(size > 0.0 && size.is_finite()) {
         bail!("--size must be a positive number of metres, got {size}");
     }
     let traj = Trajectory::read_csv(path)?;
-    Descriptors::of(&classify::classify(&traj, size))
-        .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+    let c = classify::classify(&traj, size);
+    Ok((traj, c))
+}
+
+/// Reads and describes a fall, or says why it cannot be described.
+fn describe_file(path: &std::path::Path, size: f64) -> Result<Descriptors> {
+    let (_, c) = classify_file(path, size)?;
+    Descriptors::of(&c).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }
 
 /// The motion target of `breed --like` / `--target-features`, checked
