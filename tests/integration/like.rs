@@ -188,22 +188,25 @@ fn bad_targets_stop_before_breeding() {
     let short: String = text.lines().take(121).map(|l| format!("{l}\n")).collect();
     let short_path = dir.join("short.csv");
     std::fs::write(&short_path, short).unwrap();
-    let run = dir.join("run-short");
-    let out = breed(&["--like", short_path.to_str().unwrap()], &run);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    // A refused breed: its stderr, once it has checked that it failed and
+    // wrote nothing.
+    let refused = |args: &[&str], name: &str| -> String {
+        let run = dir.join(name);
+        let out = breed(args, &run);
+        assert!(!out.status.success(), "{args:?} must be refused");
+        assert!(!run.exists(), "{args:?}: nothing may be written");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = refused(&["--like", short_path.to_str().unwrap()], "run-short");
     assert!(
         err.contains("short.csv") && err.contains("undetermined"),
         "{err}"
     );
-    assert!(!run.exists(), "nothing may be written");
-
-    let run = dir.join("run-names");
-    let out = breed(&["--target-features", "descent=1,speed=2,wobble=3"], &run);
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success());
+    let err = refused(
+        &["--target-features", "descent=1,speed=2,wobble=3"],
+        "run-names",
+    );
     assert!(err.contains("speed") && err.contains("wobble"), "{err}");
-    assert!(!run.exists(), "nothing may be written");
 }
 
 /// `compare`: a fall is at distance 0 from itself, and falls of different

@@ -2,10 +2,10 @@
 //! `processes` and `slurm` executors. The oracle is always a local run with
 //! the same seed: every file but timing.csv must be the same bytes.
 
+use crate::breeding::contents;
 use leafmagic::breed::{BreedSettings, Run};
 use leafmagic::classify::MotionClass;
 use leafmagic::shard::{self, Split};
-use std::collections::BTreeMap;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -38,26 +38,6 @@ fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
-}
-
-/// Every file of a run directory except timing.csv, by relative path.
-fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
-    let mut out = BTreeMap::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
-                if rel != "timing.csv" {
-                    out.insert(rel, std::fs::read(&p).unwrap());
-                }
-            }
-        }
-    }
-    out
 }
 
 fn assert_same_run(reference: &Path, other: &Path, what: &str) {
