@@ -105,9 +105,20 @@ fn fold_sin_cos(x: &[V3], hinge: &Hinge) -> Option<(f64, f64, [V3; 4])> {
 /// needs no arctangent; plus a damper on the fold rate.
 ///
 /// `rest` holds (sin θ₀, cos θ₀) of every hinge ([`hinge_rest`]), computed
-/// once rather than at every evaluation.
-pub fn hinges(model: &Model, rest: &[(f64, f64)], x: &[V3], v: &[V3], force: &mut [V3]) {
-    for (hinge, &(rest_sin, rest_cos)) in model.hinges.iter().zip(rest) {
+/// once rather than at every evaluation. A hinge with a torn wing
+/// (`torn[h]`; an empty mask tears none, see [`Tears`]) bends no more.
+pub fn hinges(
+    model: &Model,
+    rest: &[(f64, f64)],
+    x: &[V3],
+    v: &[V3],
+    torn: &[bool],
+    force: &mut [V3],
+) {
+    for (h, (hinge, &(rest_sin, rest_cos))) in model.hinges.iter().zip(rest).enumerate() {
+        if !torn.is_empty() && torn[h] {
+            continue;
+        }
         let Some((sin, cos, grad)) = fold_sin_cos(x, hinge) else {
             continue;
         };
@@ -121,20 +132,52 @@ pub fn hinges(model: &Model, rest: &[(f64, f64)], x: &[V3], v: &[V3], force: &mu
     }
 }
 
-/// For each triangle, the spring (if any) along each of its three edges.
-pub fn edge_springs(model: &Model) -> Vec<[Option<usize>; 3]> {
+/// The spring (if any) joining each pair of particles, in either order.
+fn spring_between(model: &Model) -> impl Fn(usize, usize) -> Option<usize> {
     let mut by_pair = std::collections::HashMap::new();
     for (k, s) in model.springs.iter().enumerate() {
         by_pair.insert((s.i.min(s.j), s.i.max(s.j)), k);
     }
+    move |i, j| by_pair.get(&(i.min(j), i.max(j))).copied()
+}
+
+/// For each triangle, the spring (if any) along each of its three edges.
+pub fn edge_springs(model: &Model) -> Vec<[Option<usize>; 3]> {
+    let between = spring_between(model);
     model
         .triangles
         .iter()
         .map(|t| {
             let [a, b, c] = t.corners;
-            [(a, b), (b, c), (c, a)].map(|(i, j)| by_pair.get(&(i.min(j), i.max(j))).copied())
+            [(a, b), (b, c), (c, a)].map(|(i, j)| between(i, j))
         })
         .collect()
+}
+
+/// For each hinge, the spring (if any) along each edge of its two wings:
+/// the shared edge a–b, then a–p, b–p, a–q, b–q.
+pub fn hinge_springs(model: &Model) -> Vec<[Option<usize>; 5]> {
+    let between = spring_between(model);
+    model
+        .hinges
+        .iter()
+        .map(|h| {
+            let ([a, b], [p, q]) = (h.edge, h.apexes);
+            [(a, b), (a, p), (b, p), (a, q), (b, q)].map(|(i, j)| between(i, j))
+        })
+        .collect()
+}
+
+/// What broken springs have torn: triangles that are no longer surfaces
+/// (an edge spring broke; they feel no air) and hinges with a torn wing (a
+/// spring along either wing broke; they bend no more). Both masks are empty
+/// until the first spring breaks, and an empty mask tears nothing.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct Tears {
+    /// `triangles[t]`: triangle t is torn.
+    pub triangles: Vec<bool>,
+    /// `hinges[h]`: hinge h has a torn wing.
+    pub hinges: Vec<bool>,
 }
 
 /// The fold rate θ̇ = Σ ∇_j θ · v_j of a hinge over its particles `ids`.
@@ -281,6 +324,20 @@ impl ForceTerms {
     }
 }
 
+/// Sets `mask[e]` for every element e with a broken spring among
+/// `springs[e]`; leaves the mask empty while none is broken (sized at the
+/// first tear only, refilled in place afterwards).
+fn tear_mask<const N: usize>(mask: &mut Vec<bool>, springs: &[[Option<usize>; N]], alive: &[bool]) {
+    if !springs.iter().flatten().flatten().any(|&s| !alive[s]) {
+        mask.clear();
+        return;
+    }
+    mask.resize(springs.len(), false);
+    for (torn, edges) in mask.iter_mut().zip(springs) {
+        *torn = edges.iter().flatten().any(|&s| !alive[s]);
+    }
+}
+
 /// Sums the force terms of a model that its [`Terms`] keep, with
 /// preallocated scratch space, so that evaluating forces inside the step
 /// loop never allocates.
@@ -293,8 +350,10 @@ pub struct Forces {
     hinge_rest: Vec<(f64, f64)>,
     /// For each triangle, the springs along its edges (with breaking on).
     edge_springs: Vec<[Option<usize>; 3]>,
-    /// Triangles torn by a broken edge spring (empty until one breaks).
-    torn: Vec<bool>,
+    /// For each hinge, the springs along its wings (with breaking on).
+    hinge_springs: Vec<[Option<usize>; 5]>,
+    /// What broken springs have torn (empty until one breaks).
+    torn: Tears,
 }
 
 impl Forces {
@@ -321,32 +380,25 @@ impl Forces {
             } else {
                 Vec::new()
             },
-            torn: Vec::new(),
+            hinge_springs: if terms.breaking {
+                hinge_springs(model)
+            } else {
+                Vec::new()
+            },
+            torn: Tears::default(),
         }
     }
 
-    /// Marks the triangles whose edge springs have broken (`alive[s]` false)
-    /// as torn; they feel no more wind. Call after springs break.
+    /// Marks as torn the triangles with a broken edge spring (`alive[s]`
+    /// false), which feel no more wind, and the hinges with a broken spring
+    /// along a wing, which bend no more. Call after springs break.
     pub fn tear(&mut self, alive: &[bool]) {
-        // Sized at the first tear only; refilled in place afterwards.
-        if !self
-            .edge_springs
-            .iter()
-            .flatten()
-            .flatten()
-            .any(|&s| !alive[s])
-        {
-            self.torn.clear();
-            return;
-        }
-        self.torn.resize(self.edge_springs.len(), false);
-        for (torn, edges) in self.torn.iter_mut().zip(&self.edge_springs) {
-            *torn = edges.iter().flatten().any(|&s| !alive[s]);
-        }
+        tear_mask(&mut self.torn.triangles, &self.edge_springs, alive);
+        tear_mask(&mut self.torn.hinges, &self.hinge_springs, alive);
     }
 
-    /// Which triangles are torn (empty: none).
-    pub fn torn(&self) -> &[bool] {
+    /// What is torn (empty masks: nothing).
+    pub fn torn(&self) -> &Tears {
         &self.torn
     }
 
@@ -396,10 +448,10 @@ impl Forces {
             springs(model, x, v, alive, force);
         }
         if terms.hinges {
-            hinges(model, &self.hinge_rest, x, v, force);
+            hinges(model, &self.hinge_rest, x, v, &self.torn.hinges, force);
         }
         // Moved out for the call (no allocation): the wind borrows self.
-        let torn = std::mem::take(&mut self.torn);
+        let torn = std::mem::take(&mut self.torn.triangles);
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
             triangle_aero_intact(model, x, v, wind, &torn, force);
@@ -407,7 +459,7 @@ impl Forces {
         if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
-        self.torn = torn;
+        self.torn.triangles = torn;
     }
 
     /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.
@@ -448,10 +500,10 @@ impl Forces {
         let terms = ForceTerms {
             gravity: term(&mut |_, s| gravity(model, s)),
             spring: term(&mut |_, s| springs(model, x, v, alive, s)),
-            bending: term(&mut |me, s| hinges(model, &me.hinge_rest, x, v, s)),
+            bending: term(&mut |me, s| hinges(model, &me.hinge_rest, x, v, &me.torn.hinges, s)),
             aero: term(&mut |me, s| {
                 let wind = me.sample_wind(model, x, t).map(|w| w.to_vec());
-                triangle_aero(model, x, v, wind.as_deref(), s)
+                triangle_aero_intact(model, x, v, wind.as_deref(), &me.torn.triangles, s)
             }),
             drag: term(&mut |me, s| {
                 let wind = me.sample_wind(model, x, t).map(|w| w.to_vec());
@@ -538,7 +590,14 @@ mod tests {
         parts.hinges = vec![hinge()];
         let model = Model::new(parts).unwrap();
         let mut f = vec![V3::zeros(); 4];
-        hinges(&model, &hinge_rest(&model), &x, &[V3::zeros(); 4], &mut f);
+        hinges(
+            &model,
+            &hinge_rest(&model),
+            &x,
+            &[V3::zeros(); 4],
+            &[],
+            &mut f,
+        );
         let net: V3 = f.iter().sum();
         let torque: V3 = x.iter().zip(&f).map(|(p, f)| p.cross(f)).sum();
         assert!(net.norm() < 1e-14 && torque.norm() < 1e-14);

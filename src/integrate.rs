@@ -246,6 +246,9 @@ pub struct Simulator {
     // Scratch, sized to the model at construction.
     acc: Vec<V3>,
     acc_valid: bool,
+    /// Whether `forces` knows what the state's broken springs have torn
+    /// (a state may arrive with springs already broken).
+    tears_known: bool,
     x_tmp: Vec<V3>,
     v_tmp: Vec<V3>,
     k_acc: [Vec<V3>; 4],
@@ -294,6 +297,7 @@ impl Simulator {
             speed_limit2: speed_limit * speed_limit,
             acc: zeros_if(true),
             acc_valid: false,
+            tears_known: false,
             x_tmp: zeros_if(rk4),
             v_tmp: zeros_if(integrator == Integrator::Verlet),
             k_acc: std::array::from_fn(|_| zeros_if(rk4)),
@@ -335,10 +339,12 @@ impl Simulator {
         self.forces.evaluations()
     }
 
-    /// Forgets the acceleration cached between Verlet steps; call it after
+    /// Forgets what is cached from the state (the acceleration carried
+    /// between Verlet steps, what broken springs have torn); call it after
     /// changing the state by hand between steps.
     pub fn invalidate(&mut self) {
         self.acc_valid = false;
+        self.tears_known = false;
     }
 
     /// Advances `state` by `dt`. The stages, each present only if its term
@@ -348,6 +354,12 @@ impl Simulator {
     /// state holds the bad values and the error names the step, particle and
     /// likely cause.
     pub fn step(&mut self, model: &Model, state: &mut State, dt: f64) -> Result<(), SimError> {
+        if !self.tears_known {
+            if !self.breakable.is_empty() {
+                self.forces.tear(&state.spring_alive);
+            }
+            self.tears_known = true;
+        }
         match self.integrator {
             Integrator::Euler => self.step_euler(model, state, dt),
             Integrator::Symplectic => self.step_symplectic(model, state, dt),
@@ -712,7 +724,7 @@ impl ImplicitScratch {
         }
     }
 
-    fn linearise(&mut self, model: &Model, s: &State, h: f64, torn: &[bool]) {
+    fn linearise(&mut self, model: &Model, s: &State, h: f64, torn: &crate::force::Tears) {
         for (k, spring) in model.springs.iter().enumerate() {
             let d = s.position[spring.i] - s.position[spring.j];
             let l = d.norm();
@@ -734,23 +746,24 @@ impl ImplicitScratch {
                 }
             };
         }
-        for (blk, hinge) in self.hinge_blocks.iter_mut().zip(&model.hinges) {
+        for (k, (blk, hinge)) in self.hinge_blocks.iter_mut().zip(&model.hinges).enumerate() {
+            let torn_wing = torn.hinges.get(k).copied().unwrap_or(false);
             *blk = match crate::force::dihedral(&s.position, hinge) {
-                Some((_, grad)) => HingeBlock {
+                Some((_, grad)) if !torn_wing => HingeBlock {
                     active: true,
                     ids: hinge.particles(),
                     grad,
                     alpha: h * hinge.damping + h * h * hinge.stiffness,
                     stiffness: hinge.stiffness,
                 },
-                None => HingeBlock::default(),
+                _ => HingeBlock::default(),
             };
         }
         for (i, blk) in self.particle_blocks.iter_mut().enumerate() {
             *blk = Matrix3::identity() * (model.mass[i] + h * model.particle_drag[i]);
         }
         for (t, tri) in model.triangles.iter().enumerate() {
-            if torn.get(t).copied().unwrap_or(false) {
+            if torn.triangles.get(t).copied().unwrap_or(false) {
                 continue;
             }
             let [a, b, c] = tri.corners;

@@ -433,7 +433,7 @@ fn tear_breaks_springs_that_then_act_no_more() {
         &mut total,
     );
     let mut intact = scene.model.clone();
-    let torn: Vec<bool> = forces.torn().to_vec();
+    let torn: Vec<bool> = forces.torn().triangles.clone();
     intact.springs = scene
         .model
         .springs

@@ -5,7 +5,7 @@ use crate::common::{V3, parts};
 use leafmagic::field::{Primitive, WindField};
 use leafmagic::force::{Forces, triangle_aero};
 use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::{Model, Spring, Triangle};
+use leafmagic::model::{Hinge, Model, Spring, Triangle};
 use leafmagic::state::State;
 
 /// Two triangles sharing edge 1–2, every edge a spring; the spring 0–1 of
@@ -60,7 +60,7 @@ fn a_torn_triangle_feels_no_wind() {
     // the aero of the intact triangle alone.
     let mut forces = Forces::new(&model);
     forces.tear(&s.spring_alive);
-    assert_eq!(forces.torn(), &[true, false]);
+    assert_eq!(forces.torn().triangles, [true, false]);
     let mut total = vec![V3::zeros(); 4];
     forces.total(
         &model,
@@ -107,4 +107,77 @@ fn a_torn_triangle_feels_no_wind() {
         total[3] != spring_only[3],
         "the intact triangle still feels the wind"
     );
+}
+
+/// The kite with a bending hinge along its shared edge 1–2 (apexes 0 and
+/// 3), folded at rest by 0.4 rad and stiff enough to matter.
+fn hinged_kite() -> Model {
+    let plain = kite();
+    let mut p = parts(4);
+    p.mass = plain.mass.clone();
+    p.rest_position = plain.rest_position.clone();
+    p.springs = plain.springs.clone();
+    p.triangles = plain.triangles.clone();
+    p.wind = plain.wind.clone();
+    p.hinges = vec![Hinge {
+        edge: [1, 2],
+        apexes: [0, 3],
+        rest_angle: 0.4,
+        stiffness: 2e-3,
+        damping: 1e-5,
+    }];
+    Model::new(p).unwrap()
+}
+
+/// A hinge bends two wings against each other; once a spring along a wing
+/// has broken that wing is torn, and the hinge acts no more. Oracle: from a
+/// state whose spring 0–1 is broken, the hinged kite moves exactly as the
+/// kite without the hinge, under every integrator, while with the spring
+/// intact the hinge changes the motion.
+#[test]
+fn a_hinge_with_a_torn_wing_bends_no_more() {
+    let hinged = hinged_kite();
+    let plain = kite();
+    let fall = |model: &Model, integrator: Integrator, broken: bool| {
+        let mut s = State::at_rest(model);
+        s.spring_alive[0] = !broken;
+        let mut sim = Simulator::new(model, integrator);
+        for _ in 0..200 {
+            sim.step(model, &mut s, 1e-4).unwrap();
+        }
+        s
+    };
+    for integrator in [
+        Integrator::Euler,
+        Integrator::Symplectic,
+        Integrator::Verlet,
+        Integrator::Rk4,
+        Integrator::Implicit,
+    ] {
+        let torn = fall(&hinged, integrator, true);
+        assert!(!torn.spring_alive[0]);
+        assert_eq!(
+            torn.position,
+            fall(&plain, integrator, true).position,
+            "{integrator}: the torn hinge still acts"
+        );
+        let intact = fall(&hinged, integrator, false);
+        assert!(
+            intact.spring_alive[0],
+            "{integrator}: the spring should hold"
+        );
+        assert_ne!(
+            intact.position,
+            fall(&plain, integrator, false).position,
+            "{integrator}: the intact hinge should act"
+        );
+    }
+    let mut forces = Forces::new(&hinged);
+    let mut alive = vec![true; 5];
+    forces.tear(&alive);
+    assert_eq!(forces.torn().hinges, Vec::<bool>::new());
+    alive[4] = false; // 3–2: on the other wing
+    forces.tear(&alive);
+    assert_eq!(forces.torn().hinges, [true]);
+    assert_eq!(forces.torn().triangles, [false, true]);
 }
