@@ -207,7 +207,7 @@ impl fmt::Display for SimError {
                     Some(m) if d.dt > m => write!(
                         f,
                         ", above the estimated stable limit dt_max = {m:.3e} s: \
-                         the time step is too large for the stiffness; use --dt auto or a step below dt_max"
+                         the time step is too large for the stiffness; use the automatic step (`--dt auto`, or `dt = \"auto\"` in a scene file) or a step below dt_max"
                     )?,
                     Some(m) => write!(
                         f,

@@ -171,9 +171,11 @@ fn min_max(values: &[f64]) -> Option<(f64, f64)> {
 /// The legend box of the generation and example plots.
 fn legend<'a, 'b: 'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, CT>,
+    position: SeriesLabelPosition,
 ) -> Result<(), String> {
     chart
         .configure_series_labels()
+        .position(position)
         .background_style(WHITE.mix(0.8))
         .border_style(BLACK)
         .label_font(("sans-serif", 14))
@@ -254,7 +256,7 @@ pub fn generations_svg(
                 )
                 .map_err(|e| e.to_string())?;
         }
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
@@ -380,13 +382,15 @@ pub fn like_svg(
                 .label(*name)
                 .legend(legend_mark(colour, 2));
         }
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
 
+        // Headroom above the rates for the four-line legend, so it covers
+        // none of them.
         let pad = 0.05 * (r_max - r_min);
         let mut chart = time_panel(
             &lower,
             t_max,
-            (r_min - pad)..(r_max + pad),
+            (r_min - pad)..(r_max + 14.0 * pad),
             "rotation rate, rad/s (0.1 s means)",
         )?;
         for ((name, colour, _), r) in falls.iter().zip(&rates) {
@@ -409,7 +413,7 @@ pub fn like_svg(
                 .label(format!("{name}: about the horizontal (|ω_h|)"))
                 .legend(legend_mark(colour, 1));
         }
-        legend(&mut chart)?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight)?;
         root.present().map_err(|e| e.to_string())?;
     }
     Ok(svg)
