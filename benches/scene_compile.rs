@@ -76,12 +76,35 @@ fn scene_compile(c: &mut Criterion) {
         "the zero-strength scene wind must contribute exactly zero"
     );
 
-    let variants: [(&str, &Model, Terms); 3] = [
+    // Each left-out term alone switched back on, to show where the
+    // difference goes.
+    let one = |set: fn(&mut Terms)| {
+        let mut t = needed;
+        set(&mut t);
+        t
+    };
+    let variants: [(&str, &Model, Terms); 8] = [
         ("compiled", &plain, needed),
+        ("+ wind (zero uniform)", &everything, one(|t| t.wind = true)),
+        (
+            "+ particle drag",
+            &everything,
+            one(|t| t.particle_drag = true),
+        ),
+        ("+ ground contact", &everything, one(|t| t.contact = true)),
+        ("+ spring breaking", &everything, one(|t| t.breaking = true)),
+        ("+ rigid-body pass", &everything, one(|t| t.rigid = true)),
         ("all_terms", &everything, Terms::all()),
         ("all_terms_scene_wind", &scene_wind, Terms::all()),
     ];
-    let mut best = [f64::INFINITY; 3];
+    for (name, model, terms) in &variants {
+        assert_eq!(
+            a,
+            fall(model, *terms, dt, steps),
+            "{name} must add exactly zero"
+        );
+    }
+    let mut best = [f64::INFINITY; 8];
     for _ in 0..300 {
         for (k, (_, model, terms)) in variants.iter().enumerate() {
             let start = std::time::Instant::now();
@@ -91,8 +114,9 @@ fn scene_compile(c: &mut Criterion) {
     }
     for (k, (name, _, _)) in variants.iter().enumerate() {
         eprintln!(
-            "scene_compile: {name:<21} minimum {:7.1} µs per simulated second, {:.2}x the compiled run",
+            "scene_compile: {name:<21} minimum {:7.1} µs per simulated second, {:5.1} ns per step, {:.2}x the compiled run",
             best[k] * 1e6,
+            best[k] / steps as f64 * 1e9,
             best[k] / best[0]
         );
     }

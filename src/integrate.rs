@@ -241,7 +241,7 @@ pub struct Simulator {
     integrator: Integrator,
     forces: Forces,
     steps: u64,
-    breakable: Vec<usize>,
+    breakable: Vec<BreakLimit>,
     speed_limit2: f64,
     // Scratch, sized to the model at construction.
     acc: Vec<V3>,
@@ -278,13 +278,7 @@ impl Simulator {
         };
         let rk4 = integrator == Integrator::Rk4;
         let breakable = if terms.breaking {
-            model
-                .springs
-                .iter()
-                .enumerate()
-                .filter(|(_, s)| s.break_strain.is_some())
-                .map(|(i, _)| i)
-                .collect()
+            break_limits(model)
         } else {
             Vec::new()
         };
@@ -630,20 +624,44 @@ impl Simulator {
     }
 }
 
-/// Breaks every intact breakable spring whose strain (l − L)/L exceeds its
-/// threshold; returns how many broke. A broken spring stays broken.
-pub fn break_springs(model: &Model, state: &mut State, breakable: &[usize]) -> usize {
+/// A breakable spring and the squared length past which it breaks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BreakLimit {
+    /// Index of the spring in [`Model::springs`].
+    pub spring: usize,
+    /// ((1 + ε) L)² for break strain ε and rest length L.
+    pub length2: f64,
+}
+
+/// The [`BreakLimit`] of every breakable spring, in spring order.
+pub fn break_limits(model: &Model) -> Vec<BreakLimit> {
+    model
+        .springs
+        .iter()
+        .enumerate()
+        .filter_map(|(k, s)| {
+            let l = (1.0 + s.break_strain?) * s.rest_length;
+            Some(BreakLimit {
+                spring: k,
+                length2: l * l,
+            })
+        })
+        .collect()
+}
+
+/// Breaks every intact spring of `limits` whose strain (l − L)/L exceeds its
+/// threshold ε, tested as l² > ((1 + ε) L)² (no square root); returns how
+/// many broke. A broken spring stays broken.
+pub fn break_springs(model: &Model, state: &mut State, limits: &[BreakLimit]) -> usize {
     let mut broken = 0;
-    for &k in breakable {
+    for limit in limits {
+        let k = limit.spring;
         if !state.spring_alive[k] {
             continue;
         }
         let spring = &model.springs[k];
-        let Some(limit) = spring.break_strain else {
-            continue;
-        };
-        let l = (state.position[spring.i] - state.position[spring.j]).norm();
-        if l - spring.rest_length > limit * spring.rest_length {
+        let l2 = (state.position[spring.i] - state.position[spring.j]).norm_squared();
+        if l2 > limit.length2 {
             state.spring_alive[k] = false;
             broken += 1;
         }

@@ -4,7 +4,7 @@
 use crate::common::*;
 use leafmagic::field::{Primitive, WindField};
 use leafmagic::force::{self, Forces};
-use leafmagic::integrate::{Integrator, SimError, Simulator, break_springs};
+use leafmagic::integrate::{Integrator, SimError, Simulator, break_limits, break_springs};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::model::{Model, ModelParts, Spring};
 use leafmagic::sim::{DropParams, TimeStep, drop_leaf};
@@ -289,7 +289,7 @@ fn spring_breaks_at_the_predicted_step_and_stops_acting() {
     assert!(f.iter().all(|x| x.norm() == 0.0));
     // A broken spring never heals, even back at its rest length.
     s.position[1] = V3::new(rest, 0.0, 0.0);
-    assert_eq!(break_springs(&model, &mut s, &[0]), 0);
+    assert_eq!(break_springs(&model, &mut s, &break_limits(&model)), 0);
     assert!(!s.spring_alive[0]);
 }
 
