@@ -11,7 +11,9 @@
 //!   `scenes/inhale.toml` (uniform, Lamb–Oseen vortex, point sink, bounded
 //!   uniform, keyframed) with every strength set to 0, which the compiler
 //!   prunes: the cost of evaluating a scene-sized field that contributes
-//!   nothing.
+//!   nothing;
+//! - `+ <term>`: the compiled terms plus one left-out term alone, to show
+//!   what each costs.
 //!
 //! Before timing, the runs are checked bit-identical, so the difference is
 //! pure overhead. The ratio of the times is the compiler's gain. On a shared
