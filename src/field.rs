@@ -320,7 +320,9 @@ impl Keyframes {
         else {
             return 1.0;
         };
-        if t <= t_first {
+        // NaN (a clock gone wrong) takes the first key rather than an index
+        // off the end.
+        if t.is_nan() || t <= t_first {
             return v_first;
         }
         if t >= t_last {

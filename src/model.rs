@@ -215,6 +215,16 @@ impl Model {
                     format!("must be > 0 kg, got {m}"),
                 ));
             }
+            // A subnormal mass passes `> 0` but its 1/m overflows to inf.
+            if !(1.0 / m).is_finite() {
+                return Err(err(
+                    format!("particle[{p}].mass"),
+                    format!(
+                        "must be at least {:e} kg (1/m must be finite), got {m:e}",
+                        f64::MIN_POSITIVE
+                    ),
+                ));
+            }
             let x = parts.rest_position[p];
             for (axis, value) in x.iter().enumerate() {
                 finite(&format!("particle[{p}].position[{axis}]"), *value)?;

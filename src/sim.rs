@@ -101,6 +101,20 @@ fn resolve(
         )),
         TimeStep::Auto => {
             let estimate = stability::estimate(model);
+            if !estimate.is_finite() {
+                return Err(format!(
+                    "no time step can be chosen: the model's fastest rate is not finite \
+                     (ω between {:.3e} and {:.3e} rad/s, drag rate {:.3e} 1/s{}): a stiffness or \
+                     drag coefficient is too large, or a mass too small, for f64 (k/m or α/m \
+                     overflows)",
+                    estimate.omega_lower,
+                    estimate.omega_upper,
+                    estimate.drag_rate,
+                    estimate
+                        .stiffest_spring
+                        .map_or(String::new(), |k| format!("; stiffest: spring[{k}]")),
+                ));
+            }
             if onto_frames {
                 estimate.auto_dt(integrator, frame_dt)
             } else {
@@ -114,6 +128,64 @@ fn resolve(
             })
         }
     }
+}
+
+/// Most steps, or output frames, one run may take. Far beyond any useful
+/// run (a scene of a hundred leaves takes hours for 10⁸ steps): a run that
+/// needs more has a step far too small (a very stiff or very light model
+/// under `dt = auto`, or a tiny fixed step) or a frame rate far too high, and
+/// is refused up front instead of running for ever.
+pub const MAX_STEPS: f64 = 1e8;
+
+/// A number for a message: plain when moderate, else in scientific notation.
+fn quantity(v: f64) -> String {
+    if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
+        format!("{v:.3e}")
+    } else {
+        format!("{v}")
+    }
+}
+
+/// Checks that `seconds` of simulation at step `dt`, written at `frame_rate`
+/// frames per second, stays within [`MAX_STEPS`] steps and frames, and
+/// writes at least one frame.
+///
+/// # Errors
+/// A message giving the counts and the likely cause.
+pub fn check_budget(
+    seconds: f64,
+    dt: f64,
+    frame_rate: f64,
+    integrator: Integrator,
+) -> Result<(), String> {
+    let frames = seconds * frame_rate;
+    if frames.is_nan() || frames < 0.5 {
+        return Err(format!(
+            "{} s at {} frames per second is no frame at all; raise the frame rate",
+            quantity(seconds),
+            quantity(frame_rate)
+        ));
+    }
+    if frames.is_nan() || frames > MAX_STEPS {
+        return Err(format!(
+            "{} s at {} frames per second is {frames:.2e} frames, more than the limit of \
+             {MAX_STEPS:.0e}; lower the frame rate",
+            quantity(seconds),
+            quantity(frame_rate)
+        ));
+    }
+    let steps = seconds / dt;
+    if steps.is_nan() || steps > MAX_STEPS {
+        return Err(format!(
+            "{} s at dt = {dt:.3e} s is {steps:.2e} steps of {integrator}, more than the \
+             limit of {MAX_STEPS:.0e}: the step is far too small. With dt = auto this means \
+             the model is extremely stiff or light for an explicit integrator (see `leafmagic \
+             check`); soften it, make it heavier, or use the implicit integrator, whose step \
+             stability does not limit",
+            quantity(seconds)
+        ));
+    }
+    Ok(())
 }
 
 /// Steps `state` with step `dt`, which need not divide `frame_dt`, until
@@ -306,6 +378,7 @@ pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropE
             params.seconds
         )));
     }
+    check_budget(params.seconds, dt, FRAME_RATE, params.integrator).map_err(DropError::Settings)?;
     let frames = (params.seconds * FRAME_RATE).round() as u64;
     let release = release_rotation(params.tilt_deg);
     let mut state = State::released(model, release, Vector3::zeros());

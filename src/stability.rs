@@ -60,6 +60,20 @@ pub struct StabilityEstimate {
 }
 
 impl StabilityEstimate {
+    /// Whether every rate is finite: false when a stiffness, drag or 1/m is
+    /// so extreme that k/m or α/m overflows f64, and no step can be chosen.
+    pub fn is_finite(&self) -> bool {
+        [
+            self.omega_max,
+            self.omega_lower,
+            self.omega_upper,
+            self.mode_damping_rate,
+            self.drag_rate,
+        ]
+        .iter()
+        .all(|v| v.is_finite())
+    }
+
     /// The drag time constant 1/γ of the particle that reacts fastest to air, s
     /// (infinite without drag).
     pub fn drag_time_constant(&self) -> f64 {
@@ -422,6 +436,11 @@ pub fn step_matrix(integrator: Integrator, h: f64, omega2: f64, c: f64) -> Matri
 /// see the position) is read off its diagonal exactly, because the quadratic
 /// formula would lose half the digits to cancellation near its double root.
 pub fn spectral_radius(m: &Matrix3<f64>) -> f64 {
+    // A step map with an overflowed entry amplifies without bound (and the
+    // Schur iteration would never converge on it).
+    if m.iter().any(|v| !v.is_finite()) {
+        return f64::INFINITY;
+    }
     let coupled = m[(2, 0)] != 0.0 || m[(2, 1)] != 0.0 || m[(2, 2)] != 0.0;
     if coupled {
         // (x, v, a) differ in scale by powers of ω and 1/h; unbalanced, the
@@ -489,6 +508,10 @@ pub fn largest_stable_step(integrator: Integrator, omega2: f64, c: f64) -> Optio
     let rate = omega2.sqrt().max(c);
     if rate <= 0.0 || integrator == Integrator::Implicit {
         return None;
+    }
+    // An overflowed rate (k/m or α/m beyond f64) is stable at no step.
+    if !rate.is_finite() {
+        return Some(0.0);
     }
     let stable =
         |h: f64| spectral_radius(&step_matrix(integrator, h, omega2, c)) <= 1.0 + NEUTRAL_TOLERANCE;

@@ -5,7 +5,7 @@ use super::{ObjectKind, Scene};
 use crate::integrate::{Integrator, SimError, Simulator};
 use crate::io::{particle_csv, write_atomic};
 use crate::pose::PoseTracker;
-use crate::sim::resolve_dt;
+use crate::sim::{check_budget, resolve_dt};
 use crate::state::State;
 use crate::trajectory::Trajectory;
 use nalgebra::Vector3;
@@ -96,6 +96,7 @@ impl Scene {
         let frame_dt = 1.0 / self.frame_rate;
         let dt = resolve_dt(&self.model, self.integrator, self.dt, frame_dt)
             .map_err(RunError::Settings)?;
+        check_budget(seconds, dt, self.frame_rate, self.integrator).map_err(RunError::Settings)?;
         let frames = (seconds * self.frame_rate).round().max(1.0) as u64;
         let steps_per_frame = (frame_dt / dt).round().max(1.0) as u64;
         let model = &self.model;

@@ -207,6 +207,53 @@ fn a_diverging_scene_stops_with_the_simulators_error() {
     }
 }
 
+/// Extreme numbers that pass a "finite and positive" check (found by
+/// mutating the shipped scenes' numbers) are refused before any stepping,
+/// with the reason, instead of panicking, hanging in the stability
+/// estimate, or stepping for ever.
+#[test]
+fn extreme_numbers_are_refused_before_stepping() {
+    let tear = std::fs::read_to_string(scene_path("tear")).unwrap();
+    let set = |key: &str, value: &str| {
+        let line = tear
+            .lines()
+            .find(|l| l.starts_with(&format!("{key} =")))
+            .unwrap();
+        tear.replacen(line, &format!("{key} = {value}"), 1)
+    };
+    // (scene text, words the error must contain)
+    let cases = [
+        // Keyframes at time NaN (0 × ∞) once indexed off the end.
+        (set("frame_rate", "1e-320"), "no frame at all"),
+        // 1.4e10 frames.
+        (set("frame_rate", "3.5e9"), "lower the frame rate"),
+        // 1e-320 s steps: 4e320 of them.
+        (set("dt", "1e-320"), "the step is far too small"),
+        // A subnormal mass: 1/m overflows; the Schur solver never returned.
+        (set("mass", "1e-320"), "1/m must be finite"),
+        // k/m overflows.
+        (set("stiffness", "1e308"), "fastest rate is not finite"),
+        // So stiff that dt = auto needs billions of steps.
+        (set("stiffness", "1e21"), "the step is far too small"),
+    ];
+    for (text, words) in &cases {
+        let start = std::time::Instant::now();
+        let message = match compile(text) {
+            Err(e) => e.to_string(),
+            Ok(scene) => match scene.run(None) {
+                Err(e) => e.to_string(),
+                Ok(_) => panic!("accepted: {text}"),
+            },
+        };
+        assert!(message.contains(words), "{words:?} not in: {message}");
+        assert!(
+            start.elapsed().as_secs_f64() < 10.0,
+            "refused only after {:?}: {message}",
+            start.elapsed()
+        );
+    }
+}
+
 fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
 }
