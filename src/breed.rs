@@ -519,24 +519,30 @@ struct RunFile {
 pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
 
 /// The prototype's model and the auto step its drops take.
-fn prototype_step(proto: &LeafSpec) -> Result<(crate::model::Model, f64), BreedError> {
+fn prototype_step(
+    proto: &LeafSpec,
+    source: &str,
+) -> Result<(crate::model::Model, f64), BreedError> {
     let model = proto
         .model()
-        .map_err(|e| BreedError(format!("--prototype: {e}")))?;
+        .map_err(|e| BreedError(format!("--prototype {source}: {e}")))?;
     let dt = crate::sim::resolve_step(
         &model,
         DropParams::default().integrator,
         TimeStep::Auto,
         1.0 / crate::sim::FRAME_RATE,
     )
-    .map_err(BreedError)?;
+    .map_err(|e| BreedError(format!("--prototype {source}: {e}")))?;
     Ok((model, dt))
 }
 
 /// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
 /// at the integrator and auto step its drops use.
-fn prototype_error(proto: &LeafSpec) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
-    let (model, dt) = prototype_step(proto)?;
+fn prototype_error(
+    proto: &LeafSpec,
+    source: &str,
+) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
+    let (model, dt) = prototype_step(proto, source)?;
     // The drop's step need not divide a second: estimate over the whole
     // number of steps nearest to ERROR_ESTIMATE_SECONDS.
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
@@ -575,7 +581,17 @@ impl Run {
             }
         }
         let integrator = DropParams::default().integrator;
-        let (_, dt) = prototype_step(&proto)?;
+        let (_, dt) = prototype_step(&proto, &settings.prototype)?;
+        // A prototype so stiff (or light) that its drops, or the error
+        // estimate beside generation 0, would take for ever is refused
+        // before anything is written.
+        crate::sim::check_budget(
+            settings.seconds.max(ERROR_ESTIMATE_SECONDS),
+            dt,
+            crate::sim::FRAME_RATE,
+            integrator,
+        )
+        .map_err(|e| BreedError(format!("--prototype {}: {e}", settings.prototype)))?;
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
         let example = match &settings.like {
@@ -724,7 +740,9 @@ impl Run {
         // run.toml's error estimate is serial work: do it beside generation 0
         // rather than before it, and complete run.toml before gen-000.csv.
         let evals = if plan.generation == 0 {
-            let (evals, estimate) = rayon::join(evaluate_all, || prototype_error(proto));
+            let (evals, estimate) = rayon::join(evaluate_all, || {
+                prototype_error(proto, &self.settings.prototype)
+            });
             let evals = evals?;
             self.complete_run_file(estimate?)?;
             evals

@@ -102,17 +102,29 @@ fn resolve(
         TimeStep::Auto => {
             let estimate = stability::estimate(model);
             if !estimate.is_finite() {
+                let rates = [
+                    ("ω_max", estimate.omega_max, "rad/s"),
+                    ("its upper bound", estimate.omega_upper, "rad/s"),
+                    (
+                        "the top mode's damping rate",
+                        estimate.mode_damping_rate,
+                        "1/s",
+                    ),
+                    ("the drag rate", estimate.drag_rate, "1/s"),
+                ];
+                let bad: Vec<String> = rates
+                    .iter()
+                    .filter(|r| !r.1.is_finite())
+                    .map(|(name, v, unit)| format!("{name} = {v} {unit}"))
+                    .collect();
                 return Err(format!(
-                    "no time step can be chosen: the model's fastest rate is not finite \
-                     (ω between {:.3e} and {:.3e} rad/s, drag rate {:.3e} 1/s{}): a stiffness or \
-                     drag coefficient is too large, or a mass too small, for f64 (k/m or α/m \
-                     overflows)",
-                    estimate.omega_lower,
-                    estimate.omega_upper,
-                    estimate.drag_rate,
+                    "no time step can be chosen: {} (a stiffness, damping or drag coefficient \
+                     too large, or a mass too small, for f64: k/m, c/m or α/m overflows{})",
+                    bad.join(", "),
                     estimate
                         .stiffest_spring
-                        .map_or(String::new(), |k| format!("; stiffest: spring[{k}]")),
+                        .filter(|_| !estimate.omega_lower.is_finite())
+                        .map_or(String::new(), |k| format!("; the stiffest is spring[{k}]")),
                 ));
             }
             if onto_frames {

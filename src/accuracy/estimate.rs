@@ -142,7 +142,13 @@ fn steps_for(dt: f64, seconds: f64) -> Result<u64, AccuracyError> {
         )));
     }
     let n = (seconds / dt).round();
-    if n < 1.0 || (n * dt - seconds).abs() > 1e-9 * seconds || n > (1u64 << 40) as f64 {
+    if n > crate::sim::MAX_STEPS {
+        return Err(AccuracyError::Settings(format!(
+            "dt: {dt:.3e} s is {n:.2e} steps over {seconds} s, more than the limit of {:.0e}",
+            crate::sim::MAX_STEPS
+        )));
+    }
+    if n < 1.0 || (n * dt - seconds).abs() > 1e-9 * seconds {
         return Err(AccuracyError::Settings(format!(
             "dt: {dt} s does not divide the duration {seconds} s into a whole number of steps"
         )));

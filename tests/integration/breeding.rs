@@ -161,6 +161,38 @@ fn bad_input_is_refused_and_nothing_is_overwritten() {
     );
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("particle[0].mass"));
+    // Prototypes whose numbers are valid but extreme are refused before
+    // anything is written: hinges so stiff that each drop would take 8e10
+    // steps (this once ran for ever), a damping whose rate overflows.
+    for (from, to, needle) in [
+        (
+            "stiffness = 1.5e-05",
+            "stiffness = 3.5e9",
+            "steps of verlet",
+        ),
+        ("damping = 4e-09", "damping = 1e308", "damping rate = inf"),
+    ] {
+        assert!(leafmagic::leaf::PROTOTYPE_A.contains(from));
+        std::fs::write(
+            &bad_leaf,
+            leafmagic::leaf::PROTOTYPE_A.replacen(from, to, 1),
+        )
+        .unwrap();
+        let out = dir.join("never");
+        let start = Instant::now();
+        let r = breed(&["--prototype", bad_leaf.to_str().unwrap()], &out);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success(), "{to}: accepted");
+        assert!(
+            err.contains(needle) && err.contains("bad.toml"),
+            "{to}: {err}"
+        );
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "{to}: slow refusal"
+        );
+        assert!(!out.exists(), "{to}: created its output directory");
+    }
 
     // A directory holding a different run is left alone.
     let run = dir.join("run");
