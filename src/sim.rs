@@ -160,7 +160,7 @@ fn quantity(v: f64) -> String {
 
 /// Checks that `seconds` of simulation at step `dt`, written at `frame_rate`
 /// frames per second, stays within [`MAX_STEPS`] steps and frames, and
-/// writes at least one frame.
+/// writes at least one frame ([`check_frames`], [`check_steps`]).
 ///
 /// # Errors
 /// A message giving the counts and the likely cause.
@@ -170,6 +170,16 @@ pub fn check_budget(
     frame_rate: f64,
     integrator: Integrator,
 ) -> Result<(), String> {
+    check_frames(seconds, frame_rate)?;
+    check_steps(seconds, dt, integrator)
+}
+
+/// Checks that `seconds` at `frame_rate` is at least one frame and at most
+/// [`MAX_STEPS`].
+///
+/// # Errors
+/// A message giving the count.
+pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
     let frames = seconds * frame_rate;
     if frames.is_nan() || frames < 0.5 {
         return Err(format!(
@@ -186,6 +196,14 @@ pub fn check_budget(
             quantity(frame_rate)
         ));
     }
+    Ok(())
+}
+
+/// Checks that `seconds` at step `dt` is at most [`MAX_STEPS`] steps.
+///
+/// # Errors
+/// A message giving the count and the likely cause.
+pub fn check_steps(seconds: f64, dt: f64, integrator: Integrator) -> Result<(), String> {
     let steps = seconds / dt;
     if steps.is_nan() || steps > MAX_STEPS {
         return Err(format!(

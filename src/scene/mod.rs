@@ -493,8 +493,13 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     check_name(ctx, "name", &spec.name, &mut HashMap::new())?;
     ctx.positive("duration", spec.duration)?;
     ctx.positive("frame_rate", spec.frame_rate)?;
+    crate::sim::check_frames(spec.duration, spec.frame_rate)
+        .map_err(|e| ctx.err("frame_rate", e))?;
     if let DtSpec::Seconds(h) = spec.dt {
         ctx.positive("dt", h)?;
+        // The step as written (the run snaps it to divide the frame, which
+        // at most doubles the count; far below the limit it changes nothing).
+        crate::sim::check_steps(spec.duration, h, spec.integrator).map_err(|e| ctx.err("dt", e))?;
     }
     ctx.vector("gravity", &spec.gravity)?;
     if let Some(ground) = &spec.ground {
