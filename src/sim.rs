@@ -183,7 +183,7 @@ pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
     let frames = seconds * frame_rate;
     if frames.is_nan() || frames < 0.5 {
         return Err(format!(
-            "{} s at {} frames per second is no frame at all; raise the frame rate",
+            "{} s at {} frames per second is no frame at all; raise the frame rate or the duration",
             quantity(seconds),
             quantity(frame_rate)
         ));
@@ -191,7 +191,7 @@ pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
     if frames.is_nan() || frames > MAX_STEPS {
         return Err(format!(
             "{} s at {} frames per second is {frames:.2e} frames, more than the limit of \
-             {MAX_STEPS:.0e}; lower the frame rate",
+             {MAX_STEPS:.0e}; lower the frame rate or the duration",
             quantity(seconds),
             quantity(frame_rate)
         ));
