@@ -42,6 +42,8 @@ pub struct RunStats {
     pub force_evals: u64,
     /// Springs broken during the run.
     pub broken_springs: usize,
+    /// Point contacts with the ground resolved during the run.
+    pub contacts_resolved: u64,
 }
 
 impl RunStats {
@@ -56,6 +58,7 @@ impl RunStats {
             wall_s: start.elapsed().as_secs_f64(),
             force_evals: sim.force_evaluations(),
             broken_springs: broken,
+            contacts_resolved: sim.contacts_resolved(),
         }
     }
 }
@@ -315,7 +318,8 @@ fn hermite(
     }
 }
 
-/// Steps `state` through `frames` frames of length `frame_dt` with step `dt`
+/// The frame loop of scenes: steps `state` through `frames` frames of
+/// length `frame_dt` with step `dt`
 /// (which must divide `frame_dt`), calling `on_frame(k, state)` at frame 0
 /// and after each frame.
 pub fn run_frames(

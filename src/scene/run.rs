@@ -2,7 +2,7 @@
 //! writing the per-object trajectories and the summary.
 
 use super::{ObjectKind, Scene};
-use crate::integrate::{Integrator, SimError, Simulator};
+use crate::integrate::{Integrator, SimError};
 use crate::io::{particle_csv, write_atomic};
 use crate::pose::PoseTracker;
 use crate::sim::{check_budget, resolve_dt};
@@ -12,7 +12,6 @@ use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 type V3 = Vector3<f64>;
 
@@ -85,7 +84,7 @@ impl Scene {
     pub fn run_with(
         &self,
         seconds: Option<f64>,
-        mut on_frame: impl FnMut(u64, &State),
+        on_frame: impl FnMut(u64, &State),
     ) -> Result<(RunStats, State), RunError> {
         let seconds = seconds.unwrap_or(self.duration);
         if !(seconds > 0.0 && seconds.is_finite()) {
@@ -98,31 +97,28 @@ impl Scene {
             .map_err(RunError::Settings)?;
         check_budget(seconds, dt, self.frame_rate, self.integrator).map_err(RunError::Settings)?;
         let frames = (seconds * self.frame_rate).round().max(1.0) as u64;
-        let steps_per_frame = (frame_dt / dt).round().max(1.0) as u64;
-        let model = &self.model;
         let mut state = self.initial.clone();
-        let mut sim = Simulator::new(model, self.integrator);
-        on_frame(0, &state);
-        let start = Instant::now();
-        for k in 1..=frames {
-            for _ in 0..steps_per_frame {
-                sim.step(model, &mut state, dt).map_err(RunError::Sim)?;
-            }
-            // Pin the clock to the frame grid (no round-off drift in output times).
-            state.time = k as f64 * frame_dt;
-            on_frame(k, &state);
-        }
+        let run = crate::sim::run_frames(
+            &self.model,
+            &mut state,
+            self.integrator,
+            dt,
+            frame_dt,
+            frames,
+            on_frame,
+        )
+        .map_err(RunError::Sim)?;
         let stats = RunStats {
-            integrator: self.integrator,
+            integrator: run.integrator,
             dt,
             frame_rate: self.frame_rate,
             frames: frames + 1,
-            simulated_s: frames as f64 * frame_dt,
-            steps: sim.steps(),
-            force_evaluations: sim.force_evaluations(),
-            contacts_resolved: sim.contacts_resolved(),
+            simulated_s: run.simulated_s,
+            steps: run.steps,
+            force_evaluations: run.force_evals,
+            contacts_resolved: run.contacts_resolved,
             broken_springs: state.broken_springs(),
-            wall_s: start.elapsed().as_secs_f64(),
+            wall_s: run.wall_s,
         };
         Ok((stats, state))
     }
