@@ -725,7 +725,7 @@ impl Run {
     }
 
     /// [`Run::step`] in three parts: [`Run::plan`] (the children, from the
-    /// checkpoint), evaluation by `executor`, and [`Run::finish`] (scores,
+    /// checkpoint), evaluation by `executor`, and `Run::finish` (scores,
     /// elites, summary, files, checkpoint).
     pub fn step_with(
         &mut self,

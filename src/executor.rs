@@ -81,7 +81,7 @@ trait Launcher: Sync {
 }
 
 /// Every launcher evaluates a generation the same way: launch, check,
-/// rerun, merge ([`evaluate_sharded`]).
+/// rerun, merge (`evaluate_sharded`).
 impl<L: Launcher> Executor for L {
     fn evaluate(
         &self,

@@ -11,7 +11,7 @@
 //!   is the displacement of frame k from frame 0 (one target per frame), and
 //!   the `weights` channel keys a one-hot weight vector per frame (a sparse
 //!   accessor: only the ones are stored, so the size is linear in the frame
-//!   count, see [`one_hot_weights`]). With LINEAR
+//!   count, see `one_hot_weights`). With LINEAR
 //!   interpolation, between keys k and k+1 the weights are (1 − s, s), which
 //!   gives exactly the linear interpolation of the two frames' positions,
 //!   because every target is a displacement from the same base.
