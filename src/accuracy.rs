@@ -210,6 +210,18 @@ pub fn reference(
     j: u32,
 ) -> Result<Reference, AccuracyError> {
     let coarse_h = step_size(seconds, j);
+    // Above RK4's stable limit the reference would be garbage, or diverge
+    // with a message about time steps the user never chose.
+    if let Some(limit) = crate::stability::estimate(model).dt_max(Integrator::Rk4)
+        && coarse_h > limit
+    {
+        return Err(AccuracyError::Settings(format!(
+            "reference_j: the reference, RK4 at T/2^{j} = {coarse_h:.3e} s, is above RK4's \
+             stable step {limit:.3e} s; simulate at most {:.3e} s at this j, or raise it \
+             (--reference-j, up to 30)",
+            limit * 2f64.powi(j as i32)
+        )));
+    }
     let coarse = run_steps(model, initial, Integrator::Rk4, coarse_h, 1 << j);
     if let Some(e) = coarse.error {
         return Err(AccuracyError::Reference(e));

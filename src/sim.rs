@@ -210,12 +210,17 @@ pub fn check_steps(seconds: f64, dt: f64, integrator: Integrator) -> Result<(), 
     let steps = seconds / dt;
     if steps.is_nan() || steps > MAX_STEPS {
         return Err(format!(
-            "{} s at dt = {dt:.3e} s is {steps:.2e} steps of {integrator}, more than the \
-             limit of {MAX_STEPS:.0e}: the step is far too small. With dt = auto this means \
+            "{} s at dt = {dt:.3e} s needs {} steps of {integrator} (the limit is \
+             {MAX_STEPS:.0e}): the step is far too small. With dt = auto this means \
              the model is extremely stiff or light for an explicit integrator (see `leafmagic \
              check`); soften it, make it heavier, or use the implicit integrator, whose step \
              stability does not limit",
-            quantity(seconds)
+            quantity(seconds),
+            if steps.is_finite() {
+                format!("{steps:.2e}")
+            } else {
+                "over 1e308".to_string()
+            }
         ));
     }
     Ok(())

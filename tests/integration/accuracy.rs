@@ -685,4 +685,13 @@ fn accuracy_rejects_a_bad_duration() {
         .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--seconds"));
+    // So long that the reference's step would be above RK4's stable limit:
+    // refused before running, saying so (it used to diverge mid-reference).
+    let out = binary()
+        .args(["accuracy", "a", "--seconds", "1e9"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("above RK4's stable step"), "{err}");
 }
