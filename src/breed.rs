@@ -485,6 +485,9 @@ pub struct Run {
     /// Wall seconds per completed generation. Kept out of the checkpoint so
     /// that every file but timing.csv is identical between identical runs.
     timing: Vec<f64>,
+    /// The fall of the best leaf, by id, once [`Run::write_best`] has
+    /// dropped it (a `--like` run), so it is not dropped again.
+    best_fall: Option<(u64, Trajectory)>,
 }
 
 const RUN_FILE: &str = "run.toml";
@@ -627,6 +630,7 @@ impl Run {
             checkpoint: None,
             settings,
             timing: Vec::new(),
+            best_fall: None,
         })
     }
 
@@ -680,6 +684,7 @@ impl Run {
             checkpoint,
             settings: run_file.settings,
             timing,
+            best_fall: None,
         })
     }
 
@@ -983,7 +988,7 @@ impl Run {
     /// and scenes accept (`best/leaf-<id>.toml`), best first, with an index;
     /// with an archive, also `archive/` (one leaf per occupied cell) and
     /// `archive.csv`.
-    pub fn write_best(&self) -> Result<(), BreedError> {
+    pub fn write_best(&mut self) -> Result<(), BreedError> {
         let Some(cp) = &self.checkpoint else {
             return Ok(());
         };
@@ -1027,6 +1032,7 @@ impl Run {
         export_leaves(&self.proto, &best, &dir)?;
         if let (Some(target), Some(first)) = (&self.settings.like, best.first()) {
             let fall = self.best_fall(first)?;
+            self.best_fall = Some((first.id, fall.clone()));
             let example = self.example();
             let title = format!(
                 "{} bred like {}: leaf {} ({}, distance {})",
@@ -1047,6 +1053,11 @@ impl Run {
 
     /// The fall of a member, dropped again exactly as it was evaluated.
     pub fn best_fall(&self, member: &Individual) -> Result<Trajectory, BreedError> {
+        if let Some((id, fall)) = &self.best_fall
+            && *id == member.id
+        {
+            return Ok(fall.clone());
+        }
         let model = member
             .genome
             .model(&self.proto)
