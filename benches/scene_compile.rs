@@ -13,7 +13,9 @@
 //!   prunes: the cost of evaluating a scene-sized field that contributes
 //!   nothing;
 //! - `+ <term>`: the compiled terms plus one left-out term alone, to show
-//!   what each costs.
+//!   what each costs;
+//! - `scene <name>`: each shipped scene's first 240 steps with every term on
+//!   against compiled: what the compiler saves in real scenes.
 //!
 //! Before timing, the runs are checked bit-identical, so the difference is
 //! pure overhead. The ratio of the times is the compiler's gain. On a shared
@@ -123,6 +125,8 @@ fn scene_compile(c: &mut Criterion) {
         );
     }
 
+    shipped_scenes();
+
     let mut group = c.benchmark_group("scene_compile");
     group.bench_function("compiled", |bench| {
         bench.iter(|| black_box(fall(&plain, needed, dt, steps)))
@@ -134,6 +138,65 @@ fn scene_compile(c: &mut Criterion) {
         bench.iter(|| black_box(fall(&scene_wind, Terms::all(), dt, steps)))
     });
     group.finish();
+}
+
+/// The compiler's gain in the shipped scenes: each scene's first 240 steps
+/// compiled against the same steps with every term on (checked
+/// bit-identical first), minimum times of 20 interleaved rounds.
+fn shipped_scenes() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    for name in [
+        "hover",
+        "shockwave",
+        "ground-blow",
+        "inhale",
+        "swings",
+        "rocking-bin",
+        "tear",
+    ] {
+        let scene = leafmagic::scene::Scene::load(&dir.join(format!("{name}.toml"))).unwrap();
+        let model = &scene.model;
+        let dt =
+            sim::resolve_dt(model, scene.integrator, scene.dt, 1.0 / scene.frame_rate).unwrap();
+        let run = |terms: Terms| {
+            let mut state = scene.initial.clone();
+            let mut simulator = Simulator::with_terms(model, scene.integrator, terms);
+            for _ in 0..240 {
+                simulator.step(model, &mut state, dt).unwrap();
+            }
+            state
+        };
+        let needed = Terms::needed(model);
+        assert_eq!(
+            run(needed),
+            run(Terms::all()),
+            "{name}: the extra terms must add zero"
+        );
+        let mut best = [f64::INFINITY; 2];
+        for _ in 0..20 {
+            for (k, terms) in [needed, Terms::all()].into_iter().enumerate() {
+                let start = std::time::Instant::now();
+                black_box(run(terms));
+                best[k] = best[k].min(start.elapsed().as_secs_f64());
+            }
+        }
+        let left_out: Vec<&str> = needed
+            .explain(model, scene.integrator)
+            .into_iter()
+            // Force terms and passes only, not the integrators' state.
+            .filter(|d| !d.kept && !d.reason.starts_with("integrator"))
+            .map(|d| d.name)
+            .collect();
+        eprintln!(
+            "scene_compile: scene {name:<12} every term on {:.2}x the compiled run (left out: {})",
+            best[1] / best[0],
+            if left_out.is_empty() {
+                "nothing".to_string()
+            } else {
+                left_out.join(", ")
+            }
+        );
+    }
 }
 
 /// The wind of `scenes/inhale.toml` with every strength 0.
