@@ -521,21 +521,26 @@ struct RunFile {
 /// something (falls may be chaotic later).
 pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
 
-/// The prototype's model and the auto step its drops take.
+/// The prototype's model and the auto step its drops take, refused (naming
+/// `source`) if that step would need more than [`crate::sim::MAX_STEPS`]
+/// steps for `seconds`: a prototype so stiff or light that its runs would
+/// take for ever.
 fn prototype_step(
     proto: &LeafSpec,
     source: &str,
+    seconds: f64,
 ) -> Result<(crate::model::Model, f64), BreedError> {
-    let model = proto
-        .model()
-        .map_err(|e| BreedError(format!("--prototype {source}: {e}")))?;
+    let integrator = DropParams::default().integrator;
+    let refuse = |e: String| BreedError(format!("--prototype {source}: {e}"));
+    let model = proto.model().map_err(|e| refuse(e.to_string()))?;
     let dt = crate::sim::resolve_step(
         &model,
-        DropParams::default().integrator,
+        integrator,
         TimeStep::Auto,
         1.0 / crate::sim::FRAME_RATE,
     )
-    .map_err(|e| BreedError(format!("--prototype {source}: {e}")))?;
+    .map_err(refuse)?;
+    crate::sim::check_budget(seconds, dt, crate::sim::FRAME_RATE, integrator).map_err(refuse)?;
     Ok((model, dt))
 }
 
@@ -545,7 +550,7 @@ fn prototype_error(
     proto: &LeafSpec,
     source: &str,
 ) -> Result<crate::accuracy::ErrorEstimate, BreedError> {
-    let (model, dt) = prototype_step(proto, source)?;
+    let (model, dt) = prototype_step(proto, source, ERROR_ESTIMATE_SECONDS)?;
     // The drop's step need not divide a second: estimate over the whole
     // number of steps nearest to ERROR_ESTIMATE_SECONDS.
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
@@ -584,17 +589,13 @@ impl Run {
             }
         }
         let integrator = DropParams::default().integrator;
-        let (_, dt) = prototype_step(&proto, &settings.prototype)?;
-        // A prototype so stiff (or light) that its drops, or the error
-        // estimate beside generation 0, would take for ever is refused
-        // before anything is written.
-        crate::sim::check_budget(
+        // Checked before anything is written: the drops, and the error
+        // estimate beside generation 0, must be able to finish.
+        let (_, dt) = prototype_step(
+            &proto,
+            &settings.prototype,
             settings.seconds.max(ERROR_ESTIMATE_SECONDS),
-            dt,
-            crate::sim::FRAME_RATE,
-            integrator,
-        )
-        .map_err(|e| BreedError(format!("--prototype {}: {e}", settings.prototype)))?;
+        )?;
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
         let example = match &settings.like {

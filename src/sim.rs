@@ -191,7 +191,7 @@ pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
             quantity(frame_rate)
         ));
     }
-    if frames.is_nan() || frames > MAX_STEPS {
+    if frames > MAX_STEPS {
         return Err(format!(
             "{} s at {} frames per second is {frames:.2e} frames, more than the limit of \
              {MAX_STEPS:.0e}; lower the frame rate or the duration",

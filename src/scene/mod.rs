@@ -597,13 +597,15 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     if dt == TimeStep::Auto {
         // dt = auto on a model too stiff or light for the integrator: the
         // error names the object of the stiffest spring (else `dt`).
-        let stiffest = crate::stability::estimate(&model)
-            .stiffest_spring
-            .and_then(|k| b.owner_of(&format!("spring[{k}]")))
-            .unwrap_or_else(|| "dt".to_string());
         crate::sim::resolve_dt(&model, spec.integrator, dt, 1.0 / spec.frame_rate)
             .and_then(|h| crate::sim::check_steps(spec.duration, h, spec.integrator))
-            .map_err(|e| ctx.err(stiffest, format!("dt = auto: {e}")))?;
+            .map_err(|e| {
+                let stiffest = crate::stability::estimate(&model)
+                    .stiffest_spring
+                    .and_then(|k| b.owner_of(&format!("spring[{k}]")))
+                    .unwrap_or_else(|| "dt".to_string());
+                ctx.err(stiffest, format!("dt = auto: {e}"))
+            })?;
     }
     Ok(Scene {
         name: spec.name.clone(),
