@@ -24,16 +24,6 @@ use rayon::prelude::*;
 use std::collections::BTreeMap;
 
 const CARD_SIDE: f64 = 0.05;
-const ATTITUDES: [[f64; 2]; 8] = [
-    [10.0, 2.0],
-    [60.0, 0.0],
-    [3.0, 30.0],
-    [20.0, 20.0],
-    [45.0, 10.0],
-    [15.0, -5.0],
-    [2.0, 8.0],
-    [30.0, 10.0],
-];
 
 fn fall(spec: &LeafSpec, tilt: [f64; 2]) -> Classification {
     let model = spec.model().unwrap();
@@ -82,7 +72,7 @@ fn card_sweep() {
     for sigma in sigmas {
         let card = square_card(CARD_SIDE, sigma, AeroSpec::quadratic());
         let model = card.model().unwrap();
-        let classes: Vec<MotionClass> = ATTITUDES
+        let classes: Vec<MotionClass> = plates::RELEASE_ATTITUDES
             .par_iter()
             .map(|&t| fall(&card, t).class)
             .collect();

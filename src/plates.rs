@@ -22,6 +22,20 @@ pub const CARD_DAMPING_RATIO: f64 = 0.2;
 /// to the four triangles; the centre takes the remaining third.
 pub const CORNER_SHARE: f64 = 1.0 / 6.0;
 
+/// Release attitudes (tilt about the body x and y axes, degrees) a card is
+/// dropped at to name its class by majority: near-flat, steep, one-sided and
+/// diagonal releases.
+pub const RELEASE_ATTITUDES: [[f64; 2]; 8] = [
+    [10.0, 2.0],
+    [60.0, 0.0],
+    [3.0, 30.0],
+    [20.0, 20.0],
+    [45.0, 10.0],
+    [15.0, -5.0],
+    [2.0, 8.0],
+    [30.0, 10.0],
+];
+
 /// A flat square card of side `side` (m) and areal density `sigma` (kg/m²)
 /// in the x-y plane, centred on the origin: four triangles fanned around the
 /// centre (symmetric about both centre lines and both diagonals), mass

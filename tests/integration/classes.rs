@@ -224,16 +224,7 @@ fn flat_card_falls_at_the_quadratic_terminal_speed() {
 #[test]
 fn card_classes_follow_density_floater_lilter_spinner() {
     let side = 0.05;
-    let attitudes = [
-        [10.0, 2.0],
-        [60.0, 0.0],
-        [3.0, 30.0],
-        [20.0, 20.0],
-        [45.0, 10.0],
-        [15.0, -5.0],
-        [2.0, 8.0],
-        [30.0, 10.0],
-    ];
+    let attitudes = plates::RELEASE_ATTITUDES;
     let sweep = [
         (0.02, MotionClass::Floater),
         (0.04, MotionClass::Floater),
