@@ -3,16 +3,16 @@
 //! extreme matrix of `check --stress`.
 
 use crate::common::*;
-use leafmagic::accuracy::{
+use leafmagic::leaf::LeafSpec;
+use leafmagic::physics::field::Flow;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::stability;
+use leafmagic::physics::state::State;
+use leafmagic::sim::accuracy::{
     self, ErrorCache, SweepRange, SweepSettings, long::LongSettings, smooth_model,
 };
-use leafmagic::field::Flow;
-use leafmagic::integrate::Integrator;
-use leafmagic::leaf::LeafSpec;
-use leafmagic::model::Model;
-use leafmagic::stability;
-use leafmagic::state::State;
-use leafmagic::stress::{self, ExplicitPolicy, Outcome, StressRow};
+use leafmagic::sim::stress::{self, ExplicitPolicy, Outcome, StressRow};
 use std::collections::HashSet;
 use std::process::Command;
 

@@ -5,12 +5,12 @@
 //! density rises (Field et al. 1997 order). Every drop is 10 s at the
 //! default settings (Verlet, auto dt); a prototype drop costs ~5 ms.
 
-use leafmagic::classify::{Classification, MotionClass, Regime, classify};
-use leafmagic::genome::{Genome, mutate};
+use leafmagic::leaf::genome::{Genome, mutate};
+use leafmagic::leaf::plates::{self, square_card};
+use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroSpec, LeafSpec};
-use leafmagic::plates::{self, square_card};
-use leafmagic::recipes::Recipe;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::motion::classify::{Classification, MotionClass, Regime, classify};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -209,8 +209,8 @@ fn flat_card_falls_at_the_quadratic_terminal_speed() {
     let n = traj.len();
     let vz = (traj.position[n - 1].z - traj.position[n - 121].z)
         / (traj.time[n - 1] - traj.time[n - 121]);
-    let expect = (2.0 * sigma * leafmagic::model::STANDARD_GRAVITY
-        / (leafmagic::aero::AIR_DENSITY * leafmagic::aero::CD_NORMAL))
+    let expect = (2.0 * sigma * leafmagic::physics::model::STANDARD_GRAVITY
+        / (leafmagic::physics::model::AIR_DENSITY * leafmagic::physics::model::CD_NORMAL))
         .sqrt();
     assert!((-vz - expect).abs() < 1e-6 * expect, "{} vs {expect}", -vz);
 }
@@ -249,7 +249,7 @@ fn card_classes_follow_density_floater_lilter_spinner() {
         let model = square_card(side, sigma, AeroSpec::quadratic())
             .model()
             .unwrap();
-        let i_star = plates::i_star(&model, side, leafmagic::aero::AIR_DENSITY);
+        let i_star = plates::i_star(&model, side, leafmagic::physics::model::AIR_DENSITY);
         let n = |c| classes.iter().filter(|&&x| x == c).count();
         println!(
             "σ = {sigma} kg/m², I* = {i_star:.3}: {} floaters, {} lilters, {} spinners, {} undetermined",

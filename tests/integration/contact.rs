@@ -5,11 +5,12 @@
 //! bodies.
 
 use crate::common::{V3, parts};
-use leafmagic::contact::Ground;
-use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::{Model, STANDARD_GRAVITY as G};
-use leafmagic::rigid::RigidGroup;
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::Ground;
+use leafmagic::physics::model::RigidGroup;
+use leafmagic::physics::model::{Model, STANDARD_GRAVITY as G};
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::state::State;
 
 fn ground(mu_s: f64, mu_k: f64, e: f64) -> Ground {
     Ground {

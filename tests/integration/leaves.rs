@@ -2,8 +2,8 @@
 //! speed the linear law predicts, and the same input gives the same bytes.
 
 use leafmagic::leaf::LeafSpec;
-use leafmagic::model::STANDARD_GRAVITY;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::physics::model::STANDARD_GRAVITY;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use nalgebra::Vector3;
 
 /// Dihedral angle between the two triangles sharing hinge (a, b), with apexes p, q.
@@ -110,7 +110,7 @@ fn drops_are_deterministic() {
 /// centre of mass and the rotation, for folded and flat leaves alike.
 #[test]
 fn pose_of_a_rigidly_moved_leaf_is_exact() {
-    use leafmagic::pose::PoseTracker;
+    use leafmagic::physics::pose::PoseTracker;
     use nalgebra::UnitQuaternion;
     for p in ["a", "b"] {
         let mut spec = LeafSpec::load(p).unwrap();

@@ -3,9 +3,9 @@
 //! the same seed: every file but timing.csv must be the same bytes.
 
 use crate::breeding::contents;
+use leafmagic::breed::shard::{self, Split};
 use leafmagic::breed::{BreedSettings, Run};
-use leafmagic::classify::MotionClass;
-use leafmagic::shard::{self, Split};
+use leafmagic::motion::classify::MotionClass;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
