@@ -6,7 +6,8 @@
 //! the cost of describing each fall and measuring its distance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::breed::{BreedSettings, evaluate, stream_seed};
+use leafmagic::breed::selection::stream_seed;
+use leafmagic::breed::{BreedSettings, evaluate};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::leaf::genome::{Genome, mutate};
 use leafmagic::motion::classify::classify;

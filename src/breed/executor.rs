@@ -8,8 +8,9 @@
 //! A driver killed mid-generation leaves the shard files already written;
 //! the resumed driver merges those and runs only the others.
 
-use crate::breed::shard::{self, Problem, Split};
-use crate::breed::{BreedError, Evaluation, Plan, Progress, Run, evaluate};
+use super::evaluate::evaluate;
+use super::population::{BreedError, Evaluation, Job, Plan, Progress};
+use super::shard::{self, Problem, Split};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fs::OpenOptions;
@@ -23,7 +24,7 @@ pub trait Executor: Sync {
     /// `progress.individual_done` once per child.
     fn evaluate(
         &self,
-        run: &Run,
+        job: &Job,
         plan: &Plan,
         progress: &dyn Progress,
     ) -> Result<Vec<Evaluation>, BreedError>;
@@ -35,16 +36,16 @@ pub struct Local;
 impl Executor for Local {
     fn evaluate(
         &self,
-        run: &Run,
+        job: &Job,
         plan: &Plan,
         progress: &dyn Progress,
     ) -> Result<Vec<Evaluation>, BreedError> {
-        let settings = run.settings();
+        let settings = job.settings;
         Ok(plan
             .children
             .par_iter()
             .map(|c| {
-                let eval = evaluate(&run.proto, &c.genome, settings);
+                let eval = evaluate(job.proto, &c.genome, settings);
                 progress.individual_done(&eval.class, eval.score);
                 eval
             })
@@ -85,11 +86,11 @@ trait Launcher: Sync {
 impl<L: Launcher> Executor for L {
     fn evaluate(
         &self,
-        run: &Run,
+        job: &Job,
         plan: &Plan,
         progress: &dyn Progress,
     ) -> Result<Vec<Evaluation>, BreedError> {
-        evaluate_sharded(self, self.shards(), run, plan, progress)
+        evaluate_sharded(self, self.shards(), job, plan, progress)
     }
 }
 
@@ -108,11 +109,11 @@ fn note(message: &str) {
 fn evaluate_sharded(
     launcher: &dyn Launcher,
     count: usize,
-    run: &Run,
+    job: &Job,
     plan: &Plan,
     progress: &dyn Progress,
 ) -> Result<Vec<Evaluation>, BreedError> {
-    let dir = &run.dir;
+    let dir = job.dir;
     let g = plan.generation;
     let mut results: Vec<Option<Vec<Evaluation>>> = vec![None; count];
     let mut why: BTreeMap<usize, String> = BTreeMap::new();

@@ -965,7 +965,7 @@ fn print_like(run: &Run, target: &MotionTarget) -> Result<()> {
     let Some(cp) = &run.checkpoint else {
         return Ok(());
     };
-    let best = breed::rank(&cp.population)[0];
+    let best = breed::selection::rank(&cp.population)[0];
     let fall = run.best_fall(best)?;
     let chord = best.genome.model(&run.proto)?.chord();
     let c = classify::classify(&fall, chord);
@@ -1071,16 +1071,16 @@ fn shard(args: ShardArgs) -> Result<()> {
         .context("cannot start the worker threads")?;
     let start = Instant::now();
     let outcome = pool.install(|| {
-        leafmagic::breed::shard::run_shard(&args.run, args.generation, split, args.skip_done)
+        leafmagic::breed::worker::run_shard(&args.run, args.generation, split, args.skip_done)
     })?;
     let (g, i, n) = (args.generation, split.index, split.count);
     match outcome {
-        leafmagic::breed::shard::Outcome::Evaluated(k, path) => println!(
+        leafmagic::breed::worker::Outcome::Evaluated(k, path) => println!(
             "generation {g}, shard {i} of {n}: {k} individuals in {:.3} s -> {}",
             start.elapsed().as_secs_f64(),
             path.display()
         ),
-        leafmagic::breed::shard::Outcome::AlreadyDone(path) => println!(
+        leafmagic::breed::worker::Outcome::AlreadyDone(path) => println!(
             "generation {g}, shard {i} of {n}: already done ({})",
             path.display()
         ),
@@ -1165,7 +1165,7 @@ fn export(args: ExportArgs) -> Result<()> {
             args.run.display()
         );
     };
-    let ranked = breed::rank(&cp.population);
+    let ranked = breed::selection::rank(&cp.population);
     let chosen: Vec<&breed::Individual> = match (&args.top, &args.ids) {
         (Some(k), None) => {
             if *k == 0 {
@@ -1188,7 +1188,7 @@ fn export(args: ExportArgs) -> Result<()> {
     };
     std::fs::create_dir_all(&args.out)
         .with_context(|| format!("cannot create {}", args.out.display()))?;
-    breed::export_leaves(&run.proto, &chosen, &args.out)?;
+    breed::files::export_leaves(&run.proto, &chosen, &args.out)?;
     println!(
         "wrote {} leaves and index.csv to {}",
         chosen.len(),
@@ -1313,7 +1313,7 @@ fn accuracy(args: AccuracyArgs) -> Result<()> {
         .with_context(|| format!("cannot write {}", csv_path.display()))?;
     let svg_path = args.out.join("accuracy.svg");
     let title = format!("work-precision: {name}, T = {seconds} s");
-    let svg = leafmagic::util::svg::work_precision_svg(&report, &title)
+    let svg = leafmagic::sim::accuracy::plot::work_precision_svg(&report, &title)
         .map_err(|e| anyhow::anyhow!("cannot draw {}: {e}", svg_path.display()))?;
     leafmagic::util::io::write_atomic(&svg_path, svg.as_bytes())
         .with_context(|| format!("cannot write {}", svg_path.display()))?;

@@ -785,7 +785,7 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
     // The re-drop is the fall that earned the recorded class.
     let opened = leafmagic::breed::Run::open(&run).unwrap();
     let cp = opened.checkpoint.as_ref().unwrap();
-    let best = leafmagic::breed::rank(&cp.population)[0];
+    let best = leafmagic::breed::selection::rank(&cp.population)[0];
     let model = best.genome.model(&opened.proto).unwrap();
     let params = leafmagic::sim::drop::DropParams {
         seconds: 3.0,

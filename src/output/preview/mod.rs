@@ -54,8 +54,10 @@ pub fn load(input: &Path, top: usize, fps: Option<f64>) -> Result<(Clip, bool), 
                 "the run has no completed generation yet",
             ));
         };
-        let chosen: Vec<&breed::Individual> =
-            breed::rank(&cp.population).into_iter().take(top).collect();
+        let chosen: Vec<&breed::Individual> = breed::selection::rank(&cp.population)
+            .into_iter()
+            .take(top)
+            .collect();
         let objects = export::drop_individuals(&run, &chosen, fps)?;
         let extent = objects
             .iter()

@@ -46,6 +46,7 @@
 
 pub mod estimate;
 pub mod long;
+pub mod plot;
 
 pub use estimate::{ErrorCache, ErrorEstimate, error_estimate};
 

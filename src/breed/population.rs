@@ -1,0 +1,199 @@
+//! The data of a breeding run: what one drop showed ([`Evaluation`]), the
+//! members and children of a generation, a generation before evaluation
+//! ([`Plan`]), the per-generation summary and the resumable checkpoint;
+//! what an executor is handed ([`Job`]); the run's error and its progress
+//! observer.
+
+use super::settings::BreedSettings;
+use crate::leaf::LeafSpec;
+use crate::leaf::genome::Genome;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// What one drop of one individual showed.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Evaluation {
+    /// `floater`, `spinner`, `lilter`, `undetermined`, or `diverged`.
+    pub class: String,
+    /// The sub-regime (empty when diverged).
+    pub regime: String,
+    /// Selection score (see [`super::evaluate::score`]).
+    pub score: f64,
+    /// The classifier's distance from the nearest class boundary, 0–1.
+    pub margin: f64,
+    /// Mean descent speed, m/s.
+    pub descent_m_s: f64,
+    /// Horizontal drift over fall.
+    pub drift_ratio: f64,
+    /// Net turns about the dominant horizontal axis.
+    pub net_turns: f64,
+    /// Turns about the vertical.
+    pub yaw_turns: f64,
+    /// Rotation rate, rad/s: 2π (|net turns| + |yaw turns|) over the
+    /// classifier's analysis window (an archive descriptor).
+    #[serde(default)]
+    pub spin_rad_s: f64,
+    /// Pitch reversals in the analysis window.
+    pub reversals: usize,
+    /// Normal flips in the analysis window.
+    pub flips: usize,
+    /// Mean tilt of the leaf plane from horizontal, degrees.
+    pub tilt_deg: f64,
+    /// The time step used, s.
+    pub dt: f64,
+    /// The simulator's error for a diverged fall.
+    pub error: String,
+    /// Distance to the run's motion target ([`crate::motion::describe`]), when it
+    /// has one and the fall passes its class gate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distance: Option<f64>,
+}
+
+/// One member of a generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Individual {
+    /// Unique within the run, assigned in order.
+    pub id: u64,
+    /// The individual it was bred from (none for the first generation's
+    /// copies of the prototype... which name the prototype as `None`).
+    pub parent: Option<u64>,
+    /// Copied unchanged from the previous generation.
+    pub elite: bool,
+    /// Its genes.
+    pub genome: Genome,
+    /// Its fall.
+    pub eval: Evaluation,
+}
+
+/// One child of a generation, bred (or copied from the prototype) but not
+/// yet dropped.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Child {
+    /// Its id (unique within the run).
+    pub id: u64,
+    /// The individual it was bred from (`None` in generation 0).
+    pub parent: Option<u64>,
+    /// Its genes.
+    pub genome: Genome,
+    /// The parent's score (NaN in generation 0), for the 1/5 success rule.
+    pub parent_score: f64,
+}
+
+/// A generation before evaluation: what [`super::run::Run::plan`] derives from the
+/// checkpoint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The generation's index.
+    pub generation: usize,
+    /// The variation scale its children were bred with.
+    pub scale: f64,
+    /// The next id to assign after its children.
+    pub next_id: u64,
+    /// The children to evaluate, in id order.
+    pub children: Vec<Child>,
+    /// The previous generation's best, copied unchanged (already evaluated).
+    pub elites: Vec<Individual>,
+}
+
+/// Per-generation summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GenerationSummary {
+    /// Generation index.
+    pub generation: usize,
+    /// Counts of floater, spinner, lilter, undetermined, diverged.
+    pub counts: [usize; 5],
+    /// Best score.
+    pub best_score: f64,
+    /// Mean score.
+    pub mean_score: f64,
+    /// Id of the best individual.
+    pub best_id: u64,
+    /// Variation scale used to breed this generation.
+    pub scale: f64,
+    /// Fraction of children that scored at least as well as their parent.
+    pub success_rate: f64,
+    /// The best individual's distance to the motion target, if the run has
+    /// one and the best passes its class gate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_distance: Option<f64>,
+}
+
+/// The resumable state after a completed generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The settings of the run.
+    pub settings: BreedSettings,
+    /// The last completed generation.
+    pub generation: usize,
+    /// Its population, in id order.
+    pub population: Vec<Individual>,
+    /// Variation scale for the next generation.
+    pub scale: f64,
+    /// Next id to assign.
+    pub next_id: u64,
+    /// Summaries of all completed generations.
+    pub history: Vec<GenerationSummary>,
+    /// The MAP-Elites archive (empty unless `settings.archive`).
+    #[serde(default)]
+    pub archive: Vec<ArchiveEntry>,
+}
+
+/// One occupied cell of the archive.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArchiveEntry {
+    /// Descent-speed bin (index into [`super::archive::ARCHIVE_DESCENT_EDGES`]).
+    pub descent_bin: usize,
+    /// Rotation-rate bin (index into [`super::archive::ARCHIVE_SPIN_EDGES`]).
+    pub spin_bin: usize,
+    /// Generation in which the occupant was evaluated.
+    pub generation: usize,
+    /// The occupant (the best-scoring leaf that fell into this cell).
+    pub individual: Individual,
+}
+
+/// What an executor needs to evaluate a generation: where the run lives
+/// (shard files go there), the prototype and the settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Job<'a> {
+    /// The run directory.
+    pub dir: &'a Path,
+    /// The prototype leaf.
+    pub proto: &'a LeafSpec,
+    /// The run's settings.
+    pub settings: &'a BreedSettings,
+}
+
+/// Why a run could not start or go on.
+#[derive(Debug)]
+pub struct BreedError(pub String);
+
+impl std::fmt::Display for BreedError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for BreedError {}
+
+pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> BreedError {
+    BreedError(format!("{}: {e}", path.display()))
+}
+
+/// Observer of progress (the CLI draws a progress bar with it).
+pub trait Progress: Sync {
+    /// A generation starts with `size` individuals to evaluate.
+    fn start_generation(&self, generation: usize, size: usize);
+    /// One individual finished with this class.
+    fn individual_done(&self, class: &str, score: f64);
+    /// The generation is complete.
+    fn finish_generation(&self, summary: &GenerationSummary);
+}
+
+/// A [`Progress`] that shows nothing.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn start_generation(&self, _: usize, _: usize) {}
+    fn individual_done(&self, _: &str, _: f64) {}
+    fn finish_generation(&self, _: &GenerationSummary) {}
+}
