@@ -1607,12 +1607,9 @@ mod tests {
 
     // ------------------------------------------------------------ MuJoCo falls
 
-    /// The shared MuJoCo falls: relative to the real crate, else the absolute
-    /// path (for the scratch crate).
-    fn mujoco_dir() -> Option<PathBuf> {
-        let rel = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data/mujoco-falls");
-        let abs = PathBuf::from("/work/shared/data/mujoco-falls");
-        [rel, abs].into_iter().find(|p| p.is_dir())
+    /// The MuJoCo falls kept in the repository (tests/data/mujoco-falls).
+    fn mujoco_dir() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mujoco-falls")
     }
 
     const MUJOCO: [(&str, MotionClass); 6] = [
@@ -1635,10 +1632,7 @@ mod tests {
 
     #[test]
     fn mujoco_falls_get_the_readme_class_at_240_100_75_and_60_hz() {
-        let Some(dir) = mujoco_dir() else {
-            println!("skipped: mujoco-falls folder not found");
-            return;
-        };
+        let dir = mujoco_dir();
         for (name, class) in MUJOCO {
             let tr = Trajectory::read_csv(&dir.join(format!("{name}.csv"))).unwrap();
             let c = classify(&tr, MUJOCO_CHORD);

@@ -12,6 +12,7 @@ mod export;
 mod genome;
 mod integrators;
 mod invariants;
+mod layers;
 mod leaves;
 mod like;
 mod rigid;
