@@ -1,6 +1,6 @@
 //! Plates for validation: a flat square card built as a leaf, and the
 //! dimensionless numbers the falling-plate literature sorts falls by
-//! (falling-plates notes §2).
+//! (docs/falling-plates.md, "Dimensionless groups").
 
 use crate::leaf::{AeroSpec, BendingSpec, LeafSpec, ParticleSpec, SpringSpec, TriangleSpec};
 use crate::physics::model::AIR_DENSITY;
@@ -136,11 +136,12 @@ pub fn principal_moments(model: &Model) -> [f64; 3] {
     [eig[0], eig[1], eig[2]]
 }
 
-/// Dimensionless moment of inertia I* = Ī / (ρ_f L⁵): Howison & Iida's
-/// I*_shape (notes §2) with Ī the mean of the two smaller principal moments
-/// (the in-plane axes of a flat leaf) and L the plate's size — the side of
-/// a square (then I* = σ/(12 ρ_f L), the notes' formula), the chord of a
-/// leaf. I*_APW = 12 I* and I*_disk ≈ 0.59 I* for a square at equal σ, L.
+/// Dimensionless moment of inertia I* = Ī / (ρ_f L⁵): Howison & Iida's I*_shape
+/// (docs/falling-plates.md, "Dimensionless groups") with Ī the mean of the two
+/// smaller principal moments (the in-plane axes of a flat leaf) and L the
+/// plate's size — the side of a square (then I* = σ/(12 ρ_f L), as there), the
+/// chord of a leaf. I*_APW = 12 I* and I*_disk ≈ 0.59 I* for a square at equal
+/// σ, L.
 pub fn i_star(model: &Model, length: f64, fluid_density: f64) -> f64 {
     let [a, b, _] = principal_moments(model);
     0.5 * (a + b) / (fluid_density * length.powi(5))

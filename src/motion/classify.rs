@@ -15,17 +15,19 @@
 //!    ∫ω_h ω_hᵀ dt, held fixed in the body (ω_h mapped with the mid-interval
 //!    orientation) or in the world, whichever frame concentrates more of the
 //!    horizontal rotation on one axis: a body-fixed axis follows a leaf that
-//!    rocks or tumbles about its own span while yawing (most lilters, notes
-//!    §4e; the precessing MuJoCo card). The pitch angle θ(t) is the integral
-//!    of ω_h about that axis; its turning points (swings ≥ 10°) are the
-//!    reversals. The plate normal is body z; a flip is the normal crossing the
+//!    rocks or tumbles about its own span while yawing (most lilters,
+//!    docs/falling-plates.md, "Folded leaves under the linear law"; the
+//!    precessing MuJoCo card). The pitch angle θ(t) is the integral of ω_h
+//!    about that axis; its turning points (swings ≥ 10°) are the reversals.
+//!    The plate normal is body z; a flip is the normal crossing the
 //!    horizontal plane with ±30° hysteresis.
-//! 4. **Rules**, first match wins (notes §6, reordered as §4e demands: flips
-//!    and reversals are looked at before a *slow* turn about the vertical —
-//!    lilters yaw at 1–9 rad/s — but a rotation that is mostly about the
-//!    vertical, vertical share ≥ 0.7, i.e. an axis within ~45° of it, is
-//!    autorotation even when its leaning axis makes the normal cross the
-//!    horizontal: such a leaf spins, it does not turn end over end):
+//! 4. **Rules**, first match wins (docs/falling-plates.md, "Classifier rules",
+//!    reordered as the boundary cases in "Folded leaves under the linear law"
+//!    demand: flips and reversals are looked at before a *slow* turn about the
+//!    vertical — lilters yaw at 1–9 rad/s — but a rotation that is mostly
+//!    about the vertical, vertical share ≥ 0.7, i.e. an axis within ~45° of
+//!    it, is autorotation even when its leaning axis makes the normal cross
+//!    the horizontal: such a leaf spins, it does not turn end over end):
 //!
 //! | # | class / regime | conditions |
 //! |---|---|---|
@@ -37,7 +39,7 @@
 //! | 6 | floater / flutter | rocking amplitude ≥ 10°, ≥ 3 periods, 10th percentile tilt < 30° (swings through flat) |
 //! | 7 | undetermined | rocking amplitude ≥ 10° but < 3 periods (too transient) |
 //! | 8 | undetermined | rocking ≥ 10° about a steep attitude (10th percentile tilt ≥ 30°) |
-//! | 9 | undetermined | mean tilt ≥ 30° without rocking: between glide and dive (§4e) |
+//! | 9 | undetermined | mean tilt ≥ 30° without rocking: between glide and dive (docs/falling-plates.md, "Folded leaves under the linear law") |
 //! | 10 | floater / glide | drift ratio ≥ 0.1 |
 //! | 11 | floater / steady | otherwise |
 //!
@@ -81,50 +83,61 @@ pub const SAMPLE_RATE_TOLERANCE: f64 = 0.01;
 /// dropped frame at the minimum rate (our choice).
 pub const MAX_GAP_S: f64 = 1.5 / MIN_SAMPLE_RATE_HZ;
 
-/// Fraction of the record's duration discarded as start-up transient. Notes
-/// §6 step 1: classify only the last 50–70 % of the fall; we keep 60 %.
+/// Fraction of the record's duration discarded as start-up transient.
+/// Classify only the last 50–70 % of the fall (docs/falling-plates.md,
+/// "Classifier rules", step 1); we keep 60 %.
 pub const TRANSIENT_FRACTION: f64 = 0.4;
 
 /// Fewest samples in the analysis window (1 s at the minimum rate; our
 /// choice, so that rates and periods have support).
 pub const MIN_WINDOW_SAMPLES: usize = 60;
 
-/// Fewest chord lengths of descent in the analysis window. Notes §6 step 1
-/// (Howison & Iida 2020 drops are ≈ 10–30 sizes).
+/// Fewest chord lengths of descent in the analysis window
+/// (docs/falling-plates.md, "Classifier rules", step 1; Howison & Iida 2020
+/// drops are ≈ 10–30 sizes).
 pub const MIN_DESCENT_CHORDS: f64 = 10.0;
 
-/// Fewest oscillation periods needed to call a rocking fall a flutter.
-/// Notes §6 step 1.
+/// Fewest oscillation periods needed to call a rocking fall a flutter
+/// (docs/falling-plates.md, "Classifier rules", step 1).
 pub const MIN_OSCILLATION_PERIODS: f64 = 3.0;
 
-/// Fewest net turns about the dominant horizontal axis for a tumble. Notes
-/// §6 step 4 (N_turn ≥ 1); a floater cannot turn past ±90° (notes §1).
+/// Fewest net turns about the dominant horizontal axis for a tumble
+/// (docs/falling-plates.md, "Classifier rules", step 4: N_turn ≥ 1); a
+/// floater cannot turn past ±90° (Belmonte, Eisenberg & Moses 1998, Phys.
+/// Rev. Lett. 81, 345; Andersen, Pesavento & Wang 2005, J. Fluid Mech. 541,
+/// 65).
 pub const SPIN_MIN_NET_TURNS: f64 = 1.0;
 
 /// Least rotation consistency |∫ω dt| / ∫|ω| dt about the horizontal axis for
-/// a tumble: "ω keeps its sign" (Belmonte 1998, APW 2005), notes §6 s > 0.9.
+/// a tumble: "ω keeps its sign" (Belmonte 1998, APW 2005); s > 0.9 in
+/// docs/falling-plates.md, "Classifier rules", step 4.
 pub const TUMBLE_MIN_CONSISTENCY: f64 = 0.9;
 
 /// Hysteresis of a normal flip, degrees: the normal must go from ≥ 30° above
 /// the horizontal plane to ≥ 30° below it (or back). The APW ODE's largest
-/// flutter reaches ±96° without flipping over (notes §4a table), and an
-/// edge-on diver wobbling a few degrees must not count flips.
+/// flutter reaches ±96° without flipping over (docs/falling-plates.md, "APW
+/// quasi-steady model"), and an edge-on diver wobbling a few degrees must not
+/// count flips.
 pub const FLIP_HYSTERESIS_DEG: f64 = 30.0;
 
 /// Fewest pitch reversals (rocks) for a lilter: Field et al. 1997 chaotic =
-/// oscillation, then a flip, irregularly; notes §6 "reversals between flips".
+/// oscillation, then a flip, irregularly; "reversals between flips" in
+/// docs/falling-plates.md, "Classifier rules", step 4.
 pub const LILT_MIN_REVERSALS: usize = 2;
 
-/// Smallest pitch swing counted as a reversal, degrees peak to peak. Notes §6
-/// calls θ within ~±10° steady; we read that as amplitude, so a swing must at
-/// least equal that band's width to count as a rock rather than jitter.
+/// Smallest pitch swing counted as a reversal, degrees peak to peak.
+/// docs/falling-plates.md, "Classifier rules", step 4, calls θ within ~±10°
+/// steady; we read that as amplitude, so a swing must at least equal that
+/// band's width to count as a rock rather than jitter.
 pub const REVERSAL_MIN_SWING_DEG: f64 = 10.0;
 
 /// Smallest rocking amplitude of a flutter, degrees (half the mean swing).
-/// Notes §6: steady if θ stays within ~10°, flutter otherwise.
+/// Steady if θ stays within ~10°, flutter otherwise (docs/falling-plates.md,
+/// "Classifier rules", step 4).
 pub const FLUTTER_MIN_AMPLITUDE_DEG: f64 = 10.0;
 
-/// Fewest turns about the vertical for autorotation. Notes §6 (N_z ≥ 1).
+/// Fewest turns about the vertical for autorotation (N_z ≥ 1:
+/// docs/falling-plates.md, "Classifier rules", step 4).
 pub const AUTOROTATION_MIN_YAW_TURNS: f64 = 1.0;
 
 /// Least yaw consistency |∫ω_z dt| / ∫|ω_z| dt for autorotation (the
@@ -133,26 +146,31 @@ pub const AUTOROTATION_MIN_YAW_CONSISTENCY: f64 = 0.9;
 
 /// Least |mean ω_z| / rms |ω| for autorotation: the spin axis lies on
 /// average within ~45° of the vertical. Lilters also yaw at 1–9 rad/s
-/// (notes §4e) but their rocking and flips dominate ω.
+/// (docs/falling-plates.md, "Folded leaves under the linear law") but their
+/// rocking and flips dominate ω.
 pub const AUTOROTATION_MIN_VERTICAL_SHARE: f64 = 0.7;
 
-/// Least mean plate tilt for autorotation, degrees. Notes §4e: autorotating
-/// spinners' planes sat 42–103° from horizontal; a flat leaf turning about
-/// its own normal is still a floater ("did not rotate" visibly).
+/// Least mean plate tilt for autorotation, degrees. Autorotating spinners'
+/// planes sat 42–103° from horizontal (docs/falling-plates.md, "Folded leaves
+/// under the linear law"); a flat leaf turning about its own normal is still a
+/// floater ("did not rotate" visibly).
 pub const AUTOROTATION_MIN_TILT_DEG: f64 = 30.0;
 
 /// Dive: the plate spends 90 % of the window within 30° of edge-on (10th
-/// percentile of tilt ≥ 60°). Notes §4e: divers fall edge-on; planes 30–60°
-/// from edge-on are "neither clearly floater nor diver".
+/// percentile of tilt ≥ 60°). Divers fall edge-on; planes 30–60° from
+/// edge-on are "neither clearly floater nor diver" (docs/falling-plates.md,
+/// "Folded leaves under the linear law").
 pub const DIVE_MIN_TILT_DEG: f64 = 60.0;
 
 /// Mean tilt above which a non-rocking, non-rotating fall is neither a clear
-/// floater nor a diver, degrees (notes §4e, 30–60° from edge-on).
+/// floater nor a diver, degrees (30–60° from edge-on: docs/falling-plates.md,
+/// "Folded leaves under the linear law").
 pub const STEEP_TILT_DEG: f64 = 30.0;
 
 /// Least drift ratio (horizontal displacement / fall) for a glide: a path
 /// ≥ 5.7° from vertical. Our choice: steady fallers and flutterers have zero
-/// mean drift (Field 1997, APW 2005), tumblers 0.5–2.3 (notes §3b row 4, §6).
+/// mean drift (Field 1997, APW 2005), tumblers 0.5–2.3 (docs/falling-plates.md,
+/// "Measured regimes", row 4, and "Classifier rules").
 pub const GLIDE_MIN_DRIFT_RATIO: f64 = 0.1;
 
 /// Body and world axis shares closer than this count as a tie (body wins).
@@ -201,7 +219,8 @@ pub enum Regime {
     Autorotation,
     /// Lilter: rocks, then flips over, irregularly.
     Chaotic,
-    /// Edge-on fall without rotation (notes §4e); class `Undetermined`.
+    /// Edge-on fall without rotation (docs/falling-plates.md, "Folded leaves
+    /// under the linear law"); class `Undetermined`.
     Dive,
     /// No regime could be named.
     Undetermined,
@@ -610,9 +629,10 @@ fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     // Dominant horizontal axis: the principal axis of ∫ω_h ω_hᵀ dt, fixed
     // either in the body or in the world, whichever explains more of the
     // horizontal rotation (ties go to the body). A body-fixed axis follows a
-    // leaf that rocks or tumbles about its own span while yawing (§4e
-    // lilters, the precessing MuJoCo card); a world-fixed one suits a plate
-    // that spins about its normal while rocking.
+    // leaf that rocks or tumbles about its own span while yawing (lilters in
+    // docs/falling-plates.md, "Folded leaves under the linear law"; the
+    // precessing MuJoCo card); a world-fixed one suits a plate that spins about
+    // its normal while rocking.
     let world = SymmetricEigen::new(s_world);
     let body = SymmetricEigen::new(s_body);
     let share = |vals: &[f64], tr: f64| {
@@ -1157,7 +1177,8 @@ mod tests {
     }
     /// Rocking that grows between irregularly spaced flips (some forwards,
     /// some back), while the leaf also turns slowly about the vertical
-    /// (3 rad/s, the §4e boundary case).
+    /// (3 rad/s, a boundary case of docs/falling-plates.md, "Folded leaves
+    /// under the linear law").
     fn chaotic_pitch(t: f64) -> f64 {
         const FLIPS: [(f64, f64); 6] = [
             (2.3, 1.0),
@@ -1257,7 +1278,8 @@ mod tests {
             |t| ry((55.0 + 20.0 * (TAU * t / 0.6).sin()).to_radians()),
         )
     }
-    /// Steady at 45°: §4e's "neither clearly floater nor diver".
+    /// Steady at 45°: "neither clearly floater nor diver"
+    /// (docs/falling-plates.md, "Folded leaves under the linear law").
     fn steep_steady() -> Trajectory {
         synth(
             240.0,
@@ -1379,7 +1401,8 @@ mod tests {
 
     #[test]
     fn lilter_that_also_yaws_is_not_a_spinner() {
-        // Notes §4e: lilters turn about the vertical at 1–9 rad/s.
+        // Lilters turn about the vertical at 1–9 rad/s (docs/falling-plates.md,
+        // "Folded leaves under the linear law").
         for yaw_rate in [1.0, 3.0, 9.0] {
             let c = classify(&chaotic_yawing(yaw_rate), CHORD);
             let f = &c.features;
@@ -1507,11 +1530,11 @@ mod tests {
     // ------------------------------------------------------------ APW ODE
 
     /// Falls of the Andersen–Pesavento–Wang 2D quasi-steady plate model
-    /// (nondimensional form as transcribed in notes §4a: C_T = 1.2, C_R = π,
-    /// A = 1.4, B = 1, μ1 = μ2 = 0.2), released from rest at 45°, RK4 with
-    /// h = 0.005, embedded in 3D (motion in the x–z plane, span along y).
-    /// Lengths in half-chords a = 1 cm, time unit a/U = 10 ms, sampled every
-    /// 0.4 units (250 Hz) up to t = 600 units.
+    /// (nondimensional form of docs/falling-plates.md, "APW quasi-steady
+    /// model": C_T = 1.2, C_R = π, A = 1.4, B = 1, μ1 = μ2 = 0.2), released
+    /// from rest at 45°, RK4 with h = 0.005, embedded in 3D (motion in the x–z
+    /// plane, span along y). Lengths in half-chords a = 1 cm, time unit
+    /// a/U = 10 ms, sampled every 0.4 units (250 Hz) up to t = 600 units.
     fn apw_fall(i_star: f64) -> Trajectory {
         const A: f64 = 0.01;
         const T_UNIT: f64 = 0.01;
@@ -1564,10 +1587,12 @@ mod tests {
         tr
     }
 
+    /// The APW model classified as the table in docs/falling-plates.md, "APW
+    /// quasi-steady model", says it falls.
     #[test]
     fn apw_model_falls_flutter_and_tumble_where_the_notes_say() {
         use MotionClass as C;
-        // Notes §4a table (our integration of the same equations): flutter at
+        // That table (our integration of the same equations): flutter at
         // I* ≤ 1.2 (±42° … ±96°), tumble at 1.3–1.4, irregular flutter/flip
         // mixture at 1.5–2.5, flutter again at 3.
         for (i_star, want) in [

@@ -1,8 +1,8 @@
 //! How large a time step a model can take: the stiffest spring mode from a
 //! power iteration on M⁻¹K (with the block-Gershgorin bound as a guaranteed
 //! fallback), its damping, and the drag rate; then, for each integrator, the
-//! largest step whose amplification on that mode stays ≤ 1 (numerics notes
-//! §2, §2b).
+//! largest step whose amplification on that mode stays ≤ 1
+//! (docs/numerics.md, "Stability limits" and "Stable-step estimate").
 
 use crate::physics::model::Model;
 use crate::physics::params::Integrator;
@@ -10,13 +10,14 @@ use nalgebra::{Matrix3, Vector3};
 
 type V3 = Vector3<f64>;
 
-/// Fraction of the stability limit that `--dt auto` uses. The numerics notes
-/// advise staying at or below about 0.7 × the limit (near it symplectic Euler
-/// is stable but its invariant ellipse is very eccentric); the estimate is
-/// made at the rest shape and a deforming leaf measured 2–3 % stiffer.
+/// Fraction of the stability limit that `--dt auto` uses. Stay at or below
+/// about 0.7 × the limit (docs/numerics.md, "Auto step"; near it symplectic
+/// Euler is stable but its invariant ellipse is very eccentric); the estimate
+/// is made at the rest shape and a deforming leaf measured 2–3 % stiffer.
 pub const AUTO_SAFETY: f64 = 0.7;
 
-/// Mass ratios above this make a network ill-conditioned (notes §4).
+/// Mass ratios above this make a network ill-conditioned (docs/numerics.md,
+/// "Conditioning warnings").
 pub const WARN_MASS_RATIO: f64 = 1e4;
 /// Spring rates k (1/mᵢ + 1/mⱼ) above this, s⁻², need tiny explicit steps.
 pub const WARN_SPRING_RATE: f64 = 1e8;
@@ -572,6 +573,7 @@ fn norm(a: &[V3]) -> f64 {
 mod tests {
     use super::*;
 
+    /// The closed-form limits of docs/numerics.md, "Stability limits".
     #[test]
     fn closed_form_limits_of_the_notes() {
         let w: f64 = 3.0;

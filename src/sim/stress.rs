@@ -1,6 +1,6 @@
-//! The stiff and extreme matrix (numerics notes §4–§5): variants of a model
-//! that push the integrators to and past their limits, each run with every
-//! integrator. Every run ends either finite, with its energy drift and
+//! The stiff and extreme matrix (docs/numerics.md, "Stress matrix"): variants
+//! of a model that push the integrators to and past their limits, each run with
+//! every integrator. Every run ends either finite, with its energy drift and
 //! largest strain, or with a clear error naming the step, the particle, the
 //! cause and the stable-step estimate — never a NaN, never a panic.
 //!
@@ -9,7 +9,7 @@
 //! ([`ExplicitPolicy`]). Sub-stepping splits each step into
 //! n = clamp(⌈h / (AUTO_SAFETY · dt_max)⌉, 1, cap) equal sub-steps — the
 //! rule of `--dt auto` — and warns when the cap clamps n, because the run
-//! may then be unstable (notes §5).
+//! may then be unstable (docs/numerics.md, "Stress matrix").
 
 use crate::physics::field::{Flow, Primitive, VortexCore, WindField};
 use crate::physics::forces;
@@ -130,9 +130,9 @@ fn best_connected(model: &Model) -> usize {
         .unwrap_or(0)
 }
 
-/// The stress cases for `model` started from `initial` (the notes' §5
-/// table). Cases that need a spring or a triangle are left out when the
-/// model has none.
+/// The stress cases for `model` started from `initial` (the table in
+/// docs/numerics.md, "Stress matrix"). Cases that need a spring or a
+/// triangle are left out when the model has none.
 ///
 /// # Errors
 /// A variant that fails validation (only for unusual models, e.g. one whose

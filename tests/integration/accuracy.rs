@@ -37,7 +37,8 @@ fn settings(seconds: f64, ranges: &[(Integrator, u32, u32)], reference_j: u32) -
     }
 }
 
-/// O7 through the sweep: on a lightly damped oscillator (ω = 5 rad/s,
+/// O7 (docs/numerics.md, "Oracles") through the sweep: on a lightly damped
+/// oscillator (ω = 5 rad/s,
 /// ζ = 0.05, stretched by 0.1 m) the fitted orders are 1, 1, 2, 4, 1
 /// within ±0.15, and so is every pairwise order of the fit. (Not ω = 2π:
 /// at T = one period the O(h) phase error of symplectic Euler, whose

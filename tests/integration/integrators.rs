@@ -1,4 +1,5 @@
-//! Discrete-exact oracles for each integrator (numerics notes §3: O1–O4, O7)
+//! Discrete-exact oracles for each integrator (docs/numerics.md, "Oracles":
+//! O1–O4, O7)
 //! and stability boundaries at 0.99 / 1.01 × the predicted limit.
 
 use crate::common::*;

@@ -1,5 +1,5 @@
-//! Conservation laws and invariances (numerics notes O4 anisotropic, O5,
-//! O12, O13) and the force terms' edge cases.
+//! Conservation laws and invariances (docs/numerics.md, "Oracles": O4
+//! anisotropic, O5, O12, O13) and the force terms' edge cases.
 
 use crate::common::*;
 use leafmagic::leaf::LeafSpec;

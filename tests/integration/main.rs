@@ -1,5 +1,5 @@
 //! Integration tests: one binary (one link on a 2-core machine), one module
-//! per topic. Oracles are exact where the notes give one (numerics notes §3).
+//! per topic. Oracles are exact where docs/numerics.md, "Oracles", gives one.
 
 mod accuracy;
 mod aero_law;

@@ -1,5 +1,6 @@
 //! The stable-step estimate against the dense eigenvalue problem, and the
-//! auto step in use (numerics notes §2b).
+//! auto step in use (docs/numerics.md, "Stable-step estimate" and "Auto
+//! step").
 
 use leafmagic::leaf::LeafSpec;
 use leafmagic::physics::model::Model;

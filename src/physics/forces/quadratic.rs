@@ -4,10 +4,11 @@
 //! # Why
 //!
 //! The paper's linear law (eq. 9–10) applied at the corners of a flat leaf of
-//! uniform mass has no pitching moment (falling-plates notes §4d): such a leaf
-//! can only float. Real plates flutter, tumble or do both (Field et al. 1997)
-//! because the force on a plate is quadratic in speed and, at small angles of
-//! attack, acts ahead of the plate's centre. This law adds both, triangle by
+//! uniform mass has no pitching moment (docs/falling-plates.md, "Linear law:
+//! no pitching moment"): such a leaf can only float. Real plates flutter,
+//! tumble or do both (Field et al. 1997) because the force on a plate is
+//! quadratic in speed and, at small angles of attack, acts ahead of the
+//! plate's centre. This law adds both, triangle by
 //! triangle, so that a leaf of any shape gets a pitching moment that changes
 //! with its attitude.
 //!
@@ -26,7 +27,7 @@
 //! (l̂ ∝ sgn(v·n) n − sin α v̂). The coefficients are those Wang, Birch &
 //! Dickinson (J. Exp. Biol. 207, 2004) fitted to a translating plate and that
 //! Andersen, Pesavento & Wang (J. Fluid Mech. 541, 2005) use for falling
-//! plates (notes §4a: C_D(0) = 0.4, C_D(π/2) = 2.4):
+//! plates (C_D(0) = 0.4, C_D(π/2) = 2.4):
 //!
 //! C_D(α) = C_D∥ cos²α + C_D⊥ sin²α   (= 1.4 − cos 2α),
 //! C_L(α) = C_L★ sin 2α               (= 1.2 sin 2α).
@@ -67,16 +68,17 @@
 //! off by default: with APW's C_R = π the square card of
 //! [`crate::leaf::plates::square_card`] tumbles in a narrow band of densities
 //! *between* fluttering and chaotic falls (flutter → tumble → chaos →
-//! tumble, as APW's own ODE does, notes §4a), instead of the experiments'
-//! flutter → chaos → tumble (Field et al. 1997); without it the card
-//! follows the experiments' order.
+//! tumble, as APW's own ODE does: docs/falling-plates.md, "APW quasi-steady
+//! model"), instead of the experiments' flutter → chaos → tumble (Field et
+//! al. 1997); without it the card follows the experiments' order.
 //!
 //! # Air density and numbers
 //!
 //! ρ = 1.2 kg/m³ (air at 20 °C). A flat plate falling face-down reaches
 //! σ g = ½ ρ C_D⊥ V², V = √(2 σ g / (ρ C_D⊥)): 0.74 m/s at σ = 80 g/m², close
-//! to the 0.72–0.78 m/s measured for 70 g/m² paper shapes (notes §3b row 4),
-//! whereas the linear law's V = σ g /(3 αⁿ) is set by the chosen αⁿ.
+//! to the 0.72–0.78 m/s measured for 70 g/m² paper shapes
+//! (docs/falling-plates.md, "Measured regimes", row 4), whereas the linear
+//! law's V = σ g /(3 αⁿ) is set by the chosen αⁿ.
 //!
 //! # Integrators
 //!

@@ -35,7 +35,8 @@ pub const COP_LEADING: f64 = 0.25;
 /// APW 2005 use π ([`APW_ROTATIONAL_LIFT`]).
 pub const ROTATIONAL_LIFT: f64 = 0.0;
 
-/// Andersen, Pesavento & Wang's C_R (notes §4a), available as an override.
+/// Andersen, Pesavento & Wang's C_R (docs/falling-plates.md, "APW
+/// quasi-steady model"), available as an override.
 pub const APW_ROTATIONAL_LIFT: f64 = std::f64::consts::PI;
 
 /// Coefficients of the quadratic law (see the module docs for the

@@ -38,7 +38,8 @@ pub struct Triangle {
 /// apexes `apexes[0]` (first triangle) and `apexes[1]` (second). It resists
 /// changes of the fold angle θ (0 when flat) about its rest value, which is
 /// what keeps a folded leaf folded; unlike a spring across the fold it is as
-/// stiff near flat as anywhere else (falling-plates notes §4e).
+/// stiff near flat as anywhere else (docs/falling-plates.md, "Folded leaves
+/// under the linear law", bending near flat).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hinge {
     /// The shared edge (particles a, b).

@@ -4,8 +4,8 @@
 //! its statistics. For each integrator and step this runs a small ensemble of
 //! drops released a hair apart, classifies each (see [`crate::motion::classify`]),
 //! and compares the majority class, the mean descent speed and the rotation
-//! rate with those at the finest step (numerics notes §1.5, with
-//! DiffEqDevTools-style 1.96 σ/√N bands).
+//! rate with those at the finest step (docs/numerics.md, "Error against
+//! work", step 5, with DiffEqDevTools-style 1.96 σ/√N bands).
 //!
 //! The horizon itself is measured with twin runs at the finest RK4 step,
 //! released [`TWIN_SEPARATION`] chords apart: it is the time at which their
@@ -20,7 +20,8 @@ use crate::sim::drop::{self, DropParams};
 use rayon::prelude::*;
 use serde::Serialize;
 
-/// Initial separation of the twin runs, chords (notes §1.5: δ₀ = 1e-9 L).
+/// Initial separation of the twin runs, chords (δ₀ = 1e-9 L:
+/// docs/numerics.md, "Error against work", step 5).
 pub const TWIN_SEPARATION: f64 = 1e-9;
 /// Separation, chords, at which the twin runs count as unrelated.
 pub const HORIZON_SEPARATION: f64 = 1e-3;

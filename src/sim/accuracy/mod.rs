@@ -1,7 +1,8 @@
 //! How accurate a run is, and what accuracy costs: work-precision sweeps over
-//! the time step (numerics notes §1), the error estimate that breeding runs
-//! record ([`estimate`]), and, past the horizon where pointwise error means
-//! nothing, statistics across time steps ([`long`]).
+//! the time step (docs/numerics.md, "Error against work"), the error
+//! estimate that breeding runs record ([`estimate`]), and, past the horizon
+//! where pointwise error means nothing, statistics across time steps
+//! ([`long`]).
 //!
 //! # The sweep
 //!
@@ -18,9 +19,10 @@
 //! the run at h_ref/2 must agree with it to [`REFERENCE_FACTOR`] × the
 //! smallest error plotted, else the report carries a warning. Errors are
 //! measured against the finer of the two runs. Because RK4 is fourth order,
-//! h_ref need not be below the first-order curves' smallest step (the notes'
-//! h_ref ≤ h_min/8 is for a reference of the same order); the validation is
-//! what guarantees it is good enough.
+//! h_ref need not be below the first-order curves' smallest step (the rule
+//! h_ref ≤ h_min/8 of docs/numerics.md, "Error against work", step 3, is for
+//! a reference of the same order); the validation is what guarantees it is
+//! good enough.
 //!
 //! **Events.** Spring breaking would limit every scheme to first order, so
 //! the sweep runs on a copy of the model with breaking switched off
@@ -64,7 +66,7 @@ use std::time::Instant;
 type V3 = Vector3<f64>;
 
 /// The reference's self-difference must be below this fraction of the
-/// smallest error plotted (numerics notes §1, step 3).
+/// smallest error plotted (docs/numerics.md, "Error against work", step 3).
 pub const REFERENCE_FACTOR: f64 = 0.1;
 /// Only errors at least this many times the reference's self-difference
 /// enter the order fit: the reference error then moves them by ≤ 1 %.
@@ -74,7 +76,8 @@ pub const FIT_FLOOR_FACTOR: f64 = 100.0;
 pub const FIT_MAX_ERROR: f64 = 1e-2;
 /// The accuracy targets of the summary table, in chords.
 pub const TOLERANCES: [f64; 2] = [1e-3, 1e-6];
-/// Timed runs per point (the median is reported); the notes ask for ≥ 5.
+/// Timed runs per point (the median is reported); at least 5
+/// (docs/numerics.md, "Error against work", step 1).
 pub const DEFAULT_RUNS: usize = 5;
 /// The most steps any single run of a default sweep may take, so that a
 /// stiff model cannot make the sweep run for hours.
@@ -111,7 +114,8 @@ impl std::error::Error for AccuracyError {}
 
 /// A copy of `model` in which no spring can break, and how many springs
 /// were breakable. Breaking is an event that limits any scheme to first
-/// order unless located, so convergence studies switch it off (notes §1.6).
+/// order unless located, so convergence studies switch it off
+/// (docs/numerics.md, "Error against work", step 6).
 pub fn smooth_model(model: &Model) -> (Model, usize) {
     let mut smooth = model.clone();
     let mut count = 0;
