@@ -81,7 +81,7 @@ fn sweep_finds_the_theoretical_orders_on_an_oscillator() {
 
 /// The same on the leaf itself, for the schemes whose fit window lies in
 /// their asymptotic range (RK4 is stable only where its error is already
-/// near the reference's floor, see the README).
+/// near the reference's floor, see docs/accuracy.md).
 #[test]
 fn sweep_finds_first_and_second_order_on_the_leaf() {
     let model = leaf_a();
