@@ -23,13 +23,14 @@ pub(crate) fn update_archive(
     generation: usize,
     population: &[Individual],
 ) {
-    for ind in population
+    for (ind, fall) in population
         .iter()
-        .filter(|i| !i.elite && i.eval.class != "diverged")
+        .filter(|i| !i.elite)
+        .filter_map(|i| Some((i, i.eval.fall()?)))
     {
         let cell = (
-            bin(&ARCHIVE_DESCENT_EDGES, ind.eval.descent_m_s),
-            bin(&ARCHIVE_SPIN_EDGES, ind.eval.spin_rad_s),
+            bin(&ARCHIVE_DESCENT_EDGES, fall.descent_m_s),
+            bin(&ARCHIVE_SPIN_EDGES, fall.spin_rad_s),
         );
         let better = |e: &ArchiveEntry| {
             ind.eval.score > e.individual.eval.score

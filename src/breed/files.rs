@@ -52,7 +52,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         for (_, v) in i.genome.values() {
             let _ = write!(out, ",{v}");
         }
-        let e = &i.eval;
+        let e = &i.eval.record();
         // Errors may contain commas: quote them for CSV.
         let error = if e.error.is_empty() {
             String::new()
@@ -89,6 +89,7 @@ pub fn export_leaves(
 ) -> Result<(), BreedError> {
     let mut index = String::from("rank,id,file,class,regime,score,descent_m_s\n");
     for (rank, ind) in chosen.iter().enumerate() {
+        let e = ind.eval.record();
         let mut leaf = ind.genome.to_leaf(proto);
         leaf.name = format!("{}-{}", proto.name, ind.id);
         let file = format!("leaf-{}.toml", ind.id);
@@ -96,9 +97,9 @@ pub fn export_leaves(
             "# Bred by leafmagic from {}: individual {} ({} / {}, score {}).\n{}",
             proto.name,
             ind.id,
-            ind.eval.class,
-            ind.eval.regime,
-            ind.eval.score,
+            e.class,
+            e.regime,
+            e.score,
             leaf.to_toml()
         );
         let path = dir.join(&file);
@@ -109,10 +110,10 @@ pub fn export_leaves(
             rank + 1,
             ind.id,
             file,
-            ind.eval.class,
-            ind.eval.regime,
-            ind.eval.score,
-            ind.eval.descent_m_s
+            e.class,
+            e.regime,
+            e.score,
+            e.descent_m_s
         );
     }
     let path = dir.join("index.csv");

@@ -7,18 +7,46 @@
 use super::settings::BreedSettings;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
+use crate::motion::classify::{MotionClass, Regime};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
-/// What one drop of one individual showed.
+/// What one drop of one individual showed: its outcome and its score.
+///
+/// Written (to `gen-NNN.csv`, shard files and the checkpoint) as one flat
+/// record, [`EvaluationRecord`], whose `class` column names the outcome
+/// (`floater`, `spinner`, `lilter`, `undetermined` or `diverged`); reading
+/// it back refuses a record that names no outcome or a regime the
+/// classifier does not have.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "EvaluationRecord", try_from = "EvaluationRecord")]
 pub struct Evaluation {
-    /// `floater`, `spinner`, `lilter`, `undetermined`, or `diverged`.
-    pub class: String,
-    /// The sub-regime (empty when diverged).
-    pub regime: String,
+    /// How the drop ended.
+    pub outcome: Outcome,
     /// Selection score (see [`super::evaluate::score`]).
     pub score: f64,
+    /// Distance to the run's motion target ([`crate::motion::describe`]),
+    /// when it has one and the fall passes its class gate.
+    pub distance: Option<f64>,
+}
+
+/// How one individual's drop ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// It fell to the end and the classifier named its motion (possibly
+    /// `undetermined`).
+    Fell(Fall),
+    /// Its model was invalid, or the simulation diverged or failed: the error.
+    Diverged(String),
+}
+
+/// A completed fall, as the classifier saw it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fall {
+    /// The motion class.
+    pub class: MotionClass,
+    /// The sub-regime.
+    pub regime: Regime,
     /// The classifier's distance from the nearest class boundary, 0–1.
     pub margin: f64,
     /// Mean descent speed, m/s.
@@ -31,7 +59,6 @@ pub struct Evaluation {
     pub yaw_turns: f64,
     /// Rotation rate, rad/s: 2π (|net turns| + |yaw turns|) over the
     /// classifier's analysis window (an archive descriptor).
-    #[serde(default)]
     pub spin_rad_s: f64,
     /// Pitch reversals in the analysis window.
     pub reversals: usize,
@@ -41,12 +68,143 @@ pub struct Evaluation {
     pub tilt_deg: f64,
     /// The time step used, s.
     pub dt: f64,
-    /// The simulator's error for a diverged fall.
+}
+
+/// The name of a diverged outcome where a class name would be.
+pub const DIVERGED: &str = "diverged";
+
+impl Evaluation {
+    /// The fall, unless the drop diverged.
+    pub fn fall(&self) -> Option<&Fall> {
+        match &self.outcome {
+            Outcome::Fell(f) => Some(f),
+            Outcome::Diverged(_) => None,
+        }
+    }
+
+    /// The class name, or `diverged`.
+    pub fn class_name(&self) -> &'static str {
+        match &self.outcome {
+            Outcome::Fell(f) => f.class.as_str(),
+            Outcome::Diverged(_) => DIVERGED,
+        }
+    }
+
+    /// The flat record the run's files hold.
+    pub fn record(&self) -> EvaluationRecord {
+        self.clone().into()
+    }
+}
+
+/// An [`Evaluation`] as one flat row: what `gen-NNN.csv`, shard files and
+/// the checkpoint hold. A diverged drop has an empty regime, zero numbers
+/// and its error; a fall has an empty error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvaluationRecord {
+    /// `floater`, `spinner`, `lilter`, `undetermined`, or `diverged`.
+    pub class: String,
+    /// The sub-regime (empty when diverged).
+    pub regime: String,
+    /// See [`Evaluation::score`].
+    pub score: f64,
+    /// See [`Fall::margin`].
+    pub margin: f64,
+    /// See [`Fall::descent_m_s`].
+    pub descent_m_s: f64,
+    /// See [`Fall::drift_ratio`].
+    pub drift_ratio: f64,
+    /// See [`Fall::net_turns`].
+    pub net_turns: f64,
+    /// See [`Fall::yaw_turns`].
+    pub yaw_turns: f64,
+    /// See [`Fall::spin_rad_s`].
+    #[serde(default)]
+    pub spin_rad_s: f64,
+    /// See [`Fall::reversals`].
+    pub reversals: usize,
+    /// See [`Fall::flips`].
+    pub flips: usize,
+    /// See [`Fall::tilt_deg`].
+    pub tilt_deg: f64,
+    /// See [`Fall::dt`].
+    pub dt: f64,
+    /// The error of a diverged drop.
     pub error: String,
-    /// Distance to the run's motion target ([`crate::motion::describe`]), when it
-    /// has one and the fall passes its class gate.
+    /// See [`Evaluation::distance`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub distance: Option<f64>,
+}
+
+impl From<Evaluation> for EvaluationRecord {
+    fn from(e: Evaluation) -> EvaluationRecord {
+        let (class, regime, error) = match &e.outcome {
+            Outcome::Fell(f) => (f.class.to_string(), f.regime.to_string(), String::new()),
+            Outcome::Diverged(error) => (DIVERGED.to_string(), String::new(), error.clone()),
+        };
+        let zero = Fall {
+            class: MotionClass::Undetermined,
+            regime: Regime::Undetermined,
+            margin: 0.0,
+            descent_m_s: 0.0,
+            drift_ratio: 0.0,
+            net_turns: 0.0,
+            yaw_turns: 0.0,
+            spin_rad_s: 0.0,
+            reversals: 0,
+            flips: 0,
+            tilt_deg: 0.0,
+            dt: 0.0,
+        };
+        let f = e.fall().unwrap_or(&zero);
+        EvaluationRecord {
+            class,
+            regime,
+            score: e.score,
+            margin: f.margin,
+            descent_m_s: f.descent_m_s,
+            drift_ratio: f.drift_ratio,
+            net_turns: f.net_turns,
+            yaw_turns: f.yaw_turns,
+            spin_rad_s: f.spin_rad_s,
+            reversals: f.reversals,
+            flips: f.flips,
+            tilt_deg: f.tilt_deg,
+            dt: f.dt,
+            error,
+            distance: e.distance,
+        }
+    }
+}
+
+impl TryFrom<EvaluationRecord> for Evaluation {
+    type Error = String;
+    fn try_from(r: EvaluationRecord) -> Result<Evaluation, String> {
+        let outcome = if r.class == DIVERGED {
+            Outcome::Diverged(r.error)
+        } else {
+            let class = r.class.parse::<MotionClass>().map_err(|e| e.to_string())?;
+            let regime = r.regime.parse::<Regime>().map_err(|e| e.to_string())?;
+            Outcome::Fell(Fall {
+                class,
+                regime,
+                margin: r.margin,
+                descent_m_s: r.descent_m_s,
+                drift_ratio: r.drift_ratio,
+                net_turns: r.net_turns,
+                yaw_turns: r.yaw_turns,
+                spin_rad_s: r.spin_rad_s,
+                reversals: r.reversals,
+                flips: r.flips,
+                tilt_deg: r.tilt_deg,
+                dt: r.dt,
+            })
+        };
+        Ok(Evaluation {
+            outcome,
+            score: r.score,
+            distance: r.distance,
+        })
+    }
 }
 
 /// One member of a generation.

@@ -483,6 +483,7 @@ impl Run {
             };
             for e in &cp.archive {
                 let i = &e.individual;
+                let r = i.eval.record();
                 let _ = writeln!(
                     csv,
                     "{},{},{},{},{},{},{},{},{},{},{},archive/leaf-{}.toml",
@@ -492,11 +493,11 @@ impl Run {
                     edge(&ARCHIVE_SPIN_EDGES, e.spin_bin),
                     e.generation,
                     i.id,
-                    i.eval.class,
-                    i.eval.regime,
-                    i.eval.score,
-                    i.eval.descent_m_s,
-                    i.eval.spin_rad_s,
+                    r.class,
+                    r.regime,
+                    r.score,
+                    r.descent_m_s,
+                    r.spin_rad_s,
                     i.id
                 );
             }
@@ -515,7 +516,7 @@ impl Run {
                 self.proto.name,
                 target.source,
                 first.id,
-                first.eval.class,
+                first.eval.class_name(),
                 first
                     .eval
                     .distance

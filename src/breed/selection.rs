@@ -62,7 +62,7 @@ pub(crate) fn summarise(
 ) -> GenerationSummary {
     let mut counts = [0; 5];
     for i in population {
-        if let Some(k) = CLASSES.iter().position(|c| *c == i.eval.class) {
+        if let Some(k) = CLASSES.iter().position(|c| *c == i.eval.class_name()) {
             counts[k] += 1;
         }
     }

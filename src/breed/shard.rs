@@ -445,6 +445,8 @@ pub fn resolve_split(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::breed::population::{Fall, Outcome};
+    use crate::motion::classify::{MotionClass, Regime};
     use std::collections::HashMap;
 
     fn env(pairs: &[(&str, &str)]) -> impl Fn(&str) -> Option<String> {
@@ -540,21 +542,38 @@ mod tests {
 
     fn eval(score: f64) -> Evaluation {
         Evaluation {
-            class: "floater".into(),
-            regime: "glide, \"quoted\"\nnewline".into(),
+            outcome: Outcome::Fell(Fall {
+                class: MotionClass::Floater,
+                regime: Regime::Glide,
+                margin: 0.1 + 0.2,
+                descent_m_s: 1e-300,
+                drift_ratio: -0.0,
+                net_turns: std::f64::consts::PI,
+                yaw_turns: 1.0 / 3.0,
+                spin_rad_s: 5e-324,
+                reversals: 3,
+                flips: 0,
+                tilt_deg: 12.5,
+                dt: 1.3889e-3,
+            }),
             score,
-            margin: 0.1 + 0.2,
-            descent_m_s: 1e-300,
-            drift_ratio: -0.0,
-            net_turns: std::f64::consts::PI,
-            yaw_turns: 1.0 / 3.0,
-            spin_rad_s: 5e-324,
-            reversals: 3,
-            flips: 0,
-            tilt_deg: 12.5,
-            dt: 1.3889e-3,
-            error: String::new(),
             distance: Some(0.1 + 0.7),
+        }
+    }
+
+    /// A diverged drop whose error needs JSON escaping.
+    fn diverged() -> Evaluation {
+        Evaluation {
+            outcome: Outcome::Diverged("diverged at step 3, \"quoted\"\nnewline".into()),
+            score: -1.0,
+            distance: None,
+        }
+    }
+
+    fn fall_mut(e: &mut Evaluation) -> &mut Fall {
+        match &mut e.outcome {
+            Outcome::Fell(f) => f,
+            Outcome::Diverged(_) => unreachable!(),
         }
     }
 
@@ -563,7 +582,7 @@ mod tests {
             generation: 2,
             split: split(1, 3),
             plan: "0123456789abcdef".into(),
-            rows: vec![(7, eval(1.25)), (10, eval(-1.0))],
+            rows: vec![(7, eval(1.25)), (10, eval(-1.0)), (12, diverged())],
         }
     }
 
@@ -572,7 +591,10 @@ mod tests {
         let text = encode(&sample()).unwrap();
         let back = decode(&text).unwrap();
         assert_eq!(back, sample());
-        assert_eq!(back.rows[0].1.drift_ratio.to_bits(), (-0.0f64).to_bits());
+        assert_eq!(
+            back.rows[0].1.fall().unwrap().drift_ratio.to_bits(),
+            (-0.0f64).to_bits()
+        );
         assert_eq!(encode(&back).unwrap(), text);
     }
 
@@ -584,14 +606,14 @@ mod tests {
         }
         // Drop a whole row but keep the footer: the checksum catches it.
         let lines: Vec<&str> = text.lines().collect();
-        let dropped = format!("{}\n{}\n{}\n", lines[0], lines[2], lines[3]);
+        let dropped = format!("{}\n{}\n{}\n{}\n", lines[0], lines[2], lines[3], lines[4]);
         assert!(decode(&dropped).unwrap_err().contains("checksum"));
         // One changed digit.
         let flipped = text.replacen("1.25", "1.26", 1);
         assert!(decode(&flipped).unwrap_err().contains("checksum"));
         // Not a number that reads back: refused at write time.
         let mut bad = sample();
-        bad.rows[0].1.margin = f64::NAN;
+        fall_mut(&mut bad.rows[0].1).margin = f64::NAN;
         assert!(encode(&bad).unwrap_err().contains("individual 7"));
     }
 

@@ -793,7 +793,7 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
     };
     let fall = leafmagic::sim::drop::drop_leaf(&model, &params).unwrap();
     let c = leafmagic::motion::classify::classify(&fall.trajectory, model.chord());
-    assert_eq!(c.class.to_string(), best.eval.class);
+    assert_eq!(c.class.as_str(), best.eval.class_name());
 }
 
 #[test]

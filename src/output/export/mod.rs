@@ -569,7 +569,7 @@ pub fn drop_individuals(
                 .genome
                 .model(&run.proto)
                 .map_err(|e| ExportError::Data(format!("{name}: invalid leaf: {e}")))?;
-            drop_clip(&name, &ind.eval.class, &model, seconds, fps)
+            drop_clip(&name, ind.eval.class_name(), &model, seconds, fps)
         })
         .collect()
 }
