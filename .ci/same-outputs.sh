@@ -93,6 +93,26 @@ EOF
   "$bin" classify drop-a-spinner.csv --json >classify-spinner.json 2>&1
   "$bin" classify tumbler.csv >classify-tumbler.txt 2>&1
   "$bin" compare tumbler.csv drop-a-lilter.csv --json >compare.json 2>&1
+  # Refusals: the message of each error path.
+  {
+    "$bin" drop a --seconds=-1
+    "$bin" drop a --dt 0
+    "$bin" drop a --dt 1e-12 --seconds 100
+    "$bin" drop a --integrator nonsense
+    "$bin" breed --population 1 --out refused-1
+    "$bin" breed --target-features wobble=1 --out refused-2
+    "$bin" breed --target undetermined --out refused-3
+    "$bin" shard breed --generation 8
+    env -u SLURM_PROCID -u SLURM_ARRAY_TASK_ID "$bin" shard breed --generation 8 --count 2
+    "$bin" check a --stress --explicit sometimes
+    "$bin" export breed --top 1 --out refused-4 --format fbx
+    sed 's/^frame_rate = .*/frame_rate = 1e-320/' "$repo/scenes/hover.toml" >bad-rate.toml
+    "$bin" scene bad-rate.toml --out refused-5
+    sed 's/^duration = .*/duration = 1e12/' "$repo/scenes/hover.toml" >bad-duration.toml
+    "$bin" scene bad-duration.toml --out refused-6
+    printf 't,x,y,z\n0,0,0,0\n' >short.csv
+    "$bin" classify short.csv
+  } >refusals.txt 2>&1
   # Scene summaries carry wall times.
   for f in */summary.toml; do
     strip_timing <"$f" >"$f.stripped" && rm "$f"
@@ -103,8 +123,12 @@ EOF
 echo "old: $old"
 echo "new: $new"
 echo "work: $work"
-run_set "$old" "$work/old"
-run_set "$new" "$work/new"
+# Both run under the name `leafmagic` (clap prints the program's name).
+mkdir -p "$work/bin-old" "$work/bin-new"
+cp "$old" "$work/bin-old/leafmagic"
+cp "$new" "$work/bin-new/leafmagic"
+run_set "$work/bin-old/leafmagic" "$work/old"
+run_set "$work/bin-new/leafmagic" "$work/new"
 # The run directories name themselves and the example; they are in both.
 if diff -r "$work/old" "$work/new" >"$work/diff.txt"; then
   echo "identical: $(find "$work/old" -type f | wc -l) files, $(du -sh "$work/old" | cut -f1)"

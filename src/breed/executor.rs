@@ -9,7 +9,7 @@
 //! the resumed driver merges those and runs only the others.
 
 use super::evaluate::evaluate;
-use super::population::{BreedError, Evaluation, Job, Plan, Progress};
+use super::population::{BreedError, Evaluation, Job, Plan, Progress, io_err};
 use super::shard::{self, Problem, Split};
 use rayon::prelude::*;
 use std::collections::BTreeMap;
@@ -97,7 +97,7 @@ impl<L: Launcher> Executor for L {
 /// `shards/gen-GGG/`, created: the launchers' logs go there.
 fn generation_dir(run_dir: &Path, generation: usize) -> Result<PathBuf, BreedError> {
     let dir = shard::generation_dir(run_dir, generation);
-    std::fs::create_dir_all(&dir).map_err(|e| BreedError(format!("{}: {e}", dir.display())))?;
+    std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
     Ok(dir)
 }
 
@@ -180,7 +180,7 @@ fn evaluate_sharded(
             } else {
                 String::new()
             };
-            return Err(BreedError(format!(
+            return Err(BreedError::Shards(format!(
                 "generation {g}: shard {first} of {count} failed {SHARD_ATTEMPTS} times ({}){others}; its log: {}",
                 why.get(&first).map_or("no shard file", String::as_str),
                 log.display()
@@ -282,7 +282,9 @@ impl Launcher for Processes {
                 .stdout(stdout)
                 .stderr(stderr)
                 .spawn()
-                .map_err(|e| BreedError(format!("cannot start {}: {e}", self.program.display())))?;
+                .map_err(|e| {
+                    BreedError::Shards(format!("cannot start {}: {e}", self.program.display()))
+                })?;
             children.push((index, child));
         }
         for (index, mut child) in children {
@@ -358,7 +360,7 @@ impl Launcher for Merge {
                 count,
             },
         );
-        Err(BreedError(format!(
+        Err(BreedError::Shards(format!(
             "generation {generation}: shards {missing:?} of {count} are missing or invalid ({} and so on); \
              run them (leafmagic shard {} --generation {generation} --index I --count {count}), then merge again",
             first.display(),
@@ -438,14 +440,14 @@ impl Launcher for Slurm {
         cmd.arg(&self.program)
             .args(shard_args(run_dir, generation, None, count, self.threads));
         let log = child_log(&driver_log, &format!("== attempt {attempt}: {cmd:?}"))
-            .map_err(|e| BreedError(format!("{}: {e}", driver_log.display())))?;
+            .map_err(|e| io_err(&driver_log, e))?;
         let status = cmd
             .stdin(Stdio::null())
             .stdout(log.0)
             .stderr(log.1)
             .status()
             .map_err(|e| {
-                BreedError(format!(
+                BreedError::Shards(format!(
                     "cannot run srun (is Slurm installed and on PATH?): {e}"
                 ))
             })?;
@@ -523,7 +525,7 @@ impl Slurm {
             .arg(format!("--wrap=exec {wrap}"));
         let _ = append_line(&driver_log, &format!("== attempt {attempt}: {cmd:?}"));
         let out = cmd.stdin(Stdio::null()).output().map_err(|e| {
-            BreedError(format!(
+            BreedError::Shards(format!(
                 "cannot run sbatch (is Slurm installed and on PATH?): {e}"
             ))
         })?;
@@ -536,7 +538,7 @@ impl Slurm {
             ),
         );
         if !out.status.success() {
-            return Err(BreedError(format!(
+            return Err(BreedError::Shards(format!(
                 "generation {generation}: sbatch refused the array ({}): {}",
                 describe(out.status),
                 String::from_utf8_lossy(&out.stderr).trim()

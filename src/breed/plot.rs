@@ -3,7 +3,7 @@
 
 use super::population::GenerationSummary;
 use crate::motion::trajectory::Trajectory;
-use crate::util::svg::{legend, legend_mark};
+use crate::util::svg::{PlotError, legend, legend_mark};
 use plotters::prelude::*;
 
 /// The SVG text of a breeding run's class counts per generation: one line
@@ -11,7 +11,7 @@ use plotters::prelude::*;
 ///
 /// # Errors
 /// A message if plotters fails (it writes to memory, so only on a bug).
-pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<String, String> {
+pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<String, PlotError> {
     const NAMES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
     const COLOURS: [RGBColor; 5] = [
         RGBColor(0, 114, 178),
@@ -30,14 +30,14 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (800, 480)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE).map_err(PlotError::of)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 20))
             .margin(16)
             .x_label_area_size(44)
             .y_label_area_size(60)
             .build_cartesian_2d(0.0..last as f64, 0.0..(top as f64 * 1.1))
-            .map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
         chart
             .configure_mesh()
             .x_desc("generation")
@@ -49,7 +49,7 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
             .axis_desc_style(("sans-serif", 16))
             .label_style(("sans-serif", 14))
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
         for (k, (name, colour)) in NAMES.iter().zip(COLOURS).enumerate() {
             if history.iter().all(|h| h.counts[k] == 0) {
                 continue;
@@ -60,7 +60,7 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
                 .collect();
             chart
                 .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
-                .map_err(|e| e.to_string())?
+                .map_err(PlotError::of)?
                 .label(*name)
                 .legend(legend_mark(colour, 2));
             chart
@@ -69,10 +69,10 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
                         .into_iter()
                         .map(|p| Circle::new(p, 3, colour.filled())),
                 )
-                .map_err(|e| e.to_string())?;
+                .map_err(PlotError::of)?;
         }
         legend(&mut chart, SeriesLabelPosition::MiddleRight)?;
-        root.present().map_err(|e| e.to_string())?;
+        root.present().map_err(PlotError::of)?;
     }
     Ok(svg)
 }
@@ -118,14 +118,14 @@ fn time_panel<'a, 'b>(
         SVGBackend<'b>,
         Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
     >,
-    String,
+    PlotError,
 > {
     let mut chart = ChartBuilder::on(area)
         .margin(12)
         .x_label_area_size(40)
         .y_label_area_size(60)
         .build_cartesian_2d(0.0..t_max, y)
-        .map_err(|e| e.to_string())?;
+        .map_err(PlotError::of)?;
     chart
         .configure_mesh()
         .x_desc("time, s")
@@ -134,7 +134,7 @@ fn time_panel<'a, 'b>(
         .axis_desc_style(("sans-serif", 16))
         .label_style(("sans-serif", 14))
         .draw()
-        .map_err(|e| e.to_string())?;
+        .map_err(PlotError::of)?;
     Ok(chart)
 }
 
@@ -148,7 +148,7 @@ pub fn like_svg(
     example: Option<&Trajectory>,
     best: &Trajectory,
     title: &str,
-) -> Result<String, String> {
+) -> Result<String, PlotError> {
     const EXAMPLE: RGBColor = RGBColor(213, 94, 0);
     const BEST: RGBColor = RGBColor(0, 114, 178);
     let falls: Vec<(&str, RGBColor, &Trajectory)> = example
@@ -183,17 +183,17 @@ pub fn like_svg(
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, (900, 720)).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE).map_err(PlotError::of)?;
         let root = root
             .titled(title, ("sans-serif", 20))
-            .map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
         let (upper, lower) = root.split_vertically(330);
         let mut chart = time_panel(&upper, t_max, (z_min * 1.05)..0.0, "height fallen, m")?;
         for ((name, colour, _), points) in falls.iter().zip(&heights) {
             let colour = *colour;
             chart
                 .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
-                .map_err(|e| e.to_string())?
+                .map_err(PlotError::of)?
                 .label(*name)
                 .legend(legend_mark(colour, 2));
         }
@@ -214,7 +214,7 @@ pub fn like_svg(
             let horizontal: Vec<(f64, f64)> = r.iter().map(|p| (p.0, p.2)).collect();
             chart
                 .draw_series(LineSeries::new(vertical, colour.stroke_width(2)))
-                .map_err(|e| e.to_string())?
+                .map_err(PlotError::of)?
                 .label(format!("{name}: about the vertical"))
                 .legend(legend_mark(colour, 2));
             chart
@@ -224,12 +224,12 @@ pub fn like_svg(
                     4,
                     colour.stroke_width(1),
                 ))
-                .map_err(|e| e.to_string())?
+                .map_err(PlotError::of)?
                 .label(format!("{name}: about the horizontal (|ω_h|)"))
                 .legend(legend_mark(colour, 1));
         }
         legend(&mut chart, SeriesLabelPosition::UpperRight)?;
-        root.present().map_err(|e| e.to_string())?;
+        root.present().map_err(PlotError::of)?;
     }
     Ok(svg)
 }

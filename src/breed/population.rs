@@ -4,12 +4,13 @@
 //! what an executor is handed ([`Job`]); the run's error and its progress
 //! observer.
 
-use super::settings::BreedSettings;
+use super::settings::{BreedSettings, SettingsError};
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
-use crate::motion::classify::{MotionClass, Regime};
+use crate::motion::classify::{MotionClass, ParseNameError, Regime};
+use crate::util::svg::PlotError;
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// What one drop of one individual showed: its outcome and its score.
 ///
@@ -176,14 +177,19 @@ impl From<Evaluation> for EvaluationRecord {
     }
 }
 
+/// A record whose class or regime the classifier does not name.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(transparent)]
+pub struct RecordError(#[from] ParseNameError);
+
 impl TryFrom<EvaluationRecord> for Evaluation {
-    type Error = String;
-    fn try_from(r: EvaluationRecord) -> Result<Evaluation, String> {
+    type Error = RecordError;
+    fn try_from(r: EvaluationRecord) -> Result<Evaluation, RecordError> {
         let outcome = if r.class == DIVERGED {
             Outcome::Diverged(r.error)
         } else {
-            let class = r.class.parse::<MotionClass>().map_err(|e| e.to_string())?;
-            let regime = r.regime.parse::<Regime>().map_err(|e| e.to_string())?;
+            let class = r.class.parse::<MotionClass>()?;
+            let regime = r.regime.parse::<Regime>()?;
             Outcome::Fell(Fall {
                 class,
                 regime,
@@ -322,19 +328,45 @@ pub struct Job<'a> {
 }
 
 /// Why a run could not start or go on.
-#[derive(Debug)]
-pub struct BreedError(pub String);
-
-impl std::fmt::Display for BreedError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
-    }
+#[derive(Debug, thiserror::Error)]
+pub enum BreedError {
+    /// A file or folder of the run could not be read, written or parsed.
+    #[error("{}: {message}", .path.display())]
+    File {
+        /// The file or folder.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The settings are invalid.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The prototype or the run directory refuse the run, or the run cannot
+    /// do what was asked of it now.
+    #[error("{0}")]
+    Refused(String),
+    /// A leaf of the run could not be built or dropped again.
+    #[error("leaf {id}: {message}")]
+    Leaf {
+        /// The individual's id.
+        id: u64,
+        /// What went wrong.
+        message: String,
+    },
+    /// The shards of a generation could not be evaluated or merged.
+    #[error("{0}")]
+    Shards(String),
+    /// A plot of the run could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
 }
 
-impl std::error::Error for BreedError {}
-
+/// A [`BreedError::File`] for `path`.
 pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> BreedError {
-    BreedError(format!("{}: {e}", path.display()))
+    BreedError::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
 }
 
 /// Observer of progress (the CLI draws a progress bar with it).

@@ -81,10 +81,12 @@ fn prototype_step(
     seconds: f64,
 ) -> Result<(Model, f64), BreedError> {
     let integrator = DropParams::default().integrator;
-    let refuse = |e: String| BreedError(format!("--prototype {source}: {e}"));
-    let model = proto.model().map_err(|e| refuse(e.to_string()))?;
-    let dt = resolve_step(&model, integrator, TimeStep::Auto, 1.0 / FRAME_RATE).map_err(refuse)?;
-    check_budget(seconds, dt, FRAME_RATE, integrator).map_err(refuse)?;
+    let refuse =
+        |e: &dyn std::fmt::Display| BreedError::Refused(format!("--prototype {source}: {e}"));
+    let model = proto.model().map_err(|e| refuse(&e))?;
+    let dt = resolve_step(&model, integrator, TimeStep::Auto, 1.0 / FRAME_RATE)
+        .map_err(|e| refuse(&e))?;
+    check_budget(seconds, dt, FRAME_RATE, integrator).map_err(|e| refuse(&e))?;
     Ok((model, dt))
 }
 
@@ -96,7 +98,7 @@ fn prototype_error(proto: &LeafSpec, source: &str) -> Result<ErrorEstimate, Bree
     // number of steps nearest to ERROR_ESTIMATE_SECONDS.
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
     error_estimate(&model, DropParams::default().integrator, dt, seconds)
-        .map_err(|e| BreedError(format!("error estimate of the prototype: {e}")))
+        .map_err(|e| BreedError::Refused(format!("error estimate of the prototype: {e}")))
 }
 
 impl Run {
@@ -104,13 +106,13 @@ impl Run {
     /// directory holding a different run (or other files) is refused and
     /// left untouched.
     pub fn create(dir: &Path, settings: BreedSettings) -> Result<Run, BreedError> {
-        settings.validate().map_err(BreedError)?;
+        settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
-            .map_err(|e| BreedError(format!("--prototype: {e}")))?;
+            .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
         if dir.join(RUN_FILE).exists() {
             let existing = Run::open(dir)?;
             if existing.settings != settings {
-                return Err(BreedError(format!(
+                return Err(BreedError::Refused(format!(
                     "{} holds a different run (its run.toml has other settings); choose another --out or --resume it",
                     dir.display()
                 )));
@@ -123,7 +125,7 @@ impl Run {
                 .next()
                 .is_some();
             if non_empty {
-                return Err(BreedError(format!(
+                return Err(BreedError::Refused(format!(
                     "{} exists and is not a leafmagic run (no run.toml); refusing to write into it",
                     dir.display()
                 )));
@@ -156,7 +158,7 @@ impl Run {
             prototype_error: None,
             prototype_leaf: proto.clone(),
         };
-        let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
+        let text = toml::to_string(&run_file).map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
         write_atomic(&dir.join(RUN_FILE), text.as_bytes())
             .map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
         // After run.toml, so a directory holding only the example is never
@@ -297,7 +299,7 @@ impl Run {
             evaluate_all()?
         };
         if evals.len() != plan.children.len() {
-            return Err(BreedError(format!(
+            return Err(BreedError::Shards(format!(
                 "generation {}: {} evaluations for {} children",
                 plan.generation,
                 evals.len(),
@@ -427,7 +429,7 @@ impl Run {
             return Ok(());
         }
         run_file.prototype_error = Some(estimate);
-        let text = toml::to_string(&run_file).map_err(|e| BreedError(e.to_string()))?;
+        let text = toml::to_string(&run_file).map_err(|e| io_err(&path, e))?;
         write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))
     }
 
@@ -454,9 +456,10 @@ impl Run {
             "{}: breeding toward {} (population {}, seed {})",
             self.proto.name, self.settings.target, self.settings.population, self.settings.seed
         );
-        let svg = plot::generations_svg(&cp.history, &title).map_err(BreedError)?;
+        let svg = plot::generations_svg(&cp.history, &title)?;
         self.write("generations.svg", svg.as_bytes())?;
-        let json = serde_json::to_string(cp).map_err(|e| BreedError(e.to_string()))?;
+        let json =
+            serde_json::to_string(cp).map_err(|e| io_err(&self.dir.join(CHECKPOINT_FILE), e))?;
         self.write(CHECKPOINT_FILE, json.as_bytes())
     }
 
@@ -522,7 +525,7 @@ impl Run {
                     .distance
                     .map_or("∞, another class".to_string(), |d| format!("{d:.3}"))
             );
-            let svg = plot::like_svg(example.as_ref(), &fall, &title).map_err(BreedError)?;
+            let svg = plot::like_svg(example.as_ref(), &fall, &title)?;
             self.write(LIKE_PLOT_FILE, svg.as_bytes())?;
         }
         Ok(())
@@ -538,7 +541,10 @@ impl Run {
         let model = member
             .genome
             .model(&self.proto)
-            .map_err(|e| BreedError(format!("leaf {}: {e}", member.id)))?;
+            .map_err(|e| BreedError::Leaf {
+                id: member.id,
+                message: e.to_string(),
+            })?;
         let params = DropParams {
             seconds: self.settings.seconds,
             dt: TimeStep::Auto,
@@ -546,7 +552,10 @@ impl Run {
         };
         drop_leaf(&model, &params)
             .map(|r| r.trajectory)
-            .map_err(|e| BreedError(format!("leaf {}: {e}", member.id)))
+            .map_err(|e| BreedError::Leaf {
+                id: member.id,
+                message: e.to_string(),
+            })
     }
 
     /// The example fall of a `--like` run, as copied into the run directory

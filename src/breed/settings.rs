@@ -57,40 +57,51 @@ impl BreedSettings {
     }
 
     /// Checks the settings, naming the bad one.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), SettingsError> {
         if self.population < 2 {
-            return Err(format!(
+            return Err(SettingsError(format!(
                 "--population must be at least 2, got {}",
                 self.population
-            ));
+            )));
         }
         if self.generations == 0 {
-            return Err("--generations must be at least 1".to_string());
+            return Err(SettingsError(
+                "--generations must be at least 1".to_string(),
+            ));
         }
         if self.target == MotionClass::Undetermined {
-            return Err("--target must be floater, spinner or lilter".to_string());
+            return Err(SettingsError(
+                "--target must be floater, spinner or lilter".to_string(),
+            ));
         }
         if !(self.seconds > 0.0 && self.seconds.is_finite()) {
-            return Err(format!(
+            return Err(SettingsError(format!(
                 "--seconds must be a positive number, got {}",
                 self.seconds
-            ));
+            )));
         }
         if !(self.initial_scale > 0.0 && self.initial_scale.is_finite()) {
-            return Err(format!(
+            return Err(SettingsError(format!(
                 "the initial scale must be positive, got {}",
                 self.initial_scale
-            ));
+            )));
         }
         if self.elites >= self.population {
-            return Err(format!(
+            return Err(SettingsError(format!(
                 "elites ({}) must be fewer than the population ({})",
                 self.elites, self.population
-            ));
+            )));
         }
         if self.tournament == 0 {
-            return Err("the tournament size must be at least 1".to_string());
+            return Err(SettingsError(
+                "the tournament size must be at least 1".to_string(),
+            ));
         }
         Ok(())
     }
 }
+
+/// Settings that define no run: names the setting and what is wrong.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct SettingsError(pub String);

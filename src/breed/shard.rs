@@ -173,7 +173,7 @@ pub struct ShardFile {
 /// The file's bytes. Fails, naming the individual, if an evaluation would
 /// not read back bit for bit (a non-finite float, which JSON cannot carry:
 /// checkpoint.json could not hold it either).
-pub fn encode(shard: &ShardFile) -> Result<String, String> {
+pub fn encode(shard: &ShardFile) -> Result<String, ShardFileError> {
     let mut out = serde_json::to_string(&Header {
         leafmagic_shard: FORMAT,
         generation: shard.generation,
@@ -192,9 +192,9 @@ pub fn encode(shard: &ShardFile) -> Result<String, String> {
         let back: Row = serde_json::from_str(&line)
             .map_err(|e| format!("individual {id}: its evaluation does not read back: {e}"))?;
         if back.eval != *eval {
-            return Err(format!(
+            return Err(ShardFileError(format!(
                 "individual {id}: its evaluation does not read back exactly (a non-finite number?)"
-            ));
+            )));
         }
         out.push_str(&line);
         out.push('\n');
@@ -211,32 +211,34 @@ pub fn encode(shard: &ShardFile) -> Result<String, String> {
 /// Parses and checks a shard file's bytes: header, one JSON row per line,
 /// footer present (else: truncated), row count and checksum as the footer
 /// says. The reason names the line.
-pub fn decode(text: &str) -> Result<ShardFile, String> {
+pub fn decode(text: &str) -> Result<ShardFile, ShardFileError> {
     if !text.ends_with('\n') {
-        return Err("truncated: the last line is incomplete".to_string());
+        return Err(ShardFileError(
+            "truncated: the last line is incomplete".to_string(),
+        ));
     }
     let body = &text[..text.len() - 1];
     let (before, footer_line) = match body.rfind('\n') {
         Some(k) => (&text[..k + 1], &body[k + 1..]),
-        None => return Err("truncated: no footer line".to_string()),
+        None => return Err(ShardFileError("truncated: no footer line".to_string())),
     };
     let footer: Footer = serde_json::from_str(footer_line)
         .map_err(|e| format!("truncated or corrupt: the last line is not the footer ({e})"))?;
     let sum = format!("{:016x}", fnv1a64(before.as_bytes()));
     if sum != footer.fnv1a64 {
-        return Err(format!(
+        return Err(ShardFileError(format!(
             "corrupt: checksum {sum} differs from the footer's {}",
             footer.fnv1a64
-        ));
+        )));
     }
     let mut lines = before.lines();
     let header: Header = serde_json::from_str(lines.next().unwrap_or_default())
         .map_err(|e| format!("line 1: not a shard header ({e})"))?;
     if header.leafmagic_shard != FORMAT {
-        return Err(format!(
+        return Err(ShardFileError(format!(
             "line 1: shard format {} (this leafmagic reads {FORMAT})",
             header.leafmagic_shard
-        ));
+        )));
     }
     let mut rows = Vec::new();
     for (k, line) in lines.enumerate() {
@@ -245,11 +247,11 @@ pub fn decode(text: &str) -> Result<ShardFile, String> {
         rows.push((row.id, row.eval));
     }
     if rows.len() != footer.rows {
-        return Err(format!(
+        return Err(ShardFileError(format!(
             "{} rows, the footer says {}",
             rows.len(),
             footer.rows
-        ));
+        )));
     }
     Ok(ShardFile {
         generation: header.generation,
@@ -260,6 +262,30 @@ pub fn decode(text: &str) -> Result<ShardFile, String> {
         plan: header.plan,
         rows,
     })
+}
+
+/// A shard file that cannot be written or read back: the reason, naming
+/// the line or the individual.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct ShardFileError(pub String);
+
+impl From<String> for ShardFileError {
+    fn from(reason: String) -> ShardFileError {
+        ShardFileError(reason)
+    }
+}
+
+/// A shard index or count that the flags and the environment do not give:
+/// names the flag or variable.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct SplitError(pub String);
+
+impl From<String> for SplitError {
+    fn from(reason: String) -> SplitError {
+        SplitError(reason)
+    }
 }
 
 /// Why a shard's results cannot be merged.
@@ -291,7 +317,7 @@ pub fn read_valid(run_dir: &Path, plan: &Plan, split: Split) -> Result<Vec<Evalu
     };
     let text =
         String::from_utf8(bytes).map_err(|_| Problem::Invalid("corrupt: not UTF-8".to_string()))?;
-    let shard = decode(&text).map_err(Problem::Invalid)?;
+    let shard = decode(&text).map_err(|e| Problem::Invalid(e.0))?;
     let members = split.members(&plan.children);
     if shard.generation != plan.generation || shard.split != split {
         return Err(Problem::Invalid(format!(
@@ -336,23 +362,25 @@ pub fn resolve_split(
     index: Option<usize>,
     count: Option<usize>,
     var: impl Fn(&str) -> Option<String>,
-) -> Result<Split, String> {
-    let check = |index: usize, count: usize, from: &str| -> Result<Split, String> {
+) -> Result<Split, SplitError> {
+    let check = |index: usize, count: usize, from: &str| -> Result<Split, SplitError> {
         if count == 0 {
-            Err(format!("{from}: the shard count must be at least 1"))
+            Err(SplitError(format!(
+                "{from}: the shard count must be at least 1"
+            )))
         } else if index >= count {
-            Err(format!(
+            Err(SplitError(format!(
                 "{from}: shard index {index} is not below the shard count {count} (indices run from 0)"
-            ))
+            )))
         } else {
             Ok(Split { index, count })
         }
     };
     if let Some(index) = index {
-        let count = count.ok_or("--index needs --count")?;
+        let count = count.ok_or_else(|| SplitError("--index needs --count".to_string()))?;
         return check(index, count, "--index/--count");
     }
-    let num = |name: &str| -> Result<Option<usize>, String> {
+    let num = |name: &str| -> Result<Option<usize>, SplitError> {
         match var(name) {
             None => Ok(None),
             Some(v) if v.trim().is_empty() => Ok(None),
@@ -360,7 +388,7 @@ pub fn resolve_split(
                 .trim()
                 .parse::<usize>()
                 .map(Some)
-                .map_err(|_| format!("{name}={v:?} is not a non-negative integer")),
+                .map_err(|_| SplitError(format!("{name}={v:?} is not a non-negative integer"))),
         }
     };
     struct Found {
@@ -404,13 +432,13 @@ pub fn resolve_split(
         found.retain(|f| !f.single_step);
     }
     let Some(first) = found.first() else {
-        return Err(
+        return Err(SplitError(
             "no shard index: pass --index and --count, or run under srun \
                     (SLURM_PROCID, SLURM_NTASKS), in a Slurm job array (SLURM_ARRAY_TASK_ID), \
                     a Kubernetes Indexed Job (JOB_COMPLETION_INDEX, with --count) or an AWS \
                     Batch array job (AWS_BATCH_JOB_ARRAY_INDEX, with --count)"
                 .to_string(),
-        );
+        ));
     };
     let names = found
         .iter()
@@ -418,9 +446,9 @@ pub fn resolve_split(
         .collect::<Vec<_>>()
         .join(", ");
     if found.iter().any(|f| f.index != first.index) {
-        return Err(format!(
+        return Err(SplitError(format!(
             "contradictory shard index: {names}; pass --index and --count"
-        ));
+        )));
     }
     let count = match count {
         Some(c) => c,
@@ -428,12 +456,14 @@ pub fn resolve_split(
             let counts: Vec<usize> = found.iter().filter_map(|f| f.count).collect();
             match counts.first() {
                 None => {
-                    return Err(format!(
+                    return Err(SplitError(format!(
                         "{names} gives the shard index but not the count: pass --count"
-                    ));
+                    )));
                 }
                 Some(&c) if counts.iter().any(|&d| d != c) => {
-                    return Err(format!("contradictory shard count: {names}; pass --count"));
+                    return Err(SplitError(format!(
+                        "contradictory shard count: {names}; pass --count"
+                    )));
                 }
                 Some(&c) => c,
             }
@@ -497,7 +527,7 @@ mod tests {
 
     #[test]
     fn missing_or_contradictory_indices_are_errors_that_say_why() {
-        let r = |i, c, e: &[(&str, &str)]| resolve_split(i, c, env(e)).unwrap_err();
+        let r = |i, c, e: &[(&str, &str)]| resolve_split(i, c, env(e)).unwrap_err().0;
         assert!(r(None, None, &[]).contains("no shard index"));
         assert!(r(None, Some(3), &[]).contains("no shard index"));
         assert!(r(None, None, &[("JOB_COMPLETION_INDEX", "1")]).contains("--count"));
@@ -607,14 +637,14 @@ mod tests {
         // Drop a whole row but keep the footer: the checksum catches it.
         let lines: Vec<&str> = text.lines().collect();
         let dropped = format!("{}\n{}\n{}\n{}\n", lines[0], lines[2], lines[3], lines[4]);
-        assert!(decode(&dropped).unwrap_err().contains("checksum"));
+        assert!(decode(&dropped).unwrap_err().0.contains("checksum"));
         // One changed digit.
         let flipped = text.replacen("1.25", "1.26", 1);
-        assert!(decode(&flipped).unwrap_err().contains("checksum"));
+        assert!(decode(&flipped).unwrap_err().0.contains("checksum"));
         // Not a number that reads back: refused at write time.
         let mut bad = sample();
         fall_mut(&mut bad.rows[0].1).margin = f64::NAN;
-        assert!(encode(&bad).unwrap_err().contains("individual 7"));
+        assert!(encode(&bad).unwrap_err().0.contains("individual 7"));
     }
 
     #[test]

@@ -2,7 +2,7 @@
 //! of a run directory, read-only but for its own shard file.
 
 use super::evaluate::evaluate;
-use super::population::{BreedError, Evaluation};
+use super::population::{BreedError, Evaluation, io_err};
 use super::run::Run;
 use super::shard::{ShardFile, Split, encode, generation_dir, plan_hash, read_valid, shard_path};
 use crate::util::io::write_atomic;
@@ -34,7 +34,7 @@ pub fn run_shard(
     let run = Run::load(run_dir)?;
     let next = run.checkpoint.as_ref().map_or(0, |c| c.generation + 1);
     if run.is_complete() {
-        return Err(BreedError(format!(
+        return Err(BreedError::Refused(format!(
             "{}: the run is complete ({} generations); there is no generation {generation} to evaluate",
             run_dir.display(),
             run.settings().generations
@@ -50,7 +50,7 @@ pub fn run_shard(
                 )
             },
         );
-        return Err(BreedError(format!(
+        return Err(BreedError::Refused(format!(
             "{}: --generation {generation} cannot be evaluated now: {held}",
             run_dir.display()
         )));
@@ -73,10 +73,9 @@ pub fn run_shard(
         plan: plan_hash(&members),
         rows,
     })
-    .map_err(|e| BreedError(format!("{}: {e}", path.display())))?;
+    .map_err(|e| io_err(&path, e))?;
     let dir = generation_dir(run_dir, generation);
-    std::fs::create_dir_all(&dir).map_err(|e| BreedError(format!("{}: {e}", dir.display())))?;
-    write_atomic(&path, text.as_bytes())
-        .map_err(|e| BreedError(format!("{}: {e}", path.display())))?;
+    std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+    write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))?;
     Ok(Outcome::Evaluated(n, path))
 }

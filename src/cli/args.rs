@@ -310,6 +310,6 @@ fn parse_tilt(s: &str) -> Result<[f64; 2], String> {
 }
 
 /// `--explicit`: `refuse` or `substep`, as the library parses them.
-fn parse_policy(s: &str) -> Result<ExplicitPolicy, String> {
+fn parse_policy(s: &str) -> Result<ExplicitPolicy, leafmagic::sim::stress::UnknownPolicy> {
     s.parse()
 }

@@ -41,7 +41,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 like,
                 ..settings
             };
-            settings.validate().map_err(anyhow::Error::msg)?;
+            settings.validate()?;
             let dir = args
                 .out
                 .clone()
@@ -174,8 +174,7 @@ fn executor(args: &BreedArgs) -> Result<Box<dyn Executor>> {
 
 /// `shard`: evaluates one shard of a generation and writes its shard file.
 pub fn shard(args: ShardArgs) -> Result<()> {
-    let split = breed::shard::resolve_split(args.index, args.count, |k| std::env::var(k).ok())
-        .map_err(anyhow::Error::msg)?;
+    let split = breed::shard::resolve_split(args.index, args.count, |k| std::env::var(k).ok())?;
     let threads = match args.threads {
         Some(t) => t,
         None => std::env::var("SLURM_CPUS_PER_TASK")
@@ -289,9 +288,7 @@ fn motion_target(args: &BreedArgs) -> Result<Option<MotionTarget>> {
         )));
     }
     match &args.target_features {
-        Some(text) => Ok(Some(
-            MotionTarget::parse_features(text, args.target).map_err(anyhow::Error::msg)?,
-        )),
+        Some(text) => Ok(Some(MotionTarget::parse_features(text, args.target)?)),
         None => Ok(None),
     }
 }

@@ -10,7 +10,6 @@ use crate::physics::model::{
 };
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
-use std::fmt;
 use std::path::Path;
 
 /// Prototype A of the paper's figure 4 (symmetric star, three flaps).
@@ -350,31 +349,24 @@ fn is_zero(x: &f64) -> bool {
 }
 
 /// A leaf file that could not be read or is invalid.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {message}")]
 pub struct LeafError {
     /// The file (or embedded prototype) name.
-    pub source: String,
+    pub file: String,
     /// What is wrong, naming the item.
     pub message: String,
 }
-
-impl fmt::Display for LeafError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.source, self.message)
-    }
-}
-
-impl std::error::Error for LeafError {}
 
 impl LeafSpec {
     /// Parses and validates TOML text; `source` names it in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<LeafSpec, LeafError> {
         let spec: LeafSpec = toml::from_str(text).map_err(|e| LeafError {
-            source: source.to_string(),
+            file: source.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
         spec.model().map_err(|e| LeafError {
-            source: source.to_string(),
+            file: source.to_string(),
             message: e.to_string(),
         })?;
         Ok(spec)
@@ -383,7 +375,7 @@ impl LeafSpec {
     /// Reads a leaf file.
     pub fn read(path: &Path) -> Result<LeafSpec, LeafError> {
         let text = std::fs::read_to_string(path).map_err(|e| LeafError {
-            source: path.display().to_string(),
+            file: path.display().to_string(),
             message: format!("cannot read: {e}"),
         })?;
         LeafSpec::from_toml(&text, &path.display().to_string())

@@ -70,24 +70,18 @@ pub struct Descriptors {
     pub values: [f64; 10],
 }
 
+/// A `--target-features` list that names no target: what is wrong with it.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct FeatureError(pub String);
+
 /// Why a fall has no descriptors.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("the fall cannot be described (the classifier says undetermined: {reason})")]
 pub struct Undescribable {
     /// The classifier's reason.
     pub reason: String,
 }
-
-impl std::fmt::Display for Undescribable {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "the fall cannot be described (the classifier says undetermined: {})",
-            self.reason
-        )
-    }
-}
-
-impl std::error::Error for Undescribable {}
 
 impl Descriptors {
     /// The descriptors of a classified fall; an undetermined fall has none.
@@ -168,18 +162,23 @@ impl MotionTarget {
     /// values by name, gated to `class` (`breed --target`) if one is given;
     /// without one every described fall has a distance. Unknown names are
     /// all listed in the error.
-    pub fn parse_features(text: &str, class: Option<MotionClass>) -> Result<MotionTarget, String> {
+    pub fn parse_features(
+        text: &str,
+        class: Option<MotionClass>,
+    ) -> Result<MotionTarget, FeatureError> {
         if class == Some(MotionClass::Undetermined) {
-            return Err("--target must be floater, spinner or lilter".to_string());
+            return Err(FeatureError(
+                "--target must be floater, spinner or lilter".to_string(),
+            ));
         }
         let mut descriptors = std::collections::BTreeMap::new();
         let mut unknown = Vec::new();
         for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let Some((name, value)) = item.split_once('=') else {
-                return Err(format!(
+                return Err(FeatureError(format!(
                     "--target-features: '{item}' is not NAME=VALUE (names: {})",
                     NAMES.join(", ")
-                ));
+                )));
             };
             let (name, value) = (name.trim(), value.trim());
             if !NAMES.contains(&name) {
@@ -191,23 +190,25 @@ impl MotionTarget {
                 .ok()
                 .filter(|v: &f64| v.is_finite() && *v >= 0.0)
                 .ok_or_else(|| {
-                    format!("--target-features: {name}: '{value}' is not a number ≥ 0")
+                    FeatureError(format!(
+                        "--target-features: {name}: '{value}' is not a number ≥ 0"
+                    ))
                 })?;
             descriptors.insert(name.to_string(), v);
         }
         if !unknown.is_empty() {
-            return Err(format!(
+            return Err(FeatureError(format!(
                 "--target-features: unknown descriptor{} {}; known: {}",
                 if unknown.len() > 1 { "s" } else { "" },
                 unknown.join(", "),
                 NAMES.join(", ")
-            ));
+            )));
         }
         if descriptors.is_empty() {
-            return Err(format!(
+            return Err(FeatureError(format!(
                 "--target-features: set at least one descriptor ({})",
                 NAMES.join(", ")
-            ));
+            )));
         }
         Ok(MotionTarget {
             source: "features".to_string(),
@@ -367,7 +368,9 @@ mod tests {
     #[test]
     fn unknown_names_are_all_listed() {
         let floater = Some(MotionClass::Floater);
-        let e = MotionTarget::parse_features("descent=1,speed=2,wobble=3", floater).unwrap_err();
+        let e = MotionTarget::parse_features("descent=1,speed=2,wobble=3", floater)
+            .unwrap_err()
+            .0;
         assert!(
             e.contains("speed") && e.contains("wobble") && e.contains("known"),
             "{e}"

@@ -80,17 +80,18 @@ impl fmt::Display for Integrator {
     }
 }
 
+/// A name that is no integrator's.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown integrator '{0}' (expected euler, symplectic, verlet, rk4 or implicit)")]
+pub struct UnknownIntegrator(pub String);
+
 impl FromStr for Integrator {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownIntegrator;
+    fn from_str(s: &str) -> Result<Self, UnknownIntegrator> {
         Integrator::ALL
             .into_iter()
             .find(|i| i.name() == s)
-            .ok_or_else(|| {
-                format!(
-                    "unknown integrator '{s}' (expected euler, symplectic, verlet, rk4 or implicit)"
-                )
-            })
+            .ok_or_else(|| UnknownIntegrator(s.to_string()))
     }
 }
 

@@ -57,7 +57,7 @@ pub fn resolve_dt(
     integrator: Integrator,
     dt: TimeStep,
     frame_dt: f64,
-) -> Result<f64, String> {
+) -> Result<f64, StepError> {
     resolve(model, integrator, dt, frame_dt, true)
 }
 
@@ -69,7 +69,7 @@ pub fn resolve_step(
     integrator: Integrator,
     dt: TimeStep,
     frame_dt: f64,
-) -> Result<f64, String> {
+) -> Result<f64, StepError> {
     resolve(model, integrator, dt, frame_dt, false)
 }
 
@@ -79,16 +79,14 @@ fn resolve(
     dt: TimeStep,
     frame_dt: f64,
     onto_frames: bool,
-) -> Result<f64, String> {
+) -> Result<f64, StepError> {
     match dt {
         TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => Ok(if onto_frames {
             stability::snap_to_frame(h, frame_dt)
         } else {
             h
         }),
-        TimeStep::Fixed(h) => Err(format!(
-            "time step must be a positive number of seconds, got {h}"
-        )),
+        TimeStep::Fixed(h) => Err(StepError::NotPositive(h)),
         TimeStep::Auto => {
             let estimate = stability::estimate(model);
             if !estimate.is_finite() {
@@ -107,27 +105,19 @@ fn resolve(
                     .filter(|r| !r.1.is_finite())
                     .map(|(name, v, unit)| format!("{name} = {v} {unit}"))
                     .collect();
-                return Err(format!(
-                    "no time step can be chosen: {} (a stiffness, damping or drag coefficient \
-                     too large, or a mass too small, for f64: k/m, c/m or α/m overflows{})",
-                    bad.join(", "),
-                    estimate
+                return Err(StepError::Overflow {
+                    rates: bad.join(", "),
+                    stiffest_spring: estimate
                         .stiffest_spring
-                        .filter(|_| !estimate.omega_lower.is_finite())
-                        .map_or(String::new(), |k| format!("; the stiffest is spring[{k}]")),
-                ));
+                        .filter(|_| !estimate.omega_lower.is_finite()),
+                });
             }
             if onto_frames {
                 estimate.auto_dt(integrator, frame_dt)
             } else {
                 estimate.auto_step(integrator, frame_dt)
             }
-            .ok_or_else(|| {
-                format!(
-                    "no stable time step exists for {integrator} on this model \
-                     (its stiffest spring mode is undamped); choose another integrator"
-                )
-            })
+            .ok_or(StepError::NoStableStep(integrator))
         }
     }
 }
@@ -153,13 +143,13 @@ fn quantity(v: f64) -> String {
 /// writes at least one frame ([`check_frames`], [`check_steps`]).
 ///
 /// # Errors
-/// A message giving the counts and the likely cause.
+/// The counts and the likely cause.
 pub fn check_budget(
     seconds: f64,
     dt: f64,
     frame_rate: f64,
     integrator: Integrator,
-) -> Result<(), String> {
+) -> Result<(), StepError> {
     check_frames(seconds, frame_rate)?;
     check_steps(seconds, dt, integrator)
 }
@@ -168,23 +158,20 @@ pub fn check_budget(
 /// [`MAX_STEPS`].
 ///
 /// # Errors
-/// A message giving the count.
-pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
+/// The count.
+pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), StepError> {
     let frames = seconds * frame_rate;
     if frames.is_nan() || frames < 0.5 {
-        return Err(format!(
-            "{} s at {} frames per second is no frame at all; raise the frame rate or the duration",
-            quantity(seconds),
-            quantity(frame_rate)
-        ));
+        return Err(StepError::NoFrame {
+            seconds,
+            frame_rate,
+        });
     }
     if frames > MAX_STEPS {
-        return Err(format!(
-            "{} s at {} frames per second is {frames:.2e} frames, more than the limit of \
-             {MAX_STEPS:.0e}; lower the frame rate or the duration",
-            quantity(seconds),
-            quantity(frame_rate)
-        ));
+        return Err(StepError::TooManyFrames {
+            seconds,
+            frame_rate,
+        });
     }
     Ok(())
 }
@@ -192,25 +179,100 @@ pub fn check_frames(seconds: f64, frame_rate: f64) -> Result<(), String> {
 /// Checks that `seconds` at step `dt` is at most [`MAX_STEPS`] steps.
 ///
 /// # Errors
-/// A message giving the count and the likely cause.
-pub fn check_steps(seconds: f64, dt: f64, integrator: Integrator) -> Result<(), String> {
+/// The count and the likely cause.
+pub fn check_steps(seconds: f64, dt: f64, integrator: Integrator) -> Result<(), StepError> {
     let steps = seconds / dt;
     if steps.is_nan() || steps > MAX_STEPS {
-        return Err(format!(
-            "{} s at dt = {dt:.3e} s needs {} steps of {integrator} (the limit is \
-             {MAX_STEPS:.0e}): the step is far too small. With dt = auto this means \
-             the model is extremely stiff or light for an explicit integrator (see `leafmagic \
-             check`); soften it, make it heavier, or use the implicit integrator, whose step \
-             stability does not limit",
-            quantity(seconds),
-            if steps.is_finite() {
-                format!("{steps:.2e}")
-            } else {
-                "over 1e308".to_string()
-            }
-        ));
+        return Err(StepError::TooManySteps {
+            seconds,
+            dt,
+            integrator,
+        });
     }
     Ok(())
+}
+
+/// Why no step, or no run, can be had: the step chosen or asked for, or the
+/// number of steps or frames it would take.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// A fixed step that is not a positive number of seconds.
+    #[error("time step must be a positive number of seconds, got {0}")]
+    NotPositive(f64),
+    /// A duration that is not a positive number of seconds.
+    #[error("duration must be a positive number of seconds, got {0}")]
+    Duration(f64),
+    /// A rate of the model overflows f64, so the auto step has nothing to go on.
+    #[error(
+        "no time step can be chosen: {rates} (a stiffness, damping or drag coefficient \
+         too large, or a mass too small, for f64: k/m, c/m or α/m overflows{})",
+        .stiffest_spring.map_or(String::new(), |k| format!("; the stiffest is spring[{k}]"))
+    )]
+    Overflow {
+        /// The rates that are not finite, with their values.
+        rates: String,
+        /// The stiffest spring, when a spring rate overflows.
+        stiffest_spring: Option<usize>,
+    },
+    /// Forward Euler on an undamped spring mode: unstable at any step.
+    #[error(
+        "no stable time step exists for {0} on this model \
+         (its stiffest spring mode is undamped); choose another integrator"
+    )]
+    NoStableStep(Integrator),
+    /// Less than one frame.
+    #[error(
+        "{} s at {} frames per second is no frame at all; raise the frame rate or the duration",
+        quantity(*.seconds),
+        quantity(*.frame_rate)
+    )]
+    NoFrame {
+        /// Duration, s.
+        seconds: f64,
+        /// Frames per second.
+        frame_rate: f64,
+    },
+    /// More frames than [`MAX_STEPS`].
+    #[error(
+        "{} s at {} frames per second is {:.2e} frames, more than the limit of \
+         {MAX_STEPS:.0e}; lower the frame rate or the duration",
+        quantity(*.seconds),
+        quantity(*.frame_rate),
+        .seconds * .frame_rate
+    )]
+    TooManyFrames {
+        /// Duration, s.
+        seconds: f64,
+        /// Frames per second.
+        frame_rate: f64,
+    },
+    /// More steps than [`MAX_STEPS`].
+    #[error(
+        "{} s at dt = {dt:.3e} s needs {} steps of {integrator} (the limit is \
+         {MAX_STEPS:.0e}): the step is far too small. With dt = auto this means \
+         the model is extremely stiff or light for an explicit integrator (see `leafmagic \
+         check`); soften it, make it heavier, or use the implicit integrator, whose step \
+         stability does not limit",
+        quantity(*.seconds),
+        step_count(*.seconds / *.dt)
+    )]
+    TooManySteps {
+        /// Duration, s.
+        seconds: f64,
+        /// The step, s.
+        dt: f64,
+        /// The integrator.
+        integrator: Integrator,
+    },
+}
+
+/// A step count for a message; "over 1e308" when it overflows.
+fn step_count(steps: f64) -> String {
+    if steps.is_finite() {
+        format!("{steps:.2e}")
+    } else {
+        "over 1e308".to_string()
+    }
 }
 
 /// Steps `state` with step `dt`, which need not divide `frame_dt`, until

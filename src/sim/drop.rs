@@ -6,7 +6,7 @@ use crate::physics::integrate::SimError;
 use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::pose::PoseTracker;
-use crate::physics::run::{RunStats, check_budget, resolve_step, run_sampled};
+use crate::physics::run::{RunStats, StepError, check_budget, resolve_step, run_sampled};
 use crate::physics::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -63,15 +63,11 @@ pub fn release_rotation(tilt_deg: [f64; 2]) -> UnitQuaternion<f64> {
 /// and records its pose every frame.
 pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropError> {
     let frame_dt = 1.0 / FRAME_RATE;
-    let dt =
-        resolve_step(model, params.integrator, params.dt, frame_dt).map_err(DropError::Settings)?;
+    let dt = resolve_step(model, params.integrator, params.dt, frame_dt)?;
     if !(params.seconds > 0.0 && params.seconds.is_finite()) {
-        return Err(DropError::Settings(format!(
-            "duration must be a positive number of seconds, got {}",
-            params.seconds
-        )));
+        return Err(StepError::Duration(params.seconds).into());
     }
-    check_budget(params.seconds, dt, FRAME_RATE, params.integrator).map_err(DropError::Settings)?;
+    check_budget(params.seconds, dt, FRAME_RATE, params.integrator)?;
     let frames = (params.seconds * FRAME_RATE).round() as u64;
     let release = release_rotation(params.tilt_deg);
     let mut state = State::released(model, release, Vector3::zeros());
@@ -104,21 +100,12 @@ pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropE
 }
 
 /// Why a drop did not complete.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum DropError {
     /// Bad settings (time step, duration).
-    Settings(String),
+    #[error(transparent)]
+    Settings(#[from] StepError),
     /// The simulation diverged or its solver failed.
-    Sim(SimError),
+    #[error(transparent)]
+    Sim(#[from] SimError),
 }
-
-impl std::fmt::Display for DropError {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        match self {
-            DropError::Settings(s) => f.write_str(s),
-            DropError::Sim(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for DropError {}

@@ -61,13 +61,18 @@ impl fmt::Display for ExplicitPolicy {
     }
 }
 
+/// A name that is no [`ExplicitPolicy`]'s.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("expected 'refuse' or 'substep', got '{0}'")]
+pub struct UnknownPolicy(pub String);
+
 impl FromStr for ExplicitPolicy {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
+    type Err = UnknownPolicy;
+    fn from_str(s: &str) -> Result<Self, UnknownPolicy> {
         match s {
             "refuse" => Ok(ExplicitPolicy::Refuse),
             "substep" => Ok(ExplicitPolicy::Substep),
-            _ => Err(format!("expected 'refuse' or 'substep', got '{s}'")),
+            _ => Err(UnknownPolicy(s.to_string())),
         }
     }
 }

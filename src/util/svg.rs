@@ -7,6 +7,19 @@
 
 use plotters::prelude::*;
 
+/// A plot that plotters could not draw (it draws into memory, so only a bug
+/// or an impossible range gets here).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct PlotError(pub String);
+
+impl PlotError {
+    /// Wraps what plotters reports.
+    pub fn of(e: impl std::fmt::Display) -> PlotError {
+        PlotError(e.to_string())
+    }
+}
+
 /// Plot size, pixels.
 pub const SIZE: (u32, u32) = (960, 640);
 
@@ -29,7 +42,7 @@ pub fn min_max(values: &[f64]) -> Option<(f64, f64)> {
 pub fn legend<'a, 'b: 'a, CT: plotters::coord::CoordTranslate>(
     chart: &mut ChartContext<'a, SVGBackend<'b>, CT>,
     position: SeriesLabelPosition,
-) -> Result<(), String> {
+) -> Result<(), PlotError> {
     chart
         .configure_series_labels()
         .position(position)
@@ -37,7 +50,7 @@ pub fn legend<'a, 'b: 'a, CT: plotters::coord::CoordTranslate>(
         .border_style(BLACK)
         .label_font(("sans-serif", 14))
         .draw()
-        .map_err(|e| e.to_string())
+        .map_err(PlotError::of)
 }
 
 /// A legend entry's mark: a short line in the series' colour and width.

@@ -3,6 +3,7 @@
 
 use super::text;
 use leafmagic::output::export::{Clip, Format};
+use leafmagic::physics::run::StepError;
 use leafmagic::physics::terms::Decision;
 use leafmagic::sim::scene::{RunStats, Scene};
 use std::fmt::Write as _;
@@ -11,7 +12,7 @@ use std::path::Path;
 /// `scene --explain`: the compiled model's size, the integrator and its
 /// step (or why there is none), each term kept or left out, and what the
 /// compiler pruned.
-pub fn explain(scene: &Scene, dt: &Result<f64, String>, decisions: &[Decision]) -> String {
+pub fn explain(scene: &Scene, dt: &Result<f64, StepError>, decisions: &[Decision]) -> String {
     text(|out| {
         writeln!(
             out,

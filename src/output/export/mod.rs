@@ -47,13 +47,18 @@ pub enum Format {
     Pc2,
 }
 
+/// A name that is no export format's.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown export format '{0}' (expected glb or pc2)")]
+pub struct UnknownFormat(pub String);
+
 impl FromStr for Format {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Format, String> {
+    type Err = UnknownFormat;
+    fn from_str(s: &str) -> Result<Format, UnknownFormat> {
         match s {
             "glb" => Ok(Format::Glb),
             "pc2" => Ok(Format::Pc2),
-            _ => Err(format!("unknown export format '{s}' (expected glb or pc2)")),
+            _ => Err(UnknownFormat(s.to_string())),
         }
     }
 }
@@ -605,7 +610,7 @@ mod tests {
     fn format_parses_and_names_unknown_ones() {
         assert_eq!("glb".parse::<Format>(), Ok(Format::Glb));
         assert_eq!("pc2".parse::<Format>(), Ok(Format::Pc2));
-        let e = "fbx".parse::<Format>().unwrap_err();
+        let e = "fbx".parse::<Format>().unwrap_err().to_string();
         assert!(e.contains("fbx") && e.contains("glb or pc2"), "{e}");
     }
 

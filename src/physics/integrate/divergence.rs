@@ -5,11 +5,13 @@ use crate::physics::params::Integrator;
 use std::fmt;
 
 /// Why a run stopped before its end.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SimError {
     /// The state became non-finite or ran away.
+    #[error("{0}")]
     Diverged(Box<Divergence>),
     /// The implicit solver's conjugate gradients did not converge.
+    #[error("{}", solver_failed(*.step, *.time, *.iterations, *.residual))]
     SolverFailed {
         /// Step index (0-based) at which it failed.
         step: u64,
@@ -48,86 +50,73 @@ pub struct Divergence {
     pub stiffest_spring: Option<usize>,
 }
 
-impl fmt::Display for SimError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            SimError::SolverFailed {
-                step,
-                time,
-                iterations,
-                residual,
-            } => {
-                write!(
-                    f,
-                    "implicit solver did not converge at step {step} (t = {time:.6} s): "
-                )?;
-                if residual.is_finite() {
-                    write!(f, "relative residual {residual:.2e}")?;
-                } else {
-                    // pᵀAp ≤ 0 or overflowed: the linearised system is no
-                    // longer positive definite; there is no residual to show.
-                    write!(f, "the system matrix lost positive definiteness")?;
-                }
-                write!(
-                    f,
-                    " after {iterations} CG iterations; \
-                     the system is ill-conditioned, try a smaller --dt"
-                )
-            }
-            SimError::Diverged(d) => {
-                let kind = if d.value.is_finite() {
-                    "ran away"
-                } else {
-                    "became non-finite"
-                };
-                // Non-finite magnitudes are said in words: a diagnosis never
-                // prints NaN.
-                let magnitude = |v: f64, unit: &str| {
-                    if v.is_finite() {
-                        format!("{v:.3e}{unit}")
-                    } else {
-                        "non-finite".to_string()
-                    }
-                };
-                write!(
-                    f,
-                    "simulation diverged at step {} (t = {:.6} s): particle {} {} {}",
-                    d.step, d.time, d.particle, d.quantity, kind
-                )?;
-                if d.value.is_finite() {
-                    write!(f, " ({:.3e})", d.value)?;
-                }
-                write!(
-                    f,
-                    "; dominant force term: {} ({}); integrator {}, dt = {:.3e} s",
-                    d.dominant_force.0,
-                    magnitude(d.dominant_force.1, " N"),
-                    d.integrator,
-                    d.dt
-                )?;
-                match d.dt_max {
-                    Some(m) if d.dt > m => write!(
-                        f,
-                        ", above the estimated stable limit dt_max = {m:.3e} s: \
-                         the time step is too large for the stiffness; use the automatic step (`--dt auto`, or `dt = \"auto\"` in a scene file) or a step below dt_max"
-                    )?,
-                    Some(m) => write!(
-                        f,
-                        ", below the estimated stable limit dt_max = {m:.3e} s; \
-                         likely cause: forces growing without bound (extreme wind or parameters)"
-                    )?,
-                    None => write!(f, "; likely cause: extreme forces or parameters")?,
-                }
-                if let Some(s) = d.stiffest_spring {
-                    write!(f, "; stiffest spring: {s}")?;
-                }
-                Ok(())
-            }
-        }
-    }
+/// The message of a failed implicit solve.
+fn solver_failed(step: u64, time: f64, iterations: usize, residual: f64) -> String {
+    let why = if residual.is_finite() {
+        format!("relative residual {residual:.2e}")
+    } else {
+        // pᵀAp ≤ 0 or overflowed: the linearised system is no longer
+        // positive definite; there is no residual to show.
+        "the system matrix lost positive definiteness".to_string()
+    };
+    format!(
+        "implicit solver did not converge at step {step} (t = {time:.6} s): {why} \
+         after {iterations} CG iterations; the system is ill-conditioned, try a smaller --dt"
+    )
 }
 
-impl std::error::Error for SimError {}
+impl fmt::Display for Divergence {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let d = self;
+        let kind = if d.value.is_finite() {
+            "ran away"
+        } else {
+            "became non-finite"
+        };
+        // Non-finite magnitudes are said in words: a diagnosis never
+        // prints NaN.
+        let magnitude = |v: f64, unit: &str| {
+            if v.is_finite() {
+                format!("{v:.3e}{unit}")
+            } else {
+                "non-finite".to_string()
+            }
+        };
+        write!(
+            f,
+            "simulation diverged at step {} (t = {:.6} s): particle {} {} {}",
+            d.step, d.time, d.particle, d.quantity, kind
+        )?;
+        if d.value.is_finite() {
+            write!(f, " ({:.3e})", d.value)?;
+        }
+        write!(
+            f,
+            "; dominant force term: {} ({}); integrator {}, dt = {:.3e} s",
+            d.dominant_force.0,
+            magnitude(d.dominant_force.1, " N"),
+            d.integrator,
+            d.dt
+        )?;
+        match d.dt_max {
+            Some(m) if d.dt > m => write!(
+                f,
+                ", above the estimated stable limit dt_max = {m:.3e} s: \
+                 the time step is too large for the stiffness; use the automatic step (`--dt auto`, or `dt = \"auto\"` in a scene file) or a step below dt_max"
+            )?,
+            Some(m) => write!(
+                f,
+                ", below the estimated stable limit dt_max = {m:.3e} s; \
+                 likely cause: forces growing without bound (extreme wind or parameters)"
+            )?,
+            None => write!(f, "; likely cause: extreme forces or parameters")?,
+        }
+        if let Some(s) = d.stiffest_spring {
+            write!(f, "; stiffest spring: {s}")?;
+        }
+        Ok(())
+    }
+}
 
 /// Speeds above this (m/s), or plus ten times the wind's bound, count as a
 /// runaway: no falling leaf or scene object gets anywhere near it, while an

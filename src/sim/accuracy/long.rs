@@ -318,7 +318,7 @@ fn horizon(
         match t {
             Ok(r) => frames.push((r.trajectory.time.clone(), r.particles.unwrap_or_default())),
             Err(drop::DropError::Sim(e)) => return Err(AccuracyError::Reference(e)),
-            Err(drop::DropError::Settings(s)) => return Err(AccuracyError::Settings(s)),
+            Err(drop::DropError::Settings(s)) => return Err(AccuracyError::Step(s)),
         }
     }
     let chord = model.chord();

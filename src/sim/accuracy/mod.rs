@@ -60,7 +60,6 @@ use crate::physics::state::State;
 use crate::sim::drop;
 use nalgebra::Vector3;
 use serde::Serialize;
-use std::fmt;
 use std::time::Instant;
 
 type V3 = Vector3<f64>;
@@ -90,27 +89,21 @@ pub const IMPLICIT_MIN_STEP: f64 = 1.0 / 524_288.0;
 const LIMIT_PRECISION: f64 = 0.01;
 
 /// Why an accuracy computation could not be done.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AccuracyError {
     /// Bad settings: the field and what is wrong.
+    #[error("{0}")]
     Settings(String),
+    /// The step or the run's length is refused.
+    #[error(transparent)]
+    Step(#[from] crate::physics::run::StepError),
     /// The reference run itself failed.
+    #[error("the reference run failed: {0}")]
     Reference(SimError),
     /// The run whose error was asked for failed (see [`estimate`]).
+    #[error("the run failed: {0}")]
     Run(SimError),
 }
-
-impl fmt::Display for AccuracyError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            AccuracyError::Settings(s) => f.write_str(s),
-            AccuracyError::Reference(e) => write!(f, "the reference run failed: {e}"),
-            AccuracyError::Run(e) => write!(f, "the run failed: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for AccuracyError {}
 
 /// A copy of `model` in which no spring can break, and how many springs
 /// were breakable. Breaking is an event that limits any scheme to first

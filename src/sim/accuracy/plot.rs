@@ -2,7 +2,7 @@
 
 use super::{SweepReport, TOLERANCES};
 use crate::physics::params::Integrator;
-use crate::util::svg::{SIZE, min_max};
+use crate::util::svg::{PlotError, SIZE, min_max};
 use plotters::prelude::*;
 
 /// One colour per integrator (colour-blind-safe Okabe–Ito hues).
@@ -24,7 +24,7 @@ fn colour(integrator: Integrator) -> RGBColor {
 ///
 /// # Errors
 /// A message if plotters fails (it writes to memory, so only on a bug).
-pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, String> {
+pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, PlotError> {
     let finite: Vec<(f64, f64)> = report
         .rows
         .iter()
@@ -52,14 +52,14 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, S
     let mut svg = String::new();
     {
         let root = SVGBackend::with_string(&mut svg, SIZE).into_drawing_area();
-        root.fill(&WHITE).map_err(|e| e.to_string())?;
+        root.fill(&WHITE).map_err(PlotError::of)?;
         let mut chart = ChartBuilder::on(&root)
             .caption(title, ("sans-serif", 22))
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(80)
             .build_cartesian_2d(x_range.log_scale(), y_range.log_scale())
-            .map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
         chart
             .configure_mesh()
             .x_desc(x_desc.as_str())
@@ -70,7 +70,7 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, S
             .axis_desc_style(("sans-serif", 17))
             .label_style(("sans-serif", 15))
             .draw()
-            .map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
         let grey = RGBColor(120, 120, 120);
         let (x0, x1) = (w_min / 2.0, w_max * 2.0);
         for (level, label) in TOLERANCES
@@ -86,14 +86,14 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, S
                     4,
                     grey.stroke_width(1),
                 ))
-                .map_err(|e| e.to_string())?;
+                .map_err(PlotError::of)?;
             chart
                 .draw_series([Text::new(
                     label,
                     (x0 * 1.15, level * 1.8),
                     ("sans-serif", 15).into_font().color(&grey),
                 )])
-                .map_err(|e| e.to_string())?;
+                .map_err(PlotError::of)?;
         }
         let diverged_y = y_top / 2.0;
         for integrator in Integrator::ALL {
@@ -113,26 +113,26 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, S
                 .collect();
             chart
                 .draw_series(LineSeries::new(curve.clone(), c.stroke_width(2)))
-                .map_err(|e| e.to_string())?
+                .map_err(PlotError::of)?
                 .label(integrator.name())
                 .legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 24, y)], c.stroke_width(2))
                 });
             chart
                 .draw_series(curve.iter().map(|&p| Circle::new(p, 3, c.filled())))
-                .map_err(|e| e.to_string())?;
+                .map_err(PlotError::of)?;
             chart
                 .draw_series(
                     rows.iter()
                         .filter(|r| r.diverged && r.wall_s > 0.0)
                         .map(|r| Cross::new((r.wall_s, diverged_y), 5, c.stroke_width(2))),
                 )
-                .map_err(|e| e.to_string())?;
+                .map_err(PlotError::of)?;
         }
         // A legend entry for the crosses (they have no error to plot).
         chart
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
-            .map_err(|e| e.to_string())?
+            .map_err(PlotError::of)?
             .label("diverged (stopped before T)")
             .legend(|(x, y)| Cross::new((x + 12, y), 5, BLACK.stroke_width(2)));
         chart
@@ -142,8 +142,8 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, S
             .border_style(BLACK)
             .label_font(("sans-serif", 16))
             .draw()
-            .map_err(|e| e.to_string())?;
-        root.present().map_err(|e| e.to_string())?;
+            .map_err(PlotError::of)?;
+        root.present().map_err(PlotError::of)?;
     }
     Ok(svg)
 }

@@ -35,13 +35,13 @@ use crate::physics::terms::{Decision, Terms};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use shapes::Part;
 use std::collections::HashMap;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 type V3 = Vector3<f64>;
 
 /// A scene file that could not be read, parsed or compiled.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}{}: {}: {}", .file, .line.map_or(String::new(), |l| format!(":{l}")), .field, .message)]
 pub struct SceneError {
     /// The scene file.
     pub file: String,
@@ -52,17 +52,6 @@ pub struct SceneError {
     /// What is wrong.
     pub message: String,
 }
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.line {
-            Some(line) => write!(f, "{}:{line}: {}: {}", self.file, self.field, self.message),
-            None => write!(f, "{}: {}: {}", self.file, self.field, self.message),
-        }
-    }
-}
-
-impl std::error::Error for SceneError {}
 
 /// What an object is, which decides what is written for it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -494,13 +483,13 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     ctx.positive("duration", spec.duration)?;
     ctx.positive("frame_rate", spec.frame_rate)?;
     crate::physics::run::check_frames(spec.duration, spec.frame_rate)
-        .map_err(|e| ctx.err("frame_rate", e))?;
+        .map_err(|e| ctx.err("frame_rate", e.to_string()))?;
     if let DtSpec::Seconds(h) = spec.dt {
         ctx.positive("dt", h)?;
         // The step as written (the run snaps it to divide the frame, which
         // at most doubles the count; far below the limit it changes nothing).
         crate::physics::run::check_steps(spec.duration, h, spec.integrator)
-            .map_err(|e| ctx.err("dt", e))?;
+            .map_err(|e| ctx.err("dt", e.to_string()))?;
     }
     ctx.vector("gravity", &spec.gravity)?;
     if let Some(ground) = &spec.ground {

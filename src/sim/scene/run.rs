@@ -6,35 +6,25 @@ use crate::motion::trajectory::Trajectory;
 use crate::physics::integrate::SimError;
 use crate::physics::params::Integrator;
 use crate::physics::pose::PoseTracker;
-use crate::physics::run::{check_budget, resolve_dt};
+use crate::physics::run::{StepError, check_budget, resolve_dt};
 use crate::physics::state::State;
 use crate::util::io::{particle_csv, write_atomic};
 use nalgebra::Vector3;
 use serde::Serialize;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 type V3 = Vector3<f64>;
 
 /// Why a scene run did not complete.
-#[derive(Debug)]
+#[derive(Debug, thiserror::Error)]
 pub enum RunError {
     /// Bad settings (duration, time step).
-    Settings(String),
+    #[error(transparent)]
+    Settings(#[from] StepError),
     /// The simulation diverged or its solver failed.
-    Sim(SimError),
+    #[error(transparent)]
+    Sim(#[from] SimError),
 }
-
-impl fmt::Display for RunError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self {
-            RunError::Settings(s) => f.write_str(s),
-            RunError::Sim(e) => e.fmt(f),
-        }
-    }
-}
-
-impl std::error::Error for RunError {}
 
 /// Numbers of a finished run. Everything but `wall_s` depends only on the
 /// input, so it goes into the summary file; wall time is reported apart.
@@ -89,14 +79,11 @@ impl Scene {
     ) -> Result<(RunStats, State), RunError> {
         let seconds = seconds.unwrap_or(self.duration);
         if !(seconds > 0.0 && seconds.is_finite()) {
-            return Err(RunError::Settings(format!(
-                "duration must be a positive number of seconds, got {seconds}"
-            )));
+            return Err(StepError::Duration(seconds).into());
         }
         let frame_dt = 1.0 / self.frame_rate;
-        let dt = resolve_dt(&self.model, self.integrator, self.dt, frame_dt)
-            .map_err(RunError::Settings)?;
-        check_budget(seconds, dt, self.frame_rate, self.integrator).map_err(RunError::Settings)?;
+        let dt = resolve_dt(&self.model, self.integrator, self.dt, frame_dt)?;
+        check_budget(seconds, dt, self.frame_rate, self.integrator)?;
         let frames = (seconds * self.frame_rate).round().max(1.0) as u64;
         let mut state = self.initial.clone();
         let run = crate::physics::run::run_frames(
