@@ -11,7 +11,7 @@
 //! rule of `--dt auto` — and warns when the cap clamps n, because the run
 //! may then be unstable (docs/numerics.md, "Stress matrix").
 
-use crate::physics::field::{Flow, Primitive, VortexCore, WindField};
+use crate::physics::field::{Flow, LineVortex, Primitive, VortexCore, WindField};
 use crate::physics::forces;
 use crate::physics::integrate::{SimError, Simulator};
 use crate::physics::model::{Model, ModelError, ModelParts};
@@ -230,13 +230,13 @@ pub fn cases(model: &Model, initial: &State) -> Result<Vec<StressCase>, ModelErr
         );
     }
     let core = 1e-3 * model.chord().max(1e-3);
-    let vortex = Primitive::new(Flow::LineVortex {
+    let vortex = Primitive::new(Flow::LineVortex(LineVortex {
         point: initial.position[0],
         axis: V3::new(1.0, 0.0, 0.0),
         circulation: 0.5,
         core_radius: core,
         core: VortexCore::LambOseen,
-    });
+    }));
     push(
         "vortex-axis".into(),
         format!(

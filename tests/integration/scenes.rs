@@ -2,7 +2,7 @@
 //! checked with numbers: each scene's test runs the shipped file.
 
 use crate::common::V3;
-use leafmagic::physics::field::{Flow, WindField};
+use leafmagic::physics::field::{Flow, Uniform, WindField};
 use leafmagic::physics::forces::Forces;
 use leafmagic::physics::state::State;
 use leafmagic::sim::scene::{ObjectKind, Scene, SceneObject};
@@ -107,7 +107,7 @@ fn shockwave_moves_leaves_only_after_the_front_passes() {
     assert_eq!(fronts.len(), 2);
     let up = fronts
         .iter()
-        .find(|p| matches!(p.flow(), Flow::Uniform { velocity } if velocity.z > 0.0))
+        .find(|p| matches!(p.flow(), Flow::Uniform(Uniform { velocity }) if velocity.z > 0.0))
         .unwrap()
         .front()
         .unwrap()

@@ -21,7 +21,9 @@ mod read;
 pub use read::{from_glb, from_glb_bytes, from_scene_dir};
 
 use crate::motion::trajectory::Trajectory;
-use crate::physics::field::{Flow, Region};
+use crate::physics::field::{
+    Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Region, Uniform,
+};
 use crate::physics::model::Model;
 use crate::sim::drop::{DropParams, drop_leaf};
 use crate::sim::scene::{ObjectKind, Scene, SceneRun};
@@ -212,7 +214,7 @@ impl WindGlyph {
             if n > 0.0 { (v / n).into() } else { [0.0; 3] }
         };
         let (kind, point, direction, strength) = match p.flow() {
-            Flow::Uniform { velocity } => {
+            Flow::Uniform(Uniform { velocity }) => {
                 let centre = match p.bounds().map(|b| &b.region) {
                     Some(Region::Sphere { center, .. }) => *center,
                     Some(Region::Box { min, max }) => (min + max) / 2.0,
@@ -221,20 +223,24 @@ impl WindGlyph {
                 };
                 ("uniform", centre, unit(velocity), velocity.norm())
             }
-            Flow::PointSource { point, flux, .. } => ("point_source", *point, [0.0; 3], *flux),
-            Flow::PointSink { point, flux, .. } => ("point_sink", *point, [0.0; 3], *flux),
-            Flow::LineSource {
+            Flow::PointSource(PointSource { point, flux, .. }) => {
+                ("point_source", *point, [0.0; 3], *flux)
+            }
+            Flow::PointSink(PointSink { point, flux, .. }) => {
+                ("point_sink", *point, [0.0; 3], *flux)
+            }
+            Flow::LineSource(LineSource {
                 point, axis, flux, ..
-            } => ("line_source", *point, unit(axis), *flux),
-            Flow::LineSink {
+            }) => ("line_source", *point, unit(axis), *flux),
+            Flow::LineSink(LineSink {
                 point, axis, flux, ..
-            } => ("line_sink", *point, unit(axis), *flux),
-            Flow::LineVortex {
+            }) => ("line_sink", *point, unit(axis), *flux),
+            Flow::LineVortex(LineVortex {
                 point,
                 axis,
                 circulation,
                 ..
-            } => ("line_vortex", *point, unit(axis), *circulation),
+            }) => ("line_vortex", *point, unit(axis), *circulation),
         };
         WindGlyph {
             kind: kind.to_string(),

@@ -25,7 +25,9 @@ pub use spec::{
 };
 
 use crate::leaf::LeafSpec;
-use crate::physics::field::{Flow, WindField};
+use crate::physics::field::{
+    Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
+};
 use crate::physics::model::RigidGroup;
 use crate::physics::model::{AeroLaw, Model, ModelError, ModelParts, Spring, Triangle};
 use crate::physics::params::Integrator;
@@ -310,12 +312,12 @@ fn inert(p: &crate::physics::field::Primitive) -> Option<&'static str> {
         return Some("all strength keys are 0");
     }
     let zero = match p.flow() {
-        Flow::Uniform { velocity } => *velocity == V3::zeros(),
-        Flow::PointSource { flux, .. }
-        | Flow::PointSink { flux, .. }
-        | Flow::LineSource { flux, .. }
-        | Flow::LineSink { flux, .. } => *flux == 0.0,
-        Flow::LineVortex { circulation, .. } => *circulation == 0.0,
+        Flow::Uniform(Uniform { velocity }) => *velocity == V3::zeros(),
+        Flow::PointSource(PointSource { flux, .. })
+        | Flow::PointSink(PointSink { flux, .. })
+        | Flow::LineSource(LineSource { flux, .. })
+        | Flow::LineSink(LineSink { flux, .. }) => *flux == 0.0,
+        Flow::LineVortex(LineVortex { circulation, .. }) => *circulation == 0.0,
     };
     zero.then_some("zero strength")
 }
