@@ -2,7 +2,7 @@
 //! the quadratic law of [`super::quadratic`] where the model chooses it.
 
 use super::quadratic::quadratic_forces;
-use super::surfaces::surfaces;
+use super::surfaces::surface;
 use crate::physics::model::{AeroLaw, Model};
 use nalgebra::Vector3;
 
@@ -44,7 +44,10 @@ pub fn triangle_aero_intact(
     if let AeroLaw::Quadratic(law) = &model.aero {
         return quadratic_forces(law, model, x, v, wind, torn, force);
     }
-    for (tri, big_n, n2) in surfaces(model, x, torn) {
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+            continue;
+        };
         let doubled_area = n2.sqrt();
         let area = 0.5 * doubled_area;
         // αᵗ A v_r + (αⁿ − αᵗ) A (n·v_r) n, with A n (n·v) = N (N·v) / (2|N|).

@@ -87,7 +87,7 @@
 //! Jacobian has no aerodynamic block under this law, so its step is bounded
 //! by the drag rate ([`drag_rate`]) as for forward Euler.
 
-use super::surfaces::surfaces;
+use super::surfaces::surface;
 use crate::physics::model::{AeroLaw, Model, QuadraticAero};
 use nalgebra::Vector3;
 
@@ -117,7 +117,10 @@ pub fn quadratic_forces(
     let half_rho = 0.5 * law.air_density;
     let k_normal = law.cd_normal - law.cd_parallel - 2.0 * law.cl_amplitude;
     let offset_at_zero = 1.0 - law.cop_leading;
-    for (tri, big_n, n2) in surfaces(model, x, torn) {
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+            continue;
+        };
         let [a, b, c] = tri.corners;
         let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
         let doubled_area = n2.sqrt();
