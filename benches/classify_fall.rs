@@ -5,10 +5,10 @@
 //! classification.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::classify::{MotionClass, classify};
-use leafmagic::describe::{Descriptors, MotionTarget};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::motion::classify::{MotionClass, classify};
+use leafmagic::motion::describe::{Descriptors, MotionTarget};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use std::hint::black_box;
 
 fn classify_fall(c: &mut Criterion) {

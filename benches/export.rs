@@ -5,8 +5,8 @@
 //! The target is under a second per export.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::export::{self, glb, pc2};
-use leafmagic::scene::Scene;
+use leafmagic::output::export::{self, glb, pc2};
+use leafmagic::sim::scene::Scene;
 use std::hint::black_box;
 use std::path::Path;
 use std::time::Duration;
@@ -21,7 +21,9 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("leafmagic-bench-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let glb_size = glb::glb_bytes(&clip).unwrap().len();
-    let page_size = leafmagic::preview::html(&clip, false).unwrap().len();
+    let page_size = leafmagic::output::preview::html(&clip, false)
+        .unwrap()
+        .len();
     eprintln!(
         "scene: {} objects, {} frames at 30 fps; .glb {:.1} MB, page {:.2} MB",
         clip.objects.len(),
@@ -49,7 +51,9 @@ fn bench(c: &mut Criterion) {
     g.bench_function("preview page (clip + html)", |b| {
         b.iter(|| {
             let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
-            leafmagic::preview::html(&clip, false).unwrap().len()
+            leafmagic::output::preview::html(&clip, false)
+                .unwrap()
+                .len()
         })
     });
     g.finish();

@@ -6,12 +6,13 @@
 //! the cost of describing each fall and measuring its distance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::breed::{BreedSettings, evaluate, stream_seed};
-use leafmagic::classify::classify;
-use leafmagic::describe::{Descriptors, MotionTarget};
-use leafmagic::genome::{Genome, mutate};
+use leafmagic::breed::selection::stream_seed;
+use leafmagic::breed::{BreedSettings, evaluate};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::leaf::genome::{Genome, mutate};
+use leafmagic::motion::classify::classify;
+use leafmagic::motion::describe::{Descriptors, MotionTarget};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;

@@ -7,14 +7,18 @@
 //! reference, so the speed is that of an accurate run.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::integrate::{Integrator, Simulator};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::sim::{self, DropParams, TimeStep, drop_leaf};
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::params::TimeStep;
+use leafmagic::physics::run;
+use leafmagic::physics::state::State;
+use leafmagic::sim::drop;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use std::hint::black_box;
 
 fn end_positions(
-    model: &leafmagic::model::Model,
+    model: &leafmagic::physics::model::Model,
     integrator: Integrator,
     dt: TimeStep,
 ) -> Vec<nalgebra::Vector3<f64>> {
@@ -49,11 +53,11 @@ fn leaf_fall(c: &mut Criterion) {
         / fast.len() as f64)
         .sqrt();
     let error = rms / model.chord();
-    let dt = sim::resolve_step(
+    let dt = run::resolve_step(
         &model,
         defaults.integrator,
         TimeStep::Auto,
-        1.0 / sim::FRAME_RATE,
+        1.0 / drop::FRAME_RATE,
     )
     .unwrap();
     eprintln!(
@@ -81,11 +85,11 @@ fn leaf_fall(c: &mut Criterion) {
     });
     group.bench_function("stability_estimate", |b| {
         b.iter(|| {
-            black_box(sim::resolve_step(
+            black_box(run::resolve_step(
                 &model,
                 defaults.integrator,
                 TimeStep::Auto,
-                1.0 / sim::FRAME_RATE,
+                1.0 / drop::FRAME_RATE,
             ))
         })
     });
@@ -94,7 +98,7 @@ fn leaf_fall(c: &mut Criterion) {
         b.iter(|| {
             let mut state = State::released(
                 &model,
-                sim::release_rotation(defaults.tilt_deg),
+                drop::release_rotation(defaults.tilt_deg),
                 Default::default(),
             );
             let mut simulator = Simulator::new(&model, defaults.integrator);

@@ -24,19 +24,22 @@
 //! ratios of their minimum times (the least disturbed runs).
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::contact::Ground;
-use leafmagic::field::{Primitive, WindField};
-use leafmagic::integrate::{Integrator, Simulator};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::model::Model;
-use leafmagic::sim::{self, TimeStep};
-use leafmagic::state::State;
-use leafmagic::terms::Terms;
+use leafmagic::physics::field::{Primitive, WindField};
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::Ground;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::params::TimeStep;
+use leafmagic::physics::run;
+use leafmagic::physics::state::State;
+use leafmagic::physics::terms::Terms;
+use leafmagic::sim::drop;
 use nalgebra::Vector3;
 use std::hint::black_box;
 
 fn fall(model: &Model, terms: Terms, dt: f64, steps: usize) -> State {
-    let mut state = State::released(model, sim::release_rotation([10.0, 2.0]), Vector3::zeros());
+    let mut state = State::released(model, drop::release_rotation([10.0, 2.0]), Vector3::zeros());
     let mut simulator = Simulator::with_terms(model, Integrator::Verlet, terms);
     for _ in 0..steps {
         simulator.step(model, &mut state, dt).unwrap();
@@ -58,11 +61,11 @@ fn scene_compile(c: &mut Criterion) {
     for s in &mut everything.springs {
         s.break_strain = Some(1e9);
     }
-    let dt = sim::resolve_dt(
+    let dt = run::resolve_dt(
         &plain,
         Integrator::Verlet,
         TimeStep::Auto,
-        1.0 / sim::FRAME_RATE,
+        1.0 / drop::FRAME_RATE,
     )
     .unwrap();
     let steps = (1.0 / dt).round() as usize;
@@ -154,10 +157,10 @@ fn shipped_scenes() {
         "rocking-bin",
         "tear",
     ] {
-        let scene = leafmagic::scene::Scene::load(&dir.join(format!("{name}.toml"))).unwrap();
+        let scene = leafmagic::sim::scene::Scene::load(&dir.join(format!("{name}.toml"))).unwrap();
         let model = &scene.model;
         let dt =
-            sim::resolve_dt(model, scene.integrator, scene.dt, 1.0 / scene.frame_rate).unwrap();
+            run::resolve_dt(model, scene.integrator, scene.dt, 1.0 / scene.frame_rate).unwrap();
         let run = |terms: Terms| {
             let mut state = scene.initial.clone();
             let mut simulator = Simulator::with_terms(model, scene.integrator, terms);

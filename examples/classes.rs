@@ -1,4 +1,4 @@
-//! The figures of the README's "Floaters, spinners, lilters" section, from
+//! The figures of docs/classes.md ("Floaters, spinners, lilters"), from
 //! real runs (10 s drops, Verlet, auto dt):
 //!
 //! ```sh
@@ -11,13 +11,13 @@
 //! 3. one round of genome variation of each prototype (200 variants);
 //! 4. the table of one leaf per class.
 
-use leafmagic::aero::AIR_DENSITY;
-use leafmagic::classify::{Classification, MotionClass, classify};
-use leafmagic::genome::{Genome, mutate};
+use leafmagic::leaf::genome::{Genome, mutate};
+use leafmagic::leaf::plates::{self, square_card};
+use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroSpec, LeafSpec};
-use leafmagic::plates::{self, square_card};
-use leafmagic::recipes::Recipe;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::motion::classify::{Classification, MotionClass, classify};
+use leafmagic::physics::model::AIR_DENSITY;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -187,7 +187,7 @@ fn table() {
         let model = spec.model().unwrap();
         let c = fall(&spec, [10.0, 2.0]);
         let length = if side > 0.0 { side } else { model.chord() };
-        let law = if matches!(model.aero, leafmagic::model::AeroLaw::Linear) {
+        let law = if matches!(model.aero, leafmagic::physics::model::AeroLaw::Linear) {
             "linear"
         } else {
             "quadratic"

@@ -6,11 +6,11 @@
 //!
 //! `cargo run --release --example descriptor_scales` (about 4 s on 2 cores).
 
-use leafmagic::classify::classify;
-use leafmagic::describe::{Descriptors, NAMES, SCALES};
-use leafmagic::genome::{Genome, mutate};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::leaf::genome::{Genome, mutate};
+use leafmagic::motion::classify::classify;
+use leafmagic::motion::describe::{Descriptors, NAMES, SCALES};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;

@@ -2,39 +2,33 @@
 //! physically based simulator (after Haumann et al., "An Application of
 //! Motion Design and Control for Physically-Based Animation").
 //!
-//! Data flow: a leaf file ([`leaf`]) becomes an immutable [`model::Model`];
-//! [`integrate::Simulator`] advances a mutable [`state::State`] under the
-//! forces of [`force`] (gravity, springs, the paper's per-triangle
-//! aerodynamics in the wind of [`field`]); [`sim`] runs frames and records
-//! poses ([`pose`]) into a trajectory.
+//! The folders are the layers; each imports only the layers above it in
+//! this list (a test, `layers`, holds the rule):
+//!
+//! - [`util`]: atomic file writes, CSV of particle positions, SVG plot
+//!   helpers. Imports nothing of leafmagic.
+//! - [`physics`]: the simulator of the paper's section 2: the model and its
+//!   parts, the state, the wind field, the force terms, contact, rigid
+//!   bodies, stability, the integrators and the frame loops.
+//! - [`motion`]: trajectories and what they show: classification into the
+//!   paper's floaters, spinners and lilters, and motion descriptors. Knows
+//!   nothing of physics: it reads poses, from leafmagic or anywhere else.
+//! - [`leaf`]: leaf files, the paper's prototypes, the genome that varies
+//!   them, recipes and flat plates.
+//! - [`sim`]: experiments built on the simulator: the drop test, scenes,
+//!   accuracy sweeps, the stress matrix.
+//! - [`breed`]: the paper's section 4.1 loop, automated: populations,
+//!   evaluation, selection, the run directory, shards and executors.
+//! - [`output`]: what leaves leafmagic for other tools: glTF, PC2 + OBJ,
+//!   and the HTML preview.
+//!
+//! The command line (`src/cli/`) sits on top, in the binary.
 #![warn(missing_docs)]
 
-pub mod accuracy;
-pub mod aero;
 pub mod breed;
-pub mod classify;
-pub mod contact;
-pub mod describe;
-pub mod executor;
-pub mod export;
-pub mod field;
-pub mod force;
-pub mod genome;
-pub mod integrate;
-pub mod io;
 pub mod leaf;
-pub mod model;
-pub mod plates;
-pub mod plot;
-pub mod pose;
-pub mod preview;
-pub mod recipes;
-pub mod rigid;
-pub mod scene;
-pub mod shard;
+pub mod motion;
+pub mod output;
+pub mod physics;
 pub mod sim;
-pub mod stability;
-pub mod state;
-pub mod stress;
-pub mod terms;
-pub mod trajectory;
+pub mod util;

@@ -3,16 +3,16 @@
 //! extreme matrix of `check --stress`.
 
 use crate::common::*;
-use leafmagic::accuracy::{
+use leafmagic::leaf::LeafSpec;
+use leafmagic::physics::field::Flow;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::stability;
+use leafmagic::physics::state::State;
+use leafmagic::sim::accuracy::{
     self, ErrorCache, SweepRange, SweepSettings, long::LongSettings, smooth_model,
 };
-use leafmagic::field::Flow;
-use leafmagic::integrate::Integrator;
-use leafmagic::leaf::LeafSpec;
-use leafmagic::model::Model;
-use leafmagic::stability;
-use leafmagic::state::State;
-use leafmagic::stress::{self, ExplicitPolicy, Outcome, StressRow};
+use leafmagic::sim::stress::{self, ExplicitPolicy, Outcome, StressRow};
 use std::collections::HashSet;
 use std::process::Command;
 
@@ -37,7 +37,8 @@ fn settings(seconds: f64, ranges: &[(Integrator, u32, u32)], reference_j: u32) -
     }
 }
 
-/// O7 through the sweep: on a lightly damped oscillator (ω = 5 rad/s,
+/// O7 (docs/numerics.md, "Oracles") through the sweep: on a lightly damped
+/// oscillator (ω = 5 rad/s,
 /// ζ = 0.05, stretched by 0.1 m) the fitted orders are 1, 1, 2, 4, 1
 /// within ±0.15, and so is every pairwise order of the fit. (Not ω = 2π:
 /// at T = one period the O(h) phase error of symplectic Euler, whose
@@ -80,7 +81,7 @@ fn sweep_finds_the_theoretical_orders_on_an_oscillator() {
 
 /// The same on the leaf itself, for the schemes whose fit window lies in
 /// their asymptotic range (RK4 is stable only where its error is already
-/// near the reference's floor, see the README).
+/// near the reference's floor, see docs/accuracy.md).
 #[test]
 fn sweep_finds_first_and_second_order_on_the_leaf() {
     let model = leaf_a();
@@ -506,7 +507,7 @@ fn stress_cases_are_what_they_say() {
     assert!((w.velocity(&V3::zeros(), 0.0).norm() - 1e3).abs() < 1e-9);
     let v = case("vortex-axis");
     let prim = &v.model.wind.primitives()[0];
-    assert!(matches!(prim.flow(), Flow::LineVortex { .. }));
+    assert!(matches!(prim.flow(), Flow::LineVortex(_)));
     let on_axis = v.model.wind.velocity(&v.initial.position[0], 0.0);
     assert!(on_axis.norm() < 1e-9, "{on_axis:?}");
     let c = case("coincident");

@@ -2,13 +2,16 @@
 //! with optional coefficient overrides; each law's fields are required or
 //! rejected by name; the stability estimate and every integrator handle it.
 
-use leafmagic::aero::{self, QuadraticAero};
-use leafmagic::integrate::Integrator;
+use leafmagic::leaf::plates::square_card;
 use leafmagic::leaf::{AeroSpec, LeafSpec, PROTOTYPE_A};
-use leafmagic::model::AeroLaw;
-use leafmagic::plates::square_card;
-use leafmagic::sim::{DropParams, TimeStep, drop_leaf};
-use leafmagic::stability;
+use leafmagic::physics::forces::quadratic;
+use leafmagic::physics::model;
+use leafmagic::physics::model::AeroLaw;
+use leafmagic::physics::model::QuadraticAero;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::params::TimeStep;
+use leafmagic::physics::stability;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 
 /// Prototype A with its `[aero]` table replaced by `aero` (TOML lines).
 fn with_aero(aero: &str) -> String {
@@ -53,7 +56,7 @@ fn quadratic_law_reads_with_defaults_and_overrides() {
             law.air_density,
             law.cd_parallel
         ),
-        (2.6, 0.3, 1.0, aero::CD_PARALLEL)
+        (2.6, 0.3, 1.0, model::CD_PARALLEL)
     );
     // Round trip through TOML keeps the law.
     let again = LeafSpec::from_toml(&spec.to_toml(), "again").unwrap();
@@ -113,7 +116,7 @@ fn stability_estimate_accounts_for_the_quadratic_drag() {
     let (el, eq) = (stability::estimate(&linear), stability::estimate(&quad));
     assert_eq!(el.dt_max(Integrator::Implicit), None);
     assert_eq!(el.explicit_drag_rate, 0.0);
-    let rate = aero::drag_rate(&quad);
+    let rate = quadratic::drag_rate(&quad);
     assert!(rate > 0.0 && eq.explicit_drag_rate == rate && eq.drag_rate >= rate);
     let implicit = eq.dt_max(Integrator::Implicit).unwrap();
     assert!(
@@ -145,8 +148,8 @@ fn stability_estimate_accounts_for_the_quadratic_drag() {
 /// is an error that names the leaf.
 #[test]
 fn scenes_carry_the_leaves_law_and_reject_a_mix() {
-    use leafmagic::force::triangle_aero;
-    use leafmagic::scene::Scene;
+    use leafmagic::physics::forces::triangle_aero;
+    use leafmagic::sim::scene::Scene;
     use nalgebra::Vector3;
     let dir = std::env::temp_dir().join(format!("leafmagic-aero-scene-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -162,7 +165,7 @@ fn scenes_carry_the_leaves_law_and_reject_a_mix() {
     let scene = Scene::from_toml(&one, "q-scene.toml", &dir).unwrap();
     assert_eq!(scene.model.aero, leaf.aero);
 
-    let total = |model: &leafmagic::model::Model, x: &[Vector3<f64>]| {
+    let total = |model: &leafmagic::physics::model::Model, x: &[Vector3<f64>]| {
         let v = vec![Vector3::new(0.1, 0.0, -0.8); x.len()];
         let mut f = vec![Vector3::zeros(); x.len()];
         triangle_aero(model, x, &v, None, &mut f);

@@ -2,9 +2,10 @@
 //! one for this test binary, and counts per thread so other tests running in
 //! parallel do not disturb the count.
 
-use leafmagic::integrate::{Integrator, Simulator};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::state::State;
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -49,7 +50,7 @@ fn stepping_allocates_nothing() {
         for integrator in Integrator::ALL {
             let mut state = State::released(
                 &model,
-                leafmagic::sim::release_rotation([10.0, 2.0]),
+                leafmagic::sim::drop::release_rotation([10.0, 2.0]),
                 Default::default(),
             );
             let mut sim = Simulator::new(&model, integrator);
@@ -75,7 +76,7 @@ fn stepping_allocates_nothing() {
 fn scene_stepping_allocates_nothing() {
     for name in ["rocking-bin", "inhale", "swings", "tear"] {
         let scene = crate::scenes::load(name);
-        let dt = leafmagic::sim::resolve_dt(
+        let dt = leafmagic::physics::run::resolve_dt(
             &scene.model,
             scene.integrator,
             scene.dt,

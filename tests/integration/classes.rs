@@ -5,12 +5,12 @@
 //! density rises (Field et al. 1997 order). Every drop is 10 s at the
 //! default settings (Verlet, auto dt); a prototype drop costs ~5 ms.
 
-use leafmagic::classify::{Classification, MotionClass, Regime, classify};
-use leafmagic::genome::{Genome, mutate};
+use leafmagic::leaf::genome::{Genome, mutate};
+use leafmagic::leaf::plates::{self, square_card};
+use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroSpec, LeafSpec};
-use leafmagic::plates::{self, square_card};
-use leafmagic::recipes::Recipe;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::motion::classify::{Classification, MotionClass, Regime, classify};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
@@ -63,7 +63,8 @@ fn paper_floaters_flaps_up_centre_of_gravity_central() {
 /// Topology A, flaps 1 and 3 folded in opposite directions, centre of
 /// gravity off to one side: "spinners". The recipe leaf (±30°, a quarter of
 /// the mass on the tip of flap 2) spins about the vertical (autorotation,
-/// its plane steep), as §4e found. Measured: 13 of 16 variants spin (12
+/// its plane steep), as leafmagic's predecessor found (docs/falling-plates.md,
+/// "Folded leaves under the linear law"). Measured: 13 of 16 variants spin (12
 /// about the vertical, 1 tumbles), 2 lilt, 1 floats.
 #[test]
 fn paper_spinners_flaps_opposed_centre_of_gravity_aside() {
@@ -167,7 +168,8 @@ fn fixtures_from_varying_prototype_a_keep_their_class() {
 }
 
 /// Under the paper's linear law a flat, uniform card has no pitching
-/// moment (notes §4d): whatever its density it keeps its release attitude
+/// moment (docs/falling-plates.md, "Linear law: no pitching moment"):
+/// whatever its density it keeps its release attitude
 /// exactly and slides down along it — a floater, never a flutterer,
 /// tumbler or lilter. (Released 45° steep it would glide steeply, which the
 /// classifier leaves undetermined.)
@@ -209,15 +211,16 @@ fn flat_card_falls_at_the_quadratic_terminal_speed() {
     let n = traj.len();
     let vz = (traj.position[n - 1].z - traj.position[n - 121].z)
         / (traj.time[n - 1] - traj.time[n - 121]);
-    let expect = (2.0 * sigma * leafmagic::model::STANDARD_GRAVITY
-        / (leafmagic::aero::AIR_DENSITY * leafmagic::aero::CD_NORMAL))
+    let expect = (2.0 * sigma * leafmagic::physics::model::STANDARD_GRAVITY
+        / (leafmagic::physics::model::AIR_DENSITY * leafmagic::physics::model::CD_NORMAL))
         .sqrt();
     assert!((-vz - expect).abs() < 1e-6 * expect, "{} vs {expect}", -vz);
 }
 
 /// The card as its areal density rises, under the quadratic law: floaters
 /// (flutter) at low density, lilters between, spinners (tumble) at high
-/// density — the order Field et al. (1997) report (notes §3a). Each density
+/// density — the order Field et al. (1997, Nature 388, 252) report. Each
+/// density
 /// is named by the most common class of eight release attitudes.
 /// Measured: 8/8, 8/8 floaters; 5/8, 5/8 lilters; 7/8, 7/8 spinners (the
 /// diagonal release [20°, 20°] floats at 0.1–0.14 and lilts at 0.3–0.5).
@@ -249,7 +252,7 @@ fn card_classes_follow_density_floater_lilter_spinner() {
         let model = square_card(side, sigma, AeroSpec::quadratic())
             .model()
             .unwrap();
-        let i_star = plates::i_star(&model, side, leafmagic::aero::AIR_DENSITY);
+        let i_star = plates::i_star(&model, side, leafmagic::physics::model::AIR_DENSITY);
         let n = |c| classes.iter().filter(|&&x| x == c).count();
         println!(
             "σ = {sigma} kg/m², I* = {i_star:.3}: {} floaters, {} lilters, {} spinners, {} undetermined",

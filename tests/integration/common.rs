@@ -1,7 +1,7 @@
 //! Small models built in code for the oracles.
 
-use leafmagic::field::WindField;
-use leafmagic::model::{AeroLaw, Model, ModelParts, Spring, Triangle};
+use leafmagic::physics::field::WindField;
+use leafmagic::physics::model::{AeroLaw, Model, ModelParts, Spring, Triangle};
 use nalgebra::Vector3;
 
 pub type V3 = Vector3<f64>;

@@ -1,15 +1,16 @@
-//! Ground contact against closed forms (numerics notes O11): first impact at
+//! Ground contact against closed forms (docs/numerics.md, "Oracles", O11): first impact at
 //! √(2H/g), bounce heights e^{2k} H, a slide stopping at v₀²/(2 μ_k g), a
 //! block on a slope held by static friction below the friction angle and
 //! sliding at g (sin θ − μ_k cos θ) above it; for free particles and for rigid
 //! bodies.
 
 use crate::common::{V3, parts};
-use leafmagic::contact::Ground;
-use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::{Model, STANDARD_GRAVITY as G};
-use leafmagic::rigid::RigidGroup;
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::Ground;
+use leafmagic::physics::model::RigidGroup;
+use leafmagic::physics::model::{Model, STANDARD_GRAVITY as G};
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::state::State;
 
 fn ground(mu_s: f64, mu_k: f64, e: f64) -> Ground {
     Ground {

@@ -3,11 +3,11 @@
 //! specification and the OBJ in the same vertex order, resampling exact for
 //! linear motion, the HTML page drawn by headless Chromium at two times.
 
-use leafmagic::export::{
+use leafmagic::leaf::LeafSpec;
+use leafmagic::output::export::{
     self, Clip, ClipObject, DEFAULT_FPS, ExportError, Format, Motion, glb, pc2,
 };
-use leafmagic::leaf::LeafSpec;
-use leafmagic::scene::Scene;
+use leafmagic::sim::scene::Scene;
 use nalgebra::Vector3;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -785,15 +785,15 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
     // The re-drop is the fall that earned the recorded class.
     let opened = leafmagic::breed::Run::open(&run).unwrap();
     let cp = opened.checkpoint.as_ref().unwrap();
-    let best = leafmagic::breed::rank(&cp.population)[0];
+    let best = leafmagic::breed::selection::rank(&cp.population)[0];
     let model = best.genome.model(&opened.proto).unwrap();
-    let params = leafmagic::sim::DropParams {
+    let params = leafmagic::sim::drop::DropParams {
         seconds: 3.0,
         ..Default::default()
     };
-    let fall = leafmagic::sim::drop_leaf(&model, &params).unwrap();
-    let c = leafmagic::classify::classify(&fall.trajectory, model.chord());
-    assert_eq!(c.class.to_string(), best.eval.class);
+    let fall = leafmagic::sim::drop::drop_leaf(&model, &params).unwrap();
+    let c = leafmagic::motion::classify::classify(&fall.trajectory, model.chord());
+    assert_eq!(c.class.as_str(), best.eval.class_name());
 }
 
 #[test]
@@ -873,7 +873,7 @@ fn hundred_leaves() -> Clip {
 fn the_page_for_a_hundred_leaves_for_ten_seconds_stays_under_20_mb() {
     let clip = hundred_leaves();
     assert_eq!(clip.frames, 301);
-    let page = leafmagic::preview::html(&clip, true).unwrap();
+    let page = leafmagic::output::preview::html(&clip, true).unwrap();
     // 100 × 301 × 7 vertices × 12 bytes of float32, base64: ≈ 3.4 MB.
     assert!(page.len() < 20_000_000, "page is {} bytes", page.len());
     assert!(

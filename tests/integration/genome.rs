@@ -1,8 +1,8 @@
 //! Leaf variation: every variant is a valid model, and the same seed gives
 //! the same variant.
 
-use leafmagic::genome::{Genome, mutate};
 use leafmagic::leaf::LeafSpec;
+use leafmagic::leaf::genome::{Genome, mutate};
 use proptest::prelude::*;
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;

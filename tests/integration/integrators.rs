@@ -1,11 +1,13 @@
-//! Discrete-exact oracles for each integrator (numerics notes §3: O1–O4, O7)
+//! Discrete-exact oracles for each integrator (docs/numerics.md, "Oracles":
+//! O1–O4, O7)
 //! and stability boundaries at 0.99 / 1.01 × the predicted limit.
 
 use crate::common::*;
-use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::Model;
-use leafmagic::stability;
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::stability;
+use leafmagic::physics::state::State;
 
 fn run(model: &Model, integrator: Integrator, h: f64, steps: usize, state: &mut State) {
     let mut sim = Simulator::new(model, integrator);
@@ -297,7 +299,7 @@ fn convergence_orders() {
 /// spanning 2.5 frames) land on the closed form to round-off.
 #[test]
 fn frames_between_steps_are_interpolated_exactly_on_a_parabola() {
-    use leafmagic::sim::run_sampled;
+    use leafmagic::physics::run::run_sampled;
     let mut parts = crate::common::parts(1);
     parts.gravity = V3::new(0.0, 0.0, -9.81);
     let model = Model::new(parts).unwrap();

@@ -1,14 +1,16 @@
-//! Conservation laws and invariances (numerics notes O4 anisotropic, O5,
-//! O12, O13) and the force terms' edge cases.
+//! Conservation laws and invariances (docs/numerics.md, "Oracles": O4
+//! anisotropic, O5, O12, O13) and the force terms' edge cases.
 
 use crate::common::*;
-use leafmagic::field::{Primitive, WindField};
-use leafmagic::force::{self, Forces};
-use leafmagic::integrate::{Integrator, SimError, Simulator, break_limits, break_springs};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::model::{Model, ModelParts, Spring};
-use leafmagic::sim::{DropParams, TimeStep, drop_leaf};
-use leafmagic::state::State;
+use leafmagic::physics::field::{Primitive, WindField};
+use leafmagic::physics::forces::{self, Forces};
+use leafmagic::physics::integrate::{SimError, Simulator, break_limits, break_springs};
+use leafmagic::physics::model::{Model, ModelParts, Spring};
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::params::TimeStep;
+use leafmagic::physics::state::State;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 
 fn momentum(model: &Model, s: &State) -> V3 {
     s.velocity
@@ -132,8 +134,8 @@ fn triangle_winding_does_not_change_the_aero_force() {
     ];
     let mut fa = vec![V3::zeros(); 3];
     let mut fb = vec![V3::zeros(); 3];
-    force::triangle_aero(&model, &x, &v, None, &mut fa);
-    force::triangle_aero(&flipped, &x, &v, None, &mut fb);
+    forces::triangle_aero(&model, &x, &v, None, &mut fa);
+    forces::triangle_aero(&flipped, &x, &v, None, &mut fb);
     for (a, b) in fa.iter().zip(&fb) {
         assert!(
             (a - b).norm() <= 1e-15 * a.norm().max(1e-12),
@@ -155,7 +157,7 @@ fn degenerate_triangles_and_still_air_give_zero_force() {
     ];
     let v = vec![V3::new(0.0, 0.0, -1.0); 3];
     let mut f = vec![V3::zeros(); 3];
-    force::triangle_aero(&model, &collinear, &v, None, &mut f);
+    forces::triangle_aero(&model, &collinear, &v, None, &mut f);
     assert!(
         f.iter().all(|x| x.norm() == 0.0),
         "collinear triangle got {f:?}"
@@ -165,13 +167,13 @@ fn degenerate_triangles_and_still_air_give_zero_force() {
         V3::new(0.1, 0.0, 0.0),
         V3::new(0.2, 1e-200, 0.0),
     ];
-    force::triangle_aero(&model, &nearly, &v, None, &mut f);
+    forces::triangle_aero(&model, &nearly, &v, None, &mut f);
     assert!(
         f.iter().all(|x| x.iter().all(|c| c.is_finite())),
         "got {f:?}"
     );
     let mut g = vec![V3::zeros(); 3];
-    force::triangle_aero(
+    forces::triangle_aero(
         &model,
         &model.rest_position,
         &[V3::zeros(); 3],
@@ -194,7 +196,7 @@ fn galilean_invariance_with_uniform_wind() {
     let released = |m: &Model| {
         State::released(
             m,
-            leafmagic::sim::release_rotation([10.0, 2.0]),
+            leafmagic::sim::drop::release_rotation([10.0, 2.0]),
             V3::zeros(),
         )
     };
@@ -285,7 +287,7 @@ fn spring_breaks_at_the_predicted_step_and_stops_acting() {
     }
     assert_eq!(broke_at, Some(expected_step));
     let mut f = vec![V3::zeros(); 2];
-    force::springs(&model, &s.position, &s.velocity, &s.spring_alive, &mut f);
+    forces::springs(&model, &s.position, &s.velocity, &s.spring_alive, &mut f);
     assert!(f.iter().all(|x| x.norm() == 0.0));
     // A broken spring never heals, even back at its rest length.
     s.position[1] = V3::new(rest, 0.0, 0.0);
@@ -298,12 +300,12 @@ fn spring_breaks_at_the_predicted_step_and_stops_acting() {
 #[test]
 fn divergence_is_reported_with_its_cause() {
     let model = LeafSpec::load("a").unwrap().model().unwrap();
-    let est = leafmagic::stability::estimate(&model);
+    let est = leafmagic::physics::stability::estimate(&model);
     let limit = est.dt_max(Integrator::Symplectic).unwrap();
     let h = 3.0 * limit;
     let mut s = State::released(
         &model,
-        leafmagic::sim::release_rotation([10.0, 2.0]),
+        leafmagic::sim::drop::release_rotation([10.0, 2.0]),
         V3::zeros(),
     );
     let mut sim = Simulator::new(&model, Integrator::Symplectic);
@@ -346,7 +348,7 @@ fn force_terms_sum_to_the_total() {
     let model = spec_wind.model().unwrap();
     let mut s = State::released(
         &model,
-        leafmagic::sim::release_rotation([30.0, 5.0]),
+        leafmagic::sim::drop::release_rotation([30.0, 5.0]),
         V3::zeros(),
     );
     s.velocity
@@ -373,7 +375,7 @@ fn force_terms_sum_to_the_total() {
 /// A diagnosis never prints NaN: non-finite magnitudes are said in words.
 #[test]
 fn diagnoses_say_non_finite_in_words() {
-    let diverged = SimError::Diverged(Box::new(leafmagic::integrate::Divergence {
+    let diverged = SimError::Diverged(Box::new(leafmagic::physics::integrate::Divergence {
         step: 3,
         time: 0.01,
         particle: 2,

@@ -2,8 +2,8 @@
 //! speed the linear law predicts, and the same input gives the same bytes.
 
 use leafmagic::leaf::LeafSpec;
-use leafmagic::model::STANDARD_GRAVITY;
-use leafmagic::sim::{DropParams, drop_leaf};
+use leafmagic::physics::model::STANDARD_GRAVITY;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use nalgebra::Vector3;
 
 /// Dihedral angle between the two triangles sharing hinge (a, b), with apexes p, q.
@@ -21,7 +21,8 @@ fn dihedral(x: &[Vector3<f64>], a: usize, b: usize, p: usize, q: usize) -> f64 {
 
 /// Air load must not fold the flaps: every hinge angle stays within 5° of
 /// its rest value through a 3 s fall (soft springs would let a flap fold
-/// over by 40–70° and turn the leaf into a diver, falling-plates notes §4e).
+/// over by 40–70° and turn the leaf into a diver: docs/falling-plates.md,
+/// "Folded leaves under the linear law").
 /// Measured: prototype A under 1°, prototype B (which lilts, falling at
 /// about 1.8 m/s) about 4°.
 #[test]
@@ -110,7 +111,7 @@ fn drops_are_deterministic() {
 /// centre of mass and the rotation, for folded and flat leaves alike.
 #[test]
 fn pose_of_a_rigidly_moved_leaf_is_exact() {
-    use leafmagic::pose::PoseTracker;
+    use leafmagic::physics::pose::PoseTracker;
     use nalgebra::UnitQuaternion;
     for p in ["a", "b"] {
         let mut spec = LeafSpec::load(p).unwrap();

@@ -11,7 +11,7 @@ fn fixture(name: &str) -> String {
 }
 
 fn mujoco(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/data/mujoco-falls/{name}"))
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("tests/data/mujoco-falls/{name}"))
 }
 
 /// (generation, best class counts row, best_distance) from generations.csv.

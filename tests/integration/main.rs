@@ -1,5 +1,5 @@
 //! Integration tests: one binary (one link on a 2-core machine), one module
-//! per topic. Oracles are exact where the notes give one (numerics notes §3).
+//! per topic. Oracles are exact where docs/numerics.md, "Oracles", gives one.
 
 mod accuracy;
 mod aero_law;
@@ -12,6 +12,7 @@ mod export;
 mod genome;
 mod integrators;
 mod invariants;
+mod layers;
 mod leaves;
 mod like;
 mod rigid;

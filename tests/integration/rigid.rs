@@ -3,10 +3,11 @@
 //! a spring-coupled particle.
 
 use crate::common::{V3, parts};
-use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::{Model, Spring};
-use leafmagic::rigid::RigidGroup;
-use leafmagic::state::State;
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::RigidGroup;
+use leafmagic::physics::model::{Model, Spring};
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::state::State;
 
 /// A symmetric top about the body z axis: six particles of mass m on a ring
 /// of radius a in the x-y plane and two on the axis at ±b.
@@ -242,7 +243,7 @@ fn degenerate_rigid_groups_are_rejected() {
 fn a_rigid_leaf_falls_at_the_linear_laws_terminal_speed() {
     let text = "name = \"rigid-leaf\"\nduration = 20.0\n\n[[leaf]]\nname = \"leaf\"\nleaf = \"a\"\nrigid = true\nrotation_deg = [10.0, 2.0, 0.0]\n";
     let scene =
-        leafmagic::scene::Scene::from_toml(text, "rigid-leaf.toml", std::path::Path::new("."))
+        leafmagic::sim::scene::Scene::from_toml(text, "rigid-leaf.toml", std::path::Path::new("."))
             .unwrap();
     assert!(scene.model.springs.is_empty() && scene.model.hinges.is_empty());
     let (_, s) = scene.run_with(None, |_, _| {}).unwrap();

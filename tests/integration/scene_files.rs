@@ -4,10 +4,10 @@
 
 use crate::common::V3;
 use crate::scenes::{load, scene_path};
-use leafmagic::integrate::{SimError, Simulator};
-use leafmagic::scene::{RunError, Scene, SceneError};
-use leafmagic::state::State;
-use leafmagic::terms::Terms;
+use leafmagic::physics::integrate::{SimError, Simulator};
+use leafmagic::physics::state::State;
+use leafmagic::physics::terms::Terms;
+use leafmagic::sim::scene::{RunError, Scene, SceneError};
 use std::path::Path;
 use std::process::Command;
 
@@ -171,7 +171,7 @@ fn the_compiler_keeps_what_each_scene_uses() {
 fn leaving_terms_out_changes_nothing() {
     for name in ["hover", "rocking-bin", "swings"] {
         let scene = load(name);
-        let dt = leafmagic::sim::resolve_dt(
+        let dt = leafmagic::physics::run::resolve_dt(
             &scene.model,
             scene.integrator,
             scene.dt,
@@ -326,7 +326,8 @@ fn the_scene_command_writes_the_same_bytes_for_the_same_input() {
     let pose = std::fs::read_to_string(dir.join("seat-1.csv")).unwrap();
     assert!(pose.starts_with("t,x,y,z,qw,qx,qy,qz\n"));
     assert_eq!(pose.lines().count(), 1 + 31, "0.5 s at 60 fps is 31 frames");
-    let traj = leafmagic::trajectory::Trajectory::read_csv(&dir.join("seat-1.csv")).unwrap();
+    let traj =
+        leafmagic::motion::trajectory::Trajectory::read_csv(&dir.join("seat-1.csv")).unwrap();
     assert_eq!(traj.len(), 31);
     let rope = std::fs::read_to_string(dir.join("rope-1lf-particles.csv")).unwrap();
     assert!(rope.starts_with("t,x0,y0,z0,"), "{}", &rope[..40]);

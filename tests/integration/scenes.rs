@@ -2,10 +2,10 @@
 //! checked with numbers: each scene's test runs the shipped file.
 
 use crate::common::V3;
-use leafmagic::field::{Flow, WindField};
-use leafmagic::force::Forces;
-use leafmagic::scene::{ObjectKind, Scene, SceneObject};
-use leafmagic::state::State;
+use leafmagic::physics::field::{Flow, Uniform, WindField};
+use leafmagic::physics::forces::Forces;
+use leafmagic::physics::state::State;
+use leafmagic::sim::scene::{ObjectKind, Scene, SceneObject};
 use std::f64::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 
@@ -96,7 +96,7 @@ fn shockwave_moves_leaves_only_after_the_front_passes() {
     let text = std::fs::read_to_string(&path).unwrap();
     let base = path.parent().unwrap();
     let scene = Scene::from_toml(&text, "shockwave.toml", base).unwrap();
-    let mut spec: leafmagic::scene::SceneSpec = toml::from_str(&text).unwrap();
+    let mut spec: leafmagic::sim::scene::SceneSpec = toml::from_str(&text).unwrap();
     let fronts: Vec<_> = spec
         .wind
         .primitives()
@@ -107,7 +107,7 @@ fn shockwave_moves_leaves_only_after_the_front_passes() {
     assert_eq!(fronts.len(), 2);
     let up = fronts
         .iter()
-        .find(|p| matches!(p.flow(), Flow::Uniform { velocity } if velocity.z > 0.0))
+        .find(|p| matches!(p.flow(), Flow::Uniform(Uniform { velocity }) if velocity.z > 0.0))
         .unwrap()
         .front()
         .unwrap()
@@ -353,7 +353,7 @@ fn rocking_bin_rocks_to_a_stop() {
     let scene = load("rocking-bin");
     let body = &scene.model.rigid[0];
     let bin = scene.object("bin").unwrap();
-    let mut tracker = leafmagic::pose::PoseTracker::new(
+    let mut tracker = leafmagic::physics::pose::PoseTracker::new(
         &bin.pose.as_ref().unwrap().model,
         bin.pose.as_ref().unwrap().initial,
     );

@@ -3,9 +3,9 @@
 //! the same seed: every file but timing.csv must be the same bytes.
 
 use crate::breeding::contents;
+use leafmagic::breed::shard::{self, Split};
 use leafmagic::breed::{BreedSettings, Run};
-use leafmagic::classify::MotionClass;
-use leafmagic::shard::{self, Split};
+use leafmagic::motion::classify::MotionClass;
 use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
@@ -348,7 +348,8 @@ fn finished_shards_are_merged_without_re_evaluation() {
     ok(&r, "shard");
     let path = shard::shard_path(&run, 0, Split { index: 0, count: 3 });
     let mut file = shard::decode(&std::fs::read_to_string(&path).unwrap()).unwrap();
-    file.rows[0].1.regime = "reused-not-recomputed".into();
+    // A score no drop gives marks the row as the shard's, not recomputed.
+    file.rows[0].1.score = 123.456789;
     std::fs::write(&path, shard::encode(&file).unwrap()).unwrap();
     let r = resume(&run, &["--executor", "processes", "--shards", "3"]);
     let err = ok(&r, "resume");
@@ -356,7 +357,7 @@ fn finished_shards_are_merged_without_re_evaluation() {
     let gen0 = std::fs::read_to_string(run.join("gen-000.csv")).unwrap();
     let row0 = gen0.lines().nth(1).unwrap();
     assert!(
-        row0.starts_with("0,0,,false,") && row0.contains(",reused-not-recomputed,"),
+        row0.starts_with("0,0,,false,") && row0.contains(",123.456789,"),
         "{row0}"
     );
 }

@@ -1,10 +1,11 @@
 //! The stable-step estimate against the dense eigenvalue problem, and the
-//! auto step in use (numerics notes §2b).
+//! auto step in use (docs/numerics.md, "Stable-step estimate" and "Auto
+//! step").
 
-use leafmagic::integrate::Integrator;
 use leafmagic::leaf::LeafSpec;
-use leafmagic::model::Model;
-use leafmagic::stability;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::stability;
 use nalgebra::DMatrix;
 
 /// Dense M^-1/2 K M^-1/2 at the rest shape: springs and hinges.
@@ -30,7 +31,7 @@ fn dense_spectrum(model: &Model) -> Vec<f64> {
     }
     // Hinges: k_b g gᵀ with g the fold angle's gradient (Gauss–Newton part).
     for h in &model.hinges {
-        let (_, g) = leafmagic::force::dihedral(&model.rest_position, h).unwrap();
+        let (_, g) = leafmagic::physics::forces::dihedral(&model.rest_position, h).unwrap();
         let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
         for (pa, &a) in ids.iter().enumerate() {
             for (pb, &b) in ids.iter().enumerate() {
@@ -149,9 +150,9 @@ fn overdamped_modes_keep_a_verlet_limit() {
         // The simulator agrees: below the limit a run stays finite, above it diverges.
         let model = crate::common::oscillator(1.0, w * w, c);
         for (factor, stable) in [(0.9, true), (1.2, false)] {
-            let mut s = leafmagic::state::State::at_rest(&model);
+            let mut s = leafmagic::physics::state::State::at_rest(&model);
             s.position[1].x += 1e-3;
-            let mut sim = leafmagic::integrate::Simulator::new(&model, Integrator::Verlet);
+            let mut sim = leafmagic::physics::integrate::Simulator::new(&model, Integrator::Verlet);
             let h = factor * limit;
             let failed = (0..20_000).any(|_| sim.step(&model, &mut s, h).is_err());
             assert_eq!(!failed, stable, "ζ = {zeta}, h = {factor} × limit");

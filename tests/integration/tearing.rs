@@ -2,11 +2,12 @@
 //! no wind, while intact triangles keep their exact eq. 9–10 force.
 
 use crate::common::{V3, parts};
-use leafmagic::field::{Primitive, WindField};
-use leafmagic::force::{Forces, triangle_aero};
-use leafmagic::integrate::{Integrator, Simulator};
-use leafmagic::model::{Hinge, Model, Spring, Triangle};
-use leafmagic::state::State;
+use leafmagic::physics::field::{Primitive, WindField};
+use leafmagic::physics::forces::{Forces, triangle_aero};
+use leafmagic::physics::integrate::Simulator;
+use leafmagic::physics::model::{Hinge, Model, Spring, Triangle};
+use leafmagic::physics::params::Integrator;
+use leafmagic::physics::state::State;
 
 /// Two triangles sharing edge 1–2, every edge a spring; the spring 0–1 of
 /// the first triangle breaks at 5 % strain.
@@ -78,7 +79,7 @@ fn a_torn_triangle_feels_no_wind() {
         .map(|x| model.wind.velocity(x, s.time))
         .collect();
     let mut expected = vec![V3::zeros(); 4];
-    leafmagic::force::springs(
+    leafmagic::physics::forces::springs(
         &model,
         &s.position,
         &s.velocity,
@@ -95,7 +96,7 @@ fn a_torn_triangle_feels_no_wind() {
     assert_eq!(total, expected);
     // Particle 0 now belongs to no intact surface: only its spring 2-0 acts.
     let mut spring_only = vec![V3::zeros(); 4];
-    leafmagic::force::springs(
+    leafmagic::physics::forces::springs(
         &model,
         &s.position,
         &s.velocity,

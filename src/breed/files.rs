@@ -1,0 +1,134 @@
+//! The files of a run directory that are tables: `generations.csv`,
+//! `gen-NNN.csv`, leaf files with their `index.csv`; and the clean-up of
+//! temporaries a killed writer left.
+
+use super::population::{BreedError, GenerationSummary, Individual, io_err};
+use crate::leaf::LeafSpec;
+use crate::util::io::write_atomic;
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// generations.csv: one row per completed generation.
+pub fn generations_csv(history: &[GenerationSummary]) -> String {
+    let mut out = String::from(
+        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance\n",
+    );
+    for h in history {
+        let c = h.counts;
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            h.generation,
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4],
+            h.best_score,
+            h.mean_score,
+            h.best_id,
+            h.scale,
+            h.success_rate,
+            h.best_distance.map_or(String::new(), |d| d.to_string())
+        );
+    }
+    out
+}
+
+/// gen-NNN.csv: one row per individual, in id order.
+pub fn population_csv(generation: usize, population: &[Individual]) -> String {
+    let mut out = String::from("generation,id,parent,elite");
+    if let Some(first) = population.first() {
+        for (name, _) in first.genome.values() {
+            let _ = write!(out, ",{name}");
+        }
+    }
+    out.push_str(
+        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,error\n",
+    );
+    for i in population {
+        let parent = i.parent.map_or(String::new(), |p| p.to_string());
+        let _ = write!(out, "{generation},{},{parent},{}", i.id, i.elite);
+        for (_, v) in i.genome.values() {
+            let _ = write!(out, ",{v}");
+        }
+        let e = &i.eval.record();
+        // Errors may contain commas: quote them for CSV.
+        let error = if e.error.is_empty() {
+            String::new()
+        } else {
+            format!("\"{}\"", e.error.replace('"', "\"\""))
+        };
+        let _ = writeln!(
+            out,
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            e.class,
+            e.regime,
+            e.score,
+            e.margin,
+            e.descent_m_s,
+            e.drift_ratio,
+            e.net_turns,
+            e.yaw_turns,
+            e.reversals,
+            e.flips,
+            e.tilt_deg,
+            e.dt,
+            e.distance.map_or(String::new(), |d| d.to_string()),
+            error
+        );
+    }
+    out
+}
+
+/// Writes each individual as `leaf-<id>.toml` plus `index.csv` into `dir`.
+pub fn export_leaves(
+    proto: &LeafSpec,
+    chosen: &[&Individual],
+    dir: &Path,
+) -> Result<(), BreedError> {
+    let mut index = String::from("rank,id,file,class,regime,score,descent_m_s\n");
+    for (rank, ind) in chosen.iter().enumerate() {
+        let e = ind.eval.record();
+        let mut leaf = ind.genome.to_leaf(proto);
+        leaf.name = format!("{}-{}", proto.name, ind.id);
+        let file = format!("leaf-{}.toml", ind.id);
+        let text = format!(
+            "# Bred by leafmagic from {}: individual {} ({} / {}, score {}).\n{}",
+            proto.name,
+            ind.id,
+            e.class,
+            e.regime,
+            e.score,
+            leaf.to_toml()
+        );
+        let path = dir.join(&file);
+        write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))?;
+        let _ = writeln!(
+            index,
+            "{},{},{},{},{},{},{}",
+            rank + 1,
+            ind.id,
+            file,
+            e.class,
+            e.regime,
+            e.score,
+            e.descent_m_s
+        );
+    }
+    let path = dir.join("index.csv");
+    write_atomic(&path, index.as_bytes()).map_err(|e| io_err(&path, e))
+}
+
+/// Removes `.<name>.<pid>.tmp` files (see [`crate::util::io::write_atomic`]).
+pub(crate) fn remove_stale_temporaries(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let name = e.file_name().to_string_lossy().into_owned();
+        if name.starts_with('.') && name.ends_with(".tmp") {
+            let _ = std::fs::remove_file(e.path());
+        }
+    }
+}

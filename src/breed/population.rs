@@ -1,0 +1,389 @@
+//! The data of a breeding run: what one drop showed ([`Evaluation`]), the
+//! members and children of a generation, a generation before evaluation
+//! ([`Plan`]), the per-generation summary and the resumable checkpoint;
+//! what an executor is handed ([`Job`]); the run's error and its progress
+//! observer.
+
+use super::settings::{BreedSettings, SettingsError};
+use crate::leaf::LeafSpec;
+use crate::leaf::genome::Genome;
+use crate::motion::classify::{MotionClass, ParseNameError, Regime};
+use crate::util::svg::PlotError;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// What one drop of one individual showed: its outcome and its score.
+///
+/// Written (to `gen-NNN.csv`, shard files and the checkpoint) as one flat
+/// record, [`EvaluationRecord`], whose `class` column names the outcome
+/// (`floater`, `spinner`, `lilter`, `undetermined` or `diverged`); reading
+/// it back refuses a record that names no outcome or a regime the
+/// classifier does not have.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(into = "EvaluationRecord", try_from = "EvaluationRecord")]
+pub struct Evaluation {
+    /// How the drop ended.
+    pub outcome: Outcome,
+    /// Selection score (see [`super::evaluate::score`]).
+    pub score: f64,
+    /// Distance to the run's motion target ([`crate::motion::describe`]),
+    /// when it has one and the fall passes its class gate.
+    pub distance: Option<f64>,
+}
+
+/// How one individual's drop ended.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Outcome {
+    /// It fell to the end and the classifier named its motion (possibly
+    /// `undetermined`).
+    Fell(Fall),
+    /// Its model was invalid, or the simulation diverged or failed: the error.
+    Diverged(String),
+}
+
+/// A completed fall, as the classifier saw it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Fall {
+    /// The motion class.
+    pub class: MotionClass,
+    /// The sub-regime.
+    pub regime: Regime,
+    /// The classifier's distance from the nearest class boundary, 0–1.
+    pub margin: f64,
+    /// Mean descent speed, m/s.
+    pub descent_m_s: f64,
+    /// Horizontal drift over fall.
+    pub drift_ratio: f64,
+    /// Net turns about the dominant horizontal axis.
+    pub net_turns: f64,
+    /// Turns about the vertical.
+    pub yaw_turns: f64,
+    /// Rotation rate, rad/s: 2π (|net turns| + |yaw turns|) over the
+    /// classifier's analysis window (an archive descriptor).
+    pub spin_rad_s: f64,
+    /// Pitch reversals in the analysis window.
+    pub reversals: usize,
+    /// Normal flips in the analysis window.
+    pub flips: usize,
+    /// Mean tilt of the leaf plane from horizontal, degrees.
+    pub tilt_deg: f64,
+    /// The time step used, s.
+    pub dt: f64,
+}
+
+/// The name of a diverged outcome where a class name would be.
+pub const DIVERGED: &str = "diverged";
+
+impl Evaluation {
+    /// The fall, unless the drop diverged.
+    pub fn fall(&self) -> Option<&Fall> {
+        match &self.outcome {
+            Outcome::Fell(f) => Some(f),
+            Outcome::Diverged(_) => None,
+        }
+    }
+
+    /// The class name, or `diverged`.
+    pub fn class_name(&self) -> &'static str {
+        match &self.outcome {
+            Outcome::Fell(f) => f.class.as_str(),
+            Outcome::Diverged(_) => DIVERGED,
+        }
+    }
+
+    /// The flat record the run's files hold.
+    pub fn record(&self) -> EvaluationRecord {
+        self.clone().into()
+    }
+}
+
+/// An [`Evaluation`] as one flat row: what `gen-NNN.csv`, shard files and
+/// the checkpoint hold. A diverged drop has an empty regime, zero numbers
+/// and its error; a fall has an empty error.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct EvaluationRecord {
+    /// `floater`, `spinner`, `lilter`, `undetermined`, or `diverged`.
+    pub class: String,
+    /// The sub-regime (empty when diverged).
+    pub regime: String,
+    /// See [`Evaluation::score`].
+    pub score: f64,
+    /// See [`Fall::margin`].
+    pub margin: f64,
+    /// See [`Fall::descent_m_s`].
+    pub descent_m_s: f64,
+    /// See [`Fall::drift_ratio`].
+    pub drift_ratio: f64,
+    /// See [`Fall::net_turns`].
+    pub net_turns: f64,
+    /// See [`Fall::yaw_turns`].
+    pub yaw_turns: f64,
+    /// See [`Fall::spin_rad_s`].
+    #[serde(default)]
+    pub spin_rad_s: f64,
+    /// See [`Fall::reversals`].
+    pub reversals: usize,
+    /// See [`Fall::flips`].
+    pub flips: usize,
+    /// See [`Fall::tilt_deg`].
+    pub tilt_deg: f64,
+    /// See [`Fall::dt`].
+    pub dt: f64,
+    /// The error of a diverged drop.
+    pub error: String,
+    /// See [`Evaluation::distance`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub distance: Option<f64>,
+}
+
+impl From<Evaluation> for EvaluationRecord {
+    fn from(e: Evaluation) -> EvaluationRecord {
+        let (class, regime, error) = match &e.outcome {
+            Outcome::Fell(f) => (f.class.to_string(), f.regime.to_string(), String::new()),
+            Outcome::Diverged(error) => (DIVERGED.to_string(), String::new(), error.clone()),
+        };
+        let zero = Fall {
+            class: MotionClass::Undetermined,
+            regime: Regime::Undetermined,
+            margin: 0.0,
+            descent_m_s: 0.0,
+            drift_ratio: 0.0,
+            net_turns: 0.0,
+            yaw_turns: 0.0,
+            spin_rad_s: 0.0,
+            reversals: 0,
+            flips: 0,
+            tilt_deg: 0.0,
+            dt: 0.0,
+        };
+        let f = e.fall().unwrap_or(&zero);
+        EvaluationRecord {
+            class,
+            regime,
+            score: e.score,
+            margin: f.margin,
+            descent_m_s: f.descent_m_s,
+            drift_ratio: f.drift_ratio,
+            net_turns: f.net_turns,
+            yaw_turns: f.yaw_turns,
+            spin_rad_s: f.spin_rad_s,
+            reversals: f.reversals,
+            flips: f.flips,
+            tilt_deg: f.tilt_deg,
+            dt: f.dt,
+            error,
+            distance: e.distance,
+        }
+    }
+}
+
+/// A record whose class or regime the classifier does not name.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(transparent)]
+pub struct RecordError(#[from] ParseNameError);
+
+impl TryFrom<EvaluationRecord> for Evaluation {
+    type Error = RecordError;
+    fn try_from(r: EvaluationRecord) -> Result<Evaluation, RecordError> {
+        let outcome = if r.class == DIVERGED {
+            Outcome::Diverged(r.error)
+        } else {
+            let class = r.class.parse::<MotionClass>()?;
+            let regime = r.regime.parse::<Regime>()?;
+            Outcome::Fell(Fall {
+                class,
+                regime,
+                margin: r.margin,
+                descent_m_s: r.descent_m_s,
+                drift_ratio: r.drift_ratio,
+                net_turns: r.net_turns,
+                yaw_turns: r.yaw_turns,
+                spin_rad_s: r.spin_rad_s,
+                reversals: r.reversals,
+                flips: r.flips,
+                tilt_deg: r.tilt_deg,
+                dt: r.dt,
+            })
+        };
+        Ok(Evaluation {
+            outcome,
+            score: r.score,
+            distance: r.distance,
+        })
+    }
+}
+
+/// One member of a generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Individual {
+    /// Unique within the run, assigned in order.
+    pub id: u64,
+    /// The individual it was bred from (none for the first generation's
+    /// copies of the prototype... which name the prototype as `None`).
+    pub parent: Option<u64>,
+    /// Copied unchanged from the previous generation.
+    pub elite: bool,
+    /// Its genes.
+    pub genome: Genome,
+    /// Its fall.
+    pub eval: Evaluation,
+}
+
+/// One child of a generation, bred (or copied from the prototype) but not
+/// yet dropped.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Child {
+    /// Its id (unique within the run).
+    pub id: u64,
+    /// The individual it was bred from (`None` in generation 0).
+    pub parent: Option<u64>,
+    /// Its genes.
+    pub genome: Genome,
+    /// The parent's score (NaN in generation 0), for the 1/5 success rule.
+    pub parent_score: f64,
+}
+
+/// A generation before evaluation: what [`super::run::Run::plan`] derives from the
+/// checkpoint.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// The generation's index.
+    pub generation: usize,
+    /// The variation scale its children were bred with.
+    pub scale: f64,
+    /// The next id to assign after its children.
+    pub next_id: u64,
+    /// The children to evaluate, in id order.
+    pub children: Vec<Child>,
+    /// The previous generation's best, copied unchanged (already evaluated).
+    pub elites: Vec<Individual>,
+}
+
+/// Per-generation summary.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct GenerationSummary {
+    /// Generation index.
+    pub generation: usize,
+    /// Counts of floater, spinner, lilter, undetermined, diverged.
+    pub counts: [usize; 5],
+    /// Best score.
+    pub best_score: f64,
+    /// Mean score.
+    pub mean_score: f64,
+    /// Id of the best individual.
+    pub best_id: u64,
+    /// Variation scale used to breed this generation.
+    pub scale: f64,
+    /// Fraction of children that scored at least as well as their parent.
+    pub success_rate: f64,
+    /// The best individual's distance to the motion target, if the run has
+    /// one and the best passes its class gate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub best_distance: Option<f64>,
+}
+
+/// The resumable state after a completed generation.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The settings of the run.
+    pub settings: BreedSettings,
+    /// The last completed generation.
+    pub generation: usize,
+    /// Its population, in id order.
+    pub population: Vec<Individual>,
+    /// Variation scale for the next generation.
+    pub scale: f64,
+    /// Next id to assign.
+    pub next_id: u64,
+    /// Summaries of all completed generations.
+    pub history: Vec<GenerationSummary>,
+    /// The MAP-Elites archive (empty unless `settings.archive`).
+    #[serde(default)]
+    pub archive: Vec<ArchiveEntry>,
+}
+
+/// One occupied cell of the archive.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ArchiveEntry {
+    /// Descent-speed bin (index into [`super::archive::ARCHIVE_DESCENT_EDGES`]).
+    pub descent_bin: usize,
+    /// Rotation-rate bin (index into [`super::archive::ARCHIVE_SPIN_EDGES`]).
+    pub spin_bin: usize,
+    /// Generation in which the occupant was evaluated.
+    pub generation: usize,
+    /// The occupant (the best-scoring leaf that fell into this cell).
+    pub individual: Individual,
+}
+
+/// What an executor needs to evaluate a generation: where the run lives
+/// (shard files go there), the prototype and the settings.
+#[derive(Clone, Copy, Debug)]
+pub struct Job<'a> {
+    /// The run directory.
+    pub dir: &'a Path,
+    /// The prototype leaf.
+    pub proto: &'a LeafSpec,
+    /// The run's settings.
+    pub settings: &'a BreedSettings,
+}
+
+/// Why a run could not start or go on.
+#[derive(Debug, thiserror::Error)]
+pub enum BreedError {
+    /// A file or folder of the run could not be read, written or parsed.
+    #[error("{}: {message}", .path.display())]
+    File {
+        /// The file or folder.
+        path: PathBuf,
+        /// What went wrong.
+        message: String,
+    },
+    /// The settings are invalid.
+    #[error(transparent)]
+    Settings(#[from] SettingsError),
+    /// The prototype or the run directory refuse the run, or the run cannot
+    /// do what was asked of it now.
+    #[error("{0}")]
+    Refused(String),
+    /// A leaf of the run could not be built or dropped again.
+    #[error("leaf {id}: {message}")]
+    Leaf {
+        /// The individual's id.
+        id: u64,
+        /// What went wrong.
+        message: String,
+    },
+    /// The shards of a generation could not be evaluated or merged.
+    #[error("{0}")]
+    Shards(String),
+    /// A plot of the run could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] PlotError),
+}
+
+/// A [`BreedError::File`] for `path`.
+pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> BreedError {
+    BreedError::File {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Observer of progress (the CLI draws a progress bar with it).
+pub trait Progress: Sync {
+    /// A generation starts with `size` individuals to evaluate.
+    fn start_generation(&self, generation: usize, size: usize);
+    /// One individual finished with this class.
+    fn individual_done(&self, class: &str, score: f64);
+    /// The generation is complete.
+    fn finish_generation(&self, summary: &GenerationSummary);
+}
+
+/// A [`Progress`] that shows nothing.
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn start_generation(&self, _: usize, _: usize) {}
+    fn individual_done(&self, _: &str, _: f64) {}
+    fn finish_generation(&self, _: &GenerationSummary) {}
+}

@@ -1,0 +1,571 @@
+//! The driver of a breeding run: the run directory, the generation loop
+//! (plan, evaluate, finish) and resume.
+
+use super::archive::{ARCHIVE_DESCENT_EDGES, ARCHIVE_SPIN_EDGES, update_archive};
+use super::executor::{Executor, Local};
+use super::files::{export_leaves, generations_csv, population_csv, remove_stale_temporaries};
+use super::plot;
+use super::population::{
+    BreedError, Checkpoint, Evaluation, GenerationSummary, Individual, Job, Plan, Progress, io_err,
+};
+use super::selection::{self, next_scale, rank, summarise};
+use super::settings::BreedSettings;
+use super::shard;
+use crate::leaf::LeafSpec;
+use crate::motion::trajectory::Trajectory;
+use crate::physics::model::Model;
+use crate::physics::params::TimeStep;
+use crate::physics::run::{check_budget, resolve_step};
+use crate::sim::accuracy::{ErrorEstimate, error_estimate};
+use crate::sim::drop::{DropParams, FRAME_RATE, drop_leaf};
+use crate::util::io::write_atomic;
+use serde::{Deserialize, Serialize};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// A breeding run bound to its directory.
+pub struct Run {
+    /// The run directory.
+    pub dir: PathBuf,
+    /// The prototype leaf.
+    pub proto: LeafSpec,
+    /// The state after the last completed generation (None before gen 0).
+    pub checkpoint: Option<Checkpoint>,
+    settings: BreedSettings,
+    /// Wall seconds per completed generation. Kept out of the checkpoint so
+    /// that every file but timing.csv is identical between identical runs.
+    timing: Vec<f64>,
+    /// The fall of the best leaf, by id, once [`Run::write_best`] has
+    /// dropped it (a `--like` run), so it is not dropped again.
+    best_fall: Option<(u64, Trajectory)>,
+}
+
+const RUN_FILE: &str = "run.toml";
+/// The example fall of a `--like` run.
+const EXAMPLE_FILE: &str = "example.csv";
+/// The overlay of the example's and the best leaf's falls.
+const LIKE_PLOT_FILE: &str = "like.svg";
+const CHECKPOINT_FILE: &str = "checkpoint.json";
+
+/// `run.toml`: the settings, the tool version and the prototype itself.
+#[derive(Serialize, Deserialize)]
+struct RunFile {
+    tool: String,
+    version: String,
+    settings: BreedSettings,
+    integrator: String,
+    dt: String,
+    /// How far the prototype's own fall, at the integrator and step breeding
+    /// uses, is from a converged reference after 1 s (issue 3's machinery):
+    /// how much to trust the run's trajectories pointwise. Computed alongside
+    /// generation 0 and added to run.toml before generation 0's files are
+    /// written (absent only while generation 0 runs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    prototype_error: Option<ErrorEstimate>,
+    prototype_leaf: LeafSpec,
+}
+
+/// Simulated seconds over which the prototype's integration error is
+/// estimated for run.toml: long enough to include the fall's transient,
+/// short enough to stay inside the horizon where pointwise error means
+/// something (falls may be chaotic later).
+pub const ERROR_ESTIMATE_SECONDS: f64 = 1.0;
+
+/// The prototype's model and the auto step its drops take, refused (naming
+/// `source`) if that step would need more than [`crate::physics::run::MAX_STEPS`]
+/// steps for `seconds`: a prototype so stiff or light that its runs would
+/// take for ever.
+fn prototype_step(
+    proto: &LeafSpec,
+    source: &str,
+    seconds: f64,
+) -> Result<(Model, f64), BreedError> {
+    let integrator = DropParams::default().integrator;
+    let refuse =
+        |e: &dyn std::fmt::Display| BreedError::Refused(format!("--prototype {source}: {e}"));
+    let model = proto.model().map_err(|e| refuse(&e))?;
+    let dt = resolve_step(&model, integrator, TimeStep::Auto, 1.0 / FRAME_RATE)
+        .map_err(|e| refuse(&e))?;
+    check_budget(seconds, dt, FRAME_RATE, integrator).map_err(|e| refuse(&e))?;
+    Ok((model, dt))
+}
+
+/// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
+/// at the integrator and auto step its drops use.
+fn prototype_error(proto: &LeafSpec, source: &str) -> Result<ErrorEstimate, BreedError> {
+    let (model, dt) = prototype_step(proto, source, ERROR_ESTIMATE_SECONDS)?;
+    // The drop's step need not divide a second: estimate over the whole
+    // number of steps nearest to ERROR_ESTIMATE_SECONDS.
+    let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
+    error_estimate(&model, DropParams::default().integrator, dt, seconds)
+        .map_err(|e| BreedError::Refused(format!("error estimate of the prototype: {e}")))
+}
+
+impl Run {
+    /// Prepares a new run in `dir`, or picks up the same run there. A
+    /// directory holding a different run (or other files) is refused and
+    /// left untouched.
+    pub fn create(dir: &Path, settings: BreedSettings) -> Result<Run, BreedError> {
+        settings.validate()?;
+        let proto = LeafSpec::load(&settings.prototype)
+            .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
+        if dir.join(RUN_FILE).exists() {
+            let existing = Run::open(dir)?;
+            if existing.settings != settings {
+                return Err(BreedError::Refused(format!(
+                    "{} holds a different run (its run.toml has other settings); choose another --out or --resume it",
+                    dir.display()
+                )));
+            }
+            return Ok(existing);
+        }
+        if dir.exists() {
+            let non_empty = std::fs::read_dir(dir)
+                .map_err(|e| io_err(dir, e))?
+                .next()
+                .is_some();
+            if non_empty {
+                return Err(BreedError::Refused(format!(
+                    "{} exists and is not a leafmagic run (no run.toml); refusing to write into it",
+                    dir.display()
+                )));
+            }
+        }
+        let integrator = DropParams::default().integrator;
+        // Checked before anything is written: the drops, and the error
+        // estimate beside generation 0, must be able to finish.
+        let (_, dt) = prototype_step(
+            &proto,
+            &settings.prototype,
+            settings.seconds.max(ERROR_ESTIMATE_SECONDS),
+        )?;
+        // The example of a --like run is copied in, so the run keeps what it
+        // bred toward even if the original moves.
+        let example = match &settings.like {
+            Some(t) if t.source != "features" => {
+                let path = Path::new(&t.source);
+                Some(Trajectory::read_csv(path).map_err(|e| io_err(path, e))?)
+            }
+            _ => None,
+        };
+        std::fs::create_dir_all(dir).map_err(|e| io_err(dir, e))?;
+        let run_file = RunFile {
+            tool: "leafmagic".to_string(),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+            settings: settings.clone(),
+            integrator: integrator.to_string(),
+            dt: format!("auto: each leaf its own, from its stability estimate (prototype: {dt} s)"),
+            prototype_error: None,
+            prototype_leaf: proto.clone(),
+        };
+        let text = toml::to_string(&run_file).map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
+        write_atomic(&dir.join(RUN_FILE), text.as_bytes())
+            .map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
+        // After run.toml, so a directory holding only the example is never
+        // left behind; a run killed before this plots the best alone.
+        if let Some(example) = example {
+            let path = dir.join(EXAMPLE_FILE);
+            let bytes = example.try_to_csv_bytes().map_err(|e| io_err(&path, e))?;
+            write_atomic(&path, &bytes).map_err(|e| io_err(&path, e))?;
+        }
+        Ok(Run {
+            dir: dir.to_path_buf(),
+            proto,
+            checkpoint: None,
+            settings,
+            timing: Vec::new(),
+            best_fall: None,
+        })
+    }
+
+    /// Opens an existing run directory (for `--resume`). Temporary files left
+    /// by a writer that was killed mid-write are removed: the rename never
+    /// happened, so they hold nothing the run needs.
+    pub fn open(dir: &Path) -> Result<Run, BreedError> {
+        for d in [dir.to_path_buf(), dir.join("best")] {
+            remove_stale_temporaries(&d);
+        }
+        Run::load(dir)
+    }
+
+    /// Reads a run directory without changing anything in it: what a shard
+    /// process uses, since the driver (or other shards) may be writing there
+    /// at the same time and their temporary files are not stale.
+    pub fn load(dir: &Path) -> Result<Run, BreedError> {
+        let path = dir.join(RUN_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
+        run_file.settings.validate().map_err(|e| io_err(&path, e))?;
+        let cp_path = dir.join(CHECKPOINT_FILE);
+        let checkpoint = if cp_path.exists() {
+            let text = std::fs::read_to_string(&cp_path).map_err(|e| io_err(&cp_path, e))?;
+            let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| io_err(&cp_path, e))?;
+            if cp.settings != run_file.settings {
+                return Err(io_err(
+                    &cp_path,
+                    "checkpoint does not belong to this run.toml",
+                ));
+            }
+            Some(cp)
+        } else {
+            None
+        };
+        // Timing of the generations done before (lost rows read as NaN: the
+        // file is informative only).
+        let done = checkpoint.as_ref().map_or(0, |c| c.generation + 1);
+        let previous: Vec<f64> = std::fs::read_to_string(dir.join("timing.csv"))
+            .unwrap_or_default()
+            .lines()
+            .skip(1)
+            .filter_map(|l| l.split(',').nth(1)?.parse().ok())
+            .collect();
+        let timing = (0..done)
+            .map(|g| previous.get(g).copied().unwrap_or(f64::NAN))
+            .collect();
+        Ok(Run {
+            dir: dir.to_path_buf(),
+            proto: run_file.prototype_leaf,
+            checkpoint,
+            settings: run_file.settings,
+            timing,
+            best_fall: None,
+        })
+    }
+
+    /// The run's settings.
+    pub fn settings(&self) -> &BreedSettings {
+        &self.settings
+    }
+
+    /// Whether every generation is done.
+    pub fn is_complete(&self) -> bool {
+        self.checkpoint
+            .as_ref()
+            .is_some_and(|c| c.generation + 1 >= self.settings.generations)
+    }
+
+    /// Runs the remaining generations, writing each one's files and then the
+    /// checkpoint.
+    pub fn run(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        self.run_with(&Local, progress)
+    }
+
+    /// [`Run::run`] with the evaluation of each generation done by
+    /// `executor` (the rayon pool, child processes, Slurm). The files are the
+    /// same bytes whichever does it (all but timing.csv).
+    pub fn run_with(
+        &mut self,
+        executor: &dyn Executor,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
+        // Shard files of generations already merged (left by a driver killed
+        // between its checkpoint and their removal) are of no further use.
+        shard::remove_merged(&self.dir, self.checkpoint.as_ref().map(|c| c.generation));
+        while !self.is_complete() {
+            self.step_with(executor, progress)?;
+        }
+        self.write_best()?;
+        Ok(())
+    }
+
+    /// Breeds, evaluates and records one generation.
+    pub fn step(&mut self, progress: &dyn Progress) -> Result<(), BreedError> {
+        self.step_with(&Local, progress)
+    }
+
+    /// [`Run::step`] in three parts: [`Run::plan`] (the children, from the
+    /// checkpoint), evaluation by `executor`, and `Run::finish` (scores,
+    /// elites, summary, files, checkpoint).
+    pub fn step_with(
+        &mut self,
+        executor: &dyn Executor,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
+        let start = std::time::Instant::now();
+        let plan = self.plan();
+        progress.start_generation(plan.generation, plan.children.len());
+        let proto = &self.proto;
+        let evaluate_all = || executor.evaluate(&self.job(), &plan, progress);
+        // run.toml's error estimate is serial work: do it beside generation 0
+        // rather than before it, and complete run.toml before gen-000.csv.
+        let evals = if plan.generation == 0 {
+            let (evals, estimate) = rayon::join(evaluate_all, || {
+                prototype_error(proto, &self.settings.prototype)
+            });
+            let evals = evals?;
+            self.complete_run_file(estimate?)?;
+            evals
+        } else {
+            evaluate_all()?
+        };
+        if evals.len() != plan.children.len() {
+            return Err(BreedError::Shards(format!(
+                "generation {}: {} evaluations for {} children",
+                plan.generation,
+                evals.len(),
+                plan.children.len()
+            )));
+        }
+        self.finish(plan, evals, start, progress)
+    }
+
+    /// The next generation before evaluation ([`selection::plan`]): what
+    /// any process that holds the run directory derives from it.
+    pub fn plan(&self) -> Plan {
+        selection::plan(&self.settings, &self.proto, self.checkpoint.as_ref())
+    }
+
+    /// What an executor needs to evaluate this run's generations.
+    pub fn job(&self) -> Job<'_> {
+        Job {
+            dir: &self.dir,
+            proto: &self.proto,
+            settings: &self.settings,
+        }
+    }
+
+    /// Everything after evaluation: success rate, population, summary,
+    /// archive, the generation's files and the checkpoint. `evals` holds one
+    /// evaluation per child of `plan`, in the plan's order.
+    fn finish(
+        &mut self,
+        plan: Plan,
+        evals: Vec<Evaluation>,
+        start: std::time::Instant,
+        progress: &dyn Progress,
+    ) -> Result<(), BreedError> {
+        let s = &self.settings;
+        let Plan {
+            generation,
+            scale,
+            mut next_id,
+            children,
+            elites,
+        } = plan;
+        let evaluated: Vec<(Individual, f64)> = children
+            .into_iter()
+            .zip(evals)
+            .map(|(c, eval)| {
+                (
+                    Individual {
+                        id: c.id,
+                        parent: c.parent,
+                        elite: false,
+                        genome: c.genome,
+                        eval,
+                    },
+                    c.parent_score,
+                )
+            })
+            .collect();
+        let successes = evaluated
+            .iter()
+            .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
+            .count();
+        let mut success_rate = successes as f64 / evaluated.len().max(1) as f64;
+        if s.like.is_some() {
+            // Toward descriptors the step size should follow local progress:
+            // only children of parents inside the class gate (score > 1)
+            // count, and a success is a child strictly closer than its
+            // parent. Children crossing into the class would otherwise keep
+            // the rate high and the variation coarse for ever.
+            let inside: Vec<&(Individual, f64)> =
+                evaluated.iter().filter(|(_, ps)| *ps > 1.0).collect();
+            if !inside.is_empty() {
+                let closer = inside.iter().filter(|(i, ps)| i.eval.score > *ps).count();
+                success_rate = closer as f64 / inside.len() as f64;
+            }
+        }
+        let mut population: Vec<Individual> = elites;
+        population.extend(evaluated.into_iter().map(|(i, _)| i));
+        population.sort_by_key(|i| i.id);
+        let summary = summarise(generation, &population, scale, success_rate);
+        let mut history = match &self.checkpoint {
+            None => Vec::new(),
+            Some(cp) => cp.history.clone(),
+        };
+        history.push(summary.clone());
+        self.timing.truncate(generation);
+        self.timing.push(start.elapsed().as_secs_f64());
+        next_id = next_id.max(population.iter().map(|i| i.id + 1).max().unwrap_or(0));
+        let mut archive = self
+            .checkpoint
+            .as_ref()
+            .map_or_else(Vec::new, |c| c.archive.clone());
+        if s.archive {
+            update_archive(&mut archive, generation, &population);
+        }
+        let checkpoint = Checkpoint {
+            settings: s.clone(),
+            generation,
+            population,
+            // Generation 0 is the prototype's copies: its successes say
+            // nothing about parents, so the scale rule starts from gen 1.
+            scale: if generation == 0 {
+                scale
+            } else {
+                next_scale(scale, success_rate)
+            },
+            next_id,
+            history,
+            archive,
+        };
+        self.write_generation(&checkpoint)?;
+        // The checkpoint now holds the generation: its shard files (if an
+        // executor wrote any) are merged and go.
+        shard::remove_merged(&self.dir, Some(generation));
+        progress.finish_generation(&summary);
+        self.checkpoint = Some(checkpoint);
+        Ok(())
+    }
+
+    /// Adds the prototype's error estimate to run.toml (if it is not there
+    /// yet: a run resumed from generation 0 may have written it already).
+    fn complete_run_file(&self, estimate: ErrorEstimate) -> Result<(), BreedError> {
+        let path = self.dir.join(RUN_FILE);
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let mut run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
+        if run_file.prototype_error.is_some() {
+            return Ok(());
+        }
+        run_file.prototype_error = Some(estimate);
+        let text = toml::to_string(&run_file).map_err(|e| io_err(&path, e))?;
+        write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))
+    }
+
+    fn write(&self, name: &str, bytes: &[u8]) -> Result<(), BreedError> {
+        let path = self.dir.join(name);
+        write_atomic(&path, bytes).map_err(|e| io_err(&path, e))
+    }
+
+    /// Writes gen-NNN.csv, generations.csv, timing.csv, generations.svg
+    /// (class counts per generation), then the checkpoint
+    /// (last, so a kill between them only repeats this generation).
+    fn write_generation(&self, cp: &Checkpoint) -> Result<(), BreedError> {
+        self.write(
+            &format!("gen-{:03}.csv", cp.generation),
+            population_csv(cp.generation, &cp.population).as_bytes(),
+        )?;
+        self.write("generations.csv", generations_csv(&cp.history).as_bytes())?;
+        let mut timing = String::from("generation,wall_s\n");
+        for (g, t) in self.timing.iter().enumerate() {
+            let _ = writeln!(timing, "{g},{t}");
+        }
+        self.write("timing.csv", timing.as_bytes())?;
+        let title = format!(
+            "{}: breeding toward {} (population {}, seed {})",
+            self.proto.name, self.settings.target, self.settings.population, self.settings.seed
+        );
+        let svg = plot::generations_svg(&cp.history, &title)?;
+        self.write("generations.svg", svg.as_bytes())?;
+        let json =
+            serde_json::to_string(cp).map_err(|e| io_err(&self.dir.join(CHECKPOINT_FILE), e))?;
+        self.write(CHECKPOINT_FILE, json.as_bytes())
+    }
+
+    /// The best individuals of the last generation as leaf files that `drop`
+    /// and scenes accept (`best/leaf-<id>.toml`), best first, with an index;
+    /// with an archive, also `archive/` (one leaf per occupied cell) and
+    /// `archive.csv`.
+    pub fn write_best(&mut self) -> Result<(), BreedError> {
+        let Some(cp) = &self.checkpoint else {
+            return Ok(());
+        };
+        if self.settings.archive {
+            let dir = self.dir.join("archive");
+            std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+            let members: Vec<&Individual> = cp.archive.iter().map(|e| &e.individual).collect();
+            export_leaves(&self.proto, &members, &dir)?;
+            let mut csv = String::from(
+                "descent_min_m_s,descent_max_m_s,spin_min_rad_s,spin_max_rad_s,generation,id,class,regime,score,descent_m_s,spin_rad_s,file\n",
+            );
+            let edge = |edges: &[f64], k: usize| {
+                edges
+                    .get(k + 1)
+                    .map_or(String::from("inf"), |e| e.to_string())
+            };
+            for e in &cp.archive {
+                let i = &e.individual;
+                let r = i.eval.record();
+                let _ = writeln!(
+                    csv,
+                    "{},{},{},{},{},{},{},{},{},{},{},archive/leaf-{}.toml",
+                    ARCHIVE_DESCENT_EDGES[e.descent_bin],
+                    edge(&ARCHIVE_DESCENT_EDGES, e.descent_bin),
+                    ARCHIVE_SPIN_EDGES[e.spin_bin],
+                    edge(&ARCHIVE_SPIN_EDGES, e.spin_bin),
+                    e.generation,
+                    i.id,
+                    r.class,
+                    r.regime,
+                    r.score,
+                    r.descent_m_s,
+                    r.spin_rad_s,
+                    i.id
+                );
+            }
+            self.write("archive.csv", csv.as_bytes())?;
+        }
+        let best: Vec<&Individual> = rank(&cp.population).into_iter().take(5).collect();
+        let dir = self.dir.join("best");
+        std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
+        export_leaves(&self.proto, &best, &dir)?;
+        if let (Some(target), Some(first)) = (&self.settings.like, best.first()) {
+            let fall = self.best_fall(first)?;
+            self.best_fall = Some((first.id, fall.clone()));
+            let example = self.example();
+            let title = format!(
+                "{} bred like {}: leaf {} ({}, distance {})",
+                self.proto.name,
+                target.source,
+                first.id,
+                first.eval.class_name(),
+                first
+                    .eval
+                    .distance
+                    .map_or("∞, another class".to_string(), |d| format!("{d:.3}"))
+            );
+            let svg = plot::like_svg(example.as_ref(), &fall, &title)?;
+            self.write(LIKE_PLOT_FILE, svg.as_bytes())?;
+        }
+        Ok(())
+    }
+
+    /// The fall of a member, dropped again exactly as it was evaluated.
+    pub fn best_fall(&self, member: &Individual) -> Result<Trajectory, BreedError> {
+        if let Some((id, fall)) = &self.best_fall
+            && *id == member.id
+        {
+            return Ok(fall.clone());
+        }
+        let model = member
+            .genome
+            .model(&self.proto)
+            .map_err(|e| BreedError::Leaf {
+                id: member.id,
+                message: e.to_string(),
+            })?;
+        let params = DropParams {
+            seconds: self.settings.seconds,
+            dt: TimeStep::Auto,
+            ..Default::default()
+        };
+        drop_leaf(&model, &params)
+            .map(|r| r.trajectory)
+            .map_err(|e| BreedError::Leaf {
+                id: member.id,
+                message: e.to_string(),
+            })
+    }
+
+    /// The example fall of a `--like` run, as copied into the run directory
+    /// (none for `--target-features`, or if it could not be read).
+    pub fn example(&self) -> Option<Trajectory> {
+        Trajectory::read_csv(&self.dir.join(EXAMPLE_FILE)).ok()
+    }
+
+    /// Summaries of the completed generations.
+    pub fn history(&self) -> &[GenerationSummary] {
+        self.checkpoint.as_ref().map_or(&[], |c| &c.history)
+    }
+}

@@ -1,0 +1,179 @@
+//! Selection and variation: ranking, tournaments, the 1/5 success rule for
+//! the variation scale, and the seeded random streams that make every
+//! generation the same bytes whatever process derives it.
+
+use super::population::{Checkpoint, Child, GenerationSummary, Individual, Plan};
+use super::settings::BreedSettings;
+use crate::leaf::LeafSpec;
+use crate::leaf::genome::{Genome, mutate};
+use rand::RngExt;
+use rand::SeedableRng;
+use rand::rngs::Xoshiro256PlusPlus;
+
+/// Variation scale rule (Rechenberg's 1/5 success rule): after each
+/// generation, if more than a fifth of the children scored at least as well
+/// as their parents, widen the variation by 1.22 (e^0.2), else narrow it by
+/// 0.82 (e^-0.2); clamped to [`MIN_SCALE`, `MAX_SCALE`]. As the population
+/// converges on the target fewer children improve, so the variation shrinks
+/// as the paper's second round did by hand.
+pub const SUCCESS_TARGET: f64 = 0.2;
+/// Smallest variation scale.
+pub const MIN_SCALE: f64 = 0.05;
+/// Largest variation scale.
+pub const MAX_SCALE: f64 = 2.0;
+
+pub(crate) fn next_scale(scale: f64, success_rate: f64) -> f64 {
+    let factor = if success_rate > SUCCESS_TARGET {
+        0.2f64.exp()
+    } else {
+        (-0.2f64).exp()
+    };
+    (scale * factor).clamp(MIN_SCALE, MAX_SCALE)
+}
+
+/// A well-mixed 64-bit seed for one random stream (SplitMix64 finaliser).
+pub fn stream_seed(seed: u64, generation: u64, id: u64) -> u64 {
+    let mut z = seed
+        .wrapping_add(generation.wrapping_mul(0x9E37_79B9_7F4A_7C15))
+        .wrapping_add(id.wrapping_mul(0xBF58_476D_1CE4_E5B9))
+        .wrapping_add(0x94D0_49BB_1331_11EB);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
+/// The stream id used for parent selection (never an individual's id).
+const SELECTION_STREAM: u64 = u64::MAX;
+
+/// Members best first; ties broken by id so the order is deterministic.
+pub fn rank(population: &[Individual]) -> Vec<&Individual> {
+    let mut v: Vec<&Individual> = population.iter().collect();
+    v.sort_by(|a, b| b.eval.score.total_cmp(&a.eval.score).then(a.id.cmp(&b.id)));
+    v
+}
+
+const CLASSES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
+
+pub(crate) fn summarise(
+    generation: usize,
+    population: &[Individual],
+    scale: f64,
+    success_rate: f64,
+) -> GenerationSummary {
+    let mut counts = [0; 5];
+    for i in population {
+        if let Some(k) = CLASSES.iter().position(|c| *c == i.eval.class_name()) {
+            counts[k] += 1;
+        }
+    }
+    let best = rank(population)[0];
+    GenerationSummary {
+        generation,
+        counts,
+        best_score: best.eval.score,
+        mean_score: population.iter().map(|i| i.eval.score).sum::<f64>() / population.len() as f64,
+        best_id: best.id,
+        scale,
+        success_rate,
+        best_distance: best.eval.distance,
+    }
+}
+
+/// The next generation before evaluation: its children, derived
+/// deterministically from the checkpoint (none: generation 0, copies of
+/// the prototype), and the elites it keeps. Every random draw comes from
+/// [`stream_seed`] streams, so any process that holds the run directory
+/// derives the same plan.
+pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>) -> Plan {
+    let (generation, scale, next_id, children) = match checkpoint {
+        None => {
+            // Generation 0: copies of the prototype with the first round's variation.
+            let g0 = Genome::of_prototype(proto);
+            let children: Vec<Child> = (0..s.population as u64)
+                .map(|id| {
+                    let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
+                    Child {
+                        id,
+                        parent: None,
+                        genome: mutate(&g0, &proto.bounds, s.initial_scale, &mut rng),
+                        parent_score: f64::NAN,
+                    }
+                })
+                .collect();
+            (0, s.initial_scale, s.population as u64, children)
+        }
+        Some(cp) => {
+            let generation = cp.generation + 1;
+            let parents = rank(&cp.population);
+            let mut sel = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+                s.seed,
+                generation as u64,
+                SELECTION_STREAM,
+            ));
+            let mut next_id = cp.next_id;
+            let mut children = Vec::with_capacity(s.population - s.elites);
+            for _ in 0..s.population - s.elites {
+                // Tournament: the best of `tournament` uniformly drawn members.
+                let pick = (0..s.tournament)
+                    .map(|_| sel.random_range(0..parents.len()))
+                    .min()
+                    .expect("tournament size ≥ 1");
+                let parent = parents[pick];
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+                    s.seed,
+                    generation as u64,
+                    next_id,
+                ));
+                let genome = mutate(&parent.genome, &proto.bounds, cp.scale, &mut rng);
+                children.push(Child {
+                    id: next_id,
+                    parent: Some(parent.id),
+                    genome,
+                    parent_score: parent.eval.score,
+                });
+                next_id += 1;
+            }
+            (generation, cp.scale, next_id, children)
+        }
+    };
+    let elites: Vec<Individual> = match checkpoint {
+        None => Vec::new(),
+        Some(cp) => rank(&cp.population)
+            .into_iter()
+            .take(s.elites)
+            .map(|i| Individual {
+                elite: true,
+                ..i.clone()
+            })
+            .collect(),
+    };
+    Plan {
+        generation,
+        scale,
+        next_id,
+        children,
+        elites,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn one_fifth_rule_widens_on_success_and_narrows_otherwise() {
+        assert!(next_scale(1.0, 0.5) > 1.0);
+        assert!(next_scale(1.0, 0.1) < 1.0);
+        assert_eq!(next_scale(MIN_SCALE, 0.0), MIN_SCALE);
+        assert_eq!(next_scale(MAX_SCALE, 1.0), MAX_SCALE);
+    }
+
+    #[test]
+    fn streams_differ_by_generation_and_id() {
+        let a = stream_seed(1, 0, 0);
+        assert_ne!(a, stream_seed(1, 0, 1));
+        assert_ne!(a, stream_seed(1, 1, 0));
+        assert_ne!(a, stream_seed(2, 0, 0));
+        assert_eq!(a, stream_seed(1, 0, 0));
+    }
+}

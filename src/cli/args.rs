@@ -1,0 +1,315 @@
+//! The arguments of every subcommand (clap derive) and the parsers of their
+//! values: what the command line accepts, apart from what the commands do.
+//! The doc comments here are the `--help` text.
+
+use leafmagic::motion::classify::MotionClass;
+use leafmagic::physics::params::{Integrator, TimeStep};
+use leafmagic::sim::stress::{self, ExplicitPolicy};
+use std::path::PathBuf;
+
+/// Arguments of `breed`.
+#[derive(clap::Args, Debug)]
+pub struct BreedArgs {
+    /// Prototype: `a`, `b` (embedded) or a leaf file.
+    #[arg(long, default_value = "a")]
+    pub prototype: String,
+    /// Motion class to breed toward: floater, spinner or lilter [default: floater; with
+    /// --target-features, none: any class may come close].
+    #[arg(long)]
+    pub target: Option<MotionClass>,
+    /// Individuals per generation.
+    #[arg(long, default_value_t = 100)]
+    pub population: usize,
+    /// Generations in all (generation 0, the prototype's varied copies, counts).
+    #[arg(long, default_value_t = 8)]
+    pub generations: usize,
+    /// Seed of every random stream (same seed, same bytes).
+    #[arg(long, default_value_t = 1991)]
+    pub seed: u64,
+    /// Simulated seconds of each drop.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Run directory (default: runs/<prototype>-<target>-s<seed>-n<population>-g<generations>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Keep a MAP-Elites archive: the best leaf per cell of descent speed × rotation rate.
+    #[arg(long)]
+    pub archive: bool,
+    /// Breed toward the motion of this fall (pose CSV t,x,y,z,qw,qx,qy,qz): its class and
+    /// descriptors (descent, spin, tumble, flips, reversals, drift, period, spreads).
+    #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
+    pub like: Option<PathBuf>,
+    /// The example's chord, metres, for --like [default: the prototype's chord].
+    #[arg(long, requires = "like")]
+    pub size: Option<f64>,
+    /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
+    /// unset ones are free), within the class of --target if given (else any class).
+    #[arg(long, value_name = "NAME=VALUE,...")]
+    pub target_features: Option<String>,
+    /// Who evaluates each generation (the run's files are the same bytes with any).
+    #[arg(long, value_enum, default_value_t = ExecutorKind::Local)]
+    pub executor: ExecutorKind,
+    /// Shards per generation with --executor processes (default: the cores) or slurm
+    /// (default: SLURM_NTASKS of the allocation). --threads is then per shard.
+    #[arg(long)]
+    pub shards: Option<usize>,
+    /// Write the run directory (run.toml) and stop: the generations are then evaluated by
+    /// `leafmagic shard` tasks and merged with `leafmagic merge` (Kubernetes, hand-run arrays).
+    #[arg(long, conflicts_with_all = ["resume", "executor", "shards", "threads"])]
+    pub create_only: bool,
+    /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features"])]
+    pub resume: Option<PathBuf>,
+}
+
+/// Who evaluates each generation of `breed`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ExecutorKind {
+    /// This process's thread pool.
+    Local,
+    /// `--shards` child processes (`leafmagic shard`) on this machine.
+    Processes,
+    /// Slurm: one `srun` step per generation inside an allocation (sbatch/salloc the driver),
+    /// else one `sbatch --wait --array` per generation.
+    Slurm,
+}
+
+/// Arguments of `export`.
+#[derive(clap::Args, Debug)]
+pub struct ExportArgs {
+    /// A breeding run directory.
+    pub run: PathBuf,
+    /// Export the K best of the last generation.
+    #[arg(long, conflicts_with = "ids")]
+    pub top: Option<usize>,
+    /// Export these individuals of the last generation (comma-separated ids).
+    #[arg(long, value_delimiter = ',')]
+    pub ids: Option<Vec<u64>>,
+    /// Output directory for the leaf files and index.csv.
+    #[arg(long)]
+    pub out: PathBuf,
+    /// Also re-drop each leaf as breeding dropped it and write its fall:
+    /// `glb` (leaf-<id>.glb) or `pc2` (leaf-<id>.pc2 + leaf-<id>.obj).
+    #[arg(long)]
+    pub format: Option<leafmagic::output::export::Format>,
+    /// Frames per second of the exported motion.
+    #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
+    pub fps: f64,
+}
+
+/// Arguments of `drop`.
+#[derive(clap::Args, Debug)]
+pub struct DropArgs {
+    /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
+    pub leaf: String,
+    /// Time integrator.
+    #[arg(long, default_value = "verlet")]
+    pub integrator: Integrator,
+    /// Time step in seconds, or `auto` (from the stability estimate).
+    #[arg(long, default_value = "auto", value_parser = parse_dt)]
+    pub dt: TimeStep,
+    /// Simulated seconds.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Release tilt about the leaf's x and y axes, degrees.
+    #[arg(long, default_value = "10,2", value_parser = parse_tilt)]
+    pub tilt: [f64; 2],
+    /// Write the trajectory (t,x,y,z,qw,qx,qy,qz at 240 Hz) to this CSV file.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Also write every particle's position per frame to this CSV file.
+    #[arg(long)]
+    pub particles: Option<PathBuf>,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
+    pub leaf: String,
+    /// Print JSON instead of a table (with --stress: an array of one object per row).
+    #[arg(long)]
+    pub json: bool,
+    /// Run the stiff and extreme matrix: every stress case with every integrator.
+    #[arg(long)]
+    pub stress: bool,
+    /// With --stress: what explicit integrators do with a step above their stable estimate.
+    #[arg(long, default_value = "substep", value_parser = parse_policy)]
+    pub explicit: ExplicitPolicy,
+    /// With --stress --explicit substep: the most sub-steps per step (a warning says when it clamps).
+    #[arg(long, default_value_t = stress::DEFAULT_SUBSTEP_CAP)]
+    pub substep_cap: u64,
+}
+
+/// Arguments of `classify`.
+#[derive(clap::Args, Debug)]
+pub struct ClassifyArgs {
+    /// Trajectory CSV: t,x,y,z,qw,qx,qy,qz (z up, quaternion body to world, w first).
+    pub trajectory: PathBuf,
+    /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
+    #[arg(long, default_value_t = 0.05)]
+    pub size: f64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `accuracy`.
+#[derive(clap::Args, Debug)]
+pub struct AccuracyArgs {
+    /// Leaf file (TOML), or `a` / `b` for the embedded prototypes.
+    #[arg(default_value = "a")]
+    pub leaf: String,
+    /// Simulated seconds T [default: 1, or 10 with --long].
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// Directory for accuracy.csv and accuracy.svg (accuracy-long.csv with --long); created if missing.
+    #[arg(long, default_value = ".")]
+    pub out: PathBuf,
+    /// Compare motion classes and statistics (descent speed, rotation rate) across steps for a long fall.
+    #[arg(long)]
+    pub long: bool,
+    /// Timed runs per point (the median is reported; at least 5 for published figures).
+    #[arg(long, default_value_t = leafmagic::sim::accuracy::DEFAULT_RUNS)]
+    pub runs: usize,
+    /// Use RK4 at T/2^J as the reference instead of the default (it is validated either way).
+    #[arg(long, value_name = "J")]
+    pub reference_j: Option<u32>,
+}
+
+/// Arguments of `scene`.
+#[derive(clap::Args, Debug)]
+pub struct SceneArgs {
+    /// Scene file (TOML, see scenes/README.md).
+    pub file: PathBuf,
+    /// Output directory (default runs/scene-<name>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Simulated seconds (default: the scene's duration).
+    #[arg(long)]
+    pub seconds: Option<f64>,
+    /// List what the compiled scene keeps and leaves out, then stop.
+    #[arg(long)]
+    pub explain: bool,
+    /// Also export the run: `glb` (DIR/<scene>.glb) or `pc2` (DIR/<object>.pc2 + .obj).
+    #[arg(long)]
+    pub export: Option<leafmagic::output::export::Format>,
+    /// Frames per second of the exported motion.
+    #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
+    pub export_fps: f64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `compare`.
+#[derive(clap::Args, Debug)]
+pub struct CompareArgs {
+    /// First fall (pose CSV t,x,y,z,qw,qx,qy,qz).
+    pub a: PathBuf,
+    /// Second fall.
+    pub b: PathBuf,
+    /// The leaves' chord, metres (both falls).
+    #[arg(long, default_value_t = 0.05)]
+    pub size: f64,
+    /// Print one JSON object instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// Arguments of `preview`.
+#[derive(clap::Args, Debug)]
+pub struct PreviewArgs {
+    /// A breeding run directory, a scene output directory or a .glb file.
+    pub input: PathBuf,
+    /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// For a breeding run: show the K best leaves of the last generation.
+    #[arg(long, default_value_t = 5)]
+    pub top: usize,
+    /// Frames per second of the embedded motion [default: 30, or the .glb's own].
+    #[arg(long)]
+    pub fps: Option<f64>,
+}
+
+/// Arguments of `shard`.
+#[derive(clap::Args, Debug)]
+pub struct ShardArgs {
+    /// A breeding run directory (run.toml, and checkpoint.json after generation 0).
+    pub run: PathBuf,
+    /// The generation to evaluate: the one after the checkpoint's.
+    #[arg(long)]
+    pub generation: usize,
+    /// This shard's index, from 0 [default: from SLURM_PROCID, SLURM_ARRAY_TASK_ID,
+    /// JOB_COMPLETION_INDEX or AWS_BATCH_JOB_ARRAY_INDEX].
+    #[arg(long, requires = "count")]
+    pub index: Option<usize>,
+    /// Shards in the generation [default: SLURM_NTASKS or SLURM_ARRAY_TASK_COUNT].
+    #[arg(long)]
+    pub count: Option<usize>,
+    /// Worker threads (default: SLURM_CPUS_PER_TASK, else all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Do nothing if a valid shard file is already there (a rerun keeps finished work).
+    #[arg(long)]
+    pub skip_done: bool,
+}
+
+/// Arguments of `merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// A breeding run directory.
+    pub run: PathBuf,
+    /// The generation whose shards to merge (the one after the checkpoint's).
+    #[arg(long)]
+    pub generation: usize,
+    /// Shards in the generation.
+    #[arg(long)]
+    pub count: usize,
+}
+
+/// `--dt`: `auto`, or a positive, finite number of seconds.
+fn parse_dt(s: &str) -> Result<TimeStep, String> {
+    if s == "auto" {
+        return Ok(TimeStep::Auto);
+    }
+    let h: f64 = s
+        .parse()
+        .map_err(|_| format!("expected a number of seconds or 'auto', got '{s}'"))?;
+    if h > 0.0 && h.is_finite() {
+        Ok(TimeStep::Fixed(h))
+    } else {
+        Err(format!(
+            "the time step must be a positive number of seconds, got {s}"
+        ))
+    }
+}
+
+/// `--tilt`: `X,Y` degrees, or `X` alone (Y is then 0).
+fn parse_tilt(s: &str) -> Result<[f64; 2], String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    let parse = |p: &str| {
+        p.trim()
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("expected degrees as 'X,Y', got '{s}'"))
+    };
+    match parts.as_slice() {
+        [x] => Ok([parse(x)?, 0.0]),
+        [x, y] => Ok([parse(x)?, parse(y)?]),
+        _ => Err(format!("expected degrees as 'X,Y', got '{s}'")),
+    }
+}
+
+/// `--explicit`: `refuse` or `substep`, as the library parses them.
+fn parse_policy(s: &str) -> Result<ExplicitPolicy, leafmagic::sim::stress::UnknownPolicy> {
+    s.parse()
+}

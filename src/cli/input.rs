@@ -1,0 +1,47 @@
+//! Reading what commands are pointed at (a leaf file or an embedded
+//! prototype, a recorded fall), with the checks and error contexts that
+//! several commands share.
+
+use anyhow::{Context, Result, bail};
+use leafmagic::leaf::LeafSpec;
+use leafmagic::motion::classify::{self, Classification};
+use leafmagic::motion::describe::Descriptors;
+use leafmagic::motion::trajectory::Trajectory;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::state::State;
+use leafmagic::sim::accuracy;
+use std::path::Path;
+
+/// A leaf file, or `a` / `b` for the embedded prototypes, and its model.
+pub fn leaf(arg: &str) -> Result<(LeafSpec, Model)> {
+    let spec = LeafSpec::load(arg)?;
+    let model = spec
+        .model()
+        .with_context(|| format!("{arg}: invalid leaf"))?;
+    Ok((spec, model))
+}
+
+/// What `accuracy` and `check --stress` run: a named model and its initial
+/// state. A leaf is dropped as `drop` drops it; a scene file, once scenes
+/// exist, brings its own model and state through this same function.
+pub fn problem(arg: &str) -> Result<(String, Model, State)> {
+    let (spec, model) = leaf(arg)?;
+    let initial = accuracy::default_release(&model);
+    Ok((spec.name, model, initial))
+}
+
+/// Reads and classifies a recorded fall of a leaf of chord `size`.
+pub fn classify_file(path: &Path, size: f64) -> Result<(Trajectory, Classification)> {
+    if !(size > 0.0 && size.is_finite()) {
+        bail!("--size must be a positive number of metres, got {size}");
+    }
+    let traj = Trajectory::read_csv(path)?;
+    let c = classify::classify(&traj, size);
+    Ok((traj, c))
+}
+
+/// Reads and describes a fall, or says why it cannot be described.
+pub fn describe_file(path: &Path, size: f64) -> Result<Descriptors> {
+    let (_, c) = classify_file(path, size)?;
+    Descriptors::of(&c).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+}

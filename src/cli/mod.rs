@@ -1,0 +1,83 @@
+//! The command line: it parses the arguments, calls the library and prints
+//! what comes back; everything that computes lives in the library. It is
+//! the top layer and may use every library layer; none of them uses it.
+//!
+//! `args` is what each subcommand accepts; `breed`, `drop`, `accuracy`,
+//! `motion`, `scene` and `output` do the commands' work (with `input`, the
+//! loading they share, and `progress`, the bar of `breed`); `report` formats
+//! what a person reads. This file: the top-level parser and the dispatch.
+
+mod accuracy;
+mod args;
+mod breed;
+mod drop;
+mod input;
+mod motion;
+mod output;
+mod progress;
+mod report;
+mod scene;
+
+use anyhow::Result;
+use args::{
+    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, MergeArgs,
+    PreviewArgs, SceneArgs, ShardArgs,
+};
+use clap::{Parser, Subcommand};
+
+/// Breed falling-leaf motion in a mass-spring simulator with potential-flow wind.
+#[derive(Parser, Debug)]
+#[command(name = "leafmagic", version, about, long_about = None)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Subcommand, Debug)]
+pub enum Command {
+    /// Breed leaf variants toward a motion class (the paper's section 4.1, automated).
+    Breed(BreedArgs),
+    /// Write chosen leaves of a breeding run as leaf files.
+    Export(ExportArgs),
+    /// Drop a leaf from rest in still air and record its fall.
+    Drop(DropArgs),
+    /// Report the stable time step of a leaf for each integrator, with warnings.
+    Check(CheckArgs),
+    /// Name the motion of a recorded fall (pose CSV t,x,y,z,qw,qx,qy,qz).
+    Classify(ClassifyArgs),
+    /// Error against cost of every integrator over a sweep of time steps
+    /// (work-precision), or with --long, classes and statistics across steps.
+    Accuracy(AccuracyArgs),
+    /// Run a scene file and write per-object trajectories and a summary.
+    Scene(SceneArgs),
+    /// Motion descriptors of two falls side by side, and their distance.
+    Compare(CompareArgs),
+    /// Write one self-contained HTML page that plays a breeding run's best
+    /// leaves, a scene's output or a .glb file in 3-D (works offline).
+    Preview(PreviewArgs),
+    /// Evaluate one shard of a generation of a breeding run and write its shard file
+    /// (what `breed --executor processes|slurm` starts; see the README, "Beyond one machine").
+    Shard(ShardArgs),
+    /// Merge the shard files of a generation that something else evaluated (a Kubernetes
+    /// Indexed Job, a Slurm array) into the run: its files and checkpoint, as breed would.
+    Merge(MergeArgs),
+}
+
+/// Runs the parsed command.
+pub fn run(cli: Cli) -> Result<()> {
+    match cli.command {
+        Command::Breed(args) => breed::breed(args),
+        Command::Export(args) => output::export(args),
+        Command::Drop(args) => drop::drop(args),
+        Command::Check(args) => drop::check(args),
+        Command::Classify(args) => motion::classify(args),
+        Command::Accuracy(args) => accuracy::accuracy(args),
+        Command::Scene(args) => scene::scene(args),
+        Command::Compare(args) => motion::compare(args),
+        Command::Preview(args) => output::preview(args),
+        Command::Shard(args) => breed::shard(args),
+        Command::Merge(args) => breed::merge(args),
+    }
+}

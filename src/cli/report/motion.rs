@@ -1,0 +1,67 @@
+//! The human reports of recorded falls: a classification (`classify`, and
+//! the end of `drop`) and two falls' descriptors side by side (`compare`).
+
+use super::text;
+use leafmagic::motion::classify::Classification;
+use leafmagic::motion::describe::{self, Descriptors};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// A classification's class, regime and reason, and the features behind it.
+pub fn class(c: &Classification) -> String {
+    let f = &c.features;
+    text(|out| {
+        writeln!(out, "class           {} ({})", c.class, c.regime)?;
+        if let Some(reason) = &c.reason {
+            writeln!(out, "reason          {reason}")?;
+        }
+        writeln!(
+            out,
+            "descent         {:.3} m/s mean, drift ratio {:.2}, {:.1} chords in the window {:.2}–{:.2} s",
+            f.mean_descent_speed_m_s, f.drift_ratio, f.descent_chords, f.t_start_s, f.t_end_s
+        )?;
+        writeln!(
+            out,
+            "rotation        {:.2} net turns, {} reversals, {} flips, {:.2} yaw turns, tilt {:.1}° ± {:.1}°",
+            f.net_turns, f.reversals, f.normal_flips, f.yaw_turns, f.tilt_mean_deg, f.tilt_std_deg
+        )
+    })
+}
+
+/// `classify`: the file, its length in samples, and its classification.
+pub fn classified(path: &Path, samples: usize, c: &Classification) -> String {
+    text(|out| {
+        writeln!(
+            out,
+            "trajectory      {} ({samples} samples)",
+            path.display()
+        )?;
+        out.push_str(&class(c));
+        Ok(())
+    })
+}
+
+/// `compare`: the two files, their descriptors as a table, and their
+/// distance (infinite between different classes).
+pub fn comparison(
+    (path_a, a): (&Path, &Descriptors),
+    (path_b, b): (&Path, &Descriptors),
+    distance: f64,
+) -> String {
+    text(|out| {
+        writeln!(out, "a: {}\nb: {}\n", path_a.display(), path_b.display())?;
+        out.push_str(&describe::table(&[("a", a), ("b", b)]));
+        if distance.is_finite() {
+            writeln!(
+                out,
+                "\ndistance    {distance:.4} (RMS over descriptors, each in units of its reference spread)"
+            )
+        } else {
+            writeln!(
+                out,
+                "\ndistance    ∞: different classes ({} vs {}) are never close",
+                a.class, b.class
+            )
+        }
+    })
+}

@@ -1,0 +1,631 @@
+//! Leaf files: a flat layout of particles, springs and triangles plus folds,
+//! read from TOML, validated, and turned into a [`Model`]. The paper's two
+//! prototypes (figure 4) are embedded so the tool runs without any file.
+//! Every field is documented in `prototypes/README.md`.
+
+use crate::physics::field::WindField;
+use crate::physics::model::QuadraticAero;
+use crate::physics::model::{
+    AeroLaw, Hinge, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle,
+};
+use nalgebra::{Unit, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Prototype A of the paper's figure 4 (symmetric star, three flaps).
+pub const PROTOTYPE_A: &str = include_str!("../../prototypes/leaf-a.toml");
+/// Prototype B of the paper's figure 4 (asymmetric strip with three flaps).
+pub const PROTOTYPE_B: &str = include_str!("../../prototypes/leaf-b.toml");
+
+/// A leaf as written in a file. Positions are the flat (unfolded) layout;
+/// folds turn vertices about hinges when the model is built.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LeafSpec {
+    /// Short name, used in outputs.
+    pub name: String,
+    /// Aerodynamic law and coefficients shared by all triangles.
+    pub aero: AeroSpec,
+    /// Limits the genome respects when varying this leaf.
+    #[serde(default)]
+    pub bounds: Bounds,
+    /// Bending stiffness of every edge shared by two triangles (absent: none).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub bending: Option<BendingSpec>,
+    /// Gravity, m/s² (default: standard gravity down z).
+    #[serde(default = "default_gravity")]
+    pub gravity: [f64; 3],
+    /// Point masses.
+    #[serde(rename = "particle")]
+    pub particles: Vec<ParticleSpec>,
+    /// Springs with dashpots.
+    #[serde(rename = "spring", default)]
+    pub springs: Vec<SpringSpec>,
+    /// Wind-catching triangles.
+    #[serde(rename = "triangle", default)]
+    pub triangles: Vec<TriangleSpec>,
+    /// Folds applied in order to the flat layout.
+    #[serde(rename = "fold", default)]
+    pub folds: Vec<FoldSpec>,
+    /// Wind (still air when absent).
+    #[serde(default, skip_serializing_if = "WindField::is_still")]
+    pub wind: WindField,
+}
+
+fn default_gravity() -> [f64; 3] {
+    [0.0, 0.0, -STANDARD_GRAVITY]
+}
+
+/// The aerodynamic law of a leaf: `[aero] law = "linear"` (eq. 9–10, the
+/// default) with `alpha_n`, `alpha_t`; or `law = "quadratic"`
+/// ([`crate::physics::forces::quadratic`]) with optional overrides of its literature coefficients.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AeroSpec {
+    /// Which law; `linear` is the paper's.
+    #[serde(default)]
+    pub law: AeroLawName,
+    /// Normal coefficient αⁿ, kg/(m²·s) (linear law; required there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_n: Option<f64>,
+    /// Tangential coefficient αᵗ, kg/(m²·s) (linear law; required there).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_t: Option<f64>,
+    /// Air density ρ, kg/m³ (quadratic law; default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub air_density: Option<f64>,
+    /// C_D edge-on (quadratic law; default 0.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd_parallel: Option<f64>,
+    /// C_D face-on (quadratic law; default 2.4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cd_normal: Option<f64>,
+    /// C_L★ in C_L = C_L★ sin 2α (quadratic law; default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cl_amplitude: Option<f64>,
+    /// Centre of pressure at small angle of attack, fraction of the chord
+    /// behind the leading edge (quadratic law; default 0.25).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cop_leading: Option<f64>,
+    /// C_R of the rotational lift (quadratic law; default π).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotational_lift: Option<f64>,
+}
+
+/// The name of an aerodynamic law in a leaf file.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AeroLawName {
+    /// The paper's linear law, eq. 9–10.
+    #[default]
+    Linear,
+    /// Quadratic drag with lift and a moving centre of pressure.
+    Quadratic,
+}
+
+impl AeroSpec {
+    /// The paper's linear law with these coefficients.
+    pub fn linear(alpha_n: f64, alpha_t: f64) -> AeroSpec {
+        AeroSpec {
+            law: AeroLawName::Linear,
+            alpha_n: Some(alpha_n),
+            alpha_t: Some(alpha_t),
+            air_density: None,
+            cd_parallel: None,
+            cd_normal: None,
+            cl_amplitude: None,
+            cop_leading: None,
+            rotational_lift: None,
+        }
+    }
+
+    /// The quadratic law with the literature's coefficients.
+    pub fn quadratic() -> AeroSpec {
+        AeroSpec {
+            law: AeroLawName::Quadratic,
+            alpha_n: None,
+            alpha_t: None,
+            ..AeroSpec::linear(0.0, 0.0)
+        }
+    }
+
+    /// The model's law. Each law's own fields are required or defaulted,
+    /// the other law's fields are rejected by name (a coefficient that
+    /// would be silently ignored is a mistake).
+    pub fn resolve(&self) -> Result<AeroLaw, ModelError> {
+        let field = |name: &str, reason: String| ModelError {
+            item: format!("aero.{name}"),
+            reason,
+        };
+        let quadratic_fields = [
+            ("air_density", self.air_density),
+            ("cd_parallel", self.cd_parallel),
+            ("cd_normal", self.cd_normal),
+            ("cl_amplitude", self.cl_amplitude),
+            ("cop_leading", self.cop_leading),
+            ("rotational_lift", self.rotational_lift),
+        ];
+        match self.law {
+            AeroLawName::Linear => {
+                if let Some((name, _)) = quadratic_fields.iter().find(|(_, v)| v.is_some()) {
+                    return Err(field(
+                        name,
+                        "belongs to law = \"quadratic\"; the linear law takes alpha_n and alpha_t"
+                            .to_string(),
+                    ));
+                }
+                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
+                    if value.is_none() {
+                        return Err(field(
+                            name,
+                            "required by law = \"linear\" (kg/(m²·s))".to_string(),
+                        ));
+                    }
+                }
+                Ok(AeroLaw::Linear)
+            }
+            AeroLawName::Quadratic => {
+                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
+                    if value.is_some() {
+                        return Err(field(
+                            name,
+                            "not used by law = \"quadratic\" (remove it; its coefficients are air_density, cd_parallel, cd_normal, cl_amplitude, cop_leading)".to_string(),
+                        ));
+                    }
+                }
+                let d = QuadraticAero::default();
+                let law = QuadraticAero {
+                    air_density: self.air_density.unwrap_or(d.air_density),
+                    cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
+                    cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
+                    cl_amplitude: self.cl_amplitude.unwrap_or(d.cl_amplitude),
+                    cop_leading: self.cop_leading.unwrap_or(d.cop_leading),
+                    rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
+                };
+                law.validate()?;
+                Ok(AeroLaw::Quadratic(law))
+            }
+        }
+    }
+}
+
+/// Bending hinges on every edge shared by two triangles, resisting changes of
+/// the fold angle from its value in the folded rest shape.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BendingSpec {
+    /// Bending stiffness k_b, N·m/rad.
+    pub stiffness: f64,
+    /// Bending damping c_b, N·m·s/rad.
+    #[serde(default)]
+    pub damping: f64,
+}
+
+/// One point mass.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ParticleSpec {
+    /// Flat-layout position, m.
+    pub position: [f64; 3],
+    /// Mass, kg.
+    pub mass: f64,
+    /// Pinned in space.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub fixed: bool,
+    /// Linear drag α of eq. 7, kg/s, for a particle in no triangle.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub drag: f64,
+}
+
+/// One spring.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpringSpec {
+    /// The two particle indices.
+    pub ends: [usize; 2],
+    /// Stiffness k, N/m.
+    pub stiffness: f64,
+    /// Dashpot coefficient c, N·s/m.
+    #[serde(default)]
+    pub damping: f64,
+    /// Group name; the genome scales stiffness per group.
+    #[serde(default = "default_group")]
+    pub group: String,
+    /// Rest length, m (default: the distance in the folded shape).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rest_length: Option<f64>,
+    /// Breaking strain (l − L)/L (default: unbreakable).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub break_strain: Option<f64>,
+}
+
+fn default_group() -> String {
+    "edge".to_string()
+}
+
+/// One triangle.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TriangleSpec {
+    /// The three corner particle indices.
+    pub corners: [usize; 3],
+    /// The paper's flap label (1, 2, 3 in figure 4), if this is a flap.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flap: Option<u8>,
+    /// Overrides the leaf's αⁿ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_n: Option<f64>,
+    /// Overrides the leaf's αᵗ.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub alpha_t: Option<f64>,
+}
+
+/// A fold: the vertices in `moves` turn about the hinge line by `angle_deg`;
+/// positive turns them up (towards +z, the side of the leaf's normal).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FoldSpec {
+    /// The paper's flap label this fold belongs to, if any.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub flap: Option<u8>,
+    /// A name for folds that are not flaps (e.g. a camber of the blade).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub name: Option<String>,
+    /// The two particles on the hinge line.
+    pub hinge: [usize; 2],
+    /// The particles carried by the fold.
+    pub moves: Vec<usize>,
+    /// Fold angle, degrees, + up.
+    pub angle_deg: f64,
+}
+
+/// Physical bounds for variation: [`crate::leaf::genome::mutate`] clamps every
+/// gene to these, so no variant is an invalid model.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Bounds {
+    /// Range of each fold angle, degrees (signed: a flap may go from up to
+    /// down; bending hinges keep a flat flap stiff).
+    pub fold_deg: [f64; 2],
+    /// Range of each particle's mass factor (mass distribution).
+    pub mass_factor: [f64; 2],
+    /// Range of the total mass factor (areal density).
+    pub total_mass_factor: [f64; 2],
+    /// Range of each spring group's stiffness relative to the prototype.
+    pub stiffness_factor: [f64; 2],
+    /// Range of the overall size relative to the prototype.
+    pub size_factor: [f64; 2],
+}
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Bounds {
+            fold_deg: [-60.0, 60.0],
+            mass_factor: [0.25, 4.0],
+            total_mass_factor: [0.5, 2.0],
+            stiffness_factor: [0.5, 4.0],
+            size_factor: [0.5, 2.0],
+        }
+    }
+}
+
+impl Bounds {
+    /// Each range finite and ordered; factor ranges positive.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let ranges = [
+            ("fold_deg", self.fold_deg, false),
+            ("mass_factor", self.mass_factor, true),
+            ("total_mass_factor", self.total_mass_factor, true),
+            ("stiffness_factor", self.stiffness_factor, true),
+            ("size_factor", self.size_factor, true),
+        ];
+        for (name, [lo, hi], positive) in ranges {
+            let reason = if !(lo.is_finite() && hi.is_finite()) {
+                Some(format!("must be finite, got [{lo}, {hi}]"))
+            } else if lo > hi {
+                Some(format!("minimum {lo} exceeds maximum {hi}"))
+            } else if positive && lo <= 0.0 {
+                Some(format!("factors must be > 0, got minimum {lo}"))
+            } else {
+                None
+            };
+            if let Some(reason) = reason {
+                return Err(ModelError {
+                    item: format!("bounds.{name}"),
+                    reason,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn is_false(b: &bool) -> bool {
+    !*b
+}
+
+fn is_zero(x: &f64) -> bool {
+    *x == 0.0
+}
+
+/// A leaf file that could not be read or is invalid.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {message}")]
+pub struct LeafError {
+    /// The file (or embedded prototype) name.
+    pub file: String,
+    /// What is wrong, naming the item.
+    pub message: String,
+}
+
+impl LeafSpec {
+    /// Parses and validates TOML text; `source` names it in errors.
+    pub fn from_toml(text: &str, source: &str) -> Result<LeafSpec, LeafError> {
+        let spec: LeafSpec = toml::from_str(text).map_err(|e| LeafError {
+            file: source.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        spec.model().map_err(|e| LeafError {
+            file: source.to_string(),
+            message: e.to_string(),
+        })?;
+        Ok(spec)
+    }
+
+    /// Reads a leaf file.
+    pub fn read(path: &Path) -> Result<LeafSpec, LeafError> {
+        let text = std::fs::read_to_string(path).map_err(|e| LeafError {
+            file: path.display().to_string(),
+            message: format!("cannot read: {e}"),
+        })?;
+        LeafSpec::from_toml(&text, &path.display().to_string())
+    }
+
+    /// `a` or `b` for the embedded prototypes, otherwise a file path.
+    pub fn load(name_or_path: &str) -> Result<LeafSpec, LeafError> {
+        match name_or_path {
+            "a" | "A" => LeafSpec::from_toml(PROTOTYPE_A, "prototype a"),
+            "b" | "B" => LeafSpec::from_toml(PROTOTYPE_B, "prototype b"),
+            path => LeafSpec::read(Path::new(path)),
+        }
+    }
+
+    /// The TOML text of this leaf (round-trips through [`LeafSpec::from_toml`]).
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a leaf always serialises")
+    }
+
+    /// The folded rest shape: the flat layout with every fold applied in order.
+    pub fn folded_positions(&self) -> Result<Vec<Vector3<f64>>, ModelError> {
+        let mut x: Vec<Vector3<f64>> = self
+            .particles
+            .iter()
+            .map(|p| Vector3::from(p.position))
+            .collect();
+        let n = x.len();
+        // Positions must be finite before folds turn them (a NaN hinge would
+        // otherwise be reported as coincident particles).
+        for (i, p) in x.iter().enumerate() {
+            for (axis, value) in p.iter().enumerate() {
+                if !value.is_finite() {
+                    return Err(ModelError {
+                        item: format!("particle[{i}].position[{axis}]"),
+                        reason: format!("must be a finite number, got {value}"),
+                    });
+                }
+            }
+        }
+        for (f, fold) in self.folds.iter().enumerate() {
+            let item = |field: &str| format!("fold[{f}].{field}");
+            for &i in fold.hinge.iter() {
+                if i >= n {
+                    return Err(ModelError {
+                        item: item("hinge"),
+                        reason: format!(
+                            "particle index {i} out of range (there are {n} particles)"
+                        ),
+                    });
+                }
+            }
+            if !fold.angle_deg.is_finite() {
+                return Err(ModelError {
+                    item: item("angle_deg"),
+                    reason: format!("must be a finite number, got {}", fold.angle_deg),
+                });
+            }
+            let (a, b) = (x[fold.hinge[0]], x[fold.hinge[1]]);
+            let Some(axis) = Unit::try_new(b - a, 1e-12) else {
+                return Err(ModelError {
+                    item: item("hinge"),
+                    reason: "the hinge particles coincide".to_string(),
+                });
+            };
+            for &m in &fold.moves {
+                if m >= n {
+                    return Err(ModelError {
+                        item: item("moves"),
+                        reason: format!(
+                            "particle index {m} out of range (there are {n} particles)"
+                        ),
+                    });
+                }
+                if fold.hinge.contains(&m) {
+                    return Err(ModelError {
+                        item: item("moves"),
+                        reason: format!("particle {m} is on the hinge and cannot move"),
+                    });
+                }
+            }
+            // "Up" is towards +z: pick the turning sense in which the first
+            // moved vertex rises, so the sign does not depend on hinge order.
+            let Some(&first) = fold.moves.first() else {
+                continue;
+            };
+            let lever = x[first] - a;
+            let sense = if axis.cross(&lever).z >= 0.0 {
+                1.0
+            } else {
+                -1.0
+            };
+            let rotation =
+                UnitQuaternion::from_axis_angle(&axis, sense * fold.angle_deg.to_radians());
+            for &m in &fold.moves {
+                x[m] = a + rotation * (x[m] - a);
+            }
+        }
+        Ok(x)
+    }
+
+    /// One hinge per edge shared by exactly two triangles (in triangle order,
+    /// so indices are stable), at the fold angle of the rest shape.
+    fn hinges(&self, rest: &[Vector3<f64>], bending: &BendingSpec) -> Vec<Hinge> {
+        let mut out = Vec::new();
+        let n = rest.len();
+        for (i, t) in self.triangles.iter().enumerate() {
+            for u in &self.triangles[i + 1..] {
+                if t.corners.iter().chain(&u.corners).any(|&c| c >= n) {
+                    continue; // reported by Model::new
+                }
+                let shared: Vec<usize> = t
+                    .corners
+                    .iter()
+                    .copied()
+                    .filter(|c| u.corners.contains(c))
+                    .collect();
+                if shared.len() != 2 {
+                    continue;
+                }
+                let p = t.corners.iter().copied().find(|c| !shared.contains(c));
+                let q = u.corners.iter().copied().find(|c| !shared.contains(c));
+                let (Some(p), Some(q)) = (p, q) else { continue };
+                let mut hinge = Hinge {
+                    edge: [shared[0], shared[1]],
+                    apexes: [p, q],
+                    rest_angle: 0.0,
+                    stiffness: bending.stiffness,
+                    damping: bending.damping,
+                };
+                if let Some((theta, _)) = crate::physics::forces::dihedral(rest, &hinge) {
+                    hinge.rest_angle = theta;
+                    out.push(hinge);
+                }
+            }
+        }
+        out
+    }
+
+    /// Builds and validates the model of this leaf.
+    pub fn model(&self) -> Result<Model, ModelError> {
+        self.bounds.validate()?;
+        let rest = self.folded_positions()?;
+        let n = rest.len();
+        let mut springs = Vec::with_capacity(self.springs.len());
+        for (s, spec) in self.springs.iter().enumerate() {
+            let [i, j] = spec.ends;
+            if i >= n || j >= n {
+                return Err(ModelError {
+                    item: format!("spring[{s}].ends"),
+                    reason: format!(
+                        "particle index {} out of range (there are {n} particles)",
+                        i.max(j)
+                    ),
+                });
+            }
+            springs.push(Spring {
+                i,
+                j,
+                rest_length: spec
+                    .rest_length
+                    .unwrap_or_else(|| (rest[i] - rest[j]).norm()),
+                stiffness: spec.stiffness,
+                damping: spec.damping,
+                break_strain: spec.break_strain,
+            });
+        }
+        let hinges = match &self.bending {
+            None => Vec::new(),
+            Some(b) => {
+                for (name, value) in [("stiffness", b.stiffness), ("damping", b.damping)] {
+                    if !(value.is_finite() && value >= 0.0) {
+                        return Err(ModelError {
+                            item: format!("bending.{name}"),
+                            reason: format!("must be a finite number ≥ 0, got {value}"),
+                        });
+                    }
+                }
+                self.hinges(&rest, b)
+            }
+        };
+        let aero = self.aero.resolve()?;
+        let mut triangles = Vec::with_capacity(self.triangles.len());
+        for (k, t) in self.triangles.iter().enumerate() {
+            let (alpha_n, alpha_t) = match aero {
+                AeroLaw::Linear => (
+                    t.alpha_n.or(self.aero.alpha_n).unwrap_or_default(),
+                    t.alpha_t.or(self.aero.alpha_t).unwrap_or_default(),
+                ),
+                AeroLaw::Quadratic(_) => {
+                    if t.alpha_n.is_some() || t.alpha_t.is_some() {
+                        return Err(ModelError {
+                            item: format!("triangle[{k}].alpha_n"),
+                            reason: "per-triangle α is not used by law = \"quadratic\"".to_string(),
+                        });
+                    }
+                    (0.0, 0.0)
+                }
+            };
+            triangles.push(Triangle {
+                corners: t.corners,
+                alpha_n,
+                alpha_t,
+            });
+        }
+        Model::new(ModelParts {
+            mass: self.particles.iter().map(|p| p.mass).collect(),
+            fixed: self.particles.iter().map(|p| p.fixed).collect(),
+            particle_drag: self.particles.iter().map(|p| p.drag).collect(),
+            rest_position: rest,
+            springs,
+            triangles,
+            hinges,
+            aero,
+            wind: self.wind.clone(),
+            gravity: Vector3::from(self.gravity),
+            ..Default::default()
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn embedded_prototypes_load_and_round_trip() {
+        for p in ["a", "b"] {
+            let spec = LeafSpec::load(p).unwrap();
+            let again = LeafSpec::from_toml(&spec.to_toml(), "round trip").unwrap();
+            assert_eq!(spec, again);
+        }
+    }
+
+    #[test]
+    fn a_positive_fold_raises_the_flap_tip() {
+        let spec = LeafSpec::load("a").unwrap();
+        let x = spec.folded_positions().unwrap();
+        for fold in &spec.folds {
+            for &m in &fold.moves {
+                assert!(
+                    x[m].z > 0.0,
+                    "fold {:?} moved {m} to z = {}",
+                    fold.flap,
+                    x[m].z
+                );
+            }
+        }
+        let mut down = spec.clone();
+        down.folds[0].angle_deg = -20.0;
+        let x = down.folded_positions().unwrap();
+        assert!(x[down.folds[0].moves[0]].z < 0.0);
+    }
+}

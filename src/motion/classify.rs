@@ -1,0 +1,1720 @@
+//! Names the motion of a fall — floater, spinner or lilter (Haumann et al.
+//! 1991, §4.1) — from its trajectory alone.
+//!
+//! # Method
+//!
+//! 1. **Checks**: ≥ 60 Hz sampling, no gap over 1.5 frames at 60 Hz.
+//! 2. **Window**: the first [`TRANSIENT_FRACTION`] of the record's duration is
+//!    discarded as start-up transient; the rest must hold
+//!    ≥ [`MIN_WINDOW_SAMPLES`] samples and ≥ [`MIN_DESCENT_CHORDS`] chord
+//!    lengths of descent, else the result is `Undetermined` with a reason.
+//! 3. **Kinematics** (all rate independent): the world angular increment
+//!    between samples, r = log(q₁ q₀⁻¹) (shortest arc, so q ≡ −q is harmless),
+//!    split into a vertical part (yaw, ψ = Σ r_z) and a horizontal part
+//!    (pitch/roll). The dominant pitch/roll axis is the principal axis of
+//!    ∫ω_h ω_hᵀ dt, held fixed in the body (ω_h mapped with the mid-interval
+//!    orientation) or in the world, whichever frame concentrates more of the
+//!    horizontal rotation on one axis: a body-fixed axis follows a leaf that
+//!    rocks or tumbles about its own span while yawing (most lilters,
+//!    docs/falling-plates.md, "Folded leaves under the linear law"; the
+//!    precessing MuJoCo card). The pitch angle θ(t) is the integral of ω_h
+//!    about that axis; its turning points (swings ≥ 10°) are the reversals.
+//!    The plate normal is body z; a flip is the normal crossing the
+//!    horizontal plane with ±30° hysteresis.
+//! 4. **Rules**, first match wins (docs/falling-plates.md, "Classifier rules",
+//!    reordered as the boundary cases in "Folded leaves under the linear law"
+//!    demand: flips and reversals are looked at before a *slow* turn about the
+//!    vertical — lilters yaw at 1–9 rad/s — but a rotation that is mostly
+//!    about the vertical, vertical share ≥ 0.7, i.e. an axis within ~45° of
+//!    it, is autorotation even when its leaning axis makes the normal cross
+//!    the horizontal: such a leaf spins, it does not turn end over end):
+//!
+//! | # | class / regime | conditions |
+//! |---|---|---|
+//! | 1 | spinner / tumble | net turns about the horizontal axis ≥ 1, rotation consistency ≥ 0.9, vertical share of ω < 0.7 |
+//! | 2 | spinner / autorotation | yaw turns ≥ 1, yaw consistency ≥ 0.9, vertical share of ω ≥ 0.7, mean plate tilt ≥ 30° |
+//! | 3 | lilter / chaotic | ≥ 1 normal flip, ≥ 2 pitch reversals |
+//! | 4 | undetermined | ≥ 1 flip but < 2 reversals (one flip, no rocking: transient) |
+//! | 5 | undetermined / dive | plate within 30° of edge-on 90 % of the time (10th percentile tilt ≥ 60°) |
+//! | 6 | floater / flutter | rocking amplitude ≥ 10°, ≥ 3 periods, 10th percentile tilt < 30° (swings through flat) |
+//! | 7 | undetermined | rocking amplitude ≥ 10° but < 3 periods (too transient) |
+//! | 8 | undetermined | rocking ≥ 10° about a steep attitude (10th percentile tilt ≥ 30°) |
+//! | 9 | undetermined | mean tilt ≥ 30° without rocking: between glide and dive (docs/falling-plates.md, "Folded leaves under the linear law") |
+//! | 10 | floater / glide | drift ratio ≥ 0.1 |
+//! | 11 | floater / steady | otherwise |
+//!
+//! # Margin
+//!
+//! Every condition is `feature ≥ threshold` (or `<`) with a natural scale:
+//! 1 turn (net or yaw turns), 0.1 (consistencies), 0.3 (vertical share),
+//! 2 reversals, 3 periods, 10° (amplitude), 30° (tilts), 0.1 (drift ratio),
+//! and for flips a continuous "flip progress" (the flip count, or without a
+//! flip the normal's largest excursion / 120°) with scale 1. Its *slack* is
+//! (feature − threshold)/scale,
+//! positive when the condition holds. A rule that did not fire is at
+//! distance max over its conditions of the missing slack (all of them must be
+//! met for it to fire). [`Features::margin`] is the smallest of: the slacks
+//! of the firing rule's conditions whose failure would change the *class*,
+//! and the distances to every earlier rule of a different class; it is
+//! clipped to [0, 1] (1 = at least one full scale unit from any class
+//! boundary). [`Features::regime_margin`] is the same counting every rule
+//! and condition (distance to the nearest regime boundary). Both are 0 when
+//! the record is insufficient.
+
+use std::fmt;
+use std::str::FromStr;
+
+use nalgebra::{Matrix2, Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
+use serde::{Deserialize, Serialize};
+
+use crate::motion::trajectory::Trajectory;
+
+// ---------------------------------------------------------------- thresholds
+
+/// Lowest accepted sampling rate, Hz. Field et al. (1997) recorded θ(t) at
+/// 60 Hz; the issue requires correct results from 60 Hz up.
+pub const MIN_SAMPLE_RATE_HZ: f64 = 60.0;
+
+/// Relative slack on [`MIN_SAMPLE_RATE_HZ`]: time stamps are often printed
+/// with 6 decimals (the MuJoCo files), which jitters 1/60 s by ~1e-4.
+pub const SAMPLE_RATE_TOLERANCE: f64 = 0.01;
+
+/// Longest accepted interval between two samples in the window, s: one
+/// dropped frame at the minimum rate (our choice).
+pub const MAX_GAP_S: f64 = 1.5 / MIN_SAMPLE_RATE_HZ;
+
+/// Fraction of the record's duration discarded as start-up transient.
+/// Classify only the last 50–70 % of the fall (docs/falling-plates.md,
+/// "Classifier rules", step 1); we keep 60 %.
+pub const TRANSIENT_FRACTION: f64 = 0.4;
+
+/// Fewest samples in the analysis window (1 s at the minimum rate; our
+/// choice, so that rates and periods have support).
+pub const MIN_WINDOW_SAMPLES: usize = 60;
+
+/// Fewest chord lengths of descent in the analysis window
+/// (docs/falling-plates.md, "Classifier rules", step 1; Howison & Iida 2020
+/// drops are ≈ 10–30 sizes).
+pub const MIN_DESCENT_CHORDS: f64 = 10.0;
+
+/// Fewest oscillation periods needed to call a rocking fall a flutter
+/// (docs/falling-plates.md, "Classifier rules", step 1).
+pub const MIN_OSCILLATION_PERIODS: f64 = 3.0;
+
+/// Fewest net turns about the dominant horizontal axis for a tumble
+/// (docs/falling-plates.md, "Classifier rules", step 4: N_turn ≥ 1); a
+/// floater cannot turn past ±90° (Belmonte, Eisenberg & Moses 1998, Phys.
+/// Rev. Lett. 81, 345; Andersen, Pesavento & Wang 2005, J. Fluid Mech. 541,
+/// 65).
+pub const SPIN_MIN_NET_TURNS: f64 = 1.0;
+
+/// Least rotation consistency |∫ω dt| / ∫|ω| dt about the horizontal axis for
+/// a tumble: "ω keeps its sign" (Belmonte 1998, APW 2005); s > 0.9 in
+/// docs/falling-plates.md, "Classifier rules", step 4.
+pub const TUMBLE_MIN_CONSISTENCY: f64 = 0.9;
+
+/// Hysteresis of a normal flip, degrees: the normal must go from ≥ 30° above
+/// the horizontal plane to ≥ 30° below it (or back). The APW ODE's largest
+/// flutter reaches ±96° without flipping over (docs/falling-plates.md, "APW
+/// quasi-steady model"), and an edge-on diver wobbling a few degrees must not
+/// count flips.
+pub const FLIP_HYSTERESIS_DEG: f64 = 30.0;
+
+/// Fewest pitch reversals (rocks) for a lilter: Field et al. 1997 chaotic =
+/// oscillation, then a flip, irregularly; "reversals between flips" in
+/// docs/falling-plates.md, "Classifier rules", step 4.
+pub const LILT_MIN_REVERSALS: usize = 2;
+
+/// Smallest pitch swing counted as a reversal, degrees peak to peak.
+/// docs/falling-plates.md, "Classifier rules", step 4, calls θ within ~±10°
+/// steady; we read that as amplitude, so a swing must at least equal that
+/// band's width to count as a rock rather than jitter.
+pub const REVERSAL_MIN_SWING_DEG: f64 = 10.0;
+
+/// Smallest rocking amplitude of a flutter, degrees (half the mean swing).
+/// Steady if θ stays within ~10°, flutter otherwise (docs/falling-plates.md,
+/// "Classifier rules", step 4).
+pub const FLUTTER_MIN_AMPLITUDE_DEG: f64 = 10.0;
+
+/// Fewest turns about the vertical for autorotation (N_z ≥ 1:
+/// docs/falling-plates.md, "Classifier rules", step 4).
+pub const AUTOROTATION_MIN_YAW_TURNS: f64 = 1.0;
+
+/// Least yaw consistency |∫ω_z dt| / ∫|ω_z| dt for autorotation (the
+/// vertical counterpart of [`TUMBLE_MIN_CONSISTENCY`]).
+pub const AUTOROTATION_MIN_YAW_CONSISTENCY: f64 = 0.9;
+
+/// Least |mean ω_z| / rms |ω| for autorotation: the spin axis lies on
+/// average within ~45° of the vertical. Lilters also yaw at 1–9 rad/s
+/// (docs/falling-plates.md, "Folded leaves under the linear law") but their
+/// rocking and flips dominate ω.
+pub const AUTOROTATION_MIN_VERTICAL_SHARE: f64 = 0.7;
+
+/// Least mean plate tilt for autorotation, degrees. Autorotating spinners'
+/// planes sat 42–103° from horizontal (docs/falling-plates.md, "Folded leaves
+/// under the linear law"); a flat leaf turning about its own normal is still a
+/// floater ("did not rotate" visibly).
+pub const AUTOROTATION_MIN_TILT_DEG: f64 = 30.0;
+
+/// Dive: the plate spends 90 % of the window within 30° of edge-on (10th
+/// percentile of tilt ≥ 60°). Divers fall edge-on; planes 30–60° from
+/// edge-on are "neither clearly floater nor diver" (docs/falling-plates.md,
+/// "Folded leaves under the linear law").
+pub const DIVE_MIN_TILT_DEG: f64 = 60.0;
+
+/// Mean tilt above which a non-rocking, non-rotating fall is neither a clear
+/// floater nor a diver, degrees (30–60° from edge-on: docs/falling-plates.md,
+/// "Folded leaves under the linear law").
+pub const STEEP_TILT_DEG: f64 = 30.0;
+
+/// Least drift ratio (horizontal displacement / fall) for a glide: a path
+/// ≥ 5.7° from vertical. Our choice: steady fallers and flutterers have zero
+/// mean drift (Field 1997, APW 2005), tumblers 0.5–2.3 (docs/falling-plates.md,
+/// "Measured regimes", row 4, and "Classifier rules").
+pub const GLIDE_MIN_DRIFT_RATIO: f64 = 0.1;
+
+/// Body and world axis shares closer than this count as a tie (body wins).
+const AXIS_FRAME_TIE: f64 = 1e-3;
+
+// ---------------------------------------------------------------- public types
+
+/// Frame in which the dominant pitch/roll axis is held fixed.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum AxisFrame {
+    /// Fixed in the leaf (e.g. its span): the usual case.
+    #[default]
+    Body,
+    /// Fixed in the world (a plate spinning about its normal while rocking).
+    World,
+}
+
+/// The paper's three kinds of leaf motion, plus `Undetermined`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MotionClass {
+    /// Does not rotate; floats or glides gently down (steady, glide, flutter).
+    Floater,
+    /// Rotates rapidly as it falls (tumble or autorotation).
+    Spinner,
+    /// Alternately rocks, then rotates end over end (chaotic).
+    Lilter,
+    /// Cannot tell, or none of the three (e.g. a dive); see the reason.
+    Undetermined,
+}
+
+/// The finer regime, in the literature's words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Regime {
+    /// Floater: constant attitude, straight down.
+    Steady,
+    /// Floater: constant attitude, drifting sideways.
+    Glide,
+    /// Floater: side-to-side rocking, pitch rate reverses.
+    Flutter,
+    /// Spinner: end-over-end rotation about a horizontal axis.
+    Tumble,
+    /// Spinner: rotation about the vertical axis, plate steeply tilted.
+    Autorotation,
+    /// Lilter: rocks, then flips over, irregularly.
+    Chaotic,
+    /// Edge-on fall without rotation (docs/falling-plates.md, "Folded leaves
+    /// under the linear law"); class `Undetermined`.
+    Dive,
+    /// No regime could be named.
+    Undetermined,
+}
+
+/// Error of [`MotionClass::from_str`] / [`Regime::from_str`].
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("unknown {what} `{input}` (expected one of: {expected})")]
+pub struct ParseNameError {
+    what: &'static str,
+    input: String,
+    expected: &'static str,
+}
+
+const CLASS_NAMES: [(MotionClass, &str); 4] = [
+    (MotionClass::Floater, "floater"),
+    (MotionClass::Spinner, "spinner"),
+    (MotionClass::Lilter, "lilter"),
+    (MotionClass::Undetermined, "undetermined"),
+];
+
+const REGIME_NAMES: [(Regime, &str); 8] = [
+    (Regime::Steady, "steady"),
+    (Regime::Glide, "glide"),
+    (Regime::Flutter, "flutter"),
+    (Regime::Tumble, "tumble"),
+    (Regime::Autorotation, "autorotation"),
+    (Regime::Chaotic, "chaotic"),
+    (Regime::Dive, "dive"),
+    (Regime::Undetermined, "undetermined"),
+];
+
+impl MotionClass {
+    /// Lower-case name, as in serde and the CLI.
+    pub fn as_str(self) -> &'static str {
+        CLASS_NAMES
+            .iter()
+            .find(|(c, _)| *c == self)
+            .map_or("", |p| p.1)
+    }
+}
+
+impl Regime {
+    /// Snake-case name, as in serde and the CLI.
+    pub fn as_str(self) -> &'static str {
+        REGIME_NAMES
+            .iter()
+            .find(|(r, _)| *r == self)
+            .map_or("", |p| p.1)
+    }
+}
+
+impl fmt::Display for MotionClass {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl fmt::Display for Regime {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl FromStr for MotionClass {
+    type Err = ParseNameError;
+    /// Parses `floater`, `spinner`, `lilter`, `undetermined` (any case).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
+        CLASS_NAMES
+            .iter()
+            .find(|(_, n)| n.eq_ignore_ascii_case(s))
+            .map(|p| p.0)
+            .ok_or_else(|| ParseNameError {
+                what: "motion class",
+                input: s.to_string(),
+                expected: "floater, spinner, lilter, undetermined",
+            })
+    }
+}
+
+impl FromStr for Regime {
+    type Err = ParseNameError;
+    /// Parses the snake-case regime names (any case).
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let s = s.trim();
+        REGIME_NAMES
+            .iter()
+            .find(|(_, n)| n.eq_ignore_ascii_case(s))
+            .map(|p| p.0)
+            .ok_or_else(|| ParseNameError {
+                what: "regime",
+                input: s.to_string(),
+                expected: "steady, glide, flutter, tumble, autorotation, chaotic, dive, undetermined",
+            })
+    }
+}
+
+/// The numbers behind a decision, all measured over the analysis window.
+/// Angles about axes are in turns (1 turn = 2π rad) or degrees as named.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct Features {
+    /// Start of the analysis window, s (after the discarded transient).
+    pub t_start_s: f64,
+    /// End of the analysis window, s (last sample).
+    pub t_end_s: f64,
+    /// Samples in the window.
+    pub samples: usize,
+    /// Sampling rate of the whole record, Hz (1 / median interval).
+    pub sample_rate_hz: f64,
+    /// Longest interval between samples in the window, s.
+    pub max_gap_s: f64,
+    /// Fall over the window (z at start − z at end), m.
+    pub descent_m: f64,
+    /// [`Features::descent_m`] in chord lengths (leaf size).
+    pub descent_chords: f64,
+    /// Mean descent speed, m/s (descent / window duration).
+    pub mean_descent_speed_m_s: f64,
+    /// Mean descent speed in chord lengths per second.
+    pub descent_speed_chords_per_s: f64,
+    /// Standard deviation / mean of the per-interval vertical speed
+    /// (Howison & Iida's `SpeedZ` analogue); dimensionless.
+    pub descent_speed_cv: f64,
+    /// Horizontal displacement / descent over the window; dimensionless.
+    pub drift_ratio: f64,
+    /// |net rotation| about the dominant horizontal (pitch/roll) axis, turns.
+    pub net_turns: f64,
+    /// Total rotation ∫|ω·a| dt about that axis, turns (≥ net_turns).
+    pub total_turns: f64,
+    /// net_turns / total_turns: 1 = one sign of rotation, 0 = pure rocking.
+    pub rotation_consistency: f64,
+    /// Share of the horizontal angular "energy" ∫ω_h ω_hᵀ dt on the dominant
+    /// axis (1 = a single axis; 1/3 in body axes or 1/2 in world axes = none).
+    pub horizontal_axis_share: f64,
+    /// Frame in which that axis is fixed.
+    pub axis_frame: AxisFrame,
+    /// Time per net turn about the horizontal axis, s (when net_turns ≥ 0.5).
+    pub turn_period_s: Option<f64>,
+    /// Reversals of the pitch rate (turning points of θ with swings of at
+    /// least [`REVERSAL_MIN_SWING_DEG`]).
+    pub reversals: usize,
+    /// [`Features::reversals`] per second.
+    pub reversals_per_s: f64,
+    /// Number of full oscillation periods (reversals / 2).
+    pub oscillation_periods: f64,
+    /// Rocking amplitude, degrees: half the mean swing between successive
+    /// turning points of θ (0 without reversals).
+    pub rocking_amplitude_deg: f64,
+    /// Oscillation period, s, from the turning points (at least 3 needed).
+    pub oscillation_period_s: Option<f64>,
+    /// Times the normal crossed the horizontal plane (with
+    /// [`FLIP_HYSTERESIS_DEG`] hysteresis).
+    pub normal_flips: usize,
+    /// [`Features::normal_flips`] per second.
+    pub flips_per_s: f64,
+    /// Largest angle of the normal from the pole of the hemisphere it started
+    /// the window in, degrees; a flip needs 90 + [`FLIP_HYSTERESIS_DEG`].
+    pub max_excursion_deg: f64,
+    /// Net rotation about the world vertical, turns (signed, + = counter-clockwise seen from above).
+    pub yaw_turns: f64,
+    /// Mean rotation rate about the vertical, rad/s (signed).
+    pub mean_yaw_rate_rad_s: f64,
+    /// |∫ω_z dt| / ∫|ω_z| dt: 1 = yaw keeps its sign.
+    pub yaw_consistency: f64,
+    /// |mean ω_z| / rms |ω|: 1 = rotation purely about the vertical.
+    pub vertical_spin_share: f64,
+    /// Time-weighted mean tilt of the plate from horizontal, degrees (0–90).
+    pub tilt_mean_deg: f64,
+    /// Time-weighted standard deviation of that tilt, degrees.
+    pub tilt_std_deg: f64,
+    /// 10th percentile of the tilt, degrees.
+    pub tilt_p10_deg: f64,
+    /// Mean angle of the normal from straight up, degrees (0–180; > 90 =
+    /// upside down).
+    pub normal_tilt_mean_deg: f64,
+    /// Distance to the nearest class boundary, in threshold scale units,
+    /// clipped to [0, 1] (see the module docs).
+    pub margin: f64,
+    /// Distance to the nearest regime boundary, same units.
+    pub regime_margin: f64,
+}
+
+/// Result of [`classify`].
+#[derive(Clone, Debug, Serialize)]
+pub struct Classification {
+    /// Floater, spinner, lilter or undetermined.
+    pub class: MotionClass,
+    /// The finer regime.
+    pub regime: Regime,
+    /// Why: always set; for `Undetermined` it says what was missing.
+    pub reason: Option<String>,
+    /// The numbers behind the decision.
+    pub features: Features,
+}
+
+// ---------------------------------------------------------------- classify
+
+/// Classifies a fall from its trajectory. `size` is the leaf's chord (longest
+/// extent), m. O(n) time and memory; see the module docs for the method.
+pub fn classify(trajectory: &Trajectory, size: f64) -> Classification {
+    let undetermined = |features: Features, why: String| Classification {
+        class: MotionClass::Undetermined,
+        regime: Regime::Undetermined,
+        reason: Some(why),
+        features,
+    };
+    let tr = trajectory;
+    let n = tr.time.len();
+    if !(size.is_finite() && size > 0.0) {
+        return undetermined(
+            Features::default(),
+            format!("leaf size must be positive and finite, got {size}"),
+        );
+    }
+    if tr.position.len() != n || tr.orientation.len() != n {
+        return undetermined(
+            Features::default(),
+            format!(
+                "inconsistent trajectory: {} times, {} positions, {} orientations",
+                n,
+                tr.position.len(),
+                tr.orientation.len()
+            ),
+        );
+    }
+    if n < 2 {
+        return undetermined(
+            Features::default(),
+            format!("too few samples: {n} (need {MIN_WINDOW_SAMPLES} in the analysis window)"),
+        );
+    }
+    for k in 0..n {
+        let p = &tr.position[k];
+        let q = &tr.orientation[k].coords;
+        if !(tr.time[k].is_finite()
+            && p.iter().all(|x| x.is_finite())
+            && q.iter().all(|x| x.is_finite()))
+        {
+            return undetermined(
+                Features::default(),
+                format!("non-finite value at sample {}", k + 1),
+            );
+        }
+        if k > 0 && tr.time[k] <= tr.time[k - 1] {
+            return undetermined(
+                Features::default(),
+                format!("time not strictly increasing at sample {}", k + 1),
+            );
+        }
+    }
+
+    // Sampling rate from the median interval (robust to an odd jitter).
+    let mut dts: Vec<f64> = tr.time.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = dts.len() / 2;
+    let median_dt = *dts.select_nth_unstable_by(mid, f64::total_cmp).1;
+    drop(dts);
+    let rate = 1.0 / median_dt;
+
+    let t0 = tr.time[0];
+    let t_start = t0 + TRANSIENT_FRACTION * (tr.time[n - 1] - t0);
+    let i0 = tr.time.partition_point(|&t| t < t_start).min(n - 1);
+    let mut f = extract(tr, i0, size);
+    f.sample_rate_hz = rate;
+
+    if rate < MIN_SAMPLE_RATE_HZ * (1.0 - SAMPLE_RATE_TOLERANCE) {
+        return undetermined(
+            f,
+            format!("sampled at {rate:.1} Hz, below the {MIN_SAMPLE_RATE_HZ} Hz minimum"),
+        );
+    }
+    if f.samples < MIN_WINDOW_SAMPLES {
+        return undetermined(
+            f.clone(),
+            format!(
+                "too few samples: {} in the analysis window {:.3}–{:.3} s (need {MIN_WINDOW_SAMPLES}); record too short",
+                f.samples, f.t_start_s, f.t_end_s
+            ),
+        );
+    }
+    if f.max_gap_s > MAX_GAP_S {
+        return undetermined(
+            f.clone(),
+            format!(
+                "gap of {:.4} s between samples (more than {MAX_GAP_S:.4} s: locally below {MIN_SAMPLE_RATE_HZ} Hz)",
+                f.max_gap_s
+            ),
+        );
+    }
+    if f.descent_chords < MIN_DESCENT_CHORDS {
+        return undetermined(
+            f.clone(),
+            format!(
+                "fell only {:.2} chord lengths in the analysis window {:.3}–{:.3} s (need {MIN_DESCENT_CHORDS}); record too short or not falling",
+                f.descent_chords, f.t_start_s, f.t_end_s
+            ),
+        );
+    }
+    decide(f)
+}
+
+// ---------------------------------------------------------------- features
+
+/// World z component of the plate normal (body z axis): cos of its angle
+/// from straight up.
+fn normal_z(q: &UnitQuaternion<f64>) -> f64 {
+    1.0 - 2.0 * (q.i * q.i + q.j * q.j)
+}
+
+/// Rotation vector (axis × angle, world frame) of the shortest rotation from
+/// `a` to `b`: log(b a⁻¹). q and −q give the same result.
+fn increment(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> Vector3<f64> {
+    let d = b * a.inverse();
+    let (mut w, mut v) = (d.w, d.vector().into_owned());
+    if w < 0.0 {
+        w = -w;
+        v = -v;
+    }
+    let s = v.norm();
+    if s < 1e-300 {
+        return v * 2.0;
+    }
+    v * (2.0 * s.atan2(w) / s)
+}
+
+/// Computes every feature except the sampling rate and margins over samples
+/// `i0..n`.
+fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
+    let n = tr.time.len();
+    let m = n - i0;
+    let mut f = Features {
+        t_start_s: tr.time[i0],
+        t_end_s: tr.time[n - 1],
+        samples: m,
+        ..Features::default()
+    };
+    let duration = f.t_end_s - f.t_start_s;
+    if m < 2 || duration <= 0.0 {
+        return f;
+    }
+
+    // Pass 1: per interval — angular increments, yaw, vertical speed. The
+    // horizontal (pitch/roll) part of each increment is kept both in world
+    // axes and in body axes (mapped with the mid-interval orientation).
+    let mut world_h: Vec<[f64; 2]> = Vec::with_capacity(m - 1);
+    let mut body_h: Vec<Vector3<f64>> = Vec::with_capacity(m - 1);
+    let (mut psi, mut abs_rz) = (0.0f64, 0.0f64);
+    let mut s_world = Matrix2::<f64>::zeros(); // ∫ω_h ω_hᵀ dt, world axes
+    let mut s_body = Matrix3::<f64>::zeros(); // the same in body axes
+    let mut w2 = 0.0f64; // ∫|ω|² dt
+    let (mut vz_sum, mut vz_sq) = (0.0f64, 0.0f64);
+    for k in i0..n - 1 {
+        let dt = tr.time[k + 1] - tr.time[k];
+        f.max_gap_s = f.max_gap_s.max(dt);
+        let r = increment(&tr.orientation[k], &tr.orientation[k + 1]);
+        psi += r.z;
+        abs_rz += r.z.abs();
+        w2 += r.norm_squared() / dt;
+        let h = Vector3::new(r.x, r.y, 0.0);
+        let mid = UnitQuaternion::from_scaled_axis(r * 0.5) * tr.orientation[k];
+        let u = mid.inverse_transform_vector(&h);
+        s_world += Matrix2::new(h.x * h.x, h.x * h.y, h.x * h.y, h.y * h.y) / dt;
+        s_body += u * u.transpose() / dt;
+        world_h.push([h.x, h.y]);
+        body_h.push(u);
+        let vz = (tr.position[k + 1].z - tr.position[k].z) / dt;
+        vz_sum += vz;
+        vz_sq += vz * vz;
+    }
+    let intervals = (m - 1) as f64;
+    let vz_mean = vz_sum / intervals;
+    let vz_std = (vz_sq / intervals - vz_mean * vz_mean).max(0.0).sqrt();
+    f.descent_speed_cv = if vz_mean != 0.0 {
+        vz_std / vz_mean.abs()
+    } else {
+        0.0
+    };
+
+    // Translation.
+    let (pa, pb) = (tr.position[i0], tr.position[n - 1]);
+    f.descent_m = pa.z - pb.z;
+    f.descent_chords = f.descent_m / size;
+    f.mean_descent_speed_m_s = f.descent_m / duration;
+    f.descent_speed_chords_per_s = f.descent_chords / duration;
+    let horizontal = (pb.x - pa.x).hypot(pb.y - pa.y);
+    f.drift_ratio = if f.descent_m > 0.0 {
+        horizontal / f.descent_m
+    } else {
+        0.0
+    };
+
+    // Yaw.
+    f.yaw_turns = psi / std::f64::consts::TAU;
+    f.mean_yaw_rate_rad_s = psi / duration;
+    f.yaw_consistency = if abs_rz > 0.0 {
+        psi.abs() / abs_rz
+    } else {
+        0.0
+    };
+    let rms_w = (w2 / duration).sqrt();
+    f.vertical_spin_share = if rms_w > 0.0 {
+        (f.mean_yaw_rate_rad_s.abs() / rms_w).min(1.0)
+    } else {
+        0.0
+    };
+
+    // Dominant horizontal axis: the principal axis of ∫ω_h ω_hᵀ dt, fixed
+    // either in the body or in the world, whichever explains more of the
+    // horizontal rotation (ties go to the body). A body-fixed axis follows a
+    // leaf that rocks or tumbles about its own span while yawing (lilters in
+    // docs/falling-plates.md, "Folded leaves under the linear law"; the
+    // precessing MuJoCo card); a world-fixed one suits a plate that spins about
+    // its normal while rocking.
+    let world = SymmetricEigen::new(s_world);
+    let body = SymmetricEigen::new(s_body);
+    let share = |vals: &[f64], tr: f64| {
+        if tr > 0.0 {
+            vals.iter().copied().fold(0.0, f64::max) / tr
+        } else {
+            0.0
+        }
+    };
+    let world_share = share(world.eigenvalues.as_slice(), s_world.trace());
+    let body_share = share(body.eigenvalues.as_slice(), s_body.trace());
+    let principal = |vals: &[f64]| {
+        (0..vals.len())
+            .max_by(|&a, &b| vals[a].total_cmp(&vals[b]))
+            .unwrap_or(0)
+    };
+    let pitch: Vec<f64> = if world_share > body_share + AXIS_FRAME_TIE {
+        f.axis_frame = AxisFrame::World;
+        f.horizontal_axis_share = world_share;
+        let a = world
+            .eigenvectors
+            .column(principal(world.eigenvalues.as_slice()));
+        world_h.iter().map(|h| h[0] * a[0] + h[1] * a[1]).collect()
+    } else {
+        f.axis_frame = AxisFrame::Body;
+        f.horizontal_axis_share = body_share;
+        let a = body
+            .eigenvectors
+            .column(principal(body.eigenvalues.as_slice()));
+        body_h.iter().map(|u| u.dot(&a)).collect()
+    };
+    drop((world_h, body_h));
+
+    // Pass 2: pitch angle θ about that axis; net/total rotation and the
+    // turning points of θ (zig-zag with a minimum swing, so jitter is not
+    // counted as rocking).
+    let swing = REVERSAL_MIN_SWING_DEG.to_radians();
+    let (mut theta, mut total) = (0.0f64, 0.0f64);
+    let mut dir = 0i8; // 0 = not yet moving by a full swing, ±1 = rising/falling
+    let (mut lo, mut hi) = (0.0f64, 0.0f64);
+    let (mut ext, mut ext_t) = (0.0f64, f.t_start_s);
+    let mut turns_n = 0usize;
+    let (mut first_turn_t, mut last_turn_t, mut last_turn_v) = (0.0f64, 0.0f64, 0.0f64);
+    let mut swing_sum = 0.0f64;
+    for (j, &d) in pitch.iter().enumerate() {
+        theta += d;
+        total += d.abs();
+        let t = tr.time[i0 + j + 1];
+        match dir {
+            0 => {
+                lo = lo.min(theta);
+                hi = hi.max(theta);
+                if theta - lo >= swing {
+                    dir = 1;
+                    (ext, ext_t) = (theta, t);
+                } else if hi - theta >= swing {
+                    dir = -1;
+                    (ext, ext_t) = (theta, t);
+                }
+            }
+            _ => {
+                let sign = f64::from(dir);
+                if (theta - ext) * sign > 0.0 {
+                    (ext, ext_t) = (theta, t);
+                } else if (ext - theta) * sign >= swing {
+                    // ext was a turning point.
+                    if turns_n == 0 {
+                        first_turn_t = ext_t;
+                    } else {
+                        swing_sum += (ext - last_turn_v).abs();
+                    }
+                    turns_n += 1;
+                    (last_turn_t, last_turn_v) = (ext_t, ext);
+                    dir = -dir;
+                    (ext, ext_t) = (theta, t);
+                }
+            }
+        }
+    }
+    let tau = std::f64::consts::TAU;
+    f.net_turns = theta.abs() / tau;
+    f.total_turns = total / tau;
+    f.rotation_consistency = if total > 0.0 {
+        theta.abs() / total
+    } else {
+        0.0
+    };
+    f.turn_period_s = (f.net_turns >= 0.5).then(|| duration / f.net_turns);
+    f.reversals = turns_n;
+    f.reversals_per_s = turns_n as f64 / duration;
+    f.oscillation_periods = turns_n as f64 / 2.0;
+    f.rocking_amplitude_deg = if turns_n >= 2 {
+        (0.5 * swing_sum / (turns_n - 1) as f64).to_degrees()
+    } else if turns_n == 1 {
+        // One turning point: the swing from it to the latest extreme.
+        (0.5 * (last_turn_v - ext).abs()).to_degrees()
+    } else {
+        0.0
+    };
+    f.oscillation_period_s =
+        (turns_n >= 3).then(|| 2.0 * (last_turn_t - first_turn_t) / (turns_n - 1) as f64);
+
+    // Pass 3: per sample — tilt statistics and normal flips.
+    let flip_z = FLIP_HYSTERESIS_DEG.to_radians().sin();
+    let nz0 = normal_z(&tr.orientation[i0]);
+    let pole = if nz0 >= 0.0 { 1.0 } else { -1.0 };
+    let mut state = if nz0 >= flip_z {
+        1i8
+    } else if nz0 <= -flip_z {
+        -1
+    } else {
+        0
+    };
+    let mut tilts: Vec<f64> = Vec::with_capacity(m);
+    let (mut wsum, mut tsum, mut tsq, mut nsum) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut max_exc = 0.0f64;
+    for k in i0..n {
+        let nz = normal_z(&tr.orientation[k]).clamp(-1.0, 1.0);
+        let tilt = nz.abs().acos().to_degrees();
+        let normal_tilt = nz.acos().to_degrees();
+        let w = 0.5 * (tr.time[(k + 1).min(n - 1)] - tr.time[k.saturating_sub(1).max(i0)]);
+        wsum += w;
+        tsum += w * tilt;
+        tsq += w * tilt * tilt;
+        nsum += w * normal_tilt;
+        tilts.push(tilt);
+        max_exc = max_exc.max((pole * nz).acos().to_degrees());
+        let now = if nz >= flip_z {
+            1
+        } else if nz <= -flip_z {
+            -1
+        } else {
+            0
+        };
+        if now != 0 && now != state {
+            if state != 0 {
+                f.normal_flips += 1;
+            }
+            state = now;
+        }
+    }
+    f.flips_per_s = f.normal_flips as f64 / duration;
+    f.max_excursion_deg = max_exc;
+    f.tilt_mean_deg = tsum / wsum;
+    f.tilt_std_deg = (tsq / wsum - f.tilt_mean_deg.powi(2)).max(0.0).sqrt();
+    f.normal_tilt_mean_deg = nsum / wsum;
+    let p10 = (0.1 * (m - 1) as f64).floor() as usize;
+    f.tilt_p10_deg = *tilts.select_nth_unstable_by(p10, f64::total_cmp).1;
+    f
+}
+
+// ---------------------------------------------------------------- rules
+
+/// One `feature ≥ threshold` (or `<`) test with its scale for margins.
+struct Cond {
+    value: f64,
+    threshold: f64,
+    scale: f64,
+    at_least: bool,
+    /// Failing it would change the class (not just the regime).
+    class_boundary: bool,
+}
+
+impl Cond {
+    fn ge(value: f64, threshold: f64, scale: f64) -> Self {
+        Self {
+            value,
+            threshold,
+            scale,
+            at_least: true,
+            class_boundary: true,
+        }
+    }
+    fn lt(value: f64, threshold: f64, scale: f64) -> Self {
+        Self {
+            at_least: false,
+            ..Self::ge(value, threshold, scale)
+        }
+    }
+    fn regime_only(self) -> Self {
+        Self {
+            class_boundary: false,
+            ..self
+        }
+    }
+    fn holds(&self) -> bool {
+        if self.at_least {
+            self.value >= self.threshold
+        } else {
+            self.value < self.threshold
+        }
+    }
+    /// Signed distance to the threshold in scale units, > 0 when it holds.
+    fn slack(&self) -> f64 {
+        let d = (self.value - self.threshold) / self.scale;
+        if self.at_least { d } else { -d }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum RuleId {
+    Tumble,
+    Lilt,
+    Autorotation,
+    FlipTransient,
+    Dive,
+    Flutter,
+    FewPeriods,
+    SteepRocking,
+    Steep,
+    Glide,
+    Steady,
+}
+
+struct Rule {
+    id: RuleId,
+    class: MotionClass,
+    regime: Regime,
+    conds: Vec<Cond>,
+}
+
+impl Rule {
+    fn fires(&self) -> bool {
+        self.conds.iter().all(Cond::holds)
+    }
+    /// Distance to firing: every condition must be met, so the largest deficit.
+    fn deficit(&self) -> f64 {
+        self.conds
+            .iter()
+            .map(|c| (-c.slack()).max(0.0))
+            .fold(0.0, f64::max)
+    }
+}
+
+/// Builds the ordered rule list from the features (thresholds and scales in
+/// one place).
+fn rules(f: &Features) -> Vec<Rule> {
+    use MotionClass as C;
+    // Continuous "how close to a flip": flips if any, else the excursion of
+    // the normal as a fraction of the excursion a flip needs, kept below 1 so
+    // that only a counted flip can fire a rule (a plate hanging steeply
+    // upside down has a large excursion without ever flipping).
+    let flip_progress = if f.normal_flips > 0 {
+        f.normal_flips as f64
+    } else {
+        (f.max_excursion_deg / (90.0 + FLIP_HYSTERESIS_DEG)).min(0.99)
+    };
+    let reversals = f.reversals as f64;
+    let lilt_rev = LILT_MIN_REVERSALS as f64;
+    let rule = |id, class, regime, conds| Rule {
+        id,
+        class,
+        regime,
+        conds,
+    };
+    vec![
+        rule(
+            RuleId::Tumble,
+            C::Spinner,
+            Regime::Tumble,
+            vec![
+                Cond::ge(f.net_turns, SPIN_MIN_NET_TURNS, 1.0),
+                Cond::ge(f.rotation_consistency, TUMBLE_MIN_CONSISTENCY, 0.1),
+                // A spin about an axis tilted < 45° from vertical has a steady
+                // horizontal part too; it is autorotation, not a tumble.
+                Cond::lt(f.vertical_spin_share, AUTOROTATION_MIN_VERTICAL_SHARE, 0.3),
+            ],
+        ),
+        rule(
+            RuleId::Autorotation,
+            C::Spinner,
+            Regime::Autorotation,
+            // Before the lilt rule: a leaf whose rotation is mostly about the
+            // vertical is seen to spin, even if its spin axis leans enough
+            // for the normal to cross the horizontal twice a turn (a
+            // wobbling spinner "flips" without turning end over end).
+            vec![
+                Cond::ge(f.yaw_turns.abs(), AUTOROTATION_MIN_YAW_TURNS, 1.0),
+                Cond::ge(f.yaw_consistency, AUTOROTATION_MIN_YAW_CONSISTENCY, 0.1),
+                Cond::ge(f.vertical_spin_share, AUTOROTATION_MIN_VERTICAL_SHARE, 0.3),
+                Cond::ge(f.tilt_mean_deg, AUTOROTATION_MIN_TILT_DEG, 30.0),
+            ],
+        ),
+        rule(
+            RuleId::Lilt,
+            C::Lilter,
+            Regime::Chaotic,
+            vec![
+                Cond::ge(flip_progress, 1.0, 1.0),
+                Cond::ge(reversals, lilt_rev, lilt_rev),
+            ],
+        ),
+        rule(
+            RuleId::FlipTransient,
+            C::Undetermined,
+            Regime::Undetermined,
+            vec![
+                Cond::ge(flip_progress, 1.0, 1.0),
+                Cond::lt(reversals, lilt_rev, lilt_rev),
+            ],
+        ),
+        rule(
+            RuleId::Dive,
+            C::Undetermined,
+            Regime::Dive,
+            vec![Cond::ge(f.tilt_p10_deg, DIVE_MIN_TILT_DEG, 30.0)],
+        ),
+        rule(
+            RuleId::Flutter,
+            C::Floater,
+            Regime::Flutter,
+            vec![
+                {
+                    // Without rocking a steep plate is "undetermined" (rule 9),
+                    // a flat one still a floater.
+                    let c = Cond::ge(f.rocking_amplitude_deg, FLUTTER_MIN_AMPLITUDE_DEG, 10.0);
+                    if f.tilt_mean_deg >= STEEP_TILT_DEG {
+                        c
+                    } else {
+                        c.regime_only()
+                    }
+                },
+                Cond::ge(
+                    f.oscillation_periods,
+                    MIN_OSCILLATION_PERIODS,
+                    MIN_OSCILLATION_PERIODS,
+                ),
+                // Flutter swings about a flat attitude (Field 1997, APW 2005):
+                // the plate passes within 30° of horizontal.
+                Cond::lt(f.tilt_p10_deg, STEEP_TILT_DEG, 30.0),
+            ],
+        ),
+        rule(
+            RuleId::FewPeriods,
+            C::Undetermined,
+            Regime::Undetermined,
+            vec![
+                Cond::ge(f.rocking_amplitude_deg, FLUTTER_MIN_AMPLITUDE_DEG, 10.0),
+                Cond::lt(
+                    f.oscillation_periods,
+                    MIN_OSCILLATION_PERIODS,
+                    MIN_OSCILLATION_PERIODS,
+                ),
+            ],
+        ),
+        rule(
+            RuleId::SteepRocking,
+            C::Undetermined,
+            Regime::Undetermined,
+            vec![
+                Cond::ge(f.rocking_amplitude_deg, FLUTTER_MIN_AMPLITUDE_DEG, 10.0),
+                Cond::ge(f.tilt_p10_deg, STEEP_TILT_DEG, 30.0),
+            ],
+        ),
+        rule(
+            RuleId::Steep,
+            C::Undetermined,
+            Regime::Undetermined,
+            vec![
+                Cond::ge(f.tilt_mean_deg, STEEP_TILT_DEG, 30.0),
+                Cond::lt(f.rocking_amplitude_deg, FLUTTER_MIN_AMPLITUDE_DEG, 10.0),
+            ],
+        ),
+        rule(
+            RuleId::Glide,
+            C::Floater,
+            Regime::Glide,
+            vec![
+                Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT_RATIO, GLIDE_MIN_DRIFT_RATIO).regime_only(),
+            ],
+        ),
+        rule(RuleId::Steady, C::Floater, Regime::Steady, vec![]),
+    ]
+}
+
+/// Applies the rules to sufficient data and fills in margins and the reason.
+fn decide(mut f: Features) -> Classification {
+    let rules = rules(&f);
+    // The last rule has no conditions, so one always fires.
+    let k = rules
+        .iter()
+        .position(Rule::fires)
+        .unwrap_or(rules.len() - 1);
+    let chosen = &rules[k];
+    let own = |class_only: bool| {
+        chosen
+            .conds
+            .iter()
+            .filter(|c| !class_only || c.class_boundary)
+            .map(Cond::slack)
+            .fold(f64::INFINITY, f64::min)
+    };
+    let earlier = |class_only: bool| {
+        rules[..k]
+            .iter()
+            .filter(|r| !class_only || r.class != chosen.class)
+            .map(Rule::deficit)
+            .fold(f64::INFINITY, f64::min)
+    };
+    f.margin = own(true).min(earlier(true)).clamp(0.0, 1.0);
+    f.regime_margin = own(false).min(earlier(false)).clamp(0.0, 1.0);
+    let reason = reason(chosen.id, &f);
+    Classification {
+        class: chosen.class,
+        regime: chosen.regime,
+        reason: Some(reason),
+        features: f,
+    }
+}
+
+/// Human-readable justification quoting the deciding features.
+fn reason(id: RuleId, f: &Features) -> String {
+    match id {
+        RuleId::Tumble => format!(
+            "tumble about a horizontal axis: {:.1} net turns, rotation consistency {:.2}, {} normal flips",
+            f.net_turns, f.rotation_consistency, f.normal_flips
+        ),
+        RuleId::Lilt => format!(
+            "rocks and flips: {} normal flips and {} pitch reversals, rotation consistency {:.2} (not a tumble)",
+            f.normal_flips, f.reversals, f.rotation_consistency
+        ),
+        RuleId::Autorotation => format!(
+            "autorotation about the vertical: {:.1} yaw turns at {:.1} rad/s, plate tilted {:.0}° from horizontal, vertical share of spin {:.2}",
+            f.yaw_turns.abs(),
+            f.mean_yaw_rate_rad_s.abs(),
+            f.tilt_mean_deg,
+            f.vertical_spin_share
+        ),
+        RuleId::FlipTransient => format!(
+            "flipped over {} time(s) without rocking and without a full turn: too transient to tell",
+            f.normal_flips
+        ),
+        RuleId::Dive => format!(
+            "dive: plate within 30° of edge-on 90 % of the time (10th-percentile tilt {:.0}°, mean {:.0}°), no rotation, falling at {:.2} m/s ({:.1} chords/s); not a floater (notes §4e)",
+            f.tilt_p10_deg, f.tilt_mean_deg, f.mean_descent_speed_m_s, f.descent_speed_chords_per_s
+        ),
+        RuleId::Flutter => format!(
+            "flutter: rocks ±{:.0}° with period {} ({} reversals), no flips",
+            f.rocking_amplitude_deg,
+            f.oscillation_period_s
+                .map_or_else(|| "?".to_string(), |p| format!("{p:.3} s")),
+            f.reversals
+        ),
+        RuleId::FewPeriods => format!(
+            "rocks ±{:.0}° but only {:.1} oscillation periods in the window (need {MIN_OSCILLATION_PERIODS}): too transient to tell",
+            f.rocking_amplitude_deg, f.oscillation_periods
+        ),
+        RuleId::SteepRocking => format!(
+            "rocks ±{:.0}° about a steep attitude (mean tilt {:.0}°, within 30° of flat less than 10 % of the time): neither flutter nor dive",
+            f.rocking_amplitude_deg, f.tilt_mean_deg
+        ),
+        RuleId::Steep => format!(
+            "steady at a mean tilt of {:.0}° from horizontal: between glide and dive (notes §4e), neither clearly floater nor diver",
+            f.tilt_mean_deg
+        ),
+        RuleId::Glide => format!(
+            "glide: steady attitude (tilt {:.0}° ± {:.0}°), drift ratio {:.2}",
+            f.tilt_mean_deg, f.tilt_std_deg, f.drift_ratio
+        ),
+        RuleId::Steady => format!(
+            "steady: attitude within ±{FLUTTER_MIN_AMPLITUDE_DEG}° (tilt {:.0}° ± {:.0}°), drift ratio {:.2}",
+            f.tilt_mean_deg, f.tilt_std_deg, f.drift_ratio
+        ),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{UnitQuaternion, Vector3};
+    use std::f64::consts::{PI, TAU};
+    use std::path::{Path, PathBuf};
+
+    const CHORD: f64 = 0.05;
+
+    fn ry(a: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_axis_angle(&Vector3::y_axis(), a)
+    }
+    fn rx(a: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_axis_angle(&Vector3::x_axis(), a)
+    }
+    fn rz(a: f64) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_axis_angle(&Vector3::z_axis(), a)
+    }
+
+    /// Samples `pos` and `rot` at `rate` Hz from t = 0 to `duration`.
+    fn synth(
+        rate: f64,
+        duration: f64,
+        pos: impl Fn(f64) -> Vector3<f64>,
+        rot: impl Fn(f64) -> UnitQuaternion<f64>,
+    ) -> Trajectory {
+        let n = (duration * rate).round() as usize + 1;
+        let mut tr = Trajectory::with_capacity(n);
+        for k in 0..n {
+            let t = k as f64 / rate;
+            tr.push(t, pos(t), rot(t));
+        }
+        tr
+    }
+
+    fn steady() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, -0.5 * t),
+            |_| rx(2f64.to_radians()),
+        )
+    }
+    fn glide() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.2 * t, 0.05 * t, -0.6 * t),
+            |_| ry(10f64.to_radians()),
+        )
+    }
+    fn flutter() -> Trajectory {
+        let w = TAU / 0.8;
+        synth(
+            240.0,
+            10.0,
+            move |t| Vector3::new(0.08 * (w * t).cos(), 0.0, -0.5 * t),
+            move |t| ry(30f64.to_radians() * (w * t).sin()),
+        )
+    }
+    fn tumble() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.3 * t, 0.0, -0.8 * t),
+            |t| ry(8.0 * t),
+        )
+    }
+    fn autorotation() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.05 * (15.0 * t).cos(), 0.05 * (15.0 * t).sin(), -1.5 * t),
+            |t| rz(15.0 * t) * rx(60f64.to_radians()),
+        )
+    }
+    /// Rocking that grows between irregularly spaced flips (some forwards,
+    /// some back), while the leaf also turns slowly about the vertical
+    /// (3 rad/s, a boundary case of docs/falling-plates.md, "Folded leaves
+    /// under the linear law").
+    fn chaotic_pitch(t: f64) -> f64 {
+        const FLIPS: [(f64, f64); 6] = [
+            (2.3, 1.0),
+            (4.1, -1.0),
+            (7.4, 1.0),
+            (8.6, 1.0),
+            (10.9, -1.0),
+            (99.0, 0.0),
+        ];
+        let smooth = |x: f64| {
+            let x = x.clamp(0.0, 1.0);
+            x * x * (3.0 - 2.0 * x)
+        };
+        let mut base = 0.0;
+        let mut last = 0.0;
+        let mut next = FLIPS[0].0;
+        for (tf, dir) in FLIPS {
+            if t >= tf {
+                last = tf + 0.4;
+                base += dir * PI * smooth((t - tf) / 0.4);
+            } else {
+                next = tf;
+                break;
+            }
+        }
+        let grow = ((t - last) / (next - last)).clamp(0.0, 1.0);
+        let amp = (15.0 + 55.0 * grow).to_radians();
+        base + amp * (TAU * t / 0.7).sin()
+    }
+    fn chaotic() -> Trajectory {
+        chaotic_yawing(3.0)
+    }
+    fn chaotic_yawing(yaw_rate: f64) -> Trajectory {
+        synth(
+            240.0,
+            12.0,
+            |t| Vector3::new(0.05 * t + 0.03 * (3.0 * t).sin(), 0.0, -0.6 * t),
+            move |t| rz(yaw_rate * t) * ry(chaotic_pitch(t)),
+        )
+    }
+    fn dive() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.02 * t, 0.0, -4.0 * t),
+            |t| ry((85.0 + 2.0 * (TAU * t / 0.5).sin()).to_radians()),
+        )
+    }
+
+    /// Rigid spin at 20 rad/s about a world axis tilted 20° from vertical,
+    /// plate at 60°: its horizontal part turns steadily too, yet it is
+    /// autorotation (the axis is within 45° of vertical), not a tumble.
+    fn tilted_spin() -> Trajectory {
+        let axis = nalgebra::Unit::new_normalize(Vector3::new(
+            20f64.to_radians().sin(),
+            0.0,
+            20f64.to_radians().cos(),
+        ));
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, -1.2 * t),
+            move |t| UnitQuaternion::from_axis_angle(&axis, 20.0 * t) * rx(60f64.to_radians()),
+        )
+    }
+    /// A leaf spinning about the vertical at 14 rad/s with its plane near
+    /// vertical and wobbling ±38° once a turn (measured on a prototype-B
+    /// variant): its normal crosses the horizontal twice a turn and the
+    /// wobble reverses, yet nothing turns end over end — autorotation.
+    fn wobbling_spin() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.02 * (14.0 * t).cos(), 0.02 * (14.0 * t).sin(), -2.3 * t),
+            |t| {
+                rz(14.0 * t)
+                    * rx((90.0 - 38.0 * (14.0 * t + 0.3 * (2.1 * t).sin()).sin()).to_radians())
+            },
+        )
+    }
+    /// End-over-end tumble about the leaf's own span while the leaf turns
+    /// slowly about the vertical (the span axis precesses by > 180°).
+    fn precessing_tumble() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.3 * (0.8 * t).cos(), 0.3 * (0.8 * t).sin(), -0.8 * t),
+            |t| rz(0.8 * t) * ry(8.0 * t),
+        )
+    }
+    /// Rocking ±20° about a 55° tilt: never near flat, never edge-on.
+    fn steep_rocking() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, -t),
+            |t| ry((55.0 + 20.0 * (TAU * t / 0.6).sin()).to_radians()),
+        )
+    }
+    /// Steady at 45°: "neither clearly floater nor diver"
+    /// (docs/falling-plates.md, "Folded leaves under the linear law").
+    fn steep_steady() -> Trajectory {
+        synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.1 * t, 0.0, -1.5 * t),
+            |_| ry(45f64.to_radians()),
+        )
+    }
+
+    fn cases() -> Vec<(&'static str, Trajectory, MotionClass, Regime)> {
+        use MotionClass as C;
+        vec![
+            ("steady", steady(), C::Floater, Regime::Steady),
+            ("glide", glide(), C::Floater, Regime::Glide),
+            ("flutter", flutter(), C::Floater, Regime::Flutter),
+            ("tumble", tumble(), C::Spinner, Regime::Tumble),
+            (
+                "autorotation",
+                autorotation(),
+                C::Spinner,
+                Regime::Autorotation,
+            ),
+            ("chaotic", chaotic(), C::Lilter, Regime::Chaotic),
+            ("dive", dive(), C::Undetermined, Regime::Dive),
+            (
+                "tilted_spin",
+                tilted_spin(),
+                C::Spinner,
+                Regime::Autorotation,
+            ),
+            (
+                "wobbling_spin",
+                wobbling_spin(),
+                C::Spinner,
+                Regime::Autorotation,
+            ),
+            (
+                "precessing_tumble",
+                precessing_tumble(),
+                C::Spinner,
+                Regime::Tumble,
+            ),
+            (
+                "steep_rocking",
+                steep_rocking(),
+                C::Undetermined,
+                Regime::Undetermined,
+            ),
+            (
+                "steep_steady",
+                steep_steady(),
+                C::Undetermined,
+                Regime::Undetermined,
+            ),
+        ]
+    }
+
+    #[test]
+    fn synthetic_kinematics_get_their_known_class_and_regime() {
+        for (name, tr, class, regime) in cases() {
+            let c = classify(&tr, CHORD);
+            println!(
+                "{name}: {} / {} margin {:.2} — {:?}",
+                c.class, c.regime, c.features.margin, c.reason
+            );
+            assert_eq!((c.class, c.regime), (class, regime), "{name}: {c:#?}");
+            assert!(c.reason.is_some());
+            if class != MotionClass::Undetermined {
+                assert!(
+                    c.features.margin > 0.2,
+                    "{name}: margin {}",
+                    c.features.margin
+                );
+            }
+            // Each holds at the minimum rate too.
+            let c60 = classify(&tr.resampled(60.0), CHORD);
+            assert_eq!(
+                (c60.class, c60.regime),
+                (class, regime),
+                "{name} at 60 Hz: {c60:#?}"
+            );
+        }
+    }
+
+    #[test]
+    fn synthetic_features_measure_what_was_built() {
+        let f = classify(&tumble(), CHORD).features;
+        // 8 rad/s for 6 s.
+        assert!((f.net_turns - 48.0 / TAU).abs() < 0.05, "{}", f.net_turns);
+        assert!(f.rotation_consistency > 0.999);
+        assert!((f.drift_ratio - 0.375).abs() < 1e-9);
+        assert!((f.turn_period_s.unwrap() - TAU / 8.0).abs() < 0.01);
+        assert_eq!(f.reversals, 0);
+        assert!((f.normal_flips as f64 - 2.0 * f.net_turns).abs() <= 1.0);
+        let f = classify(&flutter(), CHORD).features;
+        assert!(
+            (f.rocking_amplitude_deg - 30.0).abs() < 0.5,
+            "{}",
+            f.rocking_amplitude_deg
+        );
+        assert!((f.oscillation_period_s.unwrap() - 0.8).abs() < 0.01);
+        assert_eq!(f.normal_flips, 0);
+        assert!(f.net_turns < 0.1);
+        let f = classify(&autorotation(), CHORD).features;
+        assert!((f.mean_yaw_rate_rad_s - 15.0).abs() < 1e-6);
+        assert!((f.tilt_mean_deg - 60.0).abs() < 1e-6);
+        assert!(f.vertical_spin_share > 0.999);
+        // The wobbling spinner flips and reverses like a lilter would; only
+        // its vertical share tells it apart.
+        let f = classify(&wobbling_spin(), CHORD).features;
+        assert!(f.normal_flips >= 10 && f.reversals >= 10, "{f:#?}");
+        assert!(f.vertical_spin_share > 0.85, "{}", f.vertical_spin_share);
+        let f = classify(&steady(), CHORD).features;
+        assert!((f.mean_descent_speed_m_s - 0.5).abs() < 1e-9);
+        assert!((f.descent_chords - 60.0).abs() < 1e-6);
+        assert!((f.t_start_s - 4.0).abs() < 1e-9 && (f.t_end_s - 10.0).abs() < 1e-9);
+        assert_eq!(f.samples, 1441);
+    }
+
+    #[test]
+    fn lilter_that_also_yaws_is_not_a_spinner() {
+        // Lilters turn about the vertical at 1–9 rad/s (docs/falling-plates.md,
+        // "Folded leaves under the linear law").
+        for yaw_rate in [1.0, 3.0, 9.0] {
+            let c = classify(&chaotic_yawing(yaw_rate), CHORD);
+            let f = &c.features;
+            assert!(
+                f.yaw_turns.abs() >= 0.9,
+                "the case must yaw: {}",
+                f.yaw_turns
+            );
+            assert_eq!(c.class, MotionClass::Lilter, "yaw {yaw_rate} rad/s: {c:#?}");
+            assert!(f.normal_flips >= 2 && f.reversals >= 4, "{f:#?}");
+            assert_eq!(f.axis_frame, AxisFrame::Body);
+        }
+    }
+
+    #[test]
+    fn too_short_slow_or_gappy_records_are_undetermined_with_a_reason() {
+        let why = |tr: &Trajectory| {
+            let c = classify(tr, CHORD);
+            assert_eq!(c.class, MotionClass::Undetermined, "{c:#?}");
+            assert_eq!(c.class, MotionClass::Undetermined);
+            assert_eq!(c.regime, Regime::Undetermined);
+            assert_eq!(c.features.margin, 0.0);
+            c.reason.unwrap()
+        };
+        let short = synth(
+            240.0,
+            0.5,
+            |t| Vector3::new(0.0, 0.0, -0.5 * t),
+            |_| rx(0.0),
+        );
+        assert!(why(&short).contains("chord lengths"));
+        let few = synth(60.0, 0.8, |t| Vector3::new(0.0, 0.0, -5.0 * t), |_| rx(0.0));
+        assert!(why(&few).contains("too few samples"));
+        let slow = synth(
+            30.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, -0.5 * t),
+            |_| rx(0.0),
+        );
+        assert!(why(&slow).contains("Hz"));
+        let mut gappy = Trajectory::default();
+        for (k, t) in steady().time.iter().enumerate() {
+            if !(1800..1830).contains(&k) {
+                gappy.push(*t, Vector3::new(0.0, 0.0, -0.5 * t), rx(0.0));
+            }
+        }
+        assert!(why(&gappy).contains("gap"));
+        assert!(why(&Trajectory::default()).contains("too few samples"));
+        // One slow rock in the window: too transient to call a flutter.
+        let slow_rock = synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, -t),
+            |t| ry(30f64.to_radians() * (TAU * t / 5.0).sin()),
+        );
+        let c = classify(&slow_rock, CHORD);
+        assert_eq!(
+            (c.class, c.regime),
+            (MotionClass::Undetermined, Regime::Undetermined)
+        );
+        assert!(c.reason.unwrap().contains("too transient"));
+        let rising = synth(
+            240.0,
+            10.0,
+            |t| Vector3::new(0.0, 0.0, 0.5 * t),
+            |_| rx(0.0),
+        );
+        assert!(why(&rising).contains("not falling"));
+        assert!(classify(&steady(), 0.0).reason.unwrap().contains("size"));
+    }
+
+    #[test]
+    fn quaternion_sign_flips_do_not_change_anything() {
+        for (name, tr, _, _) in cases() {
+            let mut flipped = tr.clone();
+            for (k, q) in flipped.orientation.iter_mut().enumerate() {
+                if k % 2 == 1 || k % 7 == 3 {
+                    *q = UnitQuaternion::new_unchecked(-q.into_inner());
+                }
+            }
+            let (a, b) = (classify(&tr, CHORD), classify(&flipped, CHORD));
+            assert_eq!((a.class, a.regime), (b.class, b.regime), "{name}");
+            let (fa, fb) = (a.features, b.features);
+            assert!((fa.net_turns - fb.net_turns).abs() < 1e-9, "{name}");
+            assert!((fa.yaw_turns - fb.yaw_turns).abs() < 1e-9, "{name}");
+            assert_eq!(fa.reversals, fb.reversals, "{name}");
+            assert_eq!(fa.normal_flips, fb.normal_flips, "{name}");
+            assert!((fa.margin - fb.margin).abs() < 1e-9, "{name}");
+        }
+    }
+
+    mod invariance {
+        use super::*;
+        use proptest::prelude::*;
+
+        proptest! {
+            #![proptest_config(ProptestConfig::with_cases(48))]
+            /// Turning the world about the vertical and shifting time and
+            /// position leave the class and regime unchanged.
+            #[test]
+            fn class_is_invariant_under_yaw_and_shifts(
+                case in 0usize..12,
+                yaw in -PI..PI,
+                dt in -1000.0f64..1000.0,
+                dx in -100.0f64..100.0,
+                dy in -100.0f64..100.0,
+                dz in -100.0f64..100.0,
+            ) {
+                let (name, tr, class, regime) = cases().swap_remove(case);
+                let turn = rz(yaw);
+                let mut moved = Trajectory::with_capacity(tr.len());
+                for k in 0..tr.len() {
+                    moved.push(
+                        tr.time[k] + dt,
+                        turn * tr.position[k] + Vector3::new(dx, dy, dz),
+                        turn * tr.orientation[k],
+                    );
+                }
+                let c = classify(&moved, CHORD);
+                prop_assert_eq!((c.class, c.regime), (class, regime), "{}", name);
+            }
+        }
+    }
+
+    // ------------------------------------------------------------ APW ODE
+
+    /// Falls of the Andersen–Pesavento–Wang 2D quasi-steady plate model
+    /// (nondimensional form of docs/falling-plates.md, "APW quasi-steady
+    /// model": C_T = 1.2, C_R = π, A = 1.4, B = 1, μ1 = μ2 = 0.2), released
+    /// from rest at 45°, RK4 with h = 0.005, embedded in 3D (motion in the x–z
+    /// plane, span along y). Lengths in half-chords a = 1 cm, time unit
+    /// a/U = 10 ms, sampled every 0.4 units (250 Hz) up to t = 600 units.
+    fn apw_fall(i_star: f64) -> Trajectory {
+        const A: f64 = 0.01;
+        const T_UNIT: f64 = 0.01;
+        let (ct, cr, ca, cb, mu1, mu2) = (1.2, PI, 1.4, 1.0, 0.2, 0.2);
+        let deriv = |s: &[f64; 6]| -> [f64; 6] {
+            let [u, v, w, th, _, _] = *s;
+            let speed = (u * u + v * v).sqrt();
+            let gamma = (2.0 / PI)
+                * (if speed > 1e-12 {
+                    -ct * u * v / speed
+                } else {
+                    0.0
+                } + cr * w);
+            let drag = if speed > 1e-12 {
+                (1.0 / PI) * (ca - cb * (u * u - v * v) / (speed * speed)) * speed
+            } else {
+                0.0
+            };
+            let tau = (mu1 + mu2 * w.abs()) * w;
+            let du = ((i_star + 1.0) * w * v - gamma * v - th.sin() - drag * u) / i_star;
+            let dv = (-i_star * w * u + gamma * u - th.cos() - drag * v) / (i_star + 1.0);
+            let dw = (-u * v - tau) / (0.25 * (i_star + 0.5));
+            let (c, sn) = (th.cos(), th.sin());
+            [du, dv, dw, w, u * c - v * sn, u * sn + v * c]
+        };
+        let h = 0.005;
+        let per_sample = 80;
+        let samples = 1501;
+        let mut s = [0.0, 0.0, 0.0, 45f64.to_radians(), 0.0, 0.0];
+        let mut tr = Trajectory::with_capacity(samples);
+        for k in 0..samples {
+            if k > 0 {
+                for _ in 0..per_sample {
+                    let add = |a: &[f64; 6], b: &[f64; 6], f: f64| {
+                        std::array::from_fn::<f64, 6, _>(|i| a[i] + f * b[i])
+                    };
+                    let k1 = deriv(&s);
+                    let k2 = deriv(&add(&s, &k1, h / 2.0));
+                    let k3 = deriv(&add(&s, &k2, h / 2.0));
+                    let k4 = deriv(&add(&s, &k3, h));
+                    s = std::array::from_fn(|i| {
+                        s[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+                    });
+                }
+            }
+            let t = (k * per_sample) as f64 * h * T_UNIT;
+            // Body x (chord) = (cos θ, 0, sin θ): a rotation by −θ about y.
+            tr.push(t, Vector3::new(s[4] * A, 0.0, s[5] * A), ry(-s[3]));
+        }
+        tr
+    }
+
+    /// The APW model classified as the table in docs/falling-plates.md, "APW
+    /// quasi-steady model", says it falls.
+    #[test]
+    fn apw_model_falls_flutter_and_tumble_where_the_notes_say() {
+        use MotionClass as C;
+        // That table (our integration of the same equations): flutter at
+        // I* ≤ 1.2 (±42° … ±96°), tumble at 1.3–1.4, irregular flutter/flip
+        // mixture at 1.5–2.5, flutter again at 3.
+        for (i_star, want) in [
+            (0.5, C::Floater),
+            (1.0, C::Floater),
+            (1.2, C::Floater),
+            (1.3, C::Spinner),
+            (1.4, C::Spinner),
+            (1.5, C::Lilter),
+            (2.0, C::Lilter),
+            (2.5, C::Lilter),
+            (3.0, C::Floater),
+        ] {
+            let tr = apw_fall(i_star);
+            let c = classify(&tr, 0.02);
+            let f = &c.features;
+            println!(
+                "APW I* = {i_star}: {} / {} margin {:.2}; turns {:.2} cons {:.2} rev {} amp {:.0}° flips {} drift {:.2} tilt {:.0} p10 {:.0} — {}",
+                c.class,
+                c.regime,
+                f.margin,
+                f.net_turns,
+                f.rotation_consistency,
+                f.reversals,
+                f.rocking_amplitude_deg,
+                f.normal_flips,
+                f.drift_ratio,
+                f.tilt_mean_deg,
+                f.tilt_p10_deg,
+                c.reason.as_deref().unwrap_or("")
+            );
+            assert_eq!(c.class, want, "I* = {i_star}: {c:#?}");
+            let c60 = classify(&tr.resampled(60.0), 0.02);
+            assert_eq!(c60.class, want, "I* = {i_star} at 60 Hz");
+        }
+    }
+
+    // ------------------------------------------------------------ MuJoCo falls
+
+    /// The MuJoCo falls kept in the repository (tests/data/mujoco-falls).
+    fn mujoco_dir() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mujoco-falls")
+    }
+
+    const MUJOCO: [(&str, MotionClass); 6] = [
+        ("steady_fall", MotionClass::Floater),
+        ("glide_ballast", MotionClass::Floater),
+        ("wobble_card", MotionClass::Floater),
+        ("flutter_strip", MotionClass::Floater),
+        ("tumble_thick", MotionClass::Spinner),
+        ("tumble_cardscoef", MotionClass::Spinner),
+    ];
+    const MUJOCO_CHORD: f64 = 0.04;
+
+    fn decimate(tr: &Trajectory, step: usize) -> Trajectory {
+        let mut out = Trajectory::default();
+        for k in (0..tr.len()).step_by(step) {
+            out.push(tr.time[k], tr.position[k], tr.orientation[k]);
+        }
+        out
+    }
+
+    #[test]
+    fn mujoco_falls_get_the_readme_class_at_240_100_75_and_60_hz() {
+        let dir = mujoco_dir();
+        for (name, class) in MUJOCO {
+            let tr = Trajectory::read_csv(&dir.join(format!("{name}.csv"))).unwrap();
+            let c = classify(&tr, MUJOCO_CHORD);
+            let f = &c.features;
+            println!(
+                "{name}: {} / {} margin {:.2} (regime {:.2}); turns {:.2} cons {:.2} rev {} amp {:.1}° period {:?} flips {} yaw {:.2} tilt {:.1}±{:.1} p10 {:.1} drift {:.3} v {:.2} m/s chords {:.0} — {}",
+                c.class,
+                c.regime,
+                f.margin,
+                f.regime_margin,
+                f.net_turns,
+                f.rotation_consistency,
+                f.reversals,
+                f.rocking_amplitude_deg,
+                f.oscillation_period_s,
+                f.normal_flips,
+                f.yaw_turns,
+                f.tilt_mean_deg,
+                f.tilt_std_deg,
+                f.tilt_p10_deg,
+                f.drift_ratio,
+                f.mean_descent_speed_m_s,
+                f.descent_chords,
+                c.reason.as_deref().unwrap_or("")
+            );
+            assert_eq!(c.class, class, "{name}: {c:#?}");
+            for (how, rate, low) in [
+                ("decimated", 60.0, decimate(&tr, 4)),
+                ("slerp", 60.0, tr.resampled(60.0)),
+                ("slerp", 75.0, tr.resampled(75.0)),
+                ("slerp", 100.0, tr.resampled(100.0)),
+            ] {
+                let cl = classify(&low, MUJOCO_CHORD);
+                assert!((cl.features.sample_rate_hz - rate).abs() < 0.1);
+                assert_eq!(cl.class, class, "{name} {how} {rate} Hz: {cl:#?}");
+                assert_eq!(cl.regime, c.regime, "{name} {how} {rate} Hz");
+            }
+        }
+    }
+
+    #[test]
+    fn names_round_trip_through_display_fromstr_and_serde() {
+        for (c, n) in CLASS_NAMES {
+            assert_eq!(c.to_string(), n);
+            assert_eq!(n.parse::<MotionClass>().unwrap(), c);
+            assert_eq!(serde_json::to_string(&c).unwrap(), format!("\"{n}\""));
+        }
+        for (r, n) in REGIME_NAMES {
+            assert_eq!(r.to_string(), n);
+            assert_eq!(n.parse::<Regime>().unwrap(), r);
+            assert_eq!(serde_json::to_string(&r).unwrap(), format!("\"{n}\""));
+        }
+        assert!("Spinner".parse::<MotionClass>().is_ok());
+        assert!("twirler".parse::<MotionClass>().is_err());
+        let json = serde_json::to_value(classify(&tumble(), CHORD)).unwrap();
+        assert_eq!(json["class"], "spinner");
+        assert_eq!(json["regime"], "tumble");
+        assert!(json["features"]["net_turns"].as_f64().unwrap() > 5.0);
+    }
+}

@@ -1,0 +1,12 @@
+//! Motion: what a fall looks like, read from its trajectory alone.
+//!
+//! [`trajectory`] reads and writes pose CSVs (from leafmagic or any other
+//! source), [`classify`] names the motion (the paper's floaters, spinners
+//! and lilters, with a sub-regime), and [`describe`] turns a fall into
+//! descriptors and measures the distance between two falls.
+//!
+//! May use: [`crate::util`]. Knows nothing of physics: a pose is all it needs.
+
+pub mod classify;
+pub mod describe;
+pub mod trajectory;

@@ -1,0 +1,114 @@
+//! PC2 point caches (the 3ds Max "Point Cache 2" format, read by Blender's
+//! Mesh Cache modifier) and the rest-pose OBJ meshes they apply to.
+//!
+//! PC2 layout, all little-endian:
+//!
+//! ```text
+//! char[12]  "POINTCACHE2\0"
+//! int32     version = 1
+//! int32     numPoints
+//! float32   startFrame
+//! float32   sampleRate      (frames between samples: 1 = every frame)
+//! int32     numSamples
+//! numSamples × numPoints × float32[3]   x, y, z
+//! ```
+//!
+//! A cache only stores positions; the mesh comes from the OBJ, whose
+//! vertices are written in the same order (vertex i of the OBJ is point i of
+//! the cache) and at frame 0's positions, with the same f32 values. Both
+//! keep the simulator's axes (z up), so import the OBJ into Blender with
+//! Up = Z, Forward = Y, and keep the Mesh Cache modifier's default axes.
+
+use super::{Clip, ClipObject, ExportError};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// The 12-byte signature a PC2 file starts with.
+pub const SIGNATURE: &[u8; 12] = b"POINTCACHE2\0";
+
+/// Bytes before the first sample.
+pub const HEADER_BYTES: usize = 32;
+
+/// The PC2 bytes of per-sample point positions `samples[k][i]` (already in
+/// f32), with the first sample at `start_frame` and `sample_rate` frames
+/// between samples.
+pub fn pc2_bytes(samples: &[Vec<[f32; 3]>], start_frame: f32, sample_rate: f32) -> Vec<u8> {
+    let points = samples.first().map_or(0, Vec::len);
+    let mut out = Vec::with_capacity(HEADER_BYTES + samples.len() * points * 12);
+    out.extend_from_slice(SIGNATURE);
+    out.extend_from_slice(&1i32.to_le_bytes());
+    out.extend_from_slice(&(points as i32).to_le_bytes());
+    out.extend_from_slice(&start_frame.to_le_bytes());
+    out.extend_from_slice(&sample_rate.to_le_bytes());
+    out.extend_from_slice(&(samples.len() as i32).to_le_bytes());
+    for s in samples {
+        for p in s {
+            for c in p {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+    out
+}
+
+/// One object's vertex positions per frame, f32, simulator axes.
+pub fn object_samples(clip: &Clip, o: &ClipObject) -> Vec<Vec<[f32; 3]>> {
+    (0..clip.frames)
+        .map(|k| {
+            o.positions(k)
+                .iter()
+                .map(|v| [v.x as f32, v.y as f32, v.z as f32])
+                .collect()
+        })
+        .collect()
+}
+
+/// The OBJ text of an object at its first sample: `v` lines in cache order
+/// (f32 values printed in their shortest round-trip form, so they read back
+/// bit for bit), then faces (`f`, 1-based) or lines (`l`).
+pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
+    let mut s = format!(
+        "# leafmagic {}: {} ({}), vertex order = the .pc2 point order\no {}\n",
+        env!("CARGO_PKG_VERSION"),
+        o.name,
+        o.kind,
+        o.name
+    );
+    for p in first {
+        let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
+    }
+    for t in &o.triangles {
+        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    }
+    for l in &o.segments {
+        let _ = writeln!(s, "l {} {}", l[0] + 1, l[1] + 1);
+    }
+    s
+}
+
+/// Writes `<object>.pc2` and `<object>.obj` for every object of `clip` into
+/// `dir` (created if missing), atomically; returns the paths written. The
+/// cache's samples are the clip's frames, one per frame from frame 0
+/// (sampleRate 1), at the clip's frame rate.
+pub fn write_pc2(clip: &Clip, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
+    clip.validate()?;
+    std::fs::create_dir_all(dir).map_err(|e| ExportError::io(dir, e))?;
+    // Objects in parallel: each atomic write waits for its fsync, and a
+    // scene of a hundred leaves is two hundred files.
+    use rayon::prelude::*;
+    let pairs: Vec<[PathBuf; 2]> = clip
+        .objects
+        .par_iter()
+        .map(|o| {
+            let samples = object_samples(clip, o);
+            let pc2 = dir.join(format!("{}.pc2", o.name));
+            crate::util::io::write_atomic(&pc2, &pc2_bytes(&samples, 0.0, 1.0))
+                .map_err(|e| ExportError::io(&pc2, e))?;
+            let obj = dir.join(format!("{}.obj", o.name));
+            crate::util::io::write_atomic(&obj, obj_text(o, &samples[0]).as_bytes())
+                .map_err(|e| ExportError::io(&obj, e))?;
+            Ok([pc2, obj])
+        })
+        .collect::<Result<_, ExportError>>()?;
+    Ok(pairs.into_iter().flatten().collect())
+}

@@ -1,0 +1,467 @@
+//! Clips read back from what leafmagic writes: a scene's output directory
+//! (`summary.toml`, pose and particle CSVs, plus the scene file it names for
+//! the shapes) and `.glb` files (ours, or any glTF 2.0 binary whose animated
+//! nodes are roots of the scene).
+
+use super::glb::from_gltf;
+use super::{Clip, ClipObject, DEFAULT_FPS, ExportError, Motion, WindGlyph, frame_count};
+use crate::motion::trajectory::Trajectory;
+use crate::sim::scene::Scene;
+use gltf::animation::util::ReadOutputs;
+use gltf::animation::{Interpolation, Property};
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+
+type V3 = Vector3<f64>;
+
+#[derive(Deserialize)]
+struct SummaryFile {
+    scene: String,
+    source: String,
+    #[serde(rename = "object", default)]
+    objects: Vec<SummaryObject>,
+}
+
+#[derive(Deserialize)]
+struct SummaryObject {
+    name: String,
+    pose: Option<String>,
+    positions: Option<String>,
+}
+
+/// Where the scene file named in a summary is: as written (relative to the
+/// working directory the scene ran in), else relative to the output
+/// directory or any directory above it (`runs/scene-x` under the repository
+/// that holds `scenes/x.toml`).
+fn find_source(dir: &Path, source: &str) -> Option<PathBuf> {
+    let p = PathBuf::from(source);
+    if p.is_file() {
+        return Some(p);
+    }
+    let abs = std::fs::canonicalize(dir).ok()?;
+    abs.ancestors().map(|a| a.join(&p)).find(|c| c.is_file())
+}
+
+/// Reads `t,x0,y0,z0,x1,...` as written by [`crate::util::io::particle_csv`].
+fn read_particles(path: &Path) -> Result<(Vec<f64>, Vec<Vec<V3>>), ExportError> {
+    let text = std::fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
+    let mut lines = text.lines();
+    let header = lines
+        .next()
+        .ok_or_else(|| ExportError::input(path, "empty file, expected header `t,x0,y0,z0,...`"))?;
+    let columns = header.split(',').count();
+    if !header.starts_with("t,") || (columns - 1) % 3 != 0 {
+        return Err(ExportError::input(
+            path,
+            format!("line 1: expected header `t,x0,y0,z0,...`, found `{header}`"),
+        ));
+    }
+    let (mut time, mut frames) = (Vec::new(), Vec::new());
+    for (k, line) in lines.enumerate() {
+        let v: Vec<f64> = line
+            .split(',')
+            .map(|x| x.parse::<f64>())
+            .collect::<Result<_, _>>()
+            .map_err(|e| ExportError::input(path, format!("line {}: {e}", k + 2)))?;
+        if v.len() != columns {
+            return Err(ExportError::input(
+                path,
+                format!("line {}: {} fields, expected {columns}", k + 2, v.len()),
+            ));
+        }
+        time.push(v[0]);
+        frames.push(
+            v[1..]
+                .chunks(3)
+                .map(|c| V3::new(c[0], c[1], c[2]))
+                .collect(),
+        );
+    }
+    if time.is_empty() {
+        return Err(ExportError::input(path, "no data rows after the header"));
+    }
+    Ok((time, frames))
+}
+
+/// The clip of a scene's output directory (what `leafmagic scene` wrote),
+/// on the grid at `fps`. The shapes come from the scene file the summary
+/// names, which must still be there and compile to the same objects.
+pub fn from_scene_dir(dir: &Path, fps: f64) -> Result<Clip, ExportError> {
+    let summary_path = dir.join("summary.toml");
+    let text = std::fs::read_to_string(&summary_path).map_err(|e| {
+        ExportError::input(
+            dir,
+            format!("not a scene output directory (cannot read summary.toml: {e})"),
+        )
+    })?;
+    let summary: SummaryFile = toml::from_str(&text)
+        .map_err(|e| ExportError::input(&summary_path, e.message().to_string()))?;
+    let source = find_source(dir, &summary.source).ok_or_else(|| {
+        ExportError::input(
+            &summary_path,
+            format!(
+                "the scene file it names, {}, is not found (it holds the objects' shapes)",
+                summary.source
+            ),
+        )
+    })?;
+    let scene = Scene::load(&source).map_err(|e| ExportError::input(&source, e.to_string()))?;
+    if scene.name != summary.scene {
+        return Err(ExportError::input(
+            &summary_path,
+            format!(
+                "written by scene '{}', but {} is now scene '{}'",
+                summary.scene,
+                source.display(),
+                scene.name
+            ),
+        ));
+    }
+    let mut poses = Vec::new();
+    let mut particles = Vec::new();
+    let mut time: Option<Vec<f64>> = None;
+    for obj in &scene.objects {
+        let entry = summary.objects.iter().find(|o| o.name == obj.name);
+        let pose = match entry.and_then(|e| e.pose.as_ref()) {
+            Some(file) => {
+                let t = Trajectory::read_csv(&dir.join(file))
+                    .map_err(|e| ExportError::input(dir.join(file), e.to_string()))?;
+                time.get_or_insert_with(|| t.time.clone());
+                Some(t)
+            }
+            None => None,
+        };
+        let parts = match entry.and_then(|e| e.positions.as_ref()) {
+            Some(file) => {
+                let path = dir.join(file);
+                let (t, frames) = read_particles(&path)?;
+                if frames[0].len() != obj.particles.len() {
+                    return Err(ExportError::input(
+                        &path,
+                        format!(
+                            "{} particles per row, but object {} of {} has {}",
+                            frames[0].len(),
+                            obj.name,
+                            source.display(),
+                            obj.particles.len()
+                        ),
+                    ));
+                }
+                let t = time.get_or_insert(t).clone();
+                Some((t, frames))
+            }
+            None => None,
+        };
+        poses.push(pose);
+        particles.push(parts);
+    }
+    let Some(time) = time else {
+        return Err(ExportError::input(
+            dir,
+            "summary.toml lists no recorded object",
+        ));
+    };
+    let pose_refs: Vec<Option<&Trajectory>> = poses.iter().map(Option::as_ref).collect();
+    let particle_refs: Vec<Option<&[Vec<V3>]>> = particles
+        .iter()
+        .map(|p| p.as_ref().map(|(_, f)| f.as_slice()))
+        .collect();
+    super::build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)
+}
+
+/// Reads a `.glb` file as a clip (see [`from_glb_bytes`]).
+pub fn from_glb(path: &Path, fps: Option<f64>) -> Result<Clip, ExportError> {
+    let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
+    let name = path
+        .file_stem()
+        .map_or("glb".to_string(), |s| s.to_string_lossy().into_owned());
+    from_glb_bytes(&bytes, &name, fps).map_err(|e| match e {
+        ExportError::Data(reason) => ExportError::input(path, reason),
+        e => e,
+    })
+}
+
+#[derive(Deserialize, Default)]
+struct SceneExtras {
+    #[serde(default)]
+    leafmagic: Option<LeafmagicExtras>,
+}
+
+#[derive(Deserialize, Default)]
+struct LeafmagicExtras {
+    fps: Option<f64>,
+    ground: Option<f64>,
+    #[serde(default)]
+    wind: Vec<WindGlyph>,
+}
+
+#[derive(Deserialize, Default)]
+struct NodeExtras {
+    #[serde(default)]
+    kind: String,
+    #[serde(default)]
+    label: String,
+}
+
+/// Keyframes of one animated property: times and values (flattened, `width`
+/// numbers per key).
+struct Track {
+    times: Vec<f32>,
+    values: Vec<f32>,
+    width: usize,
+    step: bool,
+}
+
+impl Track {
+    /// Values at `t`: linear between keys (quaternions renormalised by the
+    /// caller), the key before for STEP, clamped outside the keys.
+    fn at(&self, t: f64) -> Vec<f64> {
+        let w = self.width;
+        let n = self.times.len();
+        let key = |k: usize| -> Vec<f64> {
+            self.values[k * w..(k + 1) * w]
+                .iter()
+                .map(|&x| x as f64)
+                .collect()
+        };
+        if n == 0 {
+            return vec![0.0; w];
+        }
+        let j = self.times.partition_point(|&x| (x as f64) <= t);
+        if j == 0 {
+            return key(0);
+        }
+        if j >= n {
+            return key(n - 1);
+        }
+        let (ta, tb) = (self.times[j - 1] as f64, self.times[j] as f64);
+        let (a, b) = (key(j - 1), key(j));
+        if self.step || tb <= ta {
+            return a;
+        }
+        let s = (t - ta) / (tb - ta);
+        a.iter().zip(&b).map(|(x, y)| x + (y - x) * s).collect()
+    }
+}
+
+/// A clip from the bytes of a `.glb`: every node of the default scene (roots
+/// only; children are not composed) that has a mesh becomes an object,
+/// sampled at `fps` (default: the file's own rate if leafmagic wrote it,
+/// else [`DEFAULT_FPS`]) over the span of its animation. Nodes without morph
+/// targets move rigidly by their TRS channels; nodes with morph targets
+/// deform. Ground and wind glyphs come from leafmagic's scene `extras`.
+pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip, ExportError> {
+    let gltf = gltf::Gltf::from_slice(bytes)
+        .map_err(|e| ExportError::Data(format!("not a valid glTF binary: {e}")))?;
+    let blob = gltf.blob.as_deref();
+    let get = |b: gltf::Buffer<'_>| match b.source() {
+        gltf::buffer::Source::Bin => blob,
+        gltf::buffer::Source::Uri(_) => None,
+    };
+    let doc = &gltf.document;
+    let scene = doc
+        .default_scene()
+        .or_else(|| doc.scenes().next())
+        .ok_or_else(|| ExportError::Data("the file has no scene".into()))?;
+    let extras: LeafmagicExtras = scene
+        .extras()
+        .as_ref()
+        .and_then(|r| serde_json::from_str::<SceneExtras>(r.get()).ok())
+        .and_then(|e| e.leafmagic)
+        .unwrap_or_default();
+    let fps = fps.or(extras.fps).unwrap_or(DEFAULT_FPS);
+    // Tracks per (node, property).
+    let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
+    let mut t_end = 0.0f64;
+    for anim in doc.animations() {
+        for ch in anim.channels() {
+            let reader = ch.reader(get);
+            let Some(times) = reader.read_inputs().map(|i| i.collect::<Vec<f32>>()) else {
+                continue;
+            };
+            let (values, width): (Vec<f32>, usize) = match reader.read_outputs() {
+                Some(ReadOutputs::Translations(it)) => (it.flatten().collect(), 3),
+                Some(ReadOutputs::Rotations(r)) => (r.into_f32().flatten().collect(), 4),
+                Some(ReadOutputs::Scales(it)) => (it.flatten().collect(), 3),
+                Some(ReadOutputs::MorphTargetWeights(w)) => {
+                    // gltf's accessor iterator applies sparse substitution
+                    // (zeros, or the buffer view, with `sparse.values` at
+                    // `sparse.indices`), as leafmagic writes these weights.
+                    let v: Vec<f32> = w.into_f32().collect();
+                    let width = v.len() / times.len().max(1);
+                    (v, width)
+                }
+                None => continue,
+            };
+            let cubic = ch.sampler().interpolation() == Interpolation::CubicSpline;
+            // Cubic splines store (in-tangent, value, out-tangent) per key:
+            // keep the values (the motion through the keys, not between them).
+            let values = if cubic {
+                values
+                    .chunks(3 * width)
+                    .flat_map(|c| c[width..2 * width].to_vec())
+                    .collect()
+            } else {
+                values
+            };
+            if let Some(&last) = times.last() {
+                t_end = t_end.max(last as f64);
+            }
+            tracks.push((
+                ch.target().node().index(),
+                ch.target().property(),
+                Track {
+                    times,
+                    values,
+                    width,
+                    step: ch.sampler().interpolation() == Interpolation::Step,
+                },
+            ));
+        }
+    }
+    let frames = frame_count(0.0, t_end, fps);
+    let mut objects = Vec::new();
+    for node in scene.nodes() {
+        let Some(mesh) = node.mesh() else { continue };
+        let node_extras: NodeExtras = node
+            .extras()
+            .as_ref()
+            .and_then(|r| serde_json::from_str(r.get()).ok())
+            .unwrap_or_default();
+        let Some(prim) = mesh.primitives().next() else {
+            continue;
+        };
+        let reader = prim.reader(get);
+        let base: Vec<[f32; 3]> =
+            reader
+                .read_positions()
+                .map(|p| p.collect())
+                .ok_or_else(|| {
+                    ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
+                })?;
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().collect(),
+            None => (0..base.len() as u32).collect(),
+        };
+        let (triangles, segments) = match prim.mode() {
+            gltf::mesh::Mode::Triangles => (
+                indices
+                    .chunks_exact(3)
+                    .map(|c| [c[0], c[1], c[2]])
+                    .collect(),
+                Vec::new(),
+            ),
+            gltf::mesh::Mode::Lines => (
+                Vec::new(),
+                indices.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
+            ),
+            gltf::mesh::Mode::LineStrip => (
+                Vec::new(),
+                indices.windows(2).map(|c| [c[0], c[1]]).collect(),
+            ),
+            _ => (Vec::new(), Vec::new()),
+        };
+        let targets: Vec<Vec<[f32; 3]>> = reader
+            .read_morph_targets()
+            .map(|(p, _, _)| p.map(|p| p.collect()).unwrap_or_default())
+            .collect();
+        let (t0, r0, s0) = node.transform().decomposed();
+        let track = |p: Property| {
+            tracks
+                .iter()
+                .find(|(n, q, _)| *n == node.index() && *q == p)
+                .map(|(_, _, t)| t)
+        };
+        let default_weights: Vec<f64> = mesh
+            .weights()
+            .map(|w| w.iter().map(|&x| x as f64).collect())
+            .unwrap_or_else(|| vec![0.0; targets.len()]);
+        let mut translation = Vec::with_capacity(frames);
+        let mut rotation = Vec::with_capacity(frames);
+        let mut scale = Vec::with_capacity(frames);
+        let mut weights = Vec::with_capacity(frames);
+        for k in 0..frames {
+            let t = k as f64 / fps;
+            let tr = track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
+            let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
+            let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
+            let w =
+                track(Property::MorphTargetWeights).map_or(default_weights.clone(), |x| x.at(t));
+            // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
+            let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
+            translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
+            rotation.push(q);
+            scale.push([s[0], s[1], s[2]]);
+            weights.push(w);
+        }
+        let scaled = |p: [f64; 3], s: [f64; 3]| -> V3 {
+            from_gltf([
+                (p[0] * s[0]) as f32,
+                (p[1] * s[1]) as f32,
+                (p[2] * s[2]) as f32,
+            ])
+        };
+        let motion = if targets.is_empty() {
+            Motion::Rigid {
+                local: base
+                    .iter()
+                    .map(|p| scaled(p.map(f64::from), scale.first().copied().unwrap_or([1.0; 3])))
+                    .collect(),
+                translation,
+                rotation,
+            }
+        } else {
+            let frames_out = (0..frames)
+                .map(|k| {
+                    base.iter()
+                        .enumerate()
+                        .map(|(i, b)| {
+                            let mut p = b.map(f64::from);
+                            for (target, w) in targets.iter().zip(&weights[k]) {
+                                if *w != 0.0
+                                    && let Some(d) = target.get(i)
+                                {
+                                    for c in 0..3 {
+                                        p[c] += w * d[c] as f64;
+                                    }
+                                }
+                            }
+                            translation[k] + rotation[k] * scaled(p, scale[k])
+                        })
+                        .collect()
+                })
+                .collect();
+            Motion::Deforming { frames: frames_out }
+        };
+        objects.push(ClipObject {
+            name: node
+                .name()
+                .map_or_else(|| format!("node-{}", node.index()), str::to_string),
+            kind: if node_extras.kind.is_empty() {
+                "mesh".to_string()
+            } else {
+                node_extras.kind
+            },
+            label: node_extras.label,
+            triangles,
+            segments,
+            motion,
+        });
+    }
+    if objects.is_empty() {
+        return Err(ExportError::Data(
+            "the default scene has no node with a mesh".into(),
+        ));
+    }
+    let clip = Clip {
+        name: name.to_string(),
+        fps,
+        frames,
+        objects,
+        ground: extras.ground,
+        wind: extras.wind,
+    };
+    clip.validate()?;
+    Ok(clip)
+}

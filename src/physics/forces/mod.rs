@@ -1,0 +1,236 @@
+//! Force terms, each a function that adds its contribution into a force
+//! accumulator (one entry per particle). The paper's equations are quoted in
+//! each doc comment; [`Forces`] sums them in a fixed order so results are
+//! reproducible bit for bit.
+
+mod aero;
+mod drag;
+mod gravity;
+mod hinges;
+pub mod quadratic;
+mod springs;
+mod surfaces;
+mod tears;
+
+pub use aero::{triangle_aero, triangle_aero_intact};
+pub use drag::particle_drag;
+pub use gravity::gravity;
+pub use hinges::{MIN_HINGE_HEIGHT_RATIO, dihedral, fold_rate, hinge_rest, hinges};
+pub use springs::springs;
+pub use tears::{Tears, edge_springs, hinge_springs};
+
+use crate::physics::model::Model;
+use crate::physics::rigid;
+use crate::physics::terms::Terms;
+use nalgebra::Vector3;
+use tears::tear_mask;
+
+type V3 = Vector3<f64>;
+
+/// The force on one particle split by source, for diagnostics and tests.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct ForceTerms {
+    /// m g.
+    pub gravity: V3,
+    /// Springs and dashpots.
+    pub spring: V3,
+    /// Bending hinges.
+    pub bending: V3,
+    /// Triangle aerodynamics (eq. 9–10).
+    pub aero: V3,
+    /// Particle drag (eq. 7).
+    pub drag: V3,
+}
+
+impl ForceTerms {
+    /// The name and magnitude of the largest term.
+    pub fn dominant(&self) -> (&'static str, f64) {
+        let terms = [
+            ("gravity", self.gravity.norm()),
+            ("spring", self.spring.norm()),
+            ("bending", self.bending.norm()),
+            ("aero", self.aero.norm()),
+            ("drag", self.drag.norm()),
+        ];
+        terms
+            .into_iter()
+            .fold(("none", 0.0), |best, t| if t.1 > best.1 { t } else { best })
+    }
+}
+
+/// Sums the force terms of a model that its [`Terms`] keep, with
+/// preallocated scratch space, so that evaluating forces inside the step
+/// loop never allocates.
+#[derive(Clone, Debug)]
+pub struct Forces {
+    wind: Vec<V3>,
+    scratch: Vec<V3>,
+    evaluations: u64,
+    terms: Terms,
+    hinge_rest: Vec<(f64, f64)>,
+    /// For each triangle, the springs along its edges (with breaking on).
+    edge_springs: Vec<[Option<usize>; 3]>,
+    /// For each hinge, the springs along its wings (with breaking on).
+    hinge_springs: Vec<[Option<usize>; 5]>,
+    /// What broken springs have torn (empty until one breaks).
+    torn: Tears,
+}
+
+impl Forces {
+    /// The terms `model` needs ([`Terms::needed`]), scratch space sized for it.
+    pub fn new(model: &Model) -> Forces {
+        Forces::with_terms(model, Terms::needed(model))
+    }
+
+    /// Evaluates exactly `terms` (a term the model gives nothing to do adds
+    /// zeros; a term left out is not evaluated).
+    pub fn with_terms(model: &Model, terms: Terms) -> Forces {
+        Forces {
+            wind: if terms.wind {
+                vec![V3::zeros(); model.len()]
+            } else {
+                Vec::new()
+            },
+            scratch: vec![V3::zeros(); model.len()],
+            evaluations: 0,
+            terms,
+            hinge_rest: hinge_rest(model),
+            edge_springs: if terms.breaking {
+                edge_springs(model)
+            } else {
+                Vec::new()
+            },
+            hinge_springs: if terms.breaking {
+                hinge_springs(model)
+            } else {
+                Vec::new()
+            },
+            torn: Tears::default(),
+        }
+    }
+
+    /// Marks as torn the triangles with a broken edge spring (`alive[s]`
+    /// false), which feel no more wind, and the hinges with a broken spring
+    /// along a wing, which bend no more. Call after springs break.
+    pub fn tear(&mut self, alive: &[bool]) {
+        tear_mask(&mut self.torn.triangles, &self.edge_springs, alive);
+        tear_mask(&mut self.torn.hinges, &self.hinge_springs, alive);
+    }
+
+    /// What is torn (empty masks: nothing).
+    pub fn torn(&self) -> &Tears {
+        &self.torn
+    }
+
+    /// The terms evaluated.
+    pub fn terms(&self) -> Terms {
+        self.terms
+    }
+
+    /// Number of full force evaluations so far (a machine-independent
+    /// measure of work).
+    pub fn evaluations(&self) -> u64 {
+        self.evaluations
+    }
+
+    fn sample_wind(&mut self, model: &Model, x: &[V3], t: f64) -> Option<&[V3]> {
+        if !self.terms.wind {
+            return None;
+        }
+        for (g, p) in self.wind.iter_mut().zip(x) {
+            *g = model.wind.velocity(p, t);
+        }
+        Some(&self.wind)
+    }
+
+    /// Total force on every particle at (x, v, t), written into `force`.
+    pub fn total(
+        &mut self,
+        model: &Model,
+        x: &[V3],
+        v: &[V3],
+        alive: &[bool],
+        t: f64,
+        force: &mut [V3],
+    ) {
+        self.evaluations += 1;
+        let terms = self.terms;
+        // Start from gravity rather than zero: one pass fewer than
+        // `fill(0)` followed by `gravity`, same sums in the same order.
+        if terms.gravity {
+            for (f, &m) in force.iter_mut().zip(&model.mass) {
+                *f = m * model.gravity;
+            }
+        } else {
+            force.fill(V3::zeros());
+        }
+        if terms.springs {
+            springs(model, x, v, alive, force);
+        }
+        if terms.hinges {
+            hinges(model, &self.hinge_rest, x, v, &self.torn.hinges, force);
+        }
+        // Moved out for the call (no allocation): the wind borrows self.
+        let torn = std::mem::take(&mut self.torn.triangles);
+        let wind = self.sample_wind(model, x, t);
+        if terms.aero {
+            triangle_aero_intact(model, x, v, wind, &torn, force);
+        }
+        if terms.particle_drag {
+            particle_drag(model, v, wind, force);
+        }
+        self.torn.triangles = torn;
+    }
+
+    /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.
+    pub fn acceleration(
+        &mut self,
+        model: &Model,
+        x: &[V3],
+        v: &[V3],
+        alive: &[bool],
+        t: f64,
+        acc: &mut [V3],
+    ) {
+        self.total(model, x, v, alive, t, acc);
+        if self.terms.rigid {
+            rigid::accelerations(&model.rigid, x, v, acc);
+        }
+        for (a, &w) in acc.iter_mut().zip(&model.inv_mass) {
+            *a *= w;
+        }
+    }
+
+    /// Each force term on particle `p` separately.
+    pub fn terms_on(
+        &mut self,
+        model: &Model,
+        x: &[V3],
+        v: &[V3],
+        alive: &[bool],
+        t: f64,
+        p: usize,
+    ) -> ForceTerms {
+        let mut scratch = std::mem::take(&mut self.scratch);
+        let mut term = |f: &mut dyn FnMut(&mut Forces, &mut [V3])| {
+            scratch.fill(V3::zeros());
+            f(self, &mut scratch);
+            scratch[p]
+        };
+        let terms = ForceTerms {
+            gravity: term(&mut |_, s| gravity(model, s)),
+            spring: term(&mut |_, s| springs(model, x, v, alive, s)),
+            bending: term(&mut |me, s| hinges(model, &me.hinge_rest, x, v, &me.torn.hinges, s)),
+            aero: term(&mut |me, s| {
+                let wind = me.sample_wind(model, x, t).map(|w| w.to_vec());
+                triangle_aero_intact(model, x, v, wind.as_deref(), &me.torn.triangles, s)
+            }),
+            drag: term(&mut |me, s| {
+                let wind = me.sample_wind(model, x, t).map(|w| w.to_vec());
+                particle_drag(model, v, wind.as_deref(), s)
+            }),
+        };
+        self.scratch = scratch;
+        terms
+    }
+}

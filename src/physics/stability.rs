@@ -1,0 +1,616 @@
+//! How large a time step a model can take: the stiffest spring mode from a
+//! power iteration on M⁻¹K (with the block-Gershgorin bound as a guaranteed
+//! fallback), its damping, and the drag rate; then, for each integrator, the
+//! largest step whose amplification on that mode stays ≤ 1
+//! (docs/numerics.md, "Stability limits" and "Stable-step estimate").
+
+use crate::physics::model::Model;
+use crate::physics::params::Integrator;
+use nalgebra::{Matrix3, Vector3};
+
+type V3 = Vector3<f64>;
+
+/// Fraction of the stability limit that `--dt auto` uses. Stay at or below
+/// about 0.7 × the limit (docs/numerics.md, "Auto step"; near it symplectic
+/// Euler is stable but its invariant ellipse is very eccentric); the estimate
+/// is made at the rest shape and a deforming leaf measured 2–3 % stiffer.
+pub const AUTO_SAFETY: f64 = 0.7;
+
+/// Mass ratios above this make a network ill-conditioned (docs/numerics.md,
+/// "Conditioning warnings").
+pub const WARN_MASS_RATIO: f64 = 1e4;
+/// Spring rates k (1/mᵢ + 1/mⱼ) above this, s⁻², need tiny explicit steps.
+pub const WARN_SPRING_RATE: f64 = 1e8;
+
+const POWER_ITERATIONS: usize = 200;
+const POWER_TOLERANCE: f64 = 1e-10;
+/// The Rayleigh quotient is a lower bound of ω²; when the power iteration has
+/// not settled, multiply it by this margin (capped by Gershgorin).
+const UNCONVERGED_MARGIN: f64 = 1.1;
+
+/// The stability-relevant numbers of a model.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StabilityEstimate {
+    /// Best estimate of the highest spring-network frequency ω_max, rad/s.
+    pub omega_max: f64,
+    /// Lower bound √max_s k_s (1/mᵢ + 1/mⱼ), rad/s.
+    pub omega_lower: f64,
+    /// Upper bound from block Gershgorin, √(2 maxᵢ Σ k / mᵢ), rad/s.
+    pub omega_upper: f64,
+    /// Whether the power iteration converged (else ω_max leans on the bounds).
+    pub power_converged: bool,
+    /// Damping rate 2ζω of the top mode (dashpots plus air), 1/s.
+    pub mode_damping_rate: f64,
+    /// Damping ratio ζ of the top mode.
+    pub zeta: f64,
+    /// Largest drag rate γ of any particle, 1/s: α A / m under the linear
+    /// law; under the quadratic law its bound at the reference speed
+    /// ([`crate::physics::forces::quadratic::drag_rate`]).
+    pub drag_rate: f64,
+    /// The part of [`StabilityEstimate::drag_rate`] that the implicit
+    /// integrator treats explicitly (the quadratic law), 1/s; 0 otherwise.
+    pub explicit_drag_rate: f64,
+    /// The spring with the largest k (1/mᵢ + 1/mⱼ).
+    pub stiffest_spring: Option<usize>,
+    /// The lightest free particle.
+    pub lightest_particle: usize,
+    /// Heaviest mass over lightest mass.
+    pub mass_ratio: f64,
+    /// Warnings worth showing a user, each naming the item.
+    pub warnings: Vec<String>,
+}
+
+impl StabilityEstimate {
+    /// Whether every rate is finite: false when a stiffness, drag or 1/m is
+    /// so extreme that k/m or α/m overflows f64, and no step can be chosen.
+    pub fn is_finite(&self) -> bool {
+        [
+            self.omega_max,
+            self.omega_lower,
+            self.omega_upper,
+            self.mode_damping_rate,
+            self.drag_rate,
+        ]
+        .iter()
+        .all(|v| v.is_finite())
+    }
+
+    /// The drag time constant 1/γ of the particle that reacts fastest to air, s
+    /// (infinite without drag).
+    pub fn drag_time_constant(&self) -> f64 {
+        1.0 / self.drag_rate
+    }
+
+    /// The largest stable step for `integrator`, s; `None` means
+    /// unconditionally stable (implicit under the linear law, or nothing
+    /// stiff at all; the implicit step treats the quadratic law explicitly,
+    /// so that law bounds it as it bounds forward Euler); `Some(0)`
+    /// means unstable at any step (forward Euler on an undamped spring).
+    pub fn dt_max(&self, integrator: Integrator) -> Option<f64> {
+        if integrator == Integrator::Implicit {
+            return largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate);
+        }
+        let spring =
+            largest_stable_step(integrator, self.omega_max.powi(2), self.mode_damping_rate);
+        let drag = largest_stable_step(integrator, 0.0, self.drag_rate);
+        match (spring, drag) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// The step `--dt auto` takes: [`AUTO_SAFETY`] × dt_max, made an integer
+    /// fraction of `frame_dt` so output frames fall exactly on steps. Implicit
+    /// (and anything unconditionally stable) takes one step per frame.
+    /// `None` when no stable step exists (forward Euler on undamped springs).
+    pub fn auto_dt(&self, integrator: Integrator, frame_dt: f64) -> Option<f64> {
+        match self.dt_max(integrator) {
+            None => Some(frame_dt),
+            Some(m) if m <= 0.0 => None,
+            Some(m) => Some(snap_to_frame(AUTO_SAFETY * m, frame_dt)),
+        }
+    }
+
+    /// The step a drop takes with `--dt auto`: [`AUTO_SAFETY`] × dt_max,
+    /// at most `frame_dt`, not snapped to divide the frame (drops sample
+    /// their frames by interpolation, [`crate::physics::run::run_sampled`], so
+    /// snapping would only shorten the step). Steps per frame are rounded
+    /// up to a multiple of 1/64 (a step at most 1.6 % shorter): the power
+    /// iteration's last bits depend on the particles' order, and a step
+    /// that moved with them would make a renumbered leaf fall differently.
+    /// `None` as for [`Self::auto_dt`].
+    pub fn auto_step(&self, integrator: Integrator, frame_dt: f64) -> Option<f64> {
+        match self.dt_max(integrator) {
+            None => Some(frame_dt),
+            Some(m) if m <= 0.0 => None,
+            Some(m) => {
+                let per_frame = (frame_dt / (AUTO_SAFETY * m) * 64.0).ceil().max(64.0) / 64.0;
+                Some(frame_dt / per_frame)
+            }
+        }
+    }
+}
+
+/// The largest step ≤ `dt` that divides `frame_dt` a whole number of times.
+pub fn snap_to_frame(dt: f64, frame_dt: f64) -> f64 {
+    let n = (frame_dt / dt * (1.0 - 1e-12)).ceil().max(1.0);
+    frame_dt / n
+}
+
+/// Computes the estimate at the rest shape.
+pub fn estimate(model: &Model) -> StabilityEstimate {
+    let n = model.len();
+    let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();
+    let mut warnings = Vec::new();
+
+    // Bounds and the stiffest spring.
+    let mut omega2_lower: f64 = 0.0;
+    let mut stiffest = None;
+    let mut row_sum = vec![0.0; n];
+    for (k, s) in model.springs.iter().enumerate() {
+        let rate = s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]);
+        if rate > omega2_lower {
+            omega2_lower = rate;
+            stiffest = Some(k);
+        }
+        row_sum[s.i] += s.stiffness;
+        row_sum[s.j] += s.stiffness;
+        if rate > WARN_SPRING_RATE {
+            warnings.push(format!(
+                "spring[{k}]: k (1/m_i + 1/m_j) = {rate:.3e} s^-2 exceeds {WARN_SPRING_RATE:.0e}: explicit steps must be tiny"
+            ));
+        }
+    }
+    // Hinges at rest: K_h = k_b g gᵀ with g = ∇θ (4 particles).
+    let hinge_grads: Vec<([usize; 4], [V3; 4], f64, f64)> = model
+        .hinges
+        .iter()
+        .filter_map(|h| {
+            crate::physics::forces::dihedral(&model.rest_position, h)
+                .map(|(_, g)| (h.particles(), g, h.stiffness, h.damping))
+        })
+        .collect();
+    for (ids, g, k, _) in &hinge_grads {
+        let total: f64 = g.iter().map(|v| v.norm()).sum();
+        for (&i, gi) in ids.iter().zip(g) {
+            row_sum[i] += 0.5 * k * gi.norm() * total;
+        }
+        for (&i, gi) in ids.iter().zip(g) {
+            let rate = k * gi.norm_squared() * model.inv_mass[i];
+            if rate > omega2_lower {
+                omega2_lower = rate;
+            }
+        }
+    }
+    let omega2_upper = (0..n)
+        .filter(|&i| free[i])
+        .map(|i| 2.0 * row_sum[i] / model.mass[i])
+        .fold(0.0, f64::max);
+
+    // Power iteration on S = M^-1/2 K M^-1/2 (symmetric, same spectrum as M⁻¹K).
+    let dirs: Vec<(usize, usize, V3, f64)> = model
+        .springs
+        .iter()
+        .map(|s| {
+            let d = model.rest_position[s.i] - model.rest_position[s.j];
+            let l = d.norm();
+            // A zero-length spring has no direction and no stiffness mode.
+            let dir = if l > 0.0 { d / l } else { V3::zeros() };
+            (s.i, s.j, dir, s.stiffness)
+        })
+        .collect();
+    let inv_sqrt_m: Vec<f64> = (0..n)
+        .map(|i| {
+            if free[i] {
+                model.mass[i].powf(-0.5)
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let apply = |y: &[V3], out: &mut [V3]| {
+        out.fill(V3::zeros());
+        for &(i, j, dir, k) in &dirs {
+            let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];
+            let f = dir * (k * dir.dot(&u));
+            out[i] += f * inv_sqrt_m[i];
+            out[j] -= f * inv_sqrt_m[j];
+        }
+        for (ids, g, k, _) in &hinge_grads {
+            let gy: f64 = ids
+                .iter()
+                .zip(g)
+                .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+                .sum();
+            for (&i, gi) in ids.iter().zip(g) {
+                out[i] += gi * (k * gy * inv_sqrt_m[i]);
+            }
+        }
+    };
+    // A fixed, irregular start vector: deterministic, and not orthogonal to
+    // the top mode for any realistic network.
+    let mut y: Vec<V3> = (0..n)
+        .map(|i| {
+            let a = i as f64 + 1.0;
+            V3::new(
+                (1.3 * a).sin(),
+                (2.7 * a + 0.5).cos(),
+                (0.9 * a + 1.1).sin() + 0.1,
+            ) * if free[i] { 1.0 } else { 0.0 }
+        })
+        .collect();
+    let mut sy = vec![V3::zeros(); n];
+    let mut lambda = 0.0;
+    let stiff = !dirs.is_empty() || !hinge_grads.is_empty();
+    let mut converged = !stiff;
+    for _ in 0..POWER_ITERATIONS {
+        if !stiff {
+            break;
+        }
+        let norm = norm(&y);
+        if norm == 0.0 {
+            break;
+        }
+        y.iter_mut().for_each(|v| *v /= norm);
+        apply(&y, &mut sy);
+        let rq = dot(&y, &sy);
+        let change = (rq - lambda).abs();
+        lambda = rq;
+        std::mem::swap(&mut y, &mut sy);
+        if change <= POWER_TOLERANCE * rq.abs() {
+            converged = true;
+            break;
+        }
+    }
+    let norm_y = norm(&y);
+    if norm_y > 0.0 {
+        y.iter_mut().for_each(|v| *v /= norm_y);
+    }
+    let omega2 = if converged {
+        lambda.min(omega2_upper)
+    } else {
+        (UNCONVERGED_MARGIN * lambda).clamp(omega2_lower, omega2_upper)
+    };
+
+    // Damping of that mode: c_eff = qᵀ C q / qᵀ M q with q = M^-1/2 y.
+    // The quadratic law's damping is not added here: at γ/(2ω_max) ~ 1e-2
+    // it moves no scheme's spring limit by more than ~1 %, well inside
+    // AUTO_SAFETY; its own limit is the drag bound.
+    let air = air_damping(model);
+    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model);
+    let mut c_eff = 0.0;
+    for (s, &(i, j, dir, _)) in model.springs.iter().zip(&dirs) {
+        let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];
+        c_eff += s.damping * dir.dot(&u).powi(2);
+    }
+    for (ids, g, _, c) in &hinge_grads {
+        let gq: f64 = ids
+            .iter()
+            .zip(g)
+            .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+            .sum();
+        c_eff += c * gq * gq;
+    }
+    for i in 0..n {
+        let q = y[i] * inv_sqrt_m[i];
+        c_eff += q.dot(&(air.blocks[i] * q));
+    }
+    let omega = omega2.max(0.0).sqrt();
+    let zeta = if omega > 0.0 {
+        c_eff / (2.0 * omega)
+    } else {
+        0.0
+    };
+
+    // Lightest particle and mass ratio.
+    let (mut lightest, mut m_min, mut m_max) = (0, f64::INFINITY, 0.0f64);
+    for i in (0..n).filter(|&i| free[i]) {
+        if model.mass[i] < m_min {
+            m_min = model.mass[i];
+            lightest = i;
+        }
+        m_max = m_max.max(model.mass[i]);
+    }
+    let mass_ratio = if m_min.is_finite() {
+        m_max / m_min
+    } else {
+        1.0
+    };
+    if mass_ratio > WARN_MASS_RATIO {
+        warnings.push(format!(
+            "particle[{lightest}]: mass ratio heaviest/lightest = {mass_ratio:.3e} exceeds {WARN_MASS_RATIO:.0e}: the light particle sets the stable step"
+        ));
+    }
+
+    StabilityEstimate {
+        omega_max: omega,
+        omega_lower: omega2_lower.sqrt(),
+        omega_upper: omega2_upper.sqrt(),
+        power_converged: converged,
+        mode_damping_rate: c_eff,
+        zeta,
+        drag_rate: air.rate_max.max(quadratic_rate),
+        explicit_drag_rate: quadratic_rate,
+        stiffest_spring: stiffest,
+        lightest_particle: lightest,
+        mass_ratio,
+        warnings,
+    }
+}
+
+struct AirDamping {
+    blocks: Vec<nalgebra::Matrix3<f64>>,
+    rate_max: f64,
+}
+
+/// Per-particle linear air damping ∂F/∂v (the linear law's αA terms) and the
+/// largest rate λ_max(block)/m over free particles.
+fn air_damping(model: &Model) -> AirDamping {
+    let n = model.len();
+    let mut blocks = vec![nalgebra::Matrix3::identity() * 0.0; n];
+    for (i, b) in blocks.iter_mut().enumerate() {
+        *b = nalgebra::Matrix3::identity() * model.particle_drag[i];
+    }
+    for tri in &model.triangles {
+        let [a, b, c] = tri.corners;
+        let x = &model.rest_position;
+        let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));
+        let doubled = big_n.norm();
+        if doubled == 0.0 {
+            continue;
+        }
+        let nrm = big_n / doubled;
+        let blk = (nalgebra::Matrix3::identity() * tri.alpha_t
+            + nrm * nrm.transpose() * (tri.alpha_n - tri.alpha_t))
+            * (0.5 * doubled);
+        for &i in &tri.corners {
+            blocks[i] += blk;
+        }
+    }
+    let rate_max = (0..n)
+        .filter(|&i| !model.fixed[i])
+        .map(|i| {
+            // The blocks are symmetric PSD; their largest eigenvalue is what sets the limit.
+            let eig = blocks[i].symmetric_eigenvalues();
+            eig.max() / model.mass[i]
+        })
+        .fold(0.0, f64::max);
+    AirDamping { blocks, rate_max }
+}
+
+/// The one-step map of `integrator` on the test problem
+/// x'' = −ω² x − c x', acting on (x, v, a), where a is the acceleration
+/// Verlet carries from one step to the next (the other schemes ignore it).
+/// Built by running the scheme's update formulas on the basis vectors, so it
+/// is the scheme's exact amplification, not an approximation of it.
+pub fn step_matrix(integrator: Integrator, h: f64, omega2: f64, c: f64) -> Matrix3<f64> {
+    let acc = |x: f64, v: f64| -omega2 * x - c * v;
+    let step = |x: f64, v: f64, a_carried: f64| -> (f64, f64, f64) {
+        let (x1, v1) = match integrator {
+            Integrator::Euler => (x + h * v, v + h * acc(x, v)),
+            Integrator::Symplectic => {
+                let v1 = v + h * acc(x, v);
+                (x + h * v1, v1)
+            }
+            Integrator::Verlet => {
+                // As in `Simulator::step_verlet`: the carried acceleration was
+                // evaluated at the previous step's predicted velocity.
+                let a0 = a_carried;
+                let vh = v + 0.5 * h * a0;
+                let x1 = x + h * vh;
+                let a1 = acc(x1, v + h * a0);
+                return (x1, vh + 0.5 * h * a1, a1);
+            }
+            Integrator::Rk4 => {
+                let (k1x, k1v) = (v, acc(x, v));
+                let (k2x, k2v) = (v + 0.5 * h * k1v, acc(x + 0.5 * h * k1x, v + 0.5 * h * k1v));
+                let (k3x, k3v) = (v + 0.5 * h * k2v, acc(x + 0.5 * h * k2x, v + 0.5 * h * k2v));
+                let (k4x, k4v) = (v + h * k3v, acc(x + h * k3x, v + h * k3v));
+                (
+                    x + h / 6.0 * (k1x + 2.0 * k2x + 2.0 * k3x + k4x),
+                    v + h / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v),
+                )
+            }
+            Integrator::Implicit => {
+                // (1 + h c + h² ω²) v1 = v − h ω² x ; x1 = x + h v1.
+                let v1 = (v - h * omega2 * x) / (1.0 + h * c + h * h * omega2);
+                (x + h * v1, v1)
+            }
+        };
+        (x1, v1, 0.0)
+    };
+    let mut m = Matrix3::zeros();
+    for k in 0..3 {
+        let mut e = [0.0; 3];
+        e[k] = 1.0;
+        let (x1, v1, a1) = step(e[0], e[1], e[2]);
+        m[(0, k)] = x1;
+        m[(1, k)] = v1;
+        m[(2, k)] = a1;
+    }
+    m
+}
+
+/// Spectral radius of the 3×3 step map. The schemes other than Verlet have
+/// a zero third row and column, so their 2×2 block is solved in closed form;
+/// a triangular block (the drag-only mode, where the velocity update does not
+/// see the position) is read off its diagonal exactly, because the quadratic
+/// formula would lose half the digits to cancellation near its double root.
+pub fn spectral_radius(m: &Matrix3<f64>) -> f64 {
+    // A step map with an overflowed entry amplifies without bound (and the
+    // Schur iteration would never converge on it).
+    if m.iter().any(|v| !v.is_finite()) {
+        return f64::INFINITY;
+    }
+    let coupled = m[(2, 0)] != 0.0 || m[(2, 1)] != 0.0 || m[(2, 2)] != 0.0;
+    if coupled {
+        // (x, v, a) differ in scale by powers of ω and 1/h; unbalanced, the
+        // eigenvalue solver's round-off (≈ ε‖M‖) can push a root that lies
+        // just inside the unit circle (a strongly overdamped mode) outside it.
+        return balanced(m)
+            .complex_eigenvalues()
+            .iter()
+            .map(|z| z.norm())
+            .fold(0.0, f64::max);
+    }
+    if m[(1, 0)] == 0.0 || m[(0, 1)] == 0.0 {
+        return m[(0, 0)].abs().max(m[(1, 1)].abs());
+    }
+    let tr = m[(0, 0)] + m[(1, 1)];
+    let det = m[(0, 0)] * m[(1, 1)] - m[(0, 1)] * m[(1, 0)];
+    let disc = tr * tr - 4.0 * det;
+    if disc >= 0.0 {
+        // Larger root without cancellation, the other from the product.
+        let big = 0.5 * (tr + tr.signum() * disc.sqrt());
+        let small = if big != 0.0 { det / big } else { 0.0 };
+        big.abs().max(small.abs())
+    } else {
+        det.abs().sqrt()
+    }
+}
+
+/// A diagonal similarity D⁻¹ M D (so the same eigenvalues) with power-of-two
+/// factors chosen so that each row and column have comparable off-diagonal
+/// norms (Parlett & Reinsch's balancing, as LAPACK's `gebal` does before an
+/// eigenvalue solve). Powers of two keep the scaling exact.
+fn balanced(m: &Matrix3<f64>) -> Matrix3<f64> {
+    let mut a = *m;
+    for _ in 0..64 {
+        let mut changed = false;
+        for i in 0..3 {
+            let col: f64 = (0..3).filter(|&j| j != i).map(|j| a[(j, i)].abs()).sum();
+            let row: f64 = (0..3).filter(|&j| j != i).map(|j| a[(i, j)].abs()).sum();
+            if col == 0.0 || row == 0.0 {
+                continue;
+            }
+            let f = 2f64.powi((row / col).sqrt().log2().round() as i32);
+            if col * f + row / f < 0.95 * (col + row) {
+                changed = true;
+                for j in 0..3 {
+                    a[(j, i)] *= f;
+                    a[(i, j)] /= f;
+                }
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    a
+}
+
+/// Amplification above 1 by less than this counts as neutral (round-off).
+const NEUTRAL_TOLERANCE: f64 = 1e-13;
+
+/// Largest h with spectral radius ≤ 1 for x'' = −ω² x − c x', found by a
+/// geometric scan then bisection. `None` if stable for every h tried (or no
+/// dynamics at all); `Some(0)` if unstable even for tiny steps.
+pub fn largest_stable_step(integrator: Integrator, omega2: f64, c: f64) -> Option<f64> {
+    let rate = omega2.sqrt().max(c);
+    if rate <= 0.0 || integrator == Integrator::Implicit {
+        return None;
+    }
+    // An overflowed rate (k/m or α/m beyond f64) is stable at no step.
+    if !rate.is_finite() {
+        return Some(0.0);
+    }
+    let stable =
+        |h: f64| spectral_radius(&step_matrix(integrator, h, omega2, c)) <= 1.0 + NEUTRAL_TOLERANCE;
+    // Start where round-off is harmless; step down if even that is unstable
+    // (forward Euler with very light damping).
+    let mut lo = 1e-3 / rate;
+    let mut hi;
+    if stable(lo) {
+        hi = lo;
+        loop {
+            hi *= 1.5;
+            if hi > 1e6 / rate {
+                return None;
+            }
+            if !stable(hi) {
+                break;
+            }
+            lo = hi;
+        }
+    } else {
+        hi = lo;
+        loop {
+            lo /= 1.5;
+            if lo < 1e-5 / rate {
+                return Some(0.0);
+            }
+            if stable(lo) {
+                break;
+            }
+            hi = lo;
+        }
+    }
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if stable(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        // 1e-10 relative: far below what any use of dt_max can resolve, and
+        // 30 fewer eigenvalue solves per estimate than going to round-off.
+        if hi - lo <= 1e-10 * hi {
+            break;
+        }
+    }
+    Some(lo)
+}
+
+fn dot(a: &[V3], b: &[V3]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x.dot(y)).sum()
+}
+
+fn norm(a: &[V3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The closed-form limits of docs/numerics.md, "Stability limits".
+    #[test]
+    fn closed_form_limits_of_the_notes() {
+        let w: f64 = 3.0;
+        let limit = |i, c| largest_stable_step(i, w * w, c).unwrap();
+        // Undamped: symplectic and Verlet ωh = 2, RK4 ωh = 2√2.
+        assert!((limit(Integrator::Symplectic, 0.0) * w - 2.0).abs() < 1e-9);
+        assert!((limit(Integrator::Verlet, 0.0) * w - 2.0).abs() < 1e-9);
+        assert!((limit(Integrator::Rk4, 0.0) * w - 2.0 * 2f64.sqrt()).abs() < 1e-9);
+        // Forward Euler never stable undamped; h < 2ζ/ω with damping.
+        assert_eq!(
+            largest_stable_step(Integrator::Euler, w * w, 0.0),
+            Some(0.0)
+        );
+        let zeta = 0.2;
+        let c = 2.0 * zeta * w;
+        assert!((limit(Integrator::Euler, c) - 2.0 * zeta / w).abs() < 1e-9);
+        // Damped symplectic: (2/ω)(√(1+ζ²) − ζ).
+        let expect = 2.0 / w * ((1.0 + zeta * zeta).sqrt() - zeta);
+        assert!((limit(Integrator::Symplectic, c) - expect).abs() < 1e-9);
+        // Drag alone: Euler and symplectic h < 2/γ, RK4 γh ≤ 2.785.
+        let gamma = 7.0;
+        assert!(
+            (largest_stable_step(Integrator::Euler, 0.0, gamma).unwrap() * gamma - 2.0).abs()
+                < 1e-9
+        );
+        let rk = largest_stable_step(Integrator::Rk4, 0.0, gamma).unwrap() * gamma;
+        assert!((rk - 2.785).abs() < 1e-3, "{rk}");
+        assert_eq!(largest_stable_step(Integrator::Implicit, w * w, 0.0), None);
+    }
+
+    #[test]
+    fn snapping_divides_the_frame() {
+        let f = 1.0 / 240.0;
+        let dt = snap_to_frame(0.0011, f);
+        assert!(dt <= 0.0011);
+        let n = f / dt;
+        assert!((n - n.round()).abs() < 1e-9);
+        assert_eq!(snap_to_frame(1.0, f), f);
+    }
+}

@@ -1,0 +1,820 @@
+//! How accurate a run is, and what accuracy costs: work-precision sweeps over
+//! the time step (docs/numerics.md, "Error against work"), the error
+//! estimate that breeding runs record ([`estimate`]), and, past the horizon
+//! where pointwise error means nothing, statistics across time steps
+//! ([`long`]).
+//!
+//! # The sweep
+//!
+//! A problem is a [`Model`] plus an initial [`State`] (a dropped leaf now; a
+//! scene later) run for T seconds. For each integrator the step is swept over
+//! h = T/2^j, so every run ends exactly at T. The error of a run is the RMS
+//! over particles of |x_i(T) − x_i^ref(T)| divided by the model's chord
+//! ([`Model::chord`]). Its work is the median wall time of
+//! [`SweepSettings::runs`] identical runs (stepping only: building the
+//! simulator, copying the initial state and all output are outside the clock)
+//! and its force evaluations, which do not depend on the machine.
+//!
+//! **Reference.** RK4 at h_ref = T/2^J. It is validated by self-convergence:
+//! the run at h_ref/2 must agree with it to [`REFERENCE_FACTOR`] × the
+//! smallest error plotted, else the report carries a warning. Errors are
+//! measured against the finer of the two runs. Because RK4 is fourth order,
+//! h_ref need not be below the first-order curves' smallest step (the rule
+//! h_ref ≤ h_min/8 of docs/numerics.md, "Error against work", step 3, is for
+//! a reference of the same order); the validation is what guarantees it is
+//! good enough.
+//!
+//! **Events.** Spring breaking would limit every scheme to first order, so
+//! the sweep runs on a copy of the model with breaking switched off
+//! ([`smooth_model`]) and says how many springs it affected. The model has no
+//! ground contact.
+//!
+//! **Divergence.** A run that the simulator stops (non-finite or runaway
+//! state, failed implicit solve) is kept as a row with `diverged = true` and
+//! no error. Between the largest stable and the smallest diverged step of
+//! each explicit scheme, the step count n (h = T/n) is then bisected, so the
+//! observed stability limit is located to about 1 % and can be set against
+//! the estimate that `check` prints. "Stable" means the run reached T: just
+//! above the true limit the growth per step is slight, so a 1 s run may end
+//! before it shows.
+//!
+//! **Observed order.** The least-squares slope of log error against log h
+//! over the non-diverged points whose error lies between
+//! [`FIT_FLOOR_FACTOR`] × the reference's self-difference (below that, the
+//! reference's own error would bend the curve) and [`FIT_MAX_ERROR`] (above
+//! that, the run is outside the asymptotic regime: near the stability limit
+//! the error is of the order of the leaf itself). The pairwise orders
+//! log₂(e(h)/e(h/2)) of those points are reported too.
+
+pub mod estimate;
+pub mod long;
+pub mod plot;
+
+pub use estimate::{ErrorCache, ErrorEstimate, error_estimate};
+
+use crate::physics::integrate::{SimError, Simulator};
+use crate::physics::model::Model;
+use crate::physics::params::Integrator;
+use crate::physics::stability;
+use crate::physics::state::State;
+use crate::sim::drop;
+use nalgebra::Vector3;
+use serde::Serialize;
+use std::time::Instant;
+
+type V3 = Vector3<f64>;
+
+/// The reference's self-difference must be below this fraction of the
+/// smallest error plotted (docs/numerics.md, "Error against work", step 3).
+pub const REFERENCE_FACTOR: f64 = 0.1;
+/// Only errors at least this many times the reference's self-difference
+/// enter the order fit: the reference error then moves them by ≤ 1 %.
+pub const FIT_FLOOR_FACTOR: f64 = 100.0;
+/// Errors above this (in chords) are outside the asymptotic regime and stay
+/// out of the order fit.
+pub const FIT_MAX_ERROR: f64 = 1e-2;
+/// The accuracy targets of the summary table, in chords.
+pub const TOLERANCES: [f64; 2] = [1e-3, 1e-6];
+/// Timed runs per point (the median is reported); at least 5
+/// (docs/numerics.md, "Error against work", step 1).
+pub const DEFAULT_RUNS: usize = 5;
+/// The most steps any single run of a default sweep may take, so that a
+/// stiff model cannot make the sweep run for hours.
+pub const MAX_STEPS_LOG2: u32 = 22;
+/// The implicit scheme's default sweep stops at this step, s (2⁻¹⁹ s: on
+/// prototype A the error is then ≈ 5e-7 chords after 1 s).
+pub const IMPLICIT_MIN_STEP: f64 = 1.0 / 524_288.0;
+/// The stability-limit bisection stops when the step count is known to
+/// this relative precision.
+const LIMIT_PRECISION: f64 = 0.01;
+
+/// Why an accuracy computation could not be done.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AccuracyError {
+    /// Bad settings: the field and what is wrong.
+    #[error("{0}")]
+    Settings(String),
+    /// The step or the run's length is refused.
+    #[error(transparent)]
+    Step(#[from] crate::physics::run::StepError),
+    /// The reference run itself failed.
+    #[error("the reference run failed: {0}")]
+    Reference(SimError),
+    /// The run whose error was asked for failed (see [`estimate`]).
+    #[error("the run failed: {0}")]
+    Run(SimError),
+}
+
+/// A copy of `model` in which no spring can break, and how many springs
+/// were breakable. Breaking is an event that limits any scheme to first
+/// order unless located, so convergence studies switch it off
+/// (docs/numerics.md, "Error against work", step 6).
+pub fn smooth_model(model: &Model) -> (Model, usize) {
+    let mut smooth = model.clone();
+    let mut count = 0;
+    for s in &mut smooth.springs {
+        if s.break_strain.take().is_some() {
+            count += 1;
+        }
+    }
+    (smooth, count)
+}
+
+/// The state a leaf is dropped from by `leafmagic drop` with default
+/// settings: at rest, centre of mass at the origin, tilted by
+/// [`drop::DropParams`]'s default release tilt.
+pub fn default_release(model: &Model) -> State {
+    let tilt = drop::DropParams::default().tilt_deg;
+    State::released(model, drop::release_rotation(tilt), V3::zeros())
+}
+
+/// The end of one run of `steps` steps of size `dt` from `initial`.
+#[derive(Clone, Debug)]
+pub struct EndRun {
+    /// The state at the end (or where the run stopped).
+    pub state: State,
+    /// Wall time of the stepping loop, s.
+    pub wall_s: f64,
+    /// Force evaluations.
+    pub force_evals: u64,
+    /// Why the run stopped early, if it did.
+    pub error: Option<SimError>,
+}
+
+/// Runs `model` from `initial` for `steps` steps of `dt` with `integrator`,
+/// timing only the stepping loop.
+pub fn run_steps(
+    model: &Model,
+    initial: &State,
+    integrator: Integrator,
+    dt: f64,
+    steps: u64,
+) -> EndRun {
+    let mut state = initial.clone();
+    let t0 = state.time;
+    let mut sim = Simulator::new(model, integrator);
+    let start = Instant::now();
+    let mut error = None;
+    for _ in 0..steps {
+        if let Err(e) = sim.step(model, &mut state, dt) {
+            error = Some(e);
+            break;
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    if error.is_none() {
+        // The clock accumulates round-off over many steps; pin it to the end.
+        state.time = t0 + steps as f64 * dt;
+    }
+    EndRun {
+        state,
+        wall_s,
+        force_evals: sim.force_evaluations(),
+        error,
+    }
+}
+
+/// RMS over particles of |a_i − b_i|, divided by `scale`.
+pub fn rms_difference(a: &[V3], b: &[V3], scale: f64) -> f64 {
+    let n = a.len().max(1) as f64;
+    let sum: f64 = a.iter().zip(b).map(|(x, y)| (x - y).norm_squared()).sum();
+    (sum / n).sqrt() / scale
+}
+
+/// The step h = T/2^j.
+pub fn step_size(seconds: f64, j: u32) -> f64 {
+    seconds / f64::from(2u32.pow(j.min(31)))
+}
+
+/// The reference solution at T and how far it can be trusted.
+#[derive(Clone, Debug, Serialize)]
+pub struct Reference {
+    /// Always RK4.
+    pub integrator: Integrator,
+    /// The reference step h_ref/2 actually used for the errors, s.
+    pub dt: f64,
+    /// RMS difference (in chords) between the runs at h_ref and h_ref/2:
+    /// an upper estimate of the reference's own error.
+    pub self_difference: f64,
+    /// Particle positions at T.
+    #[serde(skip)]
+    pub positions: Vec<V3>,
+}
+
+/// Computes the RK4 reference at T/2^j and T/2^(j+1).
+pub fn reference(
+    model: &Model,
+    initial: &State,
+    seconds: f64,
+    j: u32,
+) -> Result<Reference, AccuracyError> {
+    let coarse_h = step_size(seconds, j);
+    // Above RK4's stable limit the reference would be garbage, or diverge
+    // with a message about time steps the user never chose.
+    if let Some(limit) = crate::physics::stability::estimate(model).dt_max(Integrator::Rk4)
+        && coarse_h > limit
+    {
+        return Err(AccuracyError::Settings(format!(
+            "reference_j: the reference, RK4 at T/2^{j} = {coarse_h:.3e} s, is above RK4's \
+             stable step {limit:.3e} s; simulate at most {:.3e} s at this j, or raise it \
+             (--reference-j, up to 30)",
+            limit * 2f64.powi(j as i32)
+        )));
+    }
+    let coarse = run_steps(model, initial, Integrator::Rk4, coarse_h, 1 << j);
+    if let Some(e) = coarse.error {
+        return Err(AccuracyError::Reference(e));
+    }
+    let fine = run_steps(model, initial, Integrator::Rk4, coarse_h / 2.0, 2 << j);
+    if let Some(e) = fine.error {
+        return Err(AccuracyError::Reference(e));
+    }
+    let chord = model.chord();
+    Ok(Reference {
+        integrator: Integrator::Rk4,
+        dt: coarse_h / 2.0,
+        self_difference: rms_difference(&coarse.state.position, &fine.state.position, chord),
+        positions: fine.state.position,
+    })
+}
+
+/// Which steps one integrator is swept over: h = T/2^j for j in
+/// `j_min..=j_max`.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SweepRange {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Smallest j (largest h).
+    pub j_min: u32,
+    /// Largest j (smallest h).
+    pub j_max: u32,
+}
+
+/// Settings of a work-precision sweep.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepSettings {
+    /// Simulated duration T, s.
+    pub seconds: f64,
+    /// Timed runs per point; the median wall time is reported.
+    pub runs: usize,
+    /// Steps per integrator.
+    pub ranges: Vec<SweepRange>,
+    /// The reference is RK4 at T/2^`reference_j`, checked against T/2^(j+1).
+    pub reference_j: u32,
+    /// Bisect the step count between the largest stable and the smallest
+    /// diverged step of each scheme.
+    pub locate_limits: bool,
+}
+
+/// How many halvings each integrator gets below its first point in the
+/// default sweep. The first point is about 4 × the scheme's predicted limit
+/// (so the curve starts with its diverged points). The counts are set by
+/// cost and by what the curve can show, measured on prototype A over 1 s:
+/// euler and symplectic stop near 2^20 steps (≈ 0.3 s a run; they reach
+/// only 1e-5 … 1e-6, the table extrapolates the rest), verlet at 2^18
+/// (error ≈ 1e-9), RK4 at 2^11 (error ≈ 1e-10: one more halving would fall
+/// to within 20 × the reference's round-off floor of ≈ 3e-13), implicit at
+/// 2^19 (error ≈ 5e-7, ≈ 1 s a run). The whole default sweep then takes
+/// about 15 s on the 2-core machine.
+pub fn default_halvings(integrator: Integrator) -> u32 {
+    match integrator {
+        Integrator::Euler => 10,
+        Integrator::Symplectic => 11,
+        Integrator::Verlet => 10,
+        Integrator::Rk4 => 4,
+        Integrator::Implicit => 15,
+    }
+}
+
+impl SweepSettings {
+    /// The default sweep for `model` over `seconds`: each explicit scheme
+    /// starts at the first h = T/2^j ≤ 4 × its predicted stable step (so two
+    /// points lie beyond the limit) and halves h [`default_halvings`] times;
+    /// the implicit scheme, stable at any step, starts at T/16 and stops at
+    /// [`IMPLICIT_MIN_STEP`]. No run takes
+    /// more than 2^[`MAX_STEPS_LOG2`] steps. The reference is RK4 three
+    /// halvings below RK4's smallest step: its truncation error is then
+    /// 8⁴ ≈ 4000 times below any RK4 point's, and finer references only add
+    /// round-off (on prototype A the self-difference is 3.4e-13 chords at
+    /// 2^13 steps, 3.3e-13 at 2^14, 6.8e-13 at 2^15).
+    pub fn for_model(model: &Model, seconds: f64) -> SweepSettings {
+        let est = stability::estimate(model);
+        let ranges: Vec<SweepRange> = Integrator::ALL
+            .iter()
+            .map(|&integrator| {
+                // Forward Euler on an undamped mode has no stable step at all;
+                // start it where symplectic Euler would.
+                let limit = match est.dt_max(integrator) {
+                    Some(m) if m > 0.0 => Some(m),
+                    Some(_) => est.dt_max(Integrator::Symplectic).filter(|&m| m > 0.0),
+                    None => None,
+                };
+                let j_min = match limit {
+                    Some(m) => (seconds / (4.0 * m)).log2().ceil().max(1.0) as u32,
+                    None => 4,
+                };
+                let j_min = j_min.min(MAX_STEPS_LOG2);
+                let mut j_max = (j_min + default_halvings(integrator)).min(MAX_STEPS_LOG2);
+                if limit.is_none() {
+                    // Counted from T/16, the implicit curve would cost the
+                    // same 2^19 steps for any T; stop it at an absolute
+                    // step instead, so a short sweep stays short.
+                    let floor = (seconds / IMPLICIT_MIN_STEP).log2().floor().max(0.0) as u32;
+                    j_max = j_max.min(floor).max(j_min);
+                }
+                SweepRange {
+                    integrator,
+                    j_min,
+                    j_max,
+                }
+            })
+            .collect();
+        let rk4_max = ranges
+            .iter()
+            .find(|r| r.integrator == Integrator::Rk4)
+            .map_or(12, |r| r.j_max);
+        SweepSettings {
+            seconds,
+            runs: DEFAULT_RUNS,
+            ranges,
+            reference_j: (rk4_max + 3).min(MAX_STEPS_LOG2),
+            locate_limits: true,
+        }
+    }
+
+    fn validate(&self) -> Result<(), AccuracyError> {
+        if !(self.seconds > 0.0 && self.seconds.is_finite()) {
+            return Err(AccuracyError::Settings(format!(
+                "seconds: must be a positive number, got {}",
+                self.seconds
+            )));
+        }
+        if self.runs == 0 {
+            return Err(AccuracyError::Settings(
+                "runs: at least one timed run per point is needed".into(),
+            ));
+        }
+        for r in &self.ranges {
+            if r.j_min > r.j_max || r.j_max > 30 {
+                return Err(AccuracyError::Settings(format!(
+                    "ranges[{}]: need j_min ≤ j_max ≤ 30, got {}..={}",
+                    r.integrator, r.j_min, r.j_max
+                )));
+            }
+        }
+        if self.reference_j > 30 {
+            return Err(AccuracyError::Settings(format!(
+                "reference_j: at most 30, got {}",
+                self.reference_j
+            )));
+        }
+        Ok(())
+    }
+}
+
+/// One point of the sweep: one CSV row.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct SweepRow {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// The step, s.
+    pub dt: f64,
+    /// RMS particle position error at T over the chord; `None` if diverged.
+    pub error: Option<f64>,
+    /// Median wall time of the stepping loop over the timed runs, s (up to
+    /// the divergence for diverged runs).
+    pub wall_s: f64,
+    /// Force evaluations of one run.
+    pub force_evals: u64,
+    /// The run stopped before T.
+    pub diverged: bool,
+}
+
+/// The cheapest run that reached an error target.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Cheapest {
+    /// The target, chords.
+    pub tolerance: f64,
+    /// The run's step, s.
+    pub dt: f64,
+    /// Its error, chords.
+    pub error: f64,
+    /// Its median wall time, s.
+    pub wall_s: f64,
+    /// Its force evaluations.
+    pub force_evals: u64,
+}
+
+/// Per-integrator findings of a sweep.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct Summary {
+    /// The integrator.
+    pub integrator: Integrator,
+    /// Its theoretical order.
+    pub expected_order: u32,
+    /// Least-squares slope of log error against log h over the fit points.
+    pub order: Option<f64>,
+    /// How many points the fit used.
+    pub fit_points: usize,
+    /// log₂(e(h)/e(h/2)) for consecutive fit points, largest h first.
+    pub pairwise_orders: Vec<f64>,
+    /// The largest step that reached T without diverging (after bisection).
+    pub largest_stable_dt: Option<f64>,
+    /// The smallest step that diverged (after bisection).
+    pub smallest_diverged_dt: Option<f64>,
+    /// The stable step `check` predicts (`None`: unconditionally stable;
+    /// `Some(0)`: never stable).
+    pub predicted_dt_max: Option<f64>,
+    /// The cheapest run (least wall time) reaching each of [`TOLERANCES`].
+    pub cheapest: Vec<Option<Cheapest>>,
+    /// For each of [`TOLERANCES`] that no run reached: the step and cost it
+    /// would take, extrapolated from the finest run with the fitted order.
+    pub extrapolated: Vec<Option<Extrapolation>>,
+}
+
+/// What an error target no run reached would cost, extrapolated from the
+/// finest non-diverged run (h₀, e₀, wall₀) with the fitted order p:
+/// h = h₀ (tol/e₀)^(1/p), wall = wall₀ h₀/h, evaluations likewise.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct Extrapolation {
+    /// The target, chords.
+    pub tolerance: f64,
+    /// The step it needs, s.
+    pub dt: f64,
+    /// The wall time it would take, s.
+    pub wall_s: f64,
+    /// The force evaluations it would take.
+    pub force_evals: f64,
+}
+
+/// Everything a sweep found.
+#[derive(Clone, Debug, Serialize)]
+pub struct SweepReport {
+    /// Simulated duration, s.
+    pub seconds: f64,
+    /// Timed runs per point.
+    pub runs: usize,
+    /// The length scale of the errors (the model's chord), m.
+    pub chord: f64,
+    /// Springs whose breaking was switched off for the sweep.
+    pub breaking_disabled: usize,
+    /// The reference.
+    pub reference: Reference,
+    /// The smallest error plotted, chords.
+    pub smallest_error: Option<f64>,
+    /// Whether the reference passed self-convergence validation.
+    pub reference_valid: bool,
+    /// One row per (integrator, dt) of the sweep, in sweep order.
+    pub rows: Vec<SweepRow>,
+    /// Per-integrator findings, in [`Integrator::ALL`] order.
+    pub summaries: Vec<Summary>,
+    /// Things the user must know to read the results.
+    pub warnings: Vec<String>,
+}
+
+fn median(values: &mut [f64]) -> f64 {
+    values.sort_by(f64::total_cmp);
+    let n = values.len();
+    if n == 0 {
+        return f64::NAN;
+    }
+    if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    }
+}
+
+/// One untimed warm-up run (whose end state gives the error: every run is
+/// identical, bit for bit), then `runs` timed runs; returns the warm-up run
+/// with the median wall time. The warm-up takes the cold caches and page
+/// faults that would otherwise inflate the first timing.
+fn timed(
+    model: &Model,
+    initial: &State,
+    integrator: Integrator,
+    dt: f64,
+    steps: u64,
+    runs: usize,
+) -> EndRun {
+    let first = run_steps(model, initial, integrator, dt, steps);
+    let mut walls: Vec<f64> = (0..runs)
+        .map(|_| run_steps(model, initial, integrator, dt, steps).wall_s)
+        .collect();
+    EndRun {
+        wall_s: median(&mut walls),
+        ..first
+    }
+}
+
+/// Sweeps every integrator of `settings` on `model` from `initial` (the
+/// model is used as given: call [`smooth_model`] first to switch breaking
+/// off, as [`sweep_leaf`] does).
+pub fn sweep(
+    model: &Model,
+    initial: &State,
+    settings: &SweepSettings,
+) -> Result<SweepReport, AccuracyError> {
+    settings.validate()?;
+    let seconds = settings.seconds;
+    let chord = model.chord();
+    let reference = reference(model, initial, seconds, settings.reference_j)?;
+    let est = stability::estimate(model);
+    let mut rows = Vec::new();
+    let mut summaries = Vec::new();
+    for range in &settings.ranges {
+        let integrator = range.integrator;
+        let start = rows.len();
+        for j in range.j_min..=range.j_max {
+            let dt = step_size(seconds, j);
+            let run = timed(model, initial, integrator, dt, 1 << j, settings.runs);
+            let diverged = run.error.is_some();
+            rows.push(SweepRow {
+                integrator,
+                dt,
+                error: (!diverged)
+                    .then(|| rms_difference(&run.state.position, &reference.positions, chord)),
+                wall_s: run.wall_s,
+                force_evals: run.force_evals,
+                diverged,
+            });
+        }
+        let mine = &rows[start..];
+        let (stable, diverged) = if settings.locate_limits {
+            locate_limit(model, initial, integrator, seconds, mine)
+        } else {
+            stability_bracket(mine)
+        };
+        summaries.push(Summary {
+            integrator,
+            expected_order: integrator.order(),
+            order: None,
+            fit_points: 0,
+            pairwise_orders: Vec::new(),
+            largest_stable_dt: stable,
+            smallest_diverged_dt: diverged,
+            predicted_dt_max: est.dt_max(integrator),
+            cheapest: TOLERANCES.iter().map(|&tol| cheapest(mine, tol)).collect(),
+            extrapolated: Vec::new(),
+        });
+    }
+    let smallest_error = rows
+        .iter()
+        .filter_map(|r| r.error)
+        .filter(|e| *e > 0.0)
+        .min_by(f64::total_cmp);
+    let mut warnings = Vec::new();
+    let reference_valid = match smallest_error {
+        Some(e) => reference.self_difference < REFERENCE_FACTOR * e,
+        None => true,
+    };
+    if !reference_valid {
+        warnings.push(format!(
+            "reference not converged: RK4 at h_ref = {:.3e} s and h_ref/2 differ by {:.3e} chords, \
+             more than {REFERENCE_FACTOR} × the smallest error plotted ({:.3e}); \
+             errors near that level are unreliable: use a finer reference",
+            2.0 * reference.dt,
+            reference.self_difference,
+            smallest_error.unwrap_or(f64::NAN)
+        ));
+    }
+    for s in &mut summaries {
+        let fit: Vec<(f64, f64)> = rows
+            .iter()
+            .filter(|r| r.integrator == s.integrator)
+            .filter_map(|r| r.error.map(|e| (r.dt, e)))
+            .filter(|&(_, e)| {
+                e >= FIT_FLOOR_FACTOR * reference.self_difference && e <= FIT_MAX_ERROR
+            })
+            .collect();
+        s.fit_points = fit.len();
+        s.order = (fit.len() >= 3).then(|| loglog_slope(&fit));
+        s.pairwise_orders = fit
+            .windows(2)
+            .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+            .collect();
+        let finest = rows
+            .iter()
+            .filter(|r| r.integrator == s.integrator && r.error.is_some_and(|e| e > 0.0))
+            .min_by(|a, b| a.dt.total_cmp(&b.dt));
+        s.extrapolated = TOLERANCES
+            .iter()
+            .zip(&s.cheapest)
+            .map(|(&tolerance, reached)| match (reached, s.order, finest) {
+                (None, Some(p), Some(f)) if p > 0.0 => {
+                    let e0 = f.error.unwrap_or(f64::NAN);
+                    let ratio = (e0 / tolerance).powf(1.0 / p);
+                    Some(Extrapolation {
+                        tolerance,
+                        dt: f.dt / ratio,
+                        wall_s: f.wall_s * ratio,
+                        force_evals: f.force_evals as f64 * ratio,
+                    })
+                }
+                _ => None,
+            })
+            .collect();
+        if s.order.is_none() {
+            warnings.push(format!(
+                "{}: only {} point(s) between {:.0} × the reference's self-difference and \
+                 {FIT_MAX_ERROR:.0e} chords; no order fitted",
+                s.integrator,
+                fit.len(),
+                FIT_FLOOR_FACTOR
+            ));
+        }
+    }
+    Ok(SweepReport {
+        seconds,
+        runs: settings.runs,
+        chord,
+        breaking_disabled: 0,
+        reference,
+        smallest_error,
+        reference_valid,
+        rows,
+        summaries,
+        warnings,
+    })
+}
+
+/// [`sweep`] on a copy of `model` with breaking switched off, noting it.
+pub fn sweep_leaf(
+    model: &Model,
+    initial: &State,
+    settings: &SweepSettings,
+) -> Result<SweepReport, AccuracyError> {
+    let (smooth, disabled) = smooth_model(model);
+    let mut report = sweep(&smooth, initial, settings)?;
+    report.breaking_disabled = disabled;
+    if disabled > 0 {
+        report.warnings.push(format!(
+            "spring breaking switched off for the sweep ({disabled} breakable springs): \
+             a break is an event that limits every scheme to first order"
+        ));
+    }
+    Ok(report)
+}
+
+/// Slope of the least-squares line through (ln x, ln y).
+pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mut sx, mut sy) = (0.0, 0.0);
+    for &(x, y) in points {
+        sx += x.ln();
+        sy += y.ln();
+    }
+    let (mx, my) = (sx / n, sy / n);
+    let (mut sxy, mut sxx) = (0.0, 0.0);
+    for &(x, y) in points {
+        let (dx, dy) = (x.ln() - mx, y.ln() - my);
+        sxy += dx * dy;
+        sxx += dx * dx;
+    }
+    sxy / sxx
+}
+
+/// The largest step that reached T below every diverged one, and the
+/// smallest diverged step above it, from the sweep's points alone.
+fn stability_bracket(rows: &[SweepRow]) -> (Option<f64>, Option<f64>) {
+    // Rows go from large to small h; the limit is where divergence stops.
+    let last_diverged = rows.iter().rposition(|r| r.diverged);
+    match last_diverged {
+        None => (rows.first().map(|r| r.dt), None),
+        Some(k) => (rows.get(k + 1).map(|r| r.dt), Some(rows[k].dt)),
+    }
+}
+
+/// [`stability_bracket`] refined by bisecting the step count n (h = T/n)
+/// between the stable and the diverged step.
+fn locate_limit(
+    model: &Model,
+    initial: &State,
+    integrator: Integrator,
+    seconds: f64,
+    rows: &[SweepRow],
+) -> (Option<f64>, Option<f64>) {
+    let (stable, diverged) = stability_bracket(rows);
+    let (Some(hs), Some(hd)) = (stable, diverged) else {
+        return (stable, diverged);
+    };
+    let mut n_stable = (seconds / hs).round() as u64;
+    let mut n_diverged = (seconds / hd).round() as u64;
+    while n_stable > n_diverged + 1
+        && (n_stable - n_diverged) as f64 > LIMIT_PRECISION * n_stable as f64
+    {
+        let mid = n_diverged + (n_stable - n_diverged) / 2;
+        let run = run_steps(model, initial, integrator, seconds / mid as f64, mid);
+        if run.error.is_some() {
+            n_diverged = mid;
+        } else {
+            n_stable = mid;
+        }
+    }
+    (
+        Some(seconds / n_stable as f64),
+        Some(seconds / n_diverged as f64),
+    )
+}
+
+fn cheapest(rows: &[SweepRow], tolerance: f64) -> Option<Cheapest> {
+    rows.iter()
+        .filter_map(|r| r.error.filter(|&e| e <= tolerance).map(|e| (r, e)))
+        .min_by(|a, b| a.0.wall_s.total_cmp(&b.0.wall_s))
+        .map(|(r, error)| Cheapest {
+            tolerance,
+            dt: r.dt,
+            error,
+            wall_s: r.wall_s,
+            force_evals: r.force_evals,
+        })
+}
+
+/// The header of `accuracy.csv`.
+pub const CSV_HEADER: &str = "integrator,dt,error,wall_s,force_evals,diverged";
+
+/// The rows as CSV (header [`CSV_HEADER`]); numbers in Rust's shortest
+/// round-trip form; `error` is empty for diverged rows (the run stopped
+/// before T, so there is no end state to compare).
+pub fn csv(rows: &[SweepRow]) -> String {
+    use std::fmt::Write as _;
+    let mut out = String::from(CSV_HEADER);
+    out.push('\n');
+    for r in rows {
+        let error = r.error.map_or(String::new(), |e| e.to_string());
+        let _ = writeln!(
+            out,
+            "{},{},{},{},{},{}",
+            r.integrator, r.dt, error, r.wall_s, r.force_evals, r.diverged
+        );
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn loglog_slope_recovers_a_power_law() {
+        let points: Vec<(f64, f64)> = (0..6)
+            .map(|k| {
+                let h = 0.1 / f64::from(2u32.pow(k));
+                (h, 3.0 * h.powi(4))
+            })
+            .collect();
+        assert!((loglog_slope(&points) - 4.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn median_of_odd_and_even_counts() {
+        assert_eq!(median(&mut [3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(&mut [4.0, 1.0, 2.0, 3.0]), 2.5);
+    }
+
+    fn row(dt: f64, diverged: bool) -> SweepRow {
+        SweepRow {
+            integrator: Integrator::Verlet,
+            dt,
+            error: (!diverged).then_some(dt),
+            wall_s: 1.0 / dt,
+            force_evals: 1,
+            diverged,
+        }
+    }
+
+    #[test]
+    fn the_bracket_is_where_divergence_stops() {
+        let rows = [
+            row(4.0, true),
+            row(2.0, true),
+            row(1.0, false),
+            row(0.5, false),
+        ];
+        assert_eq!(stability_bracket(&rows), (Some(1.0), Some(2.0)));
+        assert_eq!(stability_bracket(&rows[2..]), (Some(1.0), None));
+        assert_eq!(stability_bracket(&rows[..2]), (None, Some(2.0)));
+    }
+
+    #[test]
+    fn cheapest_takes_the_least_wall_time_within_tolerance() {
+        let rows = [
+            row(4.0, true),
+            row(1e-2, false),
+            row(1e-3, false),
+            row(1e-4, false),
+        ];
+        let c = cheapest(&rows, 2e-3).unwrap();
+        assert_eq!(c.dt, 1e-3);
+        assert!(cheapest(&rows, 1e-5).is_none());
+    }
+
+    #[test]
+    fn csv_leaves_the_error_of_diverged_rows_empty() {
+        let text = csv(&[row(4.0, true), row(0.5, false)]);
+        let lines: Vec<&str> = text.lines().collect();
+        assert_eq!(lines[0], CSV_HEADER);
+        assert_eq!(lines[1], "verlet,4,,0.25,1,true");
+        assert_eq!(lines[2], "verlet,0.5,0.5,2,1,false");
+    }
+}

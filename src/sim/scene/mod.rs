@@ -1,0 +1,1108 @@
+//! Scenes (the paper's section 4): leaves, rigid objects, sheets, fixed
+//! particles and ropes in one wind field over an optional ground, read from a
+//! TOML file (`scenes/README.md` documents every field) and compiled into one
+//! [`Model`].
+//!
+//! The compiler keeps only what the scene uses. Items that can never act are
+//! left out of the model (wind primitives of zero strength, surfaces with zero
+//! aerodynamic coefficients, springs and hinges inside a rigid body, whose
+//! forces cancel in its net force and torque); then [`Terms::needed`] drops
+//! every force term and pass the model gives nothing to do (no wind
+//! evaluation in still air, no contact pass without ground, no breaking
+//! checks without breakable springs, no rigid-body pass without rigid
+//! bodies). [`Scene::explain`] lists both.
+//!
+//! Errors name the file, the line and the field (`scene.toml:12: leaf[0].count: ...`).
+
+mod locate;
+mod run;
+mod shapes;
+mod spec;
+
+pub use run::{RunError, RunStats, SceneRun};
+pub use spec::{
+    DtSpec, FixedPoint, LeafObject, Pin, RigidObject, RopeObject, SceneSpec, Shape, SheetObject,
+};
+
+use crate::leaf::LeafSpec;
+use crate::physics::field::{
+    Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
+};
+use crate::physics::model::RigidGroup;
+use crate::physics::model::{AeroLaw, Model, ModelError, ModelParts, Spring, Triangle};
+use crate::physics::params::Integrator;
+use crate::physics::params::TimeStep;
+use crate::physics::state::State;
+use crate::physics::terms::{Decision, Terms};
+use nalgebra::{Unit, UnitQuaternion, Vector3};
+use shapes::Part;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+type V3 = Vector3<f64>;
+
+/// A scene file that could not be read, parsed or compiled.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}{}: {}: {}", .file, .line.map_or(String::new(), |l| format!(":{l}")), .field, .message)]
+pub struct SceneError {
+    /// The scene file.
+    pub file: String,
+    /// 1-based line of the field, when known.
+    pub line: Option<usize>,
+    /// The field, as a path in the file (`rope[1].stiffness`).
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// What an object is, which decides what is written for it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ObjectKind {
+    /// A leaf (pose, plus particles unless rigid).
+    Leaf,
+    /// A rigid shape (pose).
+    Rigid,
+    /// A flexible sheet (particles).
+    Sheet,
+    /// A rope (particles, ends included).
+    Rope,
+    /// A fixed particle (nothing).
+    Fixed,
+}
+
+impl ObjectKind {
+    /// The name used in summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            ObjectKind::Leaf => "leaf",
+            ObjectKind::Rigid => "rigid",
+            ObjectKind::Sheet => "sheet",
+            ObjectKind::Rope => "rope",
+            ObjectKind::Fixed => "fixed",
+        }
+    }
+}
+
+/// The object's own rest shape, for pose extraction (body frame = the
+/// object's local frame).
+#[derive(Clone, Debug)]
+pub struct PoseFrame {
+    /// The object alone, in its local frame.
+    pub model: Model,
+    /// Its initial rotation (local → world).
+    pub initial: UnitQuaternion<f64>,
+}
+
+/// One object of a compiled scene.
+#[derive(Clone, Debug)]
+pub struct SceneObject {
+    /// Unique name (copies of a leaf object are `name-000`, ...).
+    pub name: String,
+    /// What it is.
+    pub kind: ObjectKind,
+    /// Its particles in the scene model (a rope's list includes its ends).
+    pub particles: Vec<usize>,
+    /// Pose reference for leaves and rigid objects.
+    pub pose: Option<PoseFrame>,
+    /// Index of its rigid body in the model, if rigid.
+    pub rigid_body: Option<usize>,
+    /// Its surface triangles for display and export, as indices into
+    /// `particles`. Kept apart from the model's triangles because the
+    /// compiler drops surfaces that feel no wind (a rigid bin with zero
+    /// aerodynamic coefficients still has to be drawn).
+    pub surface: Vec<[usize; 3]>,
+}
+
+impl SceneObject {
+    /// Whether per-frame particle positions are written for it.
+    pub fn writes_particles(&self) -> bool {
+        match self.kind {
+            ObjectKind::Leaf => self.rigid_body.is_none(),
+            ObjectKind::Sheet | ObjectKind::Rope => true,
+            ObjectKind::Rigid | ObjectKind::Fixed => false,
+        }
+    }
+}
+
+/// A compiled scene: one model holding every object, the initial state and
+/// the run settings.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Scene name.
+    pub name: String,
+    /// Free text from the file.
+    pub description: String,
+    /// The file it came from.
+    pub source: String,
+    /// All objects' particles, springs, triangles, hinges, rigid bodies,
+    /// ground and wind: only what the scene uses.
+    pub model: Model,
+    /// Positions and velocities at t = 0.
+    pub initial: State,
+    /// The objects, in file order.
+    pub objects: Vec<SceneObject>,
+    /// Time integrator.
+    pub integrator: Integrator,
+    /// Time step setting.
+    pub dt: TimeStep,
+    /// Simulated duration, s.
+    pub duration: f64,
+    /// Output frames per simulated second.
+    pub frame_rate: f64,
+    /// Items the compiler left out of the model, with the reason.
+    pub pruned: Vec<String>,
+}
+
+impl Scene {
+    /// Reads and compiles a scene file; leaf paths are relative to its
+    /// directory.
+    pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        let file = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
+            file: file.clone(),
+            line: None,
+            field: "file".to_string(),
+            message: format!("cannot read: {e}"),
+        })?;
+        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Scene::from_toml(&text, &file, &base)
+    }
+
+    /// Parses and compiles scene text; `file` names it in errors and leaf
+    /// paths are relative to `base`.
+    pub fn from_toml(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        let spec: SceneSpec = toml::from_str(text).map_err(|e| {
+            let (mut line, mut field) = match e.span() {
+                Some(span) => (
+                    Some(locate::line_of_offset(text, span.start)),
+                    locate::path_at(text, span.start).unwrap_or_else(|| "(document)".into()),
+                ),
+                None => (None, "(document)".to_string()),
+            };
+            // Errors raised for a whole table (a key that does not apply to
+            // its kind) name the key in backticks: point at that key.
+            if let Some(key) = e.message().split('`').nth(1) {
+                let path = format!("{field}.{key}");
+                if let Some(l) = locate::line_of_present(text, &path) {
+                    (line, field) = (Some(l), path);
+                }
+            }
+            SceneError {
+                file: file.to_string(),
+                line,
+                field,
+                message: e.message().trim_end().to_string(),
+            }
+        })?;
+        compile(&spec, &Ctx { text, file, base })
+    }
+
+    /// Compiles an already parsed scene (for programs that build or edit
+    /// one); errors name the field but no line.
+    pub fn from_spec(spec: &SceneSpec, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        compile(
+            spec,
+            &Ctx {
+                text: "",
+                file,
+                base,
+            },
+        )
+    }
+
+    /// The terms and passes the compiled model needs.
+    pub fn terms(&self) -> Terms {
+        Terms::needed(&self.model)
+    }
+
+    /// What was kept and what was left out, and why.
+    pub fn explain(&self) -> Vec<Decision> {
+        self.terms().explain(&self.model, self.integrator)
+    }
+
+    /// The object called `name`.
+    pub fn object(&self, name: &str) -> Option<&SceneObject> {
+        self.objects.iter().find(|o| o.name == name)
+    }
+}
+
+/// Where errors are reported.
+struct Ctx<'a> {
+    text: &'a str,
+    file: &'a str,
+    base: &'a Path,
+}
+
+impl Ctx<'_> {
+    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        let field = field.into();
+        SceneError {
+            file: self.file.to_string(),
+            line: locate::line_of_path(self.text, &field),
+            field,
+            message: message.into(),
+        }
+    }
+
+    fn finite(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number, got {v}")))
+        }
+    }
+
+    fn positive(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number > 0, got {v}")))
+        }
+    }
+
+    fn non_negative(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number ≥ 0, got {v}")))
+        }
+    }
+
+    fn vector(&self, field: &str, v: &[f64]) -> Result<(), SceneError> {
+        match v.iter().find(|c| !c.is_finite()) {
+            Some(c) => Err(self.err(field, format!("must be finite, got {c}"))),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Rotation about x, then y, then z (fixed axes), from degrees.
+fn rotation_xyz(deg: [f64; 3]) -> UnitQuaternion<f64> {
+    let [x, y, z] = deg.map(f64::to_radians);
+    UnitQuaternion::from_axis_angle(&V3::z_axis(), z)
+        * UnitQuaternion::from_axis_angle(&V3::y_axis(), y)
+        * UnitQuaternion::from_axis_angle(&V3::x_axis(), x)
+}
+
+/// SplitMix64: a tiny, fully specified generator, so that copies are placed
+/// identically whatever version of any random-number crate is in use.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    /// Uniform in [0, 1).
+    fn unit(&mut self) -> f64 {
+        (self.next_u64() >> 11) as f64 * (1.0 / (1u64 << 53) as f64)
+    }
+    /// Uniform in [−1, 1).
+    fn signed(&mut self) -> f64 {
+        2.0 * self.unit() - 1.0
+    }
+}
+
+/// Whether a wind primitive can never contribute (zero strength or all keys 0).
+fn inert(p: &crate::physics::field::Primitive) -> Option<&'static str> {
+    if p.keys().is_some_and(|k| k.max_abs() == 0.0) {
+        return Some("all strength keys are 0");
+    }
+    let zero = match p.flow() {
+        Flow::Uniform(Uniform { velocity }) => *velocity == V3::zeros(),
+        Flow::PointSource(PointSource { flux, .. })
+        | Flow::PointSink(PointSink { flux, .. })
+        | Flow::LineSource(LineSource { flux, .. })
+        | Flow::LineSink(LineSink { flux, .. }) => *flux == 0.0,
+        Flow::LineVortex(LineVortex { circulation, .. }) => *circulation == 0.0,
+    };
+    zero.then_some("zero strength")
+}
+
+/// Accumulates objects into one set of model parts.
+#[derive(Default)]
+struct Builder {
+    parts: ModelParts,
+    velocity: Vec<V3>,
+    /// Scene path of the object that made each particle, spring, triangle, hinge.
+    particle_owner: Vec<String>,
+    spring_owner: Vec<String>,
+    triangle_owner: Vec<String>,
+    hinge_owner: Vec<String>,
+    rigid_owner: Vec<String>,
+    objects: Vec<SceneObject>,
+    pruned: Vec<String>,
+    /// The first leaf that set the scene's aerodynamic law: a model has one
+    /// law, so every leaf must share it.
+    aero_from: Option<String>,
+}
+
+impl Builder {
+    /// Appends `part` moved to world = translation + rotation · (local −
+    /// pivot), with the rigid velocity field v + ω × (x − c) about the placed
+    /// centre of mass c. Fixed particles get no velocity. Returns the new
+    /// particle indices.
+    #[allow(clippy::too_many_arguments)]
+    fn add_part(
+        &mut self,
+        owner: &str,
+        part: &Part,
+        drag: &[f64],
+        alpha: (f64, f64),
+        pivot: V3,
+        rotation: UnitQuaternion<f64>,
+        translation: V3,
+        velocity: V3,
+        omega: V3,
+    ) -> Vec<usize> {
+        let start = self.parts.mass.len();
+        let world: Vec<V3> = part
+            .position
+            .iter()
+            .map(|x| translation + rotation * (x - pivot))
+            .collect();
+        let total: f64 = part.mass.iter().sum();
+        let com = world
+            .iter()
+            .zip(&part.mass)
+            .fold(V3::zeros(), |s, (x, m)| s + x * *m)
+            / total;
+        for (k, x) in world.iter().enumerate() {
+            self.parts.mass.push(part.mass[k]);
+            self.parts.fixed.push(part.fixed[k]);
+            self.parts
+                .particle_drag
+                .push(drag.get(k).copied().unwrap_or(0.0));
+            self.parts.rest_position.push(*x);
+            self.velocity.push(if part.fixed[k] {
+                V3::zeros()
+            } else {
+                velocity + omega.cross(&(x - com))
+            });
+            self.particle_owner.push(owner.to_string());
+        }
+        for s in &part.springs {
+            let [i, j] = s.ends;
+            self.parts.springs.push(Spring {
+                i: start + i,
+                j: start + j,
+                rest_length: (part.position[i] - part.position[j]).norm(),
+                stiffness: s.stiffness,
+                damping: s.damping,
+                break_strain: s.break_strain,
+            });
+            self.spring_owner.push(owner.to_string());
+        }
+        let (alpha_n, alpha_t) = alpha;
+        if alpha_n != 0.0 || alpha_t != 0.0 {
+            for t in &part.triangles {
+                self.parts.triangles.push(Triangle {
+                    corners: t.map(|c| start + c),
+                    alpha_n,
+                    alpha_t,
+                });
+                self.triangle_owner.push(owner.to_string());
+            }
+        }
+        (start..start + part.mass.len()).collect()
+    }
+
+    fn push_object(
+        &mut self,
+        name: String,
+        kind: ObjectKind,
+        particles: Vec<usize>,
+        pose: Option<PoseFrame>,
+        rigid: bool,
+        owner: &str,
+    ) {
+        let rigid_body = rigid.then(|| {
+            self.parts.rigid.push(RigidGroup {
+                members: particles.clone(),
+            });
+            self.rigid_owner.push(owner.to_string());
+            self.parts.rigid.len() - 1
+        });
+        self.objects.push(SceneObject {
+            name,
+            kind,
+            particles,
+            pose,
+            rigid_body,
+            surface: Vec::new(),
+        });
+    }
+
+    /// Sets the display surface of the object pushed last (local indices).
+    fn set_surface(&mut self, triangles: Vec<[usize; 3]>) {
+        if let Some(o) = self.objects.last_mut() {
+            o.surface = triangles;
+        }
+    }
+
+    /// The scene path of a model item named by [`ModelError`].
+    fn owner_of(&self, item: &str) -> Option<String> {
+        let index = |prefix: &str| -> Option<usize> {
+            item.strip_prefix(prefix)?.split(']').next()?.parse().ok()
+        };
+        let lists: [(&str, &Vec<String>); 5] = [
+            ("particle[", &self.particle_owner),
+            ("spring[", &self.spring_owner),
+            ("triangle[", &self.triangle_owner),
+            ("hinge[", &self.hinge_owner),
+            ("rigid[", &self.rigid_owner),
+        ];
+        lists
+            .iter()
+            .find_map(|(prefix, owners)| index(prefix).and_then(|i| owners.get(i).cloned()))
+    }
+}
+
+fn check_name(
+    ctx: &Ctx<'_>,
+    field: &str,
+    name: &str,
+    seen: &mut HashMap<String, String>,
+) -> Result<(), SceneError> {
+    if name.is_empty() || name.contains(['/', '\\', ':']) || name.starts_with('.') {
+        return Err(ctx.err(
+            field,
+            format!("'{name}' is not a usable name (empty, or contains '/', '\\\\', ':' or starts with '.')"),
+        ));
+    }
+    if let Some(other) = seen.insert(name.to_string(), field.to_string()) {
+        return Err(ctx.err(field, format!("name '{name}' is already used by {other}")));
+    }
+    Ok(())
+}
+
+fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
+    // The scene's name becomes a directory name.
+    check_name(ctx, "name", &spec.name, &mut HashMap::new())?;
+    ctx.positive("duration", spec.duration)?;
+    ctx.positive("frame_rate", spec.frame_rate)?;
+    crate::physics::run::check_frames(spec.duration, spec.frame_rate)
+        .map_err(|e| ctx.err("frame_rate", e.to_string()))?;
+    if let DtSpec::Seconds(h) = spec.dt {
+        ctx.positive("dt", h)?;
+        // The step as written (the run snaps it to divide the frame, which
+        // at most doubles the count; far below the limit it changes nothing).
+        crate::physics::run::check_steps(spec.duration, h, spec.integrator)
+            .map_err(|e| ctx.err("dt", e.to_string()))?;
+    }
+    ctx.vector("gravity", &spec.gravity)?;
+    if let Some(ground) = &spec.ground {
+        ground
+            .validate()
+            .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
+    }
+    spec.wind
+        .validate()
+        .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
+
+    let mut b = Builder::default();
+    let mut names: HashMap<String, String> = HashMap::new();
+    let mut primitives = Vec::new();
+    for (i, p) in spec.wind.primitives().iter().enumerate() {
+        match inert(p) {
+            Some(why) => b.pruned.push(format!("wind[{i}]: {why}")),
+            None => primitives.push(p.clone()),
+        }
+    }
+    let mut rng = SplitMix(spec.seed);
+
+    for (k, obj) in spec.leaves.iter().enumerate() {
+        add_leaf(ctx, &mut b, &mut names, &mut rng, k, obj)?;
+    }
+    for (k, obj) in spec.rigid.iter().enumerate() {
+        add_rigid(ctx, &mut b, &mut names, k, obj)?;
+    }
+    for (k, obj) in spec.sheets.iter().enumerate() {
+        add_sheet(ctx, &mut b, &mut names, k, obj)?;
+    }
+    for (k, obj) in spec.fixed.iter().enumerate() {
+        let path = format!("fixed[{k}]");
+        check_name(ctx, &format!("{path}.name"), &obj.name, &mut names)?;
+        ctx.vector(&format!("{path}.position"), &obj.position)?;
+        let part = Part {
+            mass: vec![1.0],
+            position: vec![V3::zeros()],
+            fixed: vec![true],
+            ..Default::default()
+        };
+        let ids = b.add_part(
+            &path,
+            &part,
+            &[],
+            (0.0, 0.0),
+            V3::zeros(),
+            UnitQuaternion::identity(),
+            V3::from(obj.position),
+            V3::zeros(),
+            V3::zeros(),
+        );
+        b.push_object(obj.name.clone(), ObjectKind::Fixed, ids, None, false, &path);
+    }
+    for (k, obj) in spec.ropes.iter().enumerate() {
+        add_rope(ctx, &mut b, &mut names, k, obj)?;
+    }
+    if b.parts.mass.is_empty() {
+        return Err(ctx.err("(document)", "the scene has no objects"));
+    }
+
+    if let (AeroLaw::Quadratic(_), Some(first)) = (&b.parts.aero, &b.aero_from) {
+        // Rigid bodies and sheets carry linear-law coefficients; under the
+        // quadratic law they would be silently ignored, so say so instead.
+        if let Some(t) = b
+            .parts
+            .triangles
+            .iter()
+            .position(|t| t.alpha_n != 0.0 || t.alpha_t != 0.0)
+        {
+            return Err(ctx.err(
+                b.triangle_owner[t].clone(),
+                format!(
+                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the quadratic law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)"
+                ),
+            ));
+        }
+    }
+    b.parts.gravity = V3::from(spec.gravity);
+    b.parts.wind = WindField::new(primitives);
+    b.parts.ground = spec.ground;
+    let velocity = std::mem::take(&mut b.velocity);
+    let model = Model::new(std::mem::take(&mut b.parts)).map_err(|e: ModelError| {
+        let owner = b
+            .owner_of(&e.item)
+            .unwrap_or_else(|| "(document)".to_string());
+        ctx.err(owner, format!("{} (model item {})", e.reason, e.item))
+    })?;
+    let mut initial = State::at_rest(&model);
+    initial.velocity = velocity;
+    let dt = match spec.dt {
+        DtSpec::Auto => TimeStep::Auto,
+        DtSpec::Seconds(h) => TimeStep::Fixed(h),
+    };
+    if dt == TimeStep::Auto {
+        // dt = auto on a model too stiff or light for the integrator: the
+        // error names the object of the stiffest spring (else `dt`).
+        crate::physics::run::resolve_dt(&model, spec.integrator, dt, 1.0 / spec.frame_rate)
+            .and_then(|h| crate::physics::run::check_steps(spec.duration, h, spec.integrator))
+            .map_err(|e| {
+                let stiffest = crate::physics::stability::estimate(&model)
+                    .stiffest_spring
+                    .and_then(|k| b.owner_of(&format!("spring[{k}]")))
+                    .unwrap_or_else(|| "dt".to_string());
+                ctx.err(stiffest, format!("dt = auto: {e}"))
+            })?;
+    }
+    Ok(Scene {
+        name: spec.name.clone(),
+        description: spec.description.clone(),
+        source: ctx.file.to_string(),
+        model,
+        initial,
+        objects: b.objects,
+        integrator: spec.integrator,
+        dt,
+        duration: spec.duration,
+        frame_rate: spec.frame_rate,
+        pruned: b.pruned,
+    })
+}
+
+fn add_leaf(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    names: &mut HashMap<String, String>,
+    rng: &mut SplitMix,
+    k: usize,
+    obj: &LeafObject,
+) -> Result<(), SceneError> {
+    let path = format!("leaf[{k}]");
+    let field = |f: &str| format!("{path}.{f}");
+    ctx.vector(&field("position"), &obj.position)?;
+    ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
+    ctx.vector(&field("velocity"), &obj.velocity)?;
+    ctx.vector(&field("angular_velocity"), &obj.angular_velocity)?;
+    ctx.vector(&field("spread"), &obj.spread)?;
+    if obj.spread.iter().any(|&s| s < 0.0) {
+        return Err(ctx.err(field("spread"), "must be ≥ 0 along every axis"));
+    }
+    ctx.non_negative(&field("tilt_deg"), obj.tilt_deg)?;
+    if obj.count == 0 {
+        return Err(ctx.err(field("count"), "must be ≥ 1"));
+    }
+    let spec = match obj.leaf.as_str() {
+        "a" | "b" => LeafSpec::load(&obj.leaf),
+        p => LeafSpec::read(&ctx.base.join(p)),
+    }
+    .map_err(|e| {
+        ctx.err(
+            field("leaf"),
+            format!("cannot use leaf '{}': {e}", obj.leaf),
+        )
+    })?;
+    if !spec.wind.is_still() {
+        return Err(ctx.err(
+            field("leaf"),
+            format!(
+                "leaf '{}' carries its own wind; in a scene the wind is the scene's [[wind]]",
+                obj.leaf
+            ),
+        ));
+    }
+    let leaf = spec
+        .model()
+        .map_err(|e| ctx.err(field("leaf"), format!("invalid leaf '{}': {e}", obj.leaf)))?;
+    match &b.aero_from {
+        None => {
+            b.aero_from = Some(path.clone());
+            b.parts.aero = leaf.aero;
+        }
+        Some(first) if b.parts.aero != leaf.aero => {
+            return Err(ctx.err(
+                field("leaf"),
+                format!(
+                    "leaf '{}' uses the {} aerodynamic law but {first} uses the {}; a scene has one law for all its leaves",
+                    obj.leaf,
+                    law_name(&leaf.aero),
+                    law_name(&b.parts.aero)
+                ),
+            ));
+        }
+        Some(_) => {}
+    }
+    let com = leaf.centre_of_mass(&leaf.rest_position);
+    let part = Part {
+        mass: leaf.mass.clone(),
+        position: leaf.rest_position.clone(),
+        fixed: leaf.fixed.clone(),
+        ..Default::default()
+    };
+    if leaf.fixed.iter().any(|&f| f) && obj.rigid {
+        return Err(ctx.err(
+            field("rigid"),
+            "a leaf with fixed particles cannot be rigid",
+        ));
+    }
+    let base = rotation_xyz(obj.rotation_deg);
+    for copy in 0..obj.count {
+        let name = if obj.count == 1 {
+            obj.name.clone()
+        } else {
+            format!("{}-{copy:03}", obj.name)
+        };
+        check_name(ctx, &field("name"), &name, names)?;
+        let offset = V3::new(
+            obj.spread[0] * rng.signed(),
+            obj.spread[1] * rng.signed(),
+            obj.spread[2] * rng.signed(),
+        );
+        let tilt_axis = rng.unit() * std::f64::consts::TAU;
+        let tilt = obj.tilt_deg.to_radians() * rng.unit();
+        let yaw = if obj.random_yaw {
+            rng.unit() * std::f64::consts::TAU
+        } else {
+            0.0
+        };
+        let axis = Unit::new_normalize(V3::new(tilt_axis.cos(), tilt_axis.sin(), 0.0));
+        let rotation = UnitQuaternion::from_axis_angle(&V3::z_axis(), yaw)
+            * UnitQuaternion::from_axis_angle(&axis, tilt)
+            * base;
+        let start = b.parts.mass.len();
+        let ids = b.add_part(
+            &path,
+            &part,
+            &leaf.particle_drag,
+            (0.0, 0.0),
+            com,
+            rotation,
+            V3::from(obj.position) + offset,
+            V3::from(obj.velocity),
+            V3::from(obj.angular_velocity),
+        );
+        // Triangles keep their own coefficients; springs and hinges keep
+        // their rest lengths and angles (both unchanged by a rigid motion).
+        for t in &leaf.triangles {
+            b.parts.triangles.push(Triangle {
+                corners: t.corners.map(|c| start + c),
+                ..*t
+            });
+            b.triangle_owner.push(path.clone());
+        }
+        if obj.rigid {
+            if copy == 0 && (!leaf.springs.is_empty() || !leaf.hinges.is_empty()) {
+                b.pruned.push(format!(
+                    "{path} ({}): {} springs and {} hinges per copy inside a rigid body (internal forces cancel)",
+                    obj.name,
+                    leaf.springs.len(),
+                    leaf.hinges.len()
+                ));
+            }
+        } else {
+            for s in &leaf.springs {
+                b.parts.springs.push(Spring {
+                    i: start + s.i,
+                    j: start + s.j,
+                    ..*s
+                });
+                b.spring_owner.push(path.clone());
+            }
+            for h in &leaf.hinges {
+                let mut h = *h;
+                h.edge = h.edge.map(|c| start + c);
+                h.apexes = h.apexes.map(|c| start + c);
+                b.parts.hinges.push(h);
+                b.hinge_owner.push(path.clone());
+            }
+        }
+        let pose = PoseFrame {
+            model: leaf.clone(),
+            initial: rotation,
+        };
+        b.push_object(name, ObjectKind::Leaf, ids, Some(pose), obj.rigid, &path);
+        b.set_surface(leaf.triangles.iter().map(|t| t.corners).collect());
+    }
+    Ok(())
+}
+
+fn add_rigid(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    names: &mut HashMap<String, String>,
+    k: usize,
+    obj: &RigidObject,
+) -> Result<(), SceneError> {
+    let path = format!("rigid[{k}]");
+    let field = |f: &str| format!("{path}.{f}");
+    check_name(ctx, &field("name"), &obj.name, names)?;
+    ctx.positive(&field("mass"), obj.mass)?;
+    ctx.non_negative(&field("alpha_n"), obj.alpha_n)?;
+    ctx.non_negative(&field("alpha_t"), obj.alpha_t)?;
+    ctx.vector(&field("position"), &obj.position)?;
+    ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
+    ctx.vector(&field("velocity"), &obj.velocity)?;
+    ctx.vector(&field("angular_velocity"), &obj.angular_velocity)?;
+    let present = [
+        ("size", obj.size.is_some()),
+        ("radius", obj.radius.is_some()),
+        ("height", obj.height.is_some()),
+        ("segments", obj.segments.is_some()),
+        ("rings", obj.rings.is_some()),
+        ("base_mass", obj.base_mass.is_some()),
+    ];
+    let allowed: &[&str] = match obj.shape {
+        Shape::Box => &["size"],
+        Shape::Cylinder => &["radius", "height", "segments", "rings", "base_mass"],
+    };
+    if let Some((key, _)) = present
+        .iter()
+        .find(|(key, here)| *here && !allowed.contains(key))
+    {
+        return Err(ctx.err(
+            field(key),
+            format!("does not apply to shape \"{}\"", shape_name(obj.shape)),
+        ));
+    }
+    let required = |key: &str, v: Option<f64>| {
+        v.ok_or_else(|| {
+            ctx.err(
+                field(key),
+                format!("shape \"{}\" requires `{key}`", shape_name(obj.shape)),
+            )
+        })
+    };
+    let part = match obj.shape {
+        Shape::Box => {
+            let size = obj
+                .size
+                .ok_or_else(|| ctx.err(field("size"), "shape \"box\" requires `size`"))?;
+            for (axis, &s) in size.iter().enumerate() {
+                ctx.positive(&format!("{}[{axis}]", field("size")), s)?;
+            }
+            shapes::cuboid(V3::from(size), obj.mass)
+        }
+        Shape::Cylinder => {
+            let radius = required("radius", obj.radius)?;
+            let height = required("height", obj.height)?;
+            ctx.positive(&field("radius"), radius)?;
+            ctx.positive(&field("height"), height)?;
+            let segments = obj.segments.unwrap_or(16);
+            let rings = obj.rings.unwrap_or(2);
+            if segments < 3 {
+                return Err(ctx.err(field("segments"), format!("must be ≥ 3, got {segments}")));
+            }
+            if rings < 2 {
+                return Err(ctx.err(field("rings"), format!("must be ≥ 2, got {rings}")));
+            }
+            let wall_each = obj.mass / (segments * rings) as f64;
+            let base = match obj.base_mass {
+                Some(m) => {
+                    ctx.positive(&field("base_mass"), m)?;
+                    m
+                }
+                None => wall_each,
+            };
+            shapes::bin(radius, height, segments, rings, obj.mass, base)
+        }
+    };
+    if obj.alpha_n == 0.0 && obj.alpha_t == 0.0 {
+        b.pruned.push(format!(
+            "{path} ({}): {} surface triangles with αⁿ = αᵗ = 0",
+            obj.name,
+            part.triangles.len()
+        ));
+    }
+    let rotation = rotation_xyz(obj.rotation_deg);
+    let ids = b.add_part(
+        &path,
+        &part,
+        &[],
+        (obj.alpha_n, obj.alpha_t),
+        V3::zeros(),
+        rotation,
+        V3::from(obj.position),
+        V3::from(obj.velocity),
+        V3::from(obj.angular_velocity),
+    );
+    let local = Model::new(ModelParts {
+        mass: part.mass.clone(),
+        fixed: part.fixed.clone(),
+        rest_position: part.position.clone(),
+        ..Default::default()
+    })
+    .map_err(|e| ctx.err(path.clone(), e.to_string()))?;
+    let pose = PoseFrame {
+        model: local,
+        initial: rotation,
+    };
+    b.push_object(
+        obj.name.clone(),
+        ObjectKind::Rigid,
+        ids,
+        Some(pose),
+        true,
+        &path,
+    );
+    b.set_surface(part.triangles.clone());
+    Ok(())
+}
+
+fn shape_name(s: Shape) -> &'static str {
+    match s {
+        Shape::Box => "box",
+        Shape::Cylinder => "cylinder",
+    }
+}
+
+fn add_sheet(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    names: &mut HashMap<String, String>,
+    k: usize,
+    obj: &SheetObject,
+) -> Result<(), SceneError> {
+    let path = format!("sheet[{k}]");
+    let field = |f: &str| format!("{path}.{f}");
+    check_name(ctx, &field("name"), &obj.name, names)?;
+    for (axis, &s) in obj.size.iter().enumerate() {
+        ctx.positive(&format!("{}[{axis}]", field("size")), s)?;
+    }
+    for (axis, &c) in obj.cells.iter().enumerate() {
+        if c == 0 {
+            return Err(ctx.err(format!("{}[{axis}]", field("cells")), "must be ≥ 1"));
+        }
+    }
+    ctx.positive(&field("mass"), obj.mass)?;
+    ctx.positive(&field("stiffness"), obj.stiffness)?;
+    let shear = obj.shear_stiffness.unwrap_or(obj.stiffness);
+    ctx.non_negative(&field("shear_stiffness"), shear)?;
+    ctx.non_negative(&field("damping"), obj.damping)?;
+    if let Some(e) = obj.break_strain {
+        ctx.positive(&field("break_strain"), e)?;
+    }
+    ctx.non_negative(&field("alpha_n"), obj.alpha_n)?;
+    ctx.non_negative(&field("alpha_t"), obj.alpha_t)?;
+    ctx.vector(&field("position"), &obj.position)?;
+    ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
+    ctx.vector(&field("velocity"), &obj.velocity)?;
+    let [nx, ny] = obj.cells;
+    let mut part = shapes::sheet(
+        obj.size[0],
+        obj.size[1],
+        nx,
+        ny,
+        obj.mass,
+        obj.stiffness,
+        shear,
+        obj.damping,
+        obj.break_strain,
+    );
+    let top = ny * (nx + 1);
+    match obj.pin {
+        Pin::None => {}
+        Pin::TopEdge => part.fixed[top..].iter_mut().for_each(|f| *f = true),
+        Pin::TopCorners => {
+            part.fixed[top] = true;
+            part.fixed[top + nx] = true;
+        }
+        Pin::Corners => {
+            for i in [0, nx, top, top + nx] {
+                part.fixed[i] = true;
+            }
+        }
+        Pin::Border => {
+            for j in 0..=ny {
+                for i in 0..=nx {
+                    if i == 0 || j == 0 || i == nx || j == ny {
+                        part.fixed[j * (nx + 1) + i] = true;
+                    }
+                }
+            }
+        }
+    }
+    let ids = b.add_part(
+        &path,
+        &part,
+        &[],
+        (obj.alpha_n, obj.alpha_t),
+        V3::zeros(),
+        rotation_xyz(obj.rotation_deg),
+        V3::from(obj.position),
+        V3::from(obj.velocity),
+        V3::zeros(),
+    );
+    b.push_object(obj.name.clone(), ObjectKind::Sheet, ids, None, false, &path);
+    b.set_surface(part.triangles.clone());
+    Ok(())
+}
+
+/// Resolves a rope end: a fixed point's (or one-particle object's) name, or
+/// `OBJECT:K` for particle K of an object.
+fn rope_end(ctx: &Ctx<'_>, b: &Builder, field: &str, end: &str) -> Result<usize, SceneError> {
+    let (name, index) = match end.rsplit_once(':') {
+        Some((name, k)) => {
+            let k: usize = k.trim().parse().map_err(|_| {
+                ctx.err(
+                    field,
+                    format!("'{end}': the particle after ':' must be a whole number"),
+                )
+            })?;
+            (name, Some(k))
+        }
+        None => (end, None),
+    };
+    let Some(obj) = b.objects.iter().find(|o| o.name == name) else {
+        return Err(ctx.err(
+            field,
+            format!(
+                "no object named '{name}' (ropes come last; name a [[fixed]] point or OBJECT:K)"
+            ),
+        ));
+    };
+    match (index, obj.particles.len()) {
+        (Some(k), n) if k < n => Ok(obj.particles[k]),
+        (Some(k), n) => Err(ctx.err(
+            field,
+            format!("object '{name}' has {n} particles; {k} is out of range"),
+        )),
+        (None, 1) => Ok(obj.particles[0]),
+        (None, n) => Err(ctx.err(
+            field,
+            format!("object '{name}' has {n} particles; say which with '{name}:K'"),
+        )),
+    }
+}
+
+fn add_rope(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    names: &mut HashMap<String, String>,
+    k: usize,
+    obj: &RopeObject,
+) -> Result<(), SceneError> {
+    let path = format!("rope[{k}]");
+    let field = |f: &str| format!("{path}.{f}");
+    check_name(ctx, &field("name"), &obj.name, names)?;
+    if obj.segments < 2 {
+        return Err(ctx.err(
+            field("segments"),
+            format!("must be ≥ 2, got {}", obj.segments),
+        ));
+    }
+    ctx.positive(&field("mass"), obj.mass)?;
+    ctx.positive(&field("stiffness"), obj.stiffness)?;
+    ctx.non_negative(&field("damping"), obj.damping)?;
+    ctx.non_negative(&field("drag"), obj.drag)?;
+    ctx.finite(&field("slack"), obj.slack)?;
+    if obj.slack <= -1.0 {
+        return Err(ctx.err(field("slack"), format!("must be > −1, got {}", obj.slack)));
+    }
+    if let Some(e) = obj.break_strain {
+        ctx.positive(&field("break_strain"), e)?;
+    }
+    let a = rope_end(ctx, b, &field("from"), &obj.from)?;
+    let z = rope_end(ctx, b, &field("to"), &obj.to)?;
+    if a == z {
+        return Err(ctx.err(field("to"), "both ends are the same particle"));
+    }
+    let (xa, xz) = (b.parts.rest_position[a], b.parts.rest_position[z]);
+    let (va, vz) = (b.velocity[a], b.velocity[z]);
+    let span = (xz - xa).norm();
+    if span == 0.0 {
+        return Err(ctx.err(field("to"), "the two ends coincide"));
+    }
+    let n = obj.segments;
+    let each = obj.mass / (n - 1) as f64;
+    let mut chain = vec![a];
+    for s in 1..n {
+        let f = s as f64 / n as f64;
+        let i = b.parts.mass.len();
+        b.parts.mass.push(each);
+        b.parts.fixed.push(false);
+        b.parts.particle_drag.push(obj.drag);
+        b.parts.rest_position.push(xa + (xz - xa) * f);
+        b.velocity.push(va + (vz - va) * f);
+        b.particle_owner.push(path.clone());
+        chain.push(i);
+    }
+    chain.push(z);
+    let rest = (1.0 + obj.slack) * span / n as f64;
+    for w in chain.windows(2) {
+        b.parts.springs.push(Spring {
+            i: w[0],
+            j: w[1],
+            rest_length: rest,
+            stiffness: obj.stiffness,
+            damping: obj.damping,
+            break_strain: obj.break_strain,
+        });
+        b.spring_owner.push(path.clone());
+    }
+    b.push_object(
+        obj.name.clone(),
+        ObjectKind::Rope,
+        chain,
+        None,
+        false,
+        &path,
+    );
+    Ok(())
+}
+
+/// The default output directory of a scene: `runs/scene-<name>`.
+pub fn default_out_dir(scene: &Scene) -> PathBuf {
+    PathBuf::from("runs").join(format!("scene-{}", scene.name))
+}
+
+/// The name of an aerodynamic law as leaf files spell it.
+fn law_name(law: &AeroLaw) -> &'static str {
+    match law {
+        AeroLaw::Linear => "linear",
+        AeroLaw::Quadratic(_) => "quadratic",
+    }
+}

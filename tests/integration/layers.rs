@@ -1,0 +1,371 @@
+//! The architecture, held: each folder of `src/` is a layer that imports only
+//! the layers below it, the model's data imports nothing of the engine, and
+//! no file of the library imports a file that imports it back.
+//!
+//! Read from the source itself: every `crate::…` and `super::…` path outside
+//! comments, strings and `#[cfg(test)]` modules, and every path through a
+//! child module named by its bare name, is resolved to the file that
+//! defines its module. A parent's `mod child;` is not an import, but its uses of the
+//! child (`pub use child::…`, `child::f()`) are: so a child that imports
+//! its parent's items, re-exported or not, closes a cycle (siblings import
+//! each other directly).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::{Path, PathBuf};
+
+/// The layers, lowest first, with what each may import.
+const LAYERS: [(&str, &[&str]); 7] = [
+    ("util", &[]),
+    ("physics", &["util"]),
+    ("motion", &["util"]),
+    ("leaf", &["physics", "util"]),
+    ("sim", &["physics", "motion", "leaf", "util"]),
+    ("breed", &["sim", "leaf", "motion", "physics", "util"]),
+    (
+        "output",
+        &["breed", "sim", "leaf", "motion", "physics", "util"],
+    ),
+];
+
+/// Every `.rs` file under `src/` but the binary's, by module path
+/// (`physics::forces::springs`; a folder's `mod.rs` is the folder's module).
+fn library_files() -> BTreeMap<String, PathBuf> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut out = BTreeMap::new();
+    let mut stack = vec![src.clone()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+                continue;
+            }
+            if path.extension().and_then(|e| e.to_str()) != Some("rs") {
+                continue;
+            }
+            let rel = path.strip_prefix(&src).unwrap().with_extension("");
+            let mut parts: Vec<String> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if parts[0] == "cli" || parts == ["main"] {
+                continue;
+            }
+            if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+                parts.pop();
+            }
+            out.insert(parts.join("::"), path);
+        }
+    }
+    out
+}
+
+/// The code of a file without comments, string and char literals, and
+/// without its `#[cfg(test)]` modules (tests may use anything).
+fn code_of(text: &str) -> String {
+    let text = match text.find("#[cfg(test)]\nmod ") {
+        Some(k) => &text[..k],
+        None => text,
+    };
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(b.len());
+    let mut i = 0;
+    while i < b.len() {
+        if b[i..].starts_with(b"//") {
+            while i < b.len() && b[i] != b'\n' {
+                i += 1;
+            }
+        } else if b[i..].starts_with(b"/*") {
+            let end = text[i + 2..].find("*/").map_or(b.len(), |k| i + 4 + k);
+            i = end;
+        } else if b[i] == b'r' && (b[i + 1..].starts_with(b"\"") || b[i + 1..].starts_with(b"#")) {
+            // Raw string r"…" or r#"…"#.
+            let hashes = b[i + 1..].iter().take_while(|&&c| c == b'#').count();
+            let open = i + 1 + hashes;
+            if b.get(open) == Some(&b'"') {
+                let close = format!("\"{}", "#".repeat(hashes));
+                let end = text[open + 1..]
+                    .find(&close)
+                    .map_or(b.len(), |k| open + 1 + k + close.len());
+                out.push_str("\"\"");
+                i = end;
+            } else {
+                out.push('r');
+                i += 1;
+            }
+        } else if b[i] == b'"' {
+            i += 1;
+            while i < b.len() && b[i] != b'"' {
+                i += if b[i] == b'\\' { 2 } else { 1 };
+            }
+            out.push_str("\"\"");
+            i += 1;
+        } else if b[i] == b'\'' {
+            // A char literal ('x', '\n', '\u{..}'), not a lifetime ('a).
+            let rest = &text[i + 1..];
+            let close = if rest.starts_with('\\') {
+                rest.find('\'').map(|k| k + 1)
+            } else {
+                rest.chars()
+                    .next()
+                    .filter(|_| rest[rest.chars().next().unwrap().len_utf8()..].starts_with('\''))
+                    .map(|c| c.len_utf8() + 1)
+            };
+            match close {
+                Some(k) => {
+                    out.push_str("' '");
+                    i += 1 + k;
+                }
+                None => {
+                    out.push('\'');
+                    i += 1;
+                }
+            }
+        } else {
+            let c = text[i..].chars().next().unwrap();
+            out.push(c);
+            i += c.len_utf8();
+        }
+    }
+    out
+}
+
+fn is_ident(c: char) -> bool {
+    c.is_ascii_alphanumeric() || c == '_'
+}
+
+/// Paths starting at `at` (just after `crate::` or `super::`): the segments
+/// before a `{` group are a prefix of every item inside it.
+fn paths_from(code: &str, at: usize, prefix: &[String], out: &mut Vec<Vec<String>>) -> usize {
+    let chars: Vec<char> = code[at..].chars().collect();
+    let mut segs = prefix.to_vec();
+    let mut i = 0;
+    loop {
+        while i < chars.len() && chars[i].is_whitespace() {
+            i += 1;
+        }
+        if i < chars.len() && chars[i] == '{' {
+            i += 1;
+            loop {
+                while i < chars.len() && (chars[i].is_whitespace() || chars[i] == ',') {
+                    i += 1;
+                }
+                if i >= chars.len() || chars[i] == '}' {
+                    let consumed: usize = chars[..(i + 1).min(chars.len())]
+                        .iter()
+                        .map(|c| c.len_utf8())
+                        .sum();
+                    return consumed;
+                }
+                let offset: usize = chars[..i].iter().map(|c| c.len_utf8()).sum();
+                let used = paths_from(code, at + offset, &segs, out);
+                let used_chars = code[at + offset..at + offset + used].chars().count();
+                i += used_chars.max(1);
+            }
+        }
+        let start = i;
+        while i < chars.len() && is_ident(chars[i]) {
+            i += 1;
+        }
+        if i == start {
+            break;
+        }
+        segs.push(chars[start..i].iter().collect());
+        if chars[i..].starts_with(&[':', ':']) {
+            i += 2;
+        } else {
+            break;
+        }
+    }
+    out.push(segs);
+    chars[..i].iter().map(|c| c.len_utf8()).sum()
+}
+
+/// The library files each file imports.
+fn imports(files: &BTreeMap<String, PathBuf>) -> BTreeMap<String, BTreeSet<String>> {
+    let resolve = |segs: &[String]| -> Option<String> {
+        (1..=segs.len())
+            .rev()
+            .map(|k| segs[..k].join("::"))
+            .find(|m| files.contains_key(m))
+    };
+    let mut edges = BTreeMap::new();
+    for (module, path) in files {
+        let code = code_of(&std::fs::read_to_string(path).unwrap());
+        let own: Vec<String> = if module.is_empty() {
+            Vec::new()
+        } else {
+            module.split("::").map(String::from).collect()
+        };
+        let mut found = Vec::new();
+        let mut k = 0;
+        while let Some(pos) = code[k..].find("::") {
+            let p = k + pos;
+            k = p + 2;
+            let word_start = code[..p]
+                .char_indices()
+                .rev()
+                .take_while(|(_, c)| is_ident(*c))
+                .last()
+                .map_or(p, |(i, _)| i);
+            let word = &code[word_start..p];
+            let before = code[..word_start].chars().next_back();
+            if before.is_some_and(|c| is_ident(c) || c == ':') {
+                continue;
+            }
+            let base: Vec<String> = match word {
+                "crate" => Vec::new(),
+                "super" => {
+                    // Each super:: goes up one module from this file's own
+                    // (a folder's mod.rs is the folder's module).
+                    let mut ups = 1;
+                    let mut rest = p + 2;
+                    while code[rest..].starts_with("super::") {
+                        ups += 1;
+                        rest += "super::".len();
+                    }
+                    k = rest;
+                    own[..own.len().saturating_sub(ups)].to_vec()
+                }
+                // A child module named by its bare name (`mod springs;` then
+                // `springs::springs`, or `pub use springs::…` re-exports).
+                child
+                    if files.contains_key(
+                        &[own.as_slice(), &[child.to_string()]].concat().join("::"),
+                    ) =>
+                {
+                    k = word_start;
+                    own.clone()
+                }
+                _ => continue,
+            };
+            let mut paths = Vec::new();
+            // Past the path read, so that no part of it is read again.
+            k += paths_from(&code, k, &base, &mut paths).max(1);
+            found.extend(paths);
+        }
+        let targets: BTreeSet<String> = found
+            .iter()
+            .filter_map(|segs| resolve(segs))
+            .filter(|t| t != module)
+            .collect();
+        edges.insert(module.clone(), targets);
+    }
+    edges
+}
+
+fn layer(module: &str) -> &str {
+    module.split("::").next().unwrap_or("")
+}
+
+#[test]
+fn each_layer_imports_only_the_layers_below_it() {
+    let files = library_files();
+    assert!(files.len() > 40, "found only {} files", files.len());
+    let edges = imports(&files);
+    let allowed: BTreeMap<&str, &[&str]> = LAYERS.into_iter().collect();
+    let mut wrong = Vec::new();
+    for (from, targets) in &edges {
+        let Some(may) = allowed.get(layer(from)) else {
+            assert!(from.is_empty(), "{from} is in no layer");
+            continue;
+        };
+        for to in targets {
+            if layer(to) != layer(from) && !may.contains(&layer(to)) {
+                wrong.push(format!("{from} imports {to}"));
+            }
+        }
+    }
+    assert!(wrong.is_empty(), "layer violations:\n{}", wrong.join("\n"));
+    // The check sees imports at all: known ones are found.
+    assert!(edges["breed::run"].contains("sim::drop"));
+    assert!(edges["physics::forces::quadratic"].contains("physics::forces::surfaces"));
+    assert!(edges["physics::model::aero_law"].contains("physics::model::error"));
+}
+
+/// The model and its parts import nothing of forces, integrators or
+/// anything that runs them (as MuJoCo's mjmodel.h includes nothing of the
+/// engine): only each other, the wind field they hold, and utilities.
+#[test]
+fn the_model_imports_nothing_of_the_engine() {
+    let edges = imports(&library_files());
+    for (from, targets) in edges.iter().filter(|(m, _)| {
+        m.starts_with("physics::model") || *m == "physics::params" || *m == "physics::state"
+    }) {
+        for to in targets {
+            let ok = to.starts_with("physics::model")
+                || to.starts_with("physics::field")
+                || to.starts_with("util")
+                || (from == "physics::state" && to == "physics::model");
+            assert!(ok, "{from} imports {to}");
+        }
+    }
+}
+
+/// Layers whose files form no import cycle. Not yet among them:
+/// `sim/accuracy`, `sim/scene` and `output/export`, whose files still use
+/// their folder module's types while it uses theirs.
+const ACYCLIC: [&str; 5] = ["util", "physics", "motion", "leaf", "breed"];
+
+#[test]
+fn no_file_imports_a_file_that_imports_it_back() {
+    let mut edges = imports(&library_files());
+    edges.retain(|m, _| ACYCLIC.contains(&layer(m)));
+    for targets in edges.values_mut() {
+        targets.retain(|t| ACYCLIC.contains(&layer(t)));
+    }
+    // Depth-first search for a cycle, reporting its path.
+    fn visit(
+        m: &str,
+        edges: &BTreeMap<String, BTreeSet<String>>,
+        state: &mut BTreeMap<String, u8>,
+        path: &mut Vec<String>,
+    ) -> Option<Vec<String>> {
+        state.insert(m.to_string(), 1);
+        path.push(m.to_string());
+        for to in edges.get(m).into_iter().flatten() {
+            match state.get(to.as_str()) {
+                Some(1) => {
+                    let k = path.iter().position(|p| p == to).unwrap();
+                    let mut cycle = path[k..].to_vec();
+                    cycle.push(to.clone());
+                    return Some(cycle);
+                }
+                Some(_) => {}
+                None => {
+                    if let Some(c) = visit(to, edges, state, path) {
+                        return Some(c);
+                    }
+                }
+            }
+        }
+        path.pop();
+        state.insert(m.to_string(), 2);
+        None
+    }
+    let mut state = BTreeMap::new();
+    for m in edges.keys() {
+        if !state.contains_key(m.as_str())
+            && let Some(cycle) = visit(m, &edges, &mut state, &mut Vec::new())
+        {
+            panic!("import cycle: {}", cycle.join(" → "));
+        }
+    }
+}
+
+/// The reader of paths itself, on a made-up file.
+#[test]
+fn paths_are_read_through_groups_comments_and_strings() {
+    let code = code_of(
+        "use crate::a::{b::C, d, e::{f, g::H}};\n// crate::zz::no\nlet s = \"crate::yy::no\";\nx = crate::k::l(1);\n#[cfg(test)]\nmod tests { use crate::t::u; }\n",
+    );
+    let mut found = Vec::new();
+    let mut k = 0;
+    while let Some(p) = code[k..].find("crate::") {
+        let at = k + p + "crate::".len();
+        paths_from(&code, at, &[], &mut found);
+        k = at;
+    }
+    let joined: Vec<String> = found.iter().map(|s| s.join("::")).collect();
+    assert_eq!(joined, ["a::b::C", "a::d", "a::e::f", "a::e::g::H", "k::l"]);
+}
