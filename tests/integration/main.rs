@@ -13,6 +13,7 @@ mod fuzz;
 mod genome;
 mod integrators;
 mod invariants;
+mod k8s;
 mod layers;
 mod leaves;
 mod like;
