@@ -865,3 +865,90 @@ pub fn run_frames_until(
         state.broken_springs() - broken_before,
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leaf::LeafSpec;
+    use crate::physics::integrate::Divergence;
+
+    /// A frame whose pose the caller finds not finite stops the run with the
+    /// simulator's diagnosis of the step that reached it.
+    #[test]
+    fn a_pose_fault_stops_the_run_with_the_diagnosis_of_its_step() {
+        let model = LeafSpec::load("a").unwrap().model().unwrap();
+        let mut state = State::at_rest(&model);
+        let (dt, frame_dt) = (1e-3, 1.0 / 240.0);
+        let err = run_sampled_until(
+            &model,
+            &mut state,
+            Integrator::Verlet,
+            dt,
+            frame_dt,
+            10,
+            |k, _| {
+                if k == 3 {
+                    Err(PoseFault {
+                        particle: 4,
+                        value: f64::INFINITY,
+                    })
+                } else {
+                    Ok(())
+                }
+            },
+        )
+        .unwrap_err();
+        let SimError::Diverged(d) = &err else {
+            panic!("{err}");
+        };
+        let d: &Divergence = d;
+        // Frame 3 at 12.5 ms is reached by step 12 (0-based) of 1 ms.
+        assert_eq!((d.step, d.particle, d.quantity), (12, 4, "pose"));
+        let text = err.to_string();
+        assert!(
+            text.contains("pose") && text.contains("step 12") && text.contains("particle 4"),
+            "{text}"
+        );
+        assert!(
+            text.contains("dominant force term") && text.contains("likely cause"),
+            "{text}"
+        );
+        assert!(!text.contains("NaN") && !text.contains("inf "), "{text}");
+    }
+
+    /// The work of a stiff leaf is explained by its stiffest spring, and the
+    /// refusal names the remedies.
+    #[test]
+    fn a_refusal_names_the_stiffest_spring_and_the_remedies() {
+        let mut spec = LeafSpec::load("a").unwrap();
+        for s in &mut spec.springs {
+            s.stiffness = 1e8;
+        }
+        let model = spec.model().unwrap();
+        let frame_dt = 1.0 / 240.0;
+        let dt = resolve_step(&model, Integrator::Verlet, TimeStep::Auto, frame_dt).unwrap();
+        let work = Work::of(&model, Integrator::Verlet, dt, true, 10.0, frame_dt);
+        // 10 s at the auto step: about 4e7 steps of 7 particles.
+        assert!(
+            (2e8..4e8).contains(&work.particle_steps()),
+            "{}",
+            work.describe()
+        );
+        let text = work
+            .check(&model, frame_dt, MAX_WORK / 10.0, Command::Drop)
+            .unwrap_err()
+            .to_string();
+        for w in [
+            "spring 0",
+            "k = 1.000e8 N/m",
+            "`--integrator implicit` (stable at any step: 2400 steps)",
+            "--max-work",
+        ] {
+            assert!(text.contains(w), "no {w:?} in {text}");
+        }
+        assert!(
+            work.check(&model, frame_dt, MAX_WORK, Command::Drop)
+                .is_ok()
+        );
+    }
+}

@@ -487,3 +487,35 @@ fn the_cases_of_issue_22_end_as_they_should() {
         }
     }
 }
+
+/// The bounds refuse none of today's valid work: every shipped scene is far
+/// below the work and memory limits, and so is the default breed of either
+/// prototype (its 800 drops in all).
+#[test]
+fn the_bounds_refuse_no_shipped_scene_and_not_the_default_breed() {
+    use leafmagic::physics::run::{MAX_BREED_WORK, MAX_WORK};
+    use leafmagic::sim::drop::{DropParams, drop_work};
+    use leafmagic::sim::scene::{MAX_MEMORY, Scene};
+    for file in seeds("scenes", "toml") {
+        let scene = Scene::load(&file).unwrap();
+        let work = scene.work(None).unwrap();
+        assert!(
+            work.particle_steps() < MAX_WORK / 100.0,
+            "{}: {}",
+            file.display(),
+            work.describe()
+        );
+        assert!(
+            scene.recorded_bytes(None) < MAX_MEMORY / 100.0,
+            "{}",
+            file.display()
+        );
+    }
+    for p in ["a", "b"] {
+        let model = leafmagic::leaf::LeafSpec::load(p).unwrap().model().unwrap();
+        let one = drop_work(&model, &DropParams::default()).unwrap();
+        let breed = one.particle_steps() * 800.0;
+        assert!(breed < MAX_BREED_WORK / 100.0, "{p}: {breed:.2e}");
+        assert!(!one.is_long(), "{p}: {}", one.describe());
+    }
+}
