@@ -862,3 +862,30 @@ fn check_generation_files(dir: &Path, cp: &Checkpoint) -> Option<Finding> {
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run whose generation 0 cannot be completed (the prototype's error
+    /// estimate failed) is taken back: run.toml goes, and so does the
+    /// directory if this process made it; a directory that was there before
+    /// stays, empty again.
+    #[test]
+    fn a_run_that_never_completed_generation_0_is_taken_back() {
+        let dir = std::env::temp_dir().join(format!("leafmagic-take-back-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut run = Run::create(&dir, BreedSettings::default_run()).unwrap();
+        assert!(dir.join(RUN_FILE).exists());
+        run.take_back();
+        assert!(!dir.exists(), "the directory it made is left");
+
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut run = Run::create(&dir, BreedSettings::default_run()).unwrap();
+        assert!(dir.join(RUN_FILE).exists());
+        run.take_back();
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(dir.is_dir() && left.is_empty(), "{left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -15,6 +15,7 @@ use super::selection::{MAX_SCALE, MIN_SCALE};
 use super::settings::BreedSettings;
 use super::shard::fnv1a64;
 use crate::leaf::LeafSpec;
+use crate::util::number::shown;
 use std::path::{Path, PathBuf};
 
 /// What is wrong with a file of a run directory: the file, the field (or
@@ -171,7 +172,10 @@ pub(crate) fn check_checkpoint(
             ("success_rate", h.success_rate),
         ] {
             if !v.is_finite() {
-                return bad(format!("history[{g}].{name}"), format!("{v} is not finite"));
+                return bad(
+                    format!("history[{g}].{name}"),
+                    format!("{} is not finite", shown(v)),
+                );
             }
         }
     }
@@ -193,7 +197,7 @@ pub(crate) fn check_checkpoint(
             "scale".into(),
             format!(
                 "{} is outside the variation scale's range [{MIN_SCALE}, {MAX_SCALE}]",
-                cp.scale
+                shown(cp.scale)
             ),
         );
     }
@@ -272,7 +276,7 @@ fn check_member(i: &Individual, proto: &LeafSpec, at: &str, file: &Path) -> Resu
             return Err(Damage::new(
                 file,
                 format!("{at}.eval.{name}"),
-                format!("{v} is not finite"),
+                format!("{} is not finite", shown(v)),
             ));
         }
     }

@@ -8,6 +8,7 @@
 
 use crate::leaf::{Bounds, LeafSpec};
 use crate::physics::model::{Model, ModelError};
+use crate::util::number::shown;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
@@ -170,8 +171,10 @@ impl Genome {
                 fail(
                     field,
                     format!(
-                        "{v} is outside the prototype's bounds [{}, {}]",
-                        range[0], range[1]
+                        "{} is outside the prototype's bounds [{}, {}]",
+                        shown(v),
+                        shown(range[0]),
+                        shown(range[1])
                     ),
                 )
             }

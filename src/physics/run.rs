@@ -147,12 +147,18 @@ pub fn check_estimate(estimate: &stability::StabilityEstimate) -> Result<(), Ste
 /// is refused up front instead of running for ever.
 pub const MAX_STEPS: f64 = 1e8;
 
-/// A number for a message: plain when moderate, else in scientific notation.
+/// A number for a message: plain when moderate, to four significant
+/// figures (`69906`, not `69905.89149035318`), else in scientific notation.
 fn quantity(v: f64) -> String {
+    let plain = format!("{v}");
     if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
         format!("{v:.3e}")
+    } else if plain.len() > 8 {
+        // |v| in [1e-3, 1e6): 0 to 6 decimals keep four figures.
+        let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
     } else {
-        format!("{v}")
+        plain
     }
 }
 
@@ -914,6 +920,16 @@ mod tests {
             "{text}"
         );
         assert!(!text.contains("NaN") && !text.contains("inf "), "{text}");
+    }
+
+    #[test]
+    fn quantities_in_messages_are_short() {
+        assert_eq!(quantity(69905.89149035318), "69906");
+        assert_eq!(quantity(4.0 / 3.0), "1.333");
+        assert_eq!(quantity(0.0013333333333), "0.001333");
+        assert_eq!(quantity(2400.0), "2400");
+        assert_eq!(quantity(1e8), "1.000e8");
+        assert_eq!(quantity(7.217e-6), "7.217e-6");
     }
 
     /// The work of a stiff leaf is explained by its stiffest spring, and the
