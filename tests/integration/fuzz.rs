@@ -4,6 +4,8 @@
 //! binary; every case must end within a few seconds, without a panic, either
 //! successfully or with an error that names the file. The cases of issue 22
 //! live in tests/data/hardening and each is checked for its own outcome.
+//! Run directories too: one file of a finished run mutated, `breed --resume`
+//! must end byte-identical to the run or refuse naming the file.
 //!
 //! `LEAFMAGIC_FUZZ_CASES=N` sets the mutated cases per kind (default 40, a
 //! few seconds in all); the mutations depend only on the seed, so a failure
@@ -518,4 +520,79 @@ fn the_bounds_refuse_no_shipped_scene_and_not_the_default_breed() {
         assert!(breed < MAX_BREED_WORK / 100.0, "{p}: {breed:.2e}");
         assert!(!one.is_long(), "{p}: {}", one.describe());
     }
+}
+
+/// Copies a directory tree.
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for e in std::fs::read_dir(from).unwrap() {
+        let e = e.unwrap();
+        if e.path().is_dir() {
+            copy_tree(&e.path(), &to.join(e.file_name()));
+        } else {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
+/// A run directory with one file mutated (bytes flipped, cut, lines
+/// dropped, duplicated or swapped, numbers made extreme, junk inserted) is
+/// resumed by `breed --resume`: it ends without a hang or a panic, either
+/// with every file byte-identical to the uninterrupted run's (the damage
+/// was recomputed, or the mutation changed nothing) or refused with an
+/// error naming the mutated file (a changed run.toml cannot be recomputed).
+#[test]
+fn mutated_run_directories_resume_to_the_same_bytes_or_are_refused_naming_the_file() {
+    use super::breeding::{breed, contents};
+    let dir = scratch("runs");
+    let whole = dir.join("whole");
+    let small = ["--population", "12", "--generations", "3", "--seconds", "2"];
+    let made = breed(&small, &whole);
+    assert!(
+        made.status.success(),
+        "{}",
+        String::from_utf8_lossy(&made.stderr)
+    );
+    let reference = contents(&whole);
+    let targets = [
+        "checkpoint.json",
+        "run.toml",
+        "gen-000.csv",
+        "gen-001.csv",
+        "gen-002.csv",
+        "generations.csv",
+        "best/index.csv",
+    ];
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(2022);
+    let (mut repaired, mut refused) = (0, 0);
+    for case in 0..(cases() / 2).max(targets.len()) {
+        let target = targets[case % targets.len()];
+        let case_dir = dir.join(format!("case-{case:03}"));
+        copy_tree(&whole, &case_dir);
+        let path = case_dir.join(target);
+        let text = std::fs::read(&path).unwrap();
+        std::fs::write(&path, mutate(&text, &mut rng)).unwrap();
+        let mut cmd = leafmagic();
+        cmd.arg("breed").arg("--resume").arg(&case_dir);
+        let ended = run(cmd);
+        judge("breed --resume", &path, &ended);
+        if ended.code == Some(0) {
+            assert!(
+                contents(&case_dir) == reference,
+                "case {case} ({target}): resumed but not byte-identical:\n{}",
+                ended.stderr
+            );
+            repaired += 1;
+        } else {
+            refused += 1;
+        }
+        let _ = std::fs::remove_dir_all(&case_dir);
+    }
+    eprintln!("fuzz: run directories: {repaired} resumed byte-identical, {refused} refused");
+    // Both outcomes are reached: damage is repaired, and run.toml refused.
+    assert!(
+        repaired > 0 && refused > 0,
+        "{repaired} repaired, {refused} refused"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
 }
