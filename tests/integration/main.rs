@@ -8,6 +8,9 @@ mod breeding;
 mod classes;
 mod common;
 mod contact;
+// Shared with examples/real_falls_classify.rs, which uses all of it.
+#[allow(dead_code)]
+mod corpus;
 mod export;
 mod genome;
 mod integrators;
@@ -15,6 +18,7 @@ mod invariants;
 mod layers;
 mod leaves;
 mod like;
+mod real_falls;
 mod rigid;
 mod scene_files;
 mod scenes;

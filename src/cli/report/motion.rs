@@ -4,6 +4,7 @@
 use super::text;
 use leafmagic::motion::classify::Classification;
 use leafmagic::motion::describe::{self, Descriptors};
+use leafmagic::motion::path::PathFeatures;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -14,6 +15,9 @@ pub fn class(c: &Classification) -> String {
         writeln!(out, "class           {} ({})", c.class, c.regime)?;
         if let Some(reason) = &c.reason {
             writeln!(out, "reason          {reason}")?;
+        }
+        if let Some(p) = &c.path {
+            return path_lines(out, c, p);
         }
         writeln!(
             out,
@@ -26,6 +30,45 @@ pub fn class(c: &Classification) -> String {
             f.net_turns, f.reversals, f.normal_flips, f.yaw_turns, f.tilt_mean_deg, f.tilt_std_deg
         )
     })
+}
+
+/// The lines of a decision from the path (and areas): the inputs, and the
+/// features behind it.
+fn path_lines(out: &mut String, c: &Classification, p: &PathFeatures) -> std::fmt::Result {
+    writeln!(out, "inputs          {}", c.inputs.describe())?;
+    writeln!(
+        out,
+        "record          {} samples at {:.1} Hz in the window {:.2}–{:.2} s, {} gaps bridged ({:.3} s), noise {:.1} mm",
+        p.samples,
+        p.sample_rate_hz,
+        p.t_start_s,
+        p.t_end_s,
+        p.gaps,
+        p.interpolated_s,
+        1e3 * p.position_noise_m.max(p.horizontal_noise_m)
+    )?;
+    writeln!(
+        out,
+        "descent         {:.3} m/s mean (Froude {:.2}), modulation {:.2}, {:.1} chords",
+        p.mean_descent_speed_m_s, p.froude_number, p.descent_speed_cv, p.descent_chords
+    )?;
+    writeln!(
+        out,
+        "path            drift ratio {:.2} ({:.0}° from vertical), straightness {:.2}, {} reversals, {:.2} turns",
+        p.drift_ratio, p.glide_angle_deg, p.straightness, p.reversals, p.path_turns
+    )?;
+    if let (Some(m), Some(w), Some(r)) = (
+        p.area_maxima_per_s,
+        p.area_turn_rate_rad_s,
+        p.area_periodicity,
+    ) {
+        writeln!(
+            out,
+            "areas           {} signals, {m:.1} maxima per second (≈ {w:.1} rad/s about a horizontal axis), periodicity {r:.2}",
+            p.area_signals
+        )?;
+    }
+    Ok(())
 }
 
 /// `classify`: the file, its length in samples, and its classification.
