@@ -250,6 +250,57 @@ fn bad_records_are_refused_with_file_line_and_reason() {
     assert!(c.reason.unwrap().contains("Hz"));
 }
 
+/// Video as it comes: uneven steps, dropped frames and short gaps are
+/// bridged (and reported), a long gap is not; 25 fps and half a second
+/// are enough.
+#[test]
+fn gaps_uneven_steps_and_low_rates_are_handled_and_reported() {
+    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
+    let whole = classify(&tr, 0.042);
+    assert_eq!(whole.class, MotionClass::Spinner);
+    let keep = |drop: &dyn Fn(usize) -> bool| {
+        let mut out = tr.clone();
+        let k: Vec<usize> = (0..tr.len()).filter(|&k| !drop(k)).collect();
+        out.time = k.iter().map(|&i| tr.time[i]).collect();
+        out.position = k.iter().map(|&i| tr.position[i]).collect();
+        for (a, b) in out.areas.iter_mut().zip(&tr.areas) {
+            a.values = k.iter().map(|&i| b.values[i]).collect();
+        }
+        out
+    };
+    // Three frames dropped here and there: three gaps of 0.04 s, bridged.
+    let gappy = keep(&|k| k == 30 || k == 31 || k == 32 || k == 70 || k == 100);
+    let c = classify(&gappy, 0.042);
+    assert_eq!(c.class, MotionClass::Spinner, "{:?}", c.reason);
+    let p = c.path.unwrap();
+    assert_eq!(p.gaps, 3);
+    // Time stamps are printed to the microsecond.
+    assert!(
+        (p.longest_gap_s - 4.0 / 98.0).abs() < 1e-5,
+        "{}",
+        p.longest_gap_s
+    );
+    // Twenty frames missing: a gap of 0.21 s is not bridged.
+    let holed = keep(&|k| (40..60).contains(&k));
+    let c = classify(&holed, 0.042);
+    assert_eq!(c.class, MotionClass::Undetermined);
+    assert!(c.reason.unwrap().contains("too gappy"));
+    // Uneven steps (every other frame 2 ms late): same class.
+    let mut jitter = tr.clone();
+    for k in (1..tr.len() - 1).step_by(2) {
+        jitter.time[k] += 0.002;
+    }
+    assert_eq!(classify(&jitter, 0.042).class, MotionClass::Spinner);
+    // 25 fps, and the first 0.6 s only: still named, never a panic.
+    for short in [
+        tr.resampled(25.0),
+        tr.sampled_at(&(0..60).map(|k| k as f64 / 98.0).collect::<Vec<_>>()),
+    ] {
+        let c = classify(&short, 0.042);
+        assert_ne!(c.class, MotionClass::Undetermined, "{:?}", c.reason);
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
     /// A real record mangled at random (bytes replaced, lines cut or
