@@ -11,11 +11,19 @@ use serde_json::json;
 pub fn classify(args: ClassifyArgs) -> Result<()> {
     let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
     if args.json {
-        let mut value = serde_json::to_value(&c)?;
-        if let (Some(map), false) = (value.as_object_mut(), notes.ignored_columns.is_empty()) {
-            map.insert("ignored_columns".into(), json!(notes.ignored_columns));
+        // The classification's own fields in their order, then the notes.
+        #[derive(serde::Serialize)]
+        struct Noted<'a> {
+            #[serde(flatten)]
+            classification: &'a leafmagic::motion::classify::Classification,
+            #[serde(skip_serializing_if = "<[String]>::is_empty")]
+            ignored_columns: &'a [String],
         }
-        println!("{}", serde_json::to_string_pretty(&value)?);
+        let noted = Noted {
+            classification: &c,
+            ignored_columns: &notes.ignored_columns,
+        };
+        println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
         print!(
             "{}",
