@@ -36,16 +36,26 @@ pub fn class(c: &Classification) -> String {
 /// features behind it.
 fn path_lines(out: &mut String, c: &Classification, p: &PathFeatures) -> std::fmt::Result {
     writeln!(out, "inputs          {}", c.inputs.describe())?;
+    // A record refused before it was measured (too short, too slow) has
+    // nothing more to show.
+    if p.t_end_s <= p.t_start_s {
+        return Ok(());
+    }
     writeln!(
         out,
-        "record          {} samples at {:.1} Hz in the window {:.2}–{:.2} s, {} gaps bridged ({:.3} s), noise {:.1} mm",
-        p.samples,
-        p.sample_rate_hz,
-        p.t_start_s,
-        p.t_end_s,
-        p.gaps,
-        p.interpolated_s,
-        1e3 * p.position_noise_m.max(p.horizontal_noise_m)
+        "record          {:.1} Hz, window {:.2}–{:.2} s, {} gaps ({:.3} s missing, longest {:.3} s)",
+        p.sample_rate_hz, p.t_start_s, p.t_end_s, p.gaps, p.interpolated_s, p.longest_gap_s
+    )?;
+    // Refused before the path was measured (too gappy).
+    if p.samples == 0 {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "noise           {:.1} mm vertical, {:.1} mm horizontal (estimated), {} samples on the grid",
+        1e3 * p.position_noise_m,
+        1e3 * p.horizontal_noise_m,
+        p.samples
     )?;
     writeln!(
         out,
