@@ -103,7 +103,7 @@ fn people_agree_with_the_path_and_areas_on_held_out_squares() {
 /// Consistency with the full classifier on the falls the tests hold
 /// (leafmagic's and MuJoCo's, 163): quaternions stripped, and as video
 /// (98 Hz, 1 mm noise, two cuts of 1.5 s). Of the falls the full classifier
-/// names, measured: 149/158 (94.3 %) stripped, 269/316 (85.1 %) as video —
+/// names, measured: 150/158 (94.9 %) stripped, 272/316 (86.1 %) as video —
 /// below the 95 %, held here so that it does not slip further.
 #[test]
 fn the_path_alone_mostly_agrees_with_the_full_classifier() {
@@ -134,8 +134,8 @@ fn the_path_alone_mostly_agrees_with_the_full_classifier() {
     assert!(named >= 150, "{named}");
     let s = stripped as f64 / named as f64;
     let v = video as f64 / (2 * named) as f64;
-    assert!(s >= 0.93, "stripped: {stripped}/{named}");
-    assert!(v >= 0.83, "video: {video}/{}", 2 * named);
+    assert!(s >= 0.94, "stripped: {stripped}/{named}");
+    assert!(v >= 0.85, "video: {video}/{}", 2 * named);
 }
 
 /// `classify` on a real square: the inputs used, the features behind the
