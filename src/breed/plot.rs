@@ -82,6 +82,10 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
 /// world-frame rotation between successive orientations, ω ≈ log(q₁ q₀⁻¹)/Δt.
 fn rotation_rates(fall: &Trajectory) -> Vec<(f64, f64, f64)> {
     let mut out = Vec::new();
+    // A record without orientation (video of a real fall) has no rates.
+    if !fall.has_orientation() {
+        return out;
+    }
     let mut k = 0;
     while k + 1 < fall.len() {
         let t0 = fall.time[k];

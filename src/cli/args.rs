@@ -156,11 +156,14 @@ pub struct CheckArgs {
 /// Arguments of `classify`.
 #[derive(clap::Args, Debug)]
 pub struct ClassifyArgs {
-    /// Trajectory CSV: t,x,y,z,qw,qx,qy,qz (z up, quaternion body to world, w first).
+    /// Fall CSV, columns by header name in any order: t,x,y,z required; qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
     pub trajectory: PathBuf,
     /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
     #[arg(long, default_value_t = 0.05)]
     pub size: f64,
+    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
+    #[arg(long, default_value = "z")]
+    pub up: leafmagic::motion::trajectory::UpAxis,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -223,13 +226,16 @@ pub struct SceneArgs {
 /// Arguments of `compare`.
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
-    /// First fall (pose CSV t,x,y,z,qw,qx,qy,qz).
+    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns).
     pub a: PathBuf,
     /// Second fall.
     pub b: PathBuf,
     /// The leaves' chord, metres (both falls).
     #[arg(long, default_value_t = 0.05)]
     pub size: f64,
+    /// The files' vertical axis: z (leafmagic's) or y (turned to z up on reading).
+    #[arg(long, default_value = "z")]
+    pub up: leafmagic::motion::trajectory::UpAxis,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,

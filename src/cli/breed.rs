@@ -11,6 +11,7 @@ use leafmagic::breed::{self, BreedSettings, Run};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, MotionClass};
 use leafmagic::motion::describe::{self, Descriptors, MotionTarget};
+use leafmagic::motion::trajectory::UpAxis;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -280,7 +281,7 @@ fn motion_target(args: &BreedArgs) -> Result<Option<MotionTarget>> {
             Some(s) => s,
             None => LeafSpec::load(&args.prototype)?.model()?.chord(),
         };
-        let example = input::describe_file(path, size)?;
+        let example = input::describe_file(path, size, UpAxis::Z)?;
         return Ok(Some(MotionTarget::like(
             &path.to_string_lossy(),
             size,

@@ -6,7 +6,7 @@ use anyhow::{Context, Result, bail};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, Classification};
 use leafmagic::motion::describe::Descriptors;
-use leafmagic::motion::trajectory::Trajectory;
+use leafmagic::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
 use leafmagic::physics::model::Model;
 use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
@@ -30,18 +30,36 @@ pub fn problem(arg: &str) -> Result<(String, Model, State)> {
     Ok((spec.name, model, initial))
 }
 
-/// Reads and classifies a recorded fall of a leaf of chord `size`.
-pub fn classify_file(path: &Path, size: f64) -> Result<(Trajectory, Classification)> {
+/// Reads and classifies a recorded fall of a leaf of chord `size`, whose
+/// file has `up` as its vertical axis; columns the reader ignored are noted
+/// on stderr.
+pub fn classify_file(
+    path: &Path,
+    size: f64,
+    up: UpAxis,
+) -> Result<(Trajectory, ReadNotes, Classification)> {
     if !(size > 0.0 && size.is_finite()) {
         bail!("--size must be a positive number of metres, got {size}");
     }
-    let traj = Trajectory::read_csv(path)?;
+    let (traj, notes) = Trajectory::read_csv_with(path, up)?;
+    if !notes.ignored_columns.is_empty() {
+        eprintln!(
+            "note: {}: ignored column{} {}",
+            path.display(),
+            if notes.ignored_columns.len() > 1 {
+                "s"
+            } else {
+                ""
+            },
+            notes.ignored_columns.join(", ")
+        );
+    }
     let c = classify::classify(&traj, size);
-    Ok((traj, c))
+    Ok((traj, notes, c))
 }
 
 /// Reads and describes a fall, or says why it cannot be described.
-pub fn describe_file(path: &Path, size: f64) -> Result<Descriptors> {
-    let (_, c) = classify_file(path, size)?;
+pub fn describe_file(path: &Path, size: f64, up: UpAxis) -> Result<Descriptors> {
+    let (_, _, c) = classify_file(path, size, up)?;
     Descriptors::of(&c).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }

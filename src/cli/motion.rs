@@ -9,9 +9,21 @@ use serde_json::json;
 
 /// `classify`: names the motion of a recorded fall.
 pub fn classify(args: ClassifyArgs) -> Result<()> {
-    let (traj, c) = input::classify_file(&args.trajectory, args.size)?;
+    let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
     if args.json {
-        println!("{}", serde_json::to_string_pretty(&c)?);
+        // The classification's own fields in their order, then the notes.
+        #[derive(serde::Serialize)]
+        struct Noted<'a> {
+            #[serde(flatten)]
+            classification: &'a leafmagic::motion::classify::Classification,
+            #[serde(skip_serializing_if = "<[String]>::is_empty")]
+            ignored_columns: &'a [String],
+        }
+        let noted = Noted {
+            classification: &c,
+            ignored_columns: &notes.ignored_columns,
+        };
+        println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
         print!(
             "{}",
@@ -23,8 +35,8 @@ pub fn classify(args: ClassifyArgs) -> Result<()> {
 
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
-    let a = input::describe_file(&args.a, args.size)?;
-    let b = input::describe_file(&args.b, args.size)?;
+    let a = input::describe_file(&args.a, args.size, args.up)?;
+    let b = input::describe_file(&args.b, args.size, args.up)?;
     let d = describe::distance(&a, &b);
     if args.json {
         let side = |d: &Descriptors| {
@@ -32,6 +44,9 @@ pub fn compare(args: CompareArgs) -> Result<()> {
             m.insert("class".into(), json!(d.class.as_str()));
             m.insert("regime".into(), json!(d.regime.as_str()));
             for (k, name) in describe::NAMES.iter().enumerate() {
+                if !d.measured[k] {
+                    continue;
+                }
                 let v = d.values[k];
                 m.insert(
                     (*name).into(),

@@ -61,12 +61,12 @@
 //! and condition (distance to the nearest regime boundary). Both are 0 when
 //! the record is insufficient.
 
-use std::fmt;
-use std::str::FromStr;
-
 use nalgebra::{Matrix2, Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
+pub use crate::motion::class::{MotionClass, ParseNameError, Regime};
+use crate::motion::path::{Inputs, PathFeatures, classify_path};
+use crate::motion::rules::{self, Cond};
 use crate::motion::trajectory::Trajectory;
 
 // ---------------------------------------------------------------- thresholds
@@ -189,136 +189,6 @@ pub enum AxisFrame {
     World,
 }
 
-/// The paper's three kinds of leaf motion, plus `Undetermined`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum MotionClass {
-    /// Does not rotate; floats or glides gently down (steady, glide, flutter).
-    Floater,
-    /// Rotates rapidly as it falls (tumble or autorotation).
-    Spinner,
-    /// Alternately rocks, then rotates end over end (chaotic).
-    Lilter,
-    /// Cannot tell, or none of the three (e.g. a dive); see the reason.
-    Undetermined,
-}
-
-/// The finer regime, in the literature's words.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Regime {
-    /// Floater: constant attitude, straight down.
-    Steady,
-    /// Floater: constant attitude, drifting sideways.
-    Glide,
-    /// Floater: side-to-side rocking, pitch rate reverses.
-    Flutter,
-    /// Spinner: end-over-end rotation about a horizontal axis.
-    Tumble,
-    /// Spinner: rotation about the vertical axis, plate steeply tilted.
-    Autorotation,
-    /// Lilter: rocks, then flips over, irregularly.
-    Chaotic,
-    /// Edge-on fall without rotation (docs/falling-plates.md, "Folded leaves
-    /// under the linear law"); class `Undetermined`.
-    Dive,
-    /// No regime could be named.
-    Undetermined,
-}
-
-/// Error of [`MotionClass::from_str`] / [`Regime::from_str`].
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown {what} `{input}` (expected one of: {expected})")]
-pub struct ParseNameError {
-    what: &'static str,
-    input: String,
-    expected: &'static str,
-}
-
-const CLASS_NAMES: [(MotionClass, &str); 4] = [
-    (MotionClass::Floater, "floater"),
-    (MotionClass::Spinner, "spinner"),
-    (MotionClass::Lilter, "lilter"),
-    (MotionClass::Undetermined, "undetermined"),
-];
-
-const REGIME_NAMES: [(Regime, &str); 8] = [
-    (Regime::Steady, "steady"),
-    (Regime::Glide, "glide"),
-    (Regime::Flutter, "flutter"),
-    (Regime::Tumble, "tumble"),
-    (Regime::Autorotation, "autorotation"),
-    (Regime::Chaotic, "chaotic"),
-    (Regime::Dive, "dive"),
-    (Regime::Undetermined, "undetermined"),
-];
-
-impl MotionClass {
-    /// Lower-case name, as in serde and the CLI.
-    pub fn as_str(self) -> &'static str {
-        CLASS_NAMES
-            .iter()
-            .find(|(c, _)| *c == self)
-            .map_or("", |p| p.1)
-    }
-}
-
-impl Regime {
-    /// Snake-case name, as in serde and the CLI.
-    pub fn as_str(self) -> &'static str {
-        REGIME_NAMES
-            .iter()
-            .find(|(r, _)| *r == self)
-            .map_or("", |p| p.1)
-    }
-}
-
-impl fmt::Display for MotionClass {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl fmt::Display for Regime {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl FromStr for MotionClass {
-    type Err = ParseNameError;
-    /// Parses `floater`, `spinner`, `lilter`, `undetermined` (any case).
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let s = s.trim();
-        CLASS_NAMES
-            .iter()
-            .find(|(_, n)| n.eq_ignore_ascii_case(s))
-            .map(|p| p.0)
-            .ok_or_else(|| ParseNameError {
-                what: "motion class",
-                input: s.to_string(),
-                expected: "floater, spinner, lilter, undetermined",
-            })
-    }
-}
-
-impl FromStr for Regime {
-    type Err = ParseNameError;
-    /// Parses the snake-case regime names (any case).
-    fn from_str(s: &str) -> Result<Self, Self::Err> {
-        let s = s.trim();
-        REGIME_NAMES
-            .iter()
-            .find(|(_, n)| n.eq_ignore_ascii_case(s))
-            .map(|p| p.0)
-            .ok_or_else(|| ParseNameError {
-                what: "regime",
-                input: s.to_string(),
-                expected: "steady, glide, flutter, tumble, autorotation, chaotic, dive, undetermined",
-            })
-    }
-}
-
 /// The numbers behind a decision, all measured over the analysis window.
 /// Angles about axes are in turns (1 turn = 2π rad) or degrees as named.
 #[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
@@ -404,7 +274,7 @@ pub struct Features {
 }
 
 /// Result of [`classify`].
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug)]
 pub struct Classification {
     /// Floater, spinner, lilter or undetermined.
     pub class: MotionClass,
@@ -412,20 +282,114 @@ pub struct Classification {
     pub regime: Regime,
     /// Why: always set; for `Undetermined` it says what was missing.
     pub reason: Option<String>,
-    /// The numbers behind the decision.
+    /// Which inputs the decision used: the orientation (this module's
+    /// classifier), or the path with or without area signals
+    /// ([`crate::motion::path`]).
+    pub inputs: Inputs,
+    /// The numbers behind a decision from the orientation. From the path,
+    /// only the translation part (window, rate, descent, drift, their
+    /// spread) and the margins are filled in; the rest is 0.
     pub features: Features,
+    /// The numbers behind a decision from the path (`None` when the
+    /// orientation was used).
+    pub path: Option<PathFeatures>,
+}
+
+/// `class`, `regime`, `reason`, `inputs`, and as `features` the numbers
+/// behind the decision: [`Features`] or [`PathFeatures`].
+impl Serialize for Classification {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut s = serializer.serialize_struct("Classification", 5)?;
+        s.serialize_field("class", &self.class)?;
+        s.serialize_field("regime", &self.regime)?;
+        s.serialize_field("reason", &self.reason)?;
+        s.serialize_field("inputs", &self.inputs)?;
+        match &self.path {
+            Some(p) => s.serialize_field("features", p)?,
+            None => s.serialize_field("features", &self.features)?,
+        }
+        s.end()
+    }
+}
+
+/// What [`classify_with`] may look at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClassifyOptions {
+    /// Use the orientation when the record has one (the full classifier);
+    /// otherwise classify from the path.
+    pub orientation: bool,
+    /// Use the projected-area signals when the path decides.
+    pub areas: bool,
+}
+
+impl Default for ClassifyOptions {
+    fn default() -> Self {
+        ClassifyOptions {
+            orientation: true,
+            areas: true,
+        }
+    }
 }
 
 // ---------------------------------------------------------------- classify
 
-/// Classifies a fall from its trajectory. `size` is the leaf's chord (longest
-/// extent), m. O(n) time and memory; see the module docs for the method.
+/// Classifies a fall from everything its record holds: from the
+/// orientation when it has one (this module's method), else from the path
+/// and any area signals ([`crate::motion::path`]). `size` is the leaf's
+/// chord (longest extent), m.
 pub fn classify(trajectory: &Trajectory, size: f64) -> Classification {
+    classify_with(trajectory, size, ClassifyOptions::default())
+}
+
+/// [`classify`] with a choice of inputs: e.g. the path only of a pose
+/// record, to compare with what video of the same fall would say.
+pub fn classify_with(trajectory: &Trajectory, size: f64, use_: ClassifyOptions) -> Classification {
+    let posed = !trajectory.orientation.is_empty() || trajectory.time.is_empty();
+    if use_.orientation && posed {
+        return classify_pose(trajectory, size);
+    }
+    let v = classify_path(trajectory, size, use_.areas);
+    let p = &v.features;
+    let features = Features {
+        t_start_s: p.t_start_s,
+        t_end_s: p.t_end_s,
+        samples: p.samples,
+        sample_rate_hz: p.sample_rate_hz,
+        max_gap_s: p.longest_gap_s,
+        descent_m: p.descent_m,
+        descent_chords: p.descent_chords,
+        mean_descent_speed_m_s: p.mean_descent_speed_m_s,
+        descent_speed_chords_per_s: if p.t_end_s > p.t_start_s {
+            p.descent_chords / (p.t_end_s - p.t_start_s)
+        } else {
+            0.0
+        },
+        descent_speed_cv: p.descent_speed_cv,
+        drift_ratio: p.drift_ratio,
+        margin: p.margin,
+        regime_margin: p.regime_margin,
+        ..Features::default()
+    };
+    Classification {
+        class: v.class,
+        regime: v.regime,
+        reason: Some(v.reason),
+        inputs: v.inputs,
+        features,
+        path: Some(v.features),
+    }
+}
+
+/// The classifier from the orientation (module docs).
+fn classify_pose(trajectory: &Trajectory, size: f64) -> Classification {
     let undetermined = |features: Features, why: String| Classification {
         class: MotionClass::Undetermined,
         regime: Regime::Undetermined,
         reason: Some(why),
+        inputs: Inputs::Orientation,
         features,
+        path: None,
     };
     let tr = trajectory;
     let n = tr.time.len();
@@ -786,52 +750,6 @@ fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
 
 // ---------------------------------------------------------------- rules
 
-/// One `feature ≥ threshold` (or `<`) test with its scale for margins.
-struct Cond {
-    value: f64,
-    threshold: f64,
-    scale: f64,
-    at_least: bool,
-    /// Failing it would change the class (not just the regime).
-    class_boundary: bool,
-}
-
-impl Cond {
-    fn ge(value: f64, threshold: f64, scale: f64) -> Self {
-        Self {
-            value,
-            threshold,
-            scale,
-            at_least: true,
-            class_boundary: true,
-        }
-    }
-    fn lt(value: f64, threshold: f64, scale: f64) -> Self {
-        Self {
-            at_least: false,
-            ..Self::ge(value, threshold, scale)
-        }
-    }
-    fn regime_only(self) -> Self {
-        Self {
-            class_boundary: false,
-            ..self
-        }
-    }
-    fn holds(&self) -> bool {
-        if self.at_least {
-            self.value >= self.threshold
-        } else {
-            self.value < self.threshold
-        }
-    }
-    /// Signed distance to the threshold in scale units, > 0 when it holds.
-    fn slack(&self) -> f64 {
-        let d = (self.value - self.threshold) / self.scale;
-        if self.at_least { d } else { -d }
-    }
-}
-
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum RuleId {
     Tumble,
@@ -847,25 +765,7 @@ enum RuleId {
     Steady,
 }
 
-struct Rule {
-    id: RuleId,
-    class: MotionClass,
-    regime: Regime,
-    conds: Vec<Cond>,
-}
-
-impl Rule {
-    fn fires(&self) -> bool {
-        self.conds.iter().all(Cond::holds)
-    }
-    /// Distance to firing: every condition must be met, so the largest deficit.
-    fn deficit(&self) -> f64 {
-        self.conds
-            .iter()
-            .map(|c| (-c.slack()).max(0.0))
-            .fold(0.0, f64::max)
-    }
-}
+type Rule = rules::Rule<RuleId>;
 
 /// Builds the ordered rule list from the features (thresholds and scales in
 /// one place).
@@ -1017,29 +917,15 @@ fn decide(mut f: Features) -> Classification {
         .position(Rule::fires)
         .unwrap_or(rules.len() - 1);
     let chosen = &rules[k];
-    let own = |class_only: bool| {
-        chosen
-            .conds
-            .iter()
-            .filter(|c| !class_only || c.class_boundary)
-            .map(Cond::slack)
-            .fold(f64::INFINITY, f64::min)
-    };
-    let earlier = |class_only: bool| {
-        rules[..k]
-            .iter()
-            .filter(|r| !class_only || r.class != chosen.class)
-            .map(Rule::deficit)
-            .fold(f64::INFINITY, f64::min)
-    };
-    f.margin = own(true).min(earlier(true)).clamp(0.0, 1.0);
-    f.regime_margin = own(false).min(earlier(false)).clamp(0.0, 1.0);
+    (f.margin, f.regime_margin) = rules::margins(&rules, k);
     let reason = reason(chosen.id, &f);
     Classification {
         class: chosen.class,
         regime: chosen.regime,
         reason: Some(reason),
+        inputs: Inputs::Orientation,
         features: f,
+        path: None,
     }
 }
 
@@ -1699,19 +1585,7 @@ mod tests {
     }
 
     #[test]
-    fn names_round_trip_through_display_fromstr_and_serde() {
-        for (c, n) in CLASS_NAMES {
-            assert_eq!(c.to_string(), n);
-            assert_eq!(n.parse::<MotionClass>().unwrap(), c);
-            assert_eq!(serde_json::to_string(&c).unwrap(), format!("\"{n}\""));
-        }
-        for (r, n) in REGIME_NAMES {
-            assert_eq!(r.to_string(), n);
-            assert_eq!(n.parse::<Regime>().unwrap(), r);
-            assert_eq!(serde_json::to_string(&r).unwrap(), format!("\"{n}\""));
-        }
-        assert!("Spinner".parse::<MotionClass>().is_ok());
-        assert!("twirler".parse::<MotionClass>().is_err());
+    fn classification_serializes_class_regime_and_features() {
         let json = serde_json::to_value(classify(&tumble(), CHORD)).unwrap();
         assert_eq!(json["class"], "spinner");
         assert_eq!(json["regime"], "tumble");

@@ -68,6 +68,17 @@ pub struct Descriptors {
     pub regime: Regime,
     /// Values in [`NAMES`] order (`period` is NaN when the fall has none).
     pub values: [f64; 10],
+    /// Which values the record let one measure: all of them from a pose
+    /// record; from a record without orientation (video) only `descent` and
+    /// `drift`, and `tumble` (π × area maxima per second) when it has
+    /// projected areas. A descriptor not measured is left out of distances.
+    #[serde(default = "all_measured")]
+    pub measured: [bool; 10],
+}
+
+/// Every descriptor measured (a pose record).
+fn all_measured() -> [bool; 10] {
+    [true; 10]
 }
 
 /// A `--target-features` list that names no target: what is wrong with it.
@@ -91,11 +102,37 @@ impl Descriptors {
                 reason: c.reason.clone().unwrap_or_default(),
             });
         }
+        if let Some(p) = &c.path {
+            // Without orientation: what the path measures as the full
+            // classifier does (same window, same definitions), and the turn
+            // rate the area signals give. The rest is not measured (the
+            // path's `reversals` are of the horizontal velocity, not of the
+            // pitch rate; its descent modulation is smoothed and denoised).
+            let mut values = [f64::NAN; 10];
+            let mut measured = [false; 10];
+            let mut set = |name: &str, v: f64| {
+                let k = NAMES.iter().position(|n| *n == name).unwrap_or(0);
+                values[k] = v;
+                measured[k] = true;
+            };
+            set("descent", p.mean_descent_speed_m_s);
+            set("drift", p.drift_ratio);
+            if let Some(w) = p.area_turn_rate_rad_s {
+                set("tumble", w);
+            }
+            return Ok(Descriptors {
+                class: c.class,
+                regime: c.regime,
+                values,
+                measured,
+            });
+        }
         let f = &c.features;
         let window = (f.t_end_s - f.t_start_s).max(f64::MIN_POSITIVE);
         Ok(Descriptors {
             class: c.class,
             regime: c.regime,
+            measured: all_measured(),
             values: [
                 f.mean_descent_speed_m_s,
                 f.mean_yaw_rate_rad_s.abs(),
@@ -152,8 +189,9 @@ impl MotionTarget {
             descriptors: NAMES
                 .iter()
                 .zip(example.values)
-                .filter(|(_, v)| v.is_finite())
-                .map(|(n, v)| (n.to_string(), v))
+                .zip(example.measured)
+                .filter(|((_, v), measured)| *measured && v.is_finite())
+                .map(|((n, v), _)| (n.to_string(), v))
                 .collect(),
         }
     }
@@ -247,15 +285,20 @@ fn term(a: f64, b: f64, scale: f64) -> f64 {
     }
 }
 
-/// Distance between two described falls: every descriptor, class-gated.
+/// Distance between two described falls: every descriptor both measured
+/// (all ten between pose records), class-gated.
 pub fn distance(a: &Descriptors, b: &Descriptors) -> f64 {
     if a.class != b.class {
         return f64::INFINITY;
     }
-    let sum: f64 = (0..NAMES.len())
-        .map(|k| term(a.values[k], b.values[k], SCALES[k]))
+    let both: Vec<usize> = (0..NAMES.len())
+        .filter(|&k| a.measured[k] && b.measured[k])
+        .collect();
+    let sum: f64 = both
+        .iter()
+        .map(|&k| term(a.values[k], b.values[k], SCALES[k]))
         .sum();
-    (sum / NAMES.len() as f64).sqrt()
+    (sum / both.len().max(1) as f64).sqrt()
 }
 
 /// A side-by-side table of descriptor vectors (columns), for the terminal.
@@ -285,7 +328,9 @@ pub fn table(columns: &[(&str, &Descriptors)]) -> String {
         let _ = write!(out, "{label:<16}");
         for (_, d) in columns {
             let v = d.values[k];
-            let cell = if v.is_finite() {
+            let cell = if !d.measured[k] {
+                "not measured".to_string()
+            } else if v.is_finite() {
                 format!("{v:.3}")
             } else {
                 "—".to_string()
@@ -306,6 +351,7 @@ mod tests {
             class,
             regime: Regime::Glide,
             values,
+            measured: all_measured(),
         }
     }
 
@@ -363,6 +409,23 @@ mod tests {
         };
         assert!(free.distance(&a).is_finite());
         assert_eq!(free.distance(&a), free.distance(&floater));
+    }
+
+    #[test]
+    fn descriptors_not_measured_are_left_out() {
+        let a = fall(MotionClass::Spinner, A);
+        let mut video = a.clone();
+        video.measured = [false; 10];
+        video.measured[0] = true;
+        video.measured[5] = true;
+        video.values[1] = f64::NAN;
+        video.values[5] += SCALES[5];
+        // Only descent and drift count: √(1/2).
+        assert!((distance(&a, &video) - 0.5f64.sqrt()).abs() < 1e-12);
+        let t = MotionTarget::like("v.csv", 0.04, &video);
+        let names: Vec<&str> = t.descriptors.keys().map(String::as_str).collect();
+        assert_eq!(names, ["descent", "drift"]);
+        assert!((t.distance(&a) - 0.5f64.sqrt()).abs() < 1e-12);
     }
 
     #[test]

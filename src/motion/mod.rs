@@ -7,6 +7,9 @@
 //!
 //! May use: [`crate::util`]. Knows nothing of physics: a pose is all it needs.
 
+pub mod class;
 pub mod classify;
 pub mod describe;
+pub mod path;
+mod rules;
 pub mod trajectory;

@@ -1,17 +1,26 @@
-//! The pose record of a fall: time, centre position and orientation of a leaf,
+//! The record of a fall: time, centre position and, when the source has
+//! them, the orientation of the leaf and the projected areas a camera saw;
 //! and its CSV form.
 //!
-//! File format (one header line, then one line per sample):
+//! File format: one header line naming the columns, then one line per
+//! sample. Columns are found by name, in any order:
+//!
+//! | column | | meaning |
+//! |---|---|---|
+//! | `t` | required | time, s, strictly increasing |
+//! | `x`, `y`, `z` | required | centre position, m, world frame, z up (gravity along −z; `y` up with [`UpAxis::Y`]) |
+//! | `qw`, `qx`, `qy`, `qz` | optional, all four or none | orientation quaternion taking body vectors to the world frame, scalar first; body z is the plate normal, body x the long axis |
+//! | `area`, `area1`, `area2`, `area_…` | optional, any number | projected area of the leaf seen by a camera, any unit (video tracking) |
+//!
+//! Other columns are ignored and listed in [`ReadNotes::ignored_columns`].
+//! What `drop` and scenes write is the pose form:
 //!
 //! ```text
 //! t,x,y,z,qw,qx,qy,qz
 //! 0,0,0,0,1,0,0,0
 //! ```
 //!
-//! `t` in seconds, `x,y,z` in metres in the world frame with z up (gravity
-//! along −z), `qw,qx,qy,qz` the orientation quaternion taking body vectors to
-//! the world frame, scalar first. Body axes: z is the plate normal, x the long
-//! axis.
+//! and a record of video tracking may look like `t,x,y,z,area1,area2`.
 //!
 //! Numbers are written with Rust's `Display` for `f64`, which prints the
 //! shortest decimal string that parses back to the same bits (never an
@@ -23,11 +32,14 @@ use std::path::Path;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-/// The header line every trajectory CSV starts with.
+/// The header line of a pose trajectory (what `drop` and scenes write).
 pub const CSV_HEADER: &str = "t,x,y,z,qw,qx,qy,qz";
 
-/// Column names, in file order (used in error messages).
-const COLUMNS: [&str; 8] = ["t", "x", "y", "z", "qw", "qx", "qy", "qz"];
+/// The columns every record must have.
+pub const REQUIRED_COLUMNS: [&str; 4] = ["t", "x", "y", "z"];
+
+/// The orientation columns: all four or none.
+pub const QUATERNION_COLUMNS: [&str; 4] = ["qw", "qx", "qy", "qz"];
 
 /// Largest accepted |‖q‖ − 1| when reading. A quaternion printed with 7
 /// significant digits (the MuJoCo files) is off by at most ~1e-7; 1e-5 accepts
@@ -55,26 +67,31 @@ pub enum TrajectoryError {
         error: std::io::Error,
     },
     /// The source holds no bytes (or only white space).
-    #[error("{file}: empty file, expected header `{CSV_HEADER}`")]
+    #[error("{file}: empty file, expected a header naming the columns (at least t,x,y,z)")]
     Empty {
         /// Name of the source.
         file: String,
     },
-    /// The first line is data, not the header.
-    #[error("{file}: line 1: missing header `{CSV_HEADER}` (first line is `{found}`)")]
+    /// The first line is data, not a header.
+    #[error(
+        "{file}: line 1: missing header (first line is `{found}`); the first line must name the columns, at least t,x,y,z, e.g. `{CSV_HEADER}`"
+    )]
     MissingHeader {
         /// Name of the source.
         file: String,
         /// The first line as read.
         found: String,
     },
-    /// The first line is a header, but not ours.
-    #[error("{file}: line 1: wrong header `{found}`, expected `{CSV_HEADER}`")]
+    /// The header lacks a required column, has some but not all quaternion
+    /// columns, or names a column twice.
+    #[error("{file}: line 1: header `{found}`: {problem}")]
     WrongHeader {
         /// Name of the source.
         file: String,
         /// The header as read.
         found: String,
+        /// What is wrong with it.
+        problem: String,
     },
     /// A header and no data.
     #[error("{file}: no data rows after the header")]
@@ -92,10 +109,10 @@ pub enum TrajectoryError {
         /// What the CSV reader said.
         message: String,
     },
-    /// A row with the wrong number of fields (truncated or extra columns).
+    /// A row with another number of fields than the header has columns.
     #[error(
-        "{file}: line {line} (data row {row}): {found} fields where the header `{CSV_HEADER}` has 8: {}",
-        if *.found < 8 {
+        "{file}: line {line} (data row {row}): {found} fields where the header names {expected}: {}",
+        if *.found < *.expected {
             "the row is cut short (a truncated file?); complete or delete it"
         } else {
             "remove the extra fields (a trailing comma counts as one)"
@@ -110,6 +127,8 @@ pub enum TrajectoryError {
         row: usize,
         /// Number of fields found.
         found: usize,
+        /// Number of columns the header names.
+        expected: usize,
     },
     /// A field that is not a number.
     #[error(
@@ -123,7 +142,7 @@ pub enum TrajectoryError {
         /// 1-based data row.
         row: usize,
         /// Column name.
-        column: &'static str,
+        column: String,
         /// The offending text.
         text: String,
     },
@@ -137,7 +156,7 @@ pub enum TrajectoryError {
         /// 1-based data row.
         row: usize,
         /// Column name.
-        column: &'static str,
+        column: String,
         /// The value read.
         value: f64,
     },
@@ -177,51 +196,199 @@ pub enum TrajectoryError {
         /// 1-based data row.
         row: usize,
         /// Column name.
-        column: &'static str,
+        column: String,
         /// The value.
         value: f64,
     },
-    /// The three columns of a [`Trajectory`] have different lengths.
-    #[error(
-        "inconsistent trajectory: {time} times, {position} positions, {orientation} orientations"
-    )]
+    /// The columns of a [`Trajectory`] have different lengths.
+    #[error("inconsistent trajectory: {time} times, but {what} has {found} values")]
     LengthMismatch {
         /// Length of `time`.
         time: usize,
-        /// Length of `position`.
-        position: usize,
-        /// Length of `orientation`.
-        orientation: usize,
+        /// Which column: `position`, `orientation` or an area signal's name.
+        what: String,
+        /// Its length.
+        found: usize,
     },
 }
 
-/// Poses of a falling leaf over time (one entry per sample, all three vectors
-/// the same length).
+/// Which world axis points up in a file. leafmagic works with z up; a file
+/// with y up (as many animation tools and trackers write) is turned about x
+/// by +90° on reading, so that its y becomes z: (x, y, z) → (x, −z, y), and
+/// the orientation q → r q with r that rotation.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum UpAxis {
+    /// z up, gravity along −z (leafmagic's convention).
+    #[default]
+    Z,
+    /// y up, gravity along −y.
+    Y,
+}
+
+impl std::str::FromStr for UpAxis {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        match s.trim() {
+            "z" | "Z" => Ok(UpAxis::Z),
+            "y" | "Y" => Ok(UpAxis::Y),
+            other => Err(format!("`{other}` is not an up axis (expected z or y)")),
+        }
+    }
+}
+
+/// The projected area of the leaf seen from one camera, one value per
+/// sample (any unit: only its variation is used).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct AreaSignal {
+    /// The column name (`area`, `area1`, `area_cam2`, …).
+    pub name: String,
+    /// One value per sample.
+    pub values: Vec<f64>,
+}
+
+/// What reading a file noticed without refusing it.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+pub struct ReadNotes {
+    /// Columns the header names that are neither time, position,
+    /// orientation nor an area: ignored.
+    pub ignored_columns: Vec<String>,
+}
+
+/// The record of a falling leaf over time: one entry per sample in `time`
+/// and `position`; `orientation` the same length or empty (a record without
+/// orientation, e.g. from video), and each area signal the same length.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Trajectory {
     /// Sample times, seconds, strictly increasing.
     pub time: Vec<f64>,
     /// Centre position, metres, world frame, z up.
     pub position: Vec<Vector3<f64>>,
-    /// Orientation, body to world. Body z is the plate normal, body x the long axis.
+    /// Orientation, body to world (body z the plate normal, body x the long
+    /// axis); empty when the record has none.
     pub orientation: Vec<UnitQuaternion<f64>>,
+    /// Projected-area signals, if the record has any.
+    pub areas: Vec<AreaSignal>,
+}
+
+/// What a header column holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Column {
+    Time,
+    Position(usize),
+    Quaternion(usize),
+    Area(usize),
+    Ignored,
+}
+
+/// True for the names of projected-area columns: `area`, `area` followed by
+/// digits (`area1`), or `area_`/`area-` and letters, digits, `_` or `-`.
+fn is_area_name(name: &str) -> bool {
+    let lower = name.to_ascii_lowercase();
+    let Some(rest) = lower.strip_prefix("area") else {
+        return false;
+    };
+    let tail_ok = |s: &str| {
+        s.chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    };
+    rest.is_empty()
+        || rest.chars().all(|c| c.is_ascii_digit())
+        || (rest.starts_with(['_', '-']) && rest.len() > 1 && tail_ok(rest))
+}
+
+/// What a header says: what each column holds, the area columns' names and
+/// the ignored columns' names.
+struct Layout {
+    columns: Vec<Column>,
+    areas: Vec<String>,
+    ignored: Vec<String>,
+}
+
+/// The layout of a header, or what is wrong with it.
+fn layout(header: &[&str]) -> Result<Layout, String> {
+    let mut columns = Vec::with_capacity(header.len());
+    let mut areas = Vec::new();
+    let mut ignored = Vec::new();
+    let mut seen: Vec<String> = Vec::with_capacity(header.len());
+    for name in header {
+        let lower = name.to_ascii_lowercase();
+        if seen.contains(&lower) {
+            return Err(format!("column `{name}` appears twice"));
+        }
+        seen.push(lower.clone());
+        let col = if lower == "t" {
+            Column::Time
+        } else if let Some(k) = REQUIRED_COLUMNS[1..].iter().position(|c| *c == lower) {
+            Column::Position(k)
+        } else if let Some(k) = QUATERNION_COLUMNS.iter().position(|c| *c == lower) {
+            Column::Quaternion(k)
+        } else if is_area_name(name) {
+            areas.push(name.to_string());
+            Column::Area(areas.len() - 1)
+        } else {
+            ignored.push(name.to_string());
+            Column::Ignored
+        };
+        columns.push(col);
+    }
+    let missing: Vec<&str> = REQUIRED_COLUMNS
+        .iter()
+        .copied()
+        .filter(|c| !seen.iter().any(|s| s == c))
+        .collect();
+    if !missing.is_empty() {
+        let list = missing
+            .iter()
+            .map(|c| format!("`{c}`"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        return Err(format!(
+            "no column {list} (required: t,x,y,z; optional: qw,qx,qy,qz and area columns)"
+        ));
+    }
+    let quats = columns
+        .iter()
+        .filter(|c| matches!(c, Column::Quaternion(_)))
+        .count();
+    if quats != 0 && quats != 4 {
+        let (has, lacks): (Vec<&str>, Vec<&str>) = QUATERNION_COLUMNS
+            .iter()
+            .partition(|c| seen.iter().any(|s| s == *c));
+        return Err(format!(
+            "quaternion columns incomplete: has {} but not {} (all four of qw,qx,qy,qz, or none)",
+            has.join(","),
+            lacks.join(",")
+        ));
+    }
+    Ok(Layout {
+        columns,
+        areas,
+        ignored,
+    })
 }
 
 impl Trajectory {
-    /// An empty trajectory with room for `n` samples.
+    /// An empty trajectory with room for `n` poses.
     pub fn with_capacity(n: usize) -> Self {
         Self {
             time: Vec::with_capacity(n),
             position: Vec::with_capacity(n),
             orientation: Vec::with_capacity(n),
+            areas: Vec::new(),
         }
     }
 
-    /// Appends one sample.
+    /// Appends one pose (a sample with orientation).
     pub fn push(&mut self, t: f64, position: Vector3<f64>, orientation: UnitQuaternion<f64>) {
         self.time.push(t);
         self.position.push(position);
         self.orientation.push(orientation);
+    }
+
+    /// Appends one sample of position only (a record without orientation).
+    pub fn push_position(&mut self, t: f64, position: Vector3<f64>) {
+        self.time.push(t);
+        self.position.push(position);
     }
 
     /// Number of samples (length of `time`).
@@ -234,24 +401,58 @@ impl Trajectory {
         self.time.is_empty()
     }
 
-    /// Reads and validates a trajectory CSV file; errors name the file.
+    /// True when every sample has an orientation (a pose record).
+    pub fn has_orientation(&self) -> bool {
+        !self.time.is_empty() && self.orientation.len() == self.time.len()
+    }
+
+    /// The same record without its orientation (what video tracking of
+    /// this fall would give, areas apart).
+    pub fn without_orientation(&self) -> Trajectory {
+        Trajectory {
+            orientation: Vec::new(),
+            ..self.clone()
+        }
+    }
+
+    /// Reads and validates a trajectory CSV file (z up); errors name the
+    /// file. See [`Trajectory::read_csv_with`] for the y-up convention and
+    /// the notes.
     pub fn read_csv(path: &Path) -> Result<Self, TrajectoryError> {
+        Self::read_csv_with(path, UpAxis::Z).map(|(t, _)| t)
+    }
+
+    /// Reads and validates a trajectory CSV file written with `up` as the
+    /// vertical axis, turned to leafmagic's z up; also returns what was
+    /// noticed (ignored columns). Errors name the file.
+    pub fn read_csv_with(path: &Path, up: UpAxis) -> Result<(Self, ReadNotes), TrajectoryError> {
         let name = path.display().to_string();
         let file = std::fs::File::open(path).map_err(|error| TrajectoryError::Io {
             file: name.clone(),
             error,
         })?;
-        Self::from_csv_reader(std::io::BufReader::new(file), &name)
+        Self::from_csv_reader_with(std::io::BufReader::new(file), &name, up)
     }
 
-    /// Reads and validates a trajectory CSV from any reader. `source` is the
-    /// name used in error messages. Checks, in order: non-empty, header,
-    /// 8 fields per row, numbers, finite, time strictly increasing, unit
-    /// quaternion (then normalised).
+    /// Reads and validates a trajectory CSV from any reader (z up). `source`
+    /// is the name used in error messages.
     pub fn from_csv_reader<R: std::io::Read>(
         reader: R,
         source: &str,
     ) -> Result<Self, TrajectoryError> {
+        Self::from_csv_reader_with(reader, source, UpAxis::Z).map(|(t, _)| t)
+    }
+
+    /// Reads and validates a trajectory CSV from any reader, `up` being the
+    /// file's vertical axis. Checks, in order: non-empty, a header naming
+    /// `t,x,y,z` (and all four quaternion columns or none, no name twice),
+    /// as many fields per row as the header names, numbers, finite, time
+    /// strictly increasing, unit quaternion (then normalised).
+    pub fn from_csv_reader_with<R: std::io::Read>(
+        reader: R,
+        source: &str,
+        up: UpAxis,
+    ) -> Result<(Self, ReadNotes), TrajectoryError> {
         let file = || source.to_string();
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(false)
@@ -295,23 +496,35 @@ impl Trajectory {
                 Some(Ok(r)) => break r,
             }
         };
-        if header.iter().ne(COLUMNS.iter().copied()) {
-            let found = header.iter().collect::<Vec<_>>().join(",");
-            let looks_numeric = header.get(0).is_some_and(|f| f.parse::<f64>().is_ok());
-            return Err(if looks_numeric {
-                TrajectoryError::MissingHeader {
-                    file: file(),
-                    found,
-                }
-            } else {
-                TrajectoryError::WrongHeader {
-                    file: file(),
-                    found,
-                }
+        let names: Vec<&str> = header.iter().collect();
+        let found = names.join(",");
+        if names.first().is_some_and(|f| f.parse::<f64>().is_ok()) {
+            return Err(TrajectoryError::MissingHeader {
+                file: file(),
+                found,
             });
         }
+        let Layout {
+            columns,
+            areas: area_names,
+            ignored,
+        } = layout(&names).map_err(|problem| TrajectoryError::WrongHeader {
+            file: file(),
+            found: found.clone(),
+            problem,
+        })?;
+        let quaternion = columns.iter().any(|c| matches!(c, Column::Quaternion(_)));
 
-        let mut traj = Trajectory::default();
+        let mut traj = Trajectory {
+            areas: area_names
+                .into_iter()
+                .map(|name| AreaSignal {
+                    name,
+                    values: Vec::new(),
+                })
+                .collect(),
+            ..Trajectory::default()
+        };
         let mut row = 0usize;
         for rec in records {
             let rec = rec.map_err(csv_err)?;
@@ -320,21 +533,26 @@ impl Trajectory {
                 continue; // blank line (e.g. trailing): not a data row
             }
             row += 1;
-            if rec.len() != COLUMNS.len() {
+            if rec.len() != columns.len() {
                 return Err(TrajectoryError::FieldCount {
                     file: file(),
                     line,
                     row,
                     found: rec.len(),
+                    expected: columns.len(),
                 });
             }
-            let mut v = [0.0f64; 8];
+            let (mut t, mut p, mut q) = (0.0f64, [0.0f64; 3], [0.0f64; 4]);
             for (k, field) in rec.iter().enumerate() {
+                let col = columns[k];
+                if col == Column::Ignored {
+                    continue;
+                }
                 let x: f64 = field.parse().map_err(|_| TrajectoryError::Number {
                     file: file(),
                     line,
                     row,
-                    column: COLUMNS[k],
+                    column: names[k].to_string(),
                     text: field.to_string(),
                 })?;
                 if !x.is_finite() {
@@ -342,62 +560,122 @@ impl Trajectory {
                         file: file(),
                         line,
                         row,
-                        column: COLUMNS[k],
+                        column: names[k].to_string(),
                         value: x,
                     });
                 }
-                v[k] = x;
+                match col {
+                    Column::Time => t = x,
+                    Column::Position(i) => p[i] = x,
+                    Column::Quaternion(i) => q[i] = x,
+                    Column::Area(i) => traj.areas[i].values.push(x),
+                    Column::Ignored => {}
+                }
             }
             if let Some(&previous) = traj.time.last()
-                && v[0] <= previous
+                && t <= previous
             {
                 return Err(TrajectoryError::TimeOrder {
                     file: file(),
                     line,
                     row,
-                    t: v[0],
+                    t,
                     previous,
                 });
             }
-            let q = Quaternion::new(v[4], v[5], v[6], v[7]);
-            let norm = q.norm();
-            if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                return Err(TrajectoryError::NonUnitQuaternion {
-                    file: file(),
-                    line,
-                    row,
-                    norm,
-                });
-            }
-            let q = if (norm - 1.0).abs() <= UNIT_EXACT_TOLERANCE {
-                UnitQuaternion::new_unchecked(q)
+            let position = Vector3::new(p[0], p[1], p[2]);
+            if quaternion {
+                let q = Quaternion::new(q[0], q[1], q[2], q[3]);
+                let norm = q.norm();
+                if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+                    return Err(TrajectoryError::NonUnitQuaternion {
+                        file: file(),
+                        line,
+                        row,
+                        norm,
+                    });
+                }
+                let q = if (norm - 1.0).abs() <= UNIT_EXACT_TOLERANCE {
+                    UnitQuaternion::new_unchecked(q)
+                } else {
+                    UnitQuaternion::new_normalize(q)
+                };
+                traj.push(t, position, q);
             } else {
-                UnitQuaternion::new_normalize(q)
-            };
-            traj.push(v[0], Vector3::new(v[1], v[2], v[3]), q);
+                traj.push_position(t, position);
+            }
         }
         if traj.is_empty() {
             return Err(TrajectoryError::NoData { file: file() });
         }
-        Ok(traj)
+        if up == UpAxis::Y {
+            traj.turn_y_up_to_z_up();
+        }
+        Ok((
+            traj,
+            ReadNotes {
+                ignored_columns: ignored,
+            },
+        ))
+    }
+
+    /// Turns a record written with y up into z up (see [`UpAxis`]).
+    fn turn_y_up_to_z_up(&mut self) {
+        let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+        for p in &mut self.position {
+            *p = Vector3::new(p.x, -p.z, p.y);
+        }
+        for q in &mut self.orientation {
+            *q = r * *q;
+        }
+    }
+
+    /// The header line this record is written with: `t,x,y,z`, the
+    /// quaternion columns if it has an orientation, then its area columns.
+    pub fn csv_header(&self) -> String {
+        let mut h = REQUIRED_COLUMNS.join(",");
+        if !self.orientation.is_empty() {
+            for c in QUATERNION_COLUMNS {
+                h.push(',');
+                h.push_str(c);
+            }
+        }
+        for a in &self.areas {
+            h.push(',');
+            h.push_str(&a.name);
+        }
+        h
+    }
+
+    /// The column names of [`Trajectory::csv_header`], in order.
+    fn column_names(&self) -> Vec<String> {
+        self.csv_header().split(',').map(str::to_string).collect()
+    }
+
+    /// The numbers of data row `k` (0-based), in column order.
+    fn row_values(&self, k: usize, out: &mut Vec<f64>) {
+        out.clear();
+        let p = &self.position[k];
+        out.extend_from_slice(&[self.time[k], p.x, p.y, p.z]);
+        if let Some(q) = self.orientation.get(k) {
+            out.extend_from_slice(&[q.w, q.i, q.j, q.k]);
+        }
+        out.extend(self.areas.iter().map(|a| a.values[k]));
     }
 
     /// The CSV text, or an error if any value is NaN/infinite or the columns
     /// have different lengths. Deterministic: same data, same bytes.
     pub fn try_to_csv_bytes(&self) -> Result<Vec<u8>, TrajectoryError> {
         self.check_lengths()?;
-        for (i, (t, (p, q))) in self
-            .time
-            .iter()
-            .zip(self.position.iter().zip(&self.orientation))
-            .enumerate()
-        {
-            let v = row_values(*t, p, q);
-            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+        let names = self.column_names();
+        let mut v = Vec::with_capacity(names.len());
+        for k in 0..self.len() {
+            self.row_values(k, &mut v);
+            if let Some(c) = v.iter().position(|x| !x.is_finite()) {
                 return Err(TrajectoryError::WriteNonFinite {
-                    row: i + 1,
-                    column: COLUMNS[k],
-                    value: v[k],
+                    row: k + 1,
+                    column: names[c].clone(),
+                    value: v[c],
                 });
             }
         }
@@ -408,21 +686,21 @@ impl Trajectory {
     /// decimals). This never fails: a non-finite value is printed as `NaN` or
     /// `inf`, which [`Trajectory::from_csv_reader`] then rejects. Use
     /// [`Trajectory::try_to_csv_bytes`] or [`Trajectory::write_csv`], which
-    /// refuse such data, to produce files. Rows beyond the shortest column are
-    /// dropped.
+    /// refuse such data, to produce files. Rows beyond the shortest column
+    /// are dropped.
     pub fn to_csv_bytes(&self) -> Vec<u8> {
+        let header = self.csv_header();
+        let n = self.rows_written();
+        let columns = header.split(',').count();
         // ~15 characters per number is typical for simulator output.
-        let mut s = String::with_capacity(CSV_HEADER.len() + 1 + self.len() * 8 * 16);
-        s.push_str(CSV_HEADER);
+        let mut s = String::with_capacity(header.len() + 1 + n * columns * 16);
+        s.push_str(&header);
         s.push('\n');
-        for (t, (p, q)) in self
-            .time
-            .iter()
-            .zip(self.position.iter().zip(&self.orientation))
-        {
-            let v = row_values(*t, p, q);
-            for (k, x) in v.iter().enumerate() {
-                if k > 0 {
+        let mut v = Vec::with_capacity(columns);
+        for k in 0..n {
+            self.row_values(k, &mut v);
+            for (c, x) in v.iter().enumerate() {
+                if c > 0 {
                     s.push(',');
                 }
                 // Writing to a String cannot fail.
@@ -431,6 +709,15 @@ impl Trajectory {
             s.push('\n');
         }
         s.into_bytes()
+    }
+
+    /// Rows every written column has.
+    fn rows_written(&self) -> usize {
+        let mut n = self.time.len().min(self.position.len());
+        if !self.orientation.is_empty() {
+            n = n.min(self.orientation.len());
+        }
+        self.areas.iter().fold(n, |n, a| n.min(a.values.len()))
     }
 
     /// Writes the CSV atomically (temporary file + rename). Refuses NaN or
@@ -444,52 +731,95 @@ impl Trajectory {
     }
 
     /// The same fall sampled at `rate_hz` from the first sample time onwards:
-    /// positions interpolated linearly, orientations by slerp along the
-    /// shorter arc (q and −q are the same rotation). Used to check that the
-    /// classifier does not depend on the sampling rate. Returns an empty
-    /// trajectory if `rate_hz` is not positive and finite.
+    /// positions and areas interpolated linearly, orientations by slerp
+    /// along the shorter arc (q and −q are the same rotation). Returns an
+    /// empty trajectory if `rate_hz` is not positive and finite.
     pub fn resampled(&self, rate_hz: f64) -> Trajectory {
-        let n = self
-            .time
-            .len()
-            .min(self.position.len())
-            .min(self.orientation.len());
+        let n = self.rows_written();
         if n == 0 || !(rate_hz.is_finite() && rate_hz > 0.0) {
             return Trajectory::default();
         }
         let (t0, t1) = (self.time[0], self.time[n - 1]);
         let m = ((t1 - t0) * rate_hz + 1e-9).floor() as usize + 1;
-        let mut out = Trajectory::with_capacity(m);
+        let times: Vec<f64> = (0..m).map(|k| t0 + k as f64 / rate_hz).collect();
+        self.sampled_at(&times)
+    }
+
+    /// The record interpolated at the given times (increasing; clamped to
+    /// the record's span), as [`Trajectory::resampled`] interpolates.
+    pub fn sampled_at(&self, times: &[f64]) -> Trajectory {
+        let n = self.rows_written();
+        let has_q = !self.orientation.is_empty();
+        let mut out = Trajectory {
+            time: Vec::with_capacity(times.len()),
+            position: Vec::with_capacity(times.len()),
+            orientation: Vec::with_capacity(if has_q { times.len() } else { 0 }),
+            areas: self
+                .areas
+                .iter()
+                .map(|a| AreaSignal {
+                    name: a.name.clone(),
+                    values: Vec::with_capacity(times.len()),
+                })
+                .collect(),
+        };
+        if n == 0 {
+            return out;
+        }
         let mut j = 0usize;
-        for k in 0..m {
-            let t = t0 + k as f64 / rate_hz;
+        for &t in times {
             while j + 2 < n && self.time[j + 1] <= t {
                 j += 1;
             }
+            out.time.push(t);
             if n == 1 {
-                out.push(t, self.position[0], self.orientation[0]);
+                out.position.push(self.position[0]);
+                if has_q {
+                    out.orientation.push(self.orientation[0]);
+                }
+                for (o, a) in out.areas.iter_mut().zip(&self.areas) {
+                    o.values.push(a.values[0]);
+                }
                 continue;
             }
             let (ta, tb) = (self.time[j], self.time[j + 1]);
             let s = ((t - ta) / (tb - ta)).clamp(0.0, 1.0);
-            let p = self.position[j].lerp(&self.position[j + 1], s);
-            let q = slerp_short(&self.orientation[j], &self.orientation[j + 1], s);
-            out.push(t, p, q);
+            out.position
+                .push(self.position[j].lerp(&self.position[j + 1], s));
+            if has_q {
+                out.orientation.push(slerp_short(
+                    &self.orientation[j],
+                    &self.orientation[j + 1],
+                    s,
+                ));
+            }
+            for (o, a) in out.areas.iter_mut().zip(&self.areas) {
+                o.values
+                    .push(a.values[j] + s * (a.values[j + 1] - a.values[j]));
+            }
         }
         out
     }
 
     fn check_lengths(&self) -> Result<(), TrajectoryError> {
-        let (a, b, c) = (self.time.len(), self.position.len(), self.orientation.len());
-        if a == b && b == c {
-            Ok(())
-        } else {
-            Err(TrajectoryError::LengthMismatch {
-                time: a,
-                position: b,
-                orientation: c,
-            })
+        let n = self.time.len();
+        let mismatch = |what: &str, found: usize| TrajectoryError::LengthMismatch {
+            time: n,
+            what: what.to_string(),
+            found,
+        };
+        if self.position.len() != n {
+            return Err(mismatch("position", self.position.len()));
         }
+        if !self.orientation.is_empty() && self.orientation.len() != n {
+            return Err(mismatch("orientation", self.orientation.len()));
+        }
+        for a in &self.areas {
+            if a.values.len() != n {
+                return Err(mismatch(&a.name, a.values.len()));
+            }
+        }
+        Ok(())
     }
 }
 
@@ -512,11 +842,6 @@ fn slerp_short(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>, s: f64) -> Unit
         qa * (((1.0 - s) * angle).sin() / sin) + qb * ((s * angle).sin() / sin)
     };
     UnitQuaternion::new_normalize(Quaternion::from(v))
-}
-
-/// The eight numbers of one CSV row, in column order.
-fn row_values(t: f64, p: &Vector3<f64>, q: &UnitQuaternion<f64>) -> [f64; 8] {
-    [t, p.x, p.y, p.z, q.w, q.i, q.j, q.k]
 }
 
 #[cfg(test)]
@@ -599,12 +924,23 @@ mod tests {
         assert_err("0,0,0,0,1,0,0,0\n", &["line 1", "missing header"]);
         assert_err(
             "time,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n",
-            &["line 1", "wrong header"],
+            &["line 1", "no column `t`", "required: t,x,y,z"],
         );
+        assert_err("t,x,z,area1\n0,0,0,1\n", &["line 1", "no column `y`"]);
+        assert_err(
+            "t,x,y,z,qw,qx\n0,0,0,0,1,0\n",
+            &["line 1", "quaternion columns incomplete", "not qy,qz"],
+        );
+        assert_err("t,x,y,z,X\n0,0,0,0,0\n", &["line 1", "`X` appears twice"]);
         let ok = "0,0,0,0,1,0,0,0\n";
         assert_err(
             &format!("{H}{ok}0.1,0,0,-1,1,0\n"),
-            &["line 3", "data row 2", "6 fields"],
+            &[
+                "line 3",
+                "data row 2",
+                "6 fields where the header names 8",
+                "cut short",
+            ],
         );
         assert_err(
             &format!("{H}{ok}0.1,0,zero,-1,1,0,0,0\n"),
@@ -681,5 +1017,89 @@ mod tests {
             assert!((r.position[k] - tr.position[j]).norm() < 1e-12);
             assert!(r.orientation[k].angle_to(&tr.orientation[j]) < 1e-9);
         }
+    }
+
+    #[test]
+    fn columns_are_found_by_name_in_any_order_and_extras_are_noted() {
+        let text = "z,frame,t,area2,x,y,area1\n1.0,0,0,10,0.1,0.2,20\n0.9,1,0.01,11,0.1,0.21,19\n";
+        let (tr, notes) =
+            Trajectory::from_csv_reader_with(text.as_bytes(), "v.csv", UpAxis::Z).unwrap();
+        assert_eq!(notes.ignored_columns, vec!["frame".to_string()]);
+        assert!(!tr.has_orientation() && tr.orientation.is_empty());
+        assert_eq!(tr.time, vec![0.0, 0.01]);
+        assert_eq!(tr.position[1], Vector3::new(0.1, 0.21, 0.9));
+        let names: Vec<&str> = tr.areas.iter().map(|a| a.name.as_str()).collect();
+        assert_eq!(names, ["area2", "area1"]);
+        assert_eq!(tr.areas[1].values, vec![20.0, 19.0]);
+        // Written back in leafmagic's order, and read back the same.
+        let bytes = tr.try_to_csv_bytes().unwrap();
+        let text = String::from_utf8(bytes.clone()).unwrap();
+        assert!(
+            text.starts_with("t,x,y,z,area2,area1\n0,0.1,0.2,1,10,20\n"),
+            "{text}"
+        );
+        let back = Trajectory::from_csv_reader(&bytes[..], "back.csv").unwrap();
+        assert_eq!(back, tr);
+        // A pose file with columns shuffled reads as the pose file.
+        let shuffled = "qz,t,qy,x,qx,y,qw,z\n0,0,0,1,0,2,1,3\n";
+        let tr = read_str(shuffled).unwrap();
+        assert!(tr.has_orientation());
+        assert_eq!(tr.position[0], Vector3::new(1.0, 2.0, 3.0));
+        assert_eq!(tr.orientation[0], UnitQuaternion::identity());
+        assert_eq!(tr.csv_header(), CSV_HEADER);
+    }
+
+    #[test]
+    fn area_column_names() {
+        for yes in ["area", "area1", "AREA2", "area_cam1", "area-left"] {
+            assert!(is_area_name(yes), "{yes}");
+        }
+        for no in ["areal", "areas", "area_", "volume", "xarea", "area1b"] {
+            assert!(!is_area_name(no), "{no}");
+        }
+    }
+
+    #[test]
+    fn y_up_files_are_turned_to_z_up() {
+        // Falling along -y, drifting along +x; a plate whose normal is the
+        // file's up axis (y).
+        let s = 0.5f64.sqrt();
+        let text =
+            format!("t,x,y,z,qw,qx,qy,qz\n0,0,1,0,1,0,0,0\n0.1,0.05,0.9,-0.02,{s},-{s},0,0\n");
+        let (tr, _) =
+            Trajectory::from_csv_reader_with(text.as_bytes(), "y.csv", UpAxis::Y).unwrap();
+        assert_eq!(tr.position[0], Vector3::new(0.0, 0.0, 1.0));
+        assert!((tr.position[1] - Vector3::new(0.05, 0.02, 0.9)).norm() < 1e-15);
+        // Body z (the normal): at row 1 the file's rotation of -90° about x
+        // takes it to the file's +y, i.e. up.
+        let n = tr.orientation[1] * Vector3::z();
+        assert!((n - Vector3::z()).norm() < 1e-12, "{n}");
+        assert!("y".parse::<UpAxis>().unwrap() == UpAxis::Y);
+        assert!("w".parse::<UpAxis>().is_err());
+    }
+
+    #[test]
+    fn position_only_records_round_trip_and_resample() {
+        let mut tr = Trajectory::default();
+        tr.areas.push(AreaSignal {
+            name: "area".to_string(),
+            values: Vec::new(),
+        });
+        for k in 0..11 {
+            let t = k as f64 * 0.1;
+            tr.push_position(t, Vector3::new(t, 0.0, -t));
+            tr.areas[0].values.push(2.0 * t);
+        }
+        let r = tr.resampled(20.0);
+        assert_eq!(r.len(), 21);
+        assert!(r.orientation.is_empty());
+        assert!((r.position[3].x - 0.15).abs() < 1e-12);
+        assert!((r.areas[0].values[3] - 0.3).abs() < 1e-12);
+        let path = tmp_path("pos.csv");
+        tr.write_csv(&path).unwrap();
+        assert_eq!(Trajectory::read_csv(&path).unwrap(), tr);
+        tr.areas[0].values.pop();
+        let err = tr.try_to_csv_bytes().unwrap_err().to_string();
+        assert!(err.contains("area") && err.contains("10 values"), "{err}");
     }
 }

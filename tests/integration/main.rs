@@ -8,6 +8,9 @@ mod breeding;
 mod classes;
 mod common;
 mod contact;
+// Shared with examples/real_falls_classify.rs, which uses all of it.
+#[allow(dead_code)]
+mod corpus;
 mod export;
 mod fuzz;
 mod genome;
@@ -17,6 +20,7 @@ mod k8s;
 mod layers;
 mod leaves;
 mod like;
+mod real_falls;
 mod resume;
 mod rigid;
 mod scene_files;

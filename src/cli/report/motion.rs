@@ -4,6 +4,7 @@
 use super::text;
 use leafmagic::motion::classify::Classification;
 use leafmagic::motion::describe::{self, Descriptors};
+use leafmagic::motion::path::PathFeatures;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -14,6 +15,9 @@ pub fn class(c: &Classification) -> String {
         writeln!(out, "class           {} ({})", c.class, c.regime)?;
         if let Some(reason) = &c.reason {
             writeln!(out, "reason          {reason}")?;
+        }
+        if let Some(p) = &c.path {
+            return path_lines(out, c, p);
         }
         writeln!(
             out,
@@ -26,6 +30,55 @@ pub fn class(c: &Classification) -> String {
             f.net_turns, f.reversals, f.normal_flips, f.yaw_turns, f.tilt_mean_deg, f.tilt_std_deg
         )
     })
+}
+
+/// The lines of a decision from the path (and areas): the inputs, and the
+/// features behind it.
+fn path_lines(out: &mut String, c: &Classification, p: &PathFeatures) -> std::fmt::Result {
+    writeln!(out, "inputs          {}", c.inputs.describe())?;
+    // A record refused before it was measured (too short, too slow) has
+    // nothing more to show.
+    if p.t_end_s <= p.t_start_s {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "record          {:.1} Hz, window {:.2}–{:.2} s, {} gaps ({:.3} s missing, longest {:.3} s)",
+        p.sample_rate_hz, p.t_start_s, p.t_end_s, p.gaps, p.interpolated_s, p.longest_gap_s
+    )?;
+    // Refused before the path was measured (too gappy).
+    if p.samples == 0 {
+        return Ok(());
+    }
+    writeln!(
+        out,
+        "noise           {:.1} mm vertical, {:.1} mm horizontal (estimated), {} samples on the grid",
+        1e3 * p.position_noise_m,
+        1e3 * p.horizontal_noise_m,
+        p.samples
+    )?;
+    writeln!(
+        out,
+        "descent         {:.3} m/s mean (Froude {:.2}), modulation {:.2}, {:.1} chords",
+        p.mean_descent_speed_m_s, p.froude_number, p.descent_speed_cv, p.descent_chords
+    )?;
+    writeln!(
+        out,
+        "path            drift ratio {:.2} ({:.0}° from vertical), straightness {:.2}, {} reversals, {:.2} turns",
+        p.drift_ratio, p.glide_angle_deg, p.straightness, p.reversals, p.path_turns
+    )?;
+    if let (Some(m), Some(w), Some(r)) = (
+        p.area_maxima_per_s,
+        p.area_turn_rate_rad_s,
+        p.area_periodicity,
+    ) {
+        writeln!(
+            out,
+            "areas           {} signals, {m:.1} maxima per second (≈ {w:.1} rad/s about a horizontal axis), periodicity {r:.2}",
+            p.area_signals
+        )?;
+    }
+    Ok(())
 }
 
 /// `classify`: the file, its length in samples, and its classification.

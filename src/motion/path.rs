@@ -1,0 +1,1026 @@
+//! Names the motion of a fall from its path alone — and from the projected
+//! areas a camera saw, when the record has them — as video tracking gives
+//! falls: positions, maybe silhouettes, no rotation, a second or two,
+//! noise, gaps.
+//!
+//! # Method
+//!
+//! 1. **Checks**: ≥ [`MIN_PATH_SAMPLE_RATE_HZ`] sampling, ≥
+//!    [`MIN_PATH_DURATION_S`] of record, gaps (intervals longer than
+//!    [`GAP_FACTOR`] × the median one) no longer than [`MAX_GAP_S`] each and
+//!    [`MAX_GAP_SHARE`] of the window in all, else `Undetermined` with the
+//!    reason. The record is then put on a uniform grid at its median rate by
+//!    linear interpolation (uneven steps and short gaps, which are counted
+//!    and reported).
+//! 2. **Window**: a record longer than [`WHOLE_RECORD_S`] loses its start as
+//!    the full classifier's does (the first [`TRANSIENT_FRACTION`]), but never down to
+//!    less than [`WHOLE_RECORD_S`]; a shorter one is taken whole (a real
+//!    drop of about a metre lasts 1–1.5 s from release). It must fall at
+//!    least [`MIN_PATH_DESCENT_CHORDS`] chord lengths ("not falling"
+//!    otherwise).
+//! 3. **Path**: velocities by a local linear fit over ±[`SMOOTHING_S`]
+//!    (noise of a millimetre at 100 Hz moves them by ~1 cm/s). From them:
+//!    the descent speed and its spread, the drift ratio (glide angle), the
+//!    straightness of the horizontal path |∫v_h dt| / ∫|v_h| dt (1: a
+//!    straight slanted line, ~0: swinging back and forth), the reversals of
+//!    the horizontal velocity along its dominant axis (a swing), and the
+//!    turning of the horizontal velocity's direction (a helix).
+//! 4. **Areas** (each signal detrended): maxima per second (swings of at
+//!    least [`AREA_MIN_SWING`] of the signal's range) — a plate turning
+//!    about a horizontal axis shows two per turn, so the turn rate is π ×
+//!    maxima per second — and the periodicity of the signal (its
+//!    autocorrelation at the first peak after the first zero).
+//! 5. **Rules**, first match wins (the thresholds and where they come from
+//!    are the constants below; docs/classification.md reports how they
+//!    were calibrated and checked).
+//!
+//! "Steady" is a modulation below
+//! [`STEADY_MAX_MODULATION`] (or below what the record's noise leaves,
+//! [`PathFeatures::modulation_noise`], if that is larger):
+//!
+//! | # | class / regime | conditions |
+//! |---|---|---|
+//! | 1 | spinner / autorotation | a tight helix: the horizontal velocity turns ≥ [`HELIX_MIN_TURNS`] the same way (≥ [`HELIX_MIN_CONSISTENCY`]) round a circle of radius < [`HELIX_MAX_RADIUS_CHORDS`], modulation < [`HELIX_MAX_MODULATION`] |
+//! | 2 | floater / flutter | ≥ [`FLUTTER_MIN_REVERSALS`] reversals of a swing with periodicity ≥ [`FLUTTER_MIN_PERIODICITY`] that comes to rest at each (horizontal speed spread ≥ [`FLUTTER_MIN_SPEED_SPREAD`]), drift < [`GLIDE_MIN_DRIFT`] |
+//! | 3 | floater / steady | steady, drift < [`GLIDE_MIN_DRIFT`], Fr < [`STEADY_MAX_FROUDE`] |
+//! | 4 | spinner / autorotation | steady, drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`STEADY_MAX_FROUDE`]: straight down, fast (or an edge-on dive: the path cannot tell) |
+//! | 5 | floater / glide | steady, drift ≥ [`GLIDE_MIN_DRIFT`] |
+//! | 6 | spinner / tumble | straightness ≥ [`TUMBLE_MIN_STRAIGHTNESS`], drift ≥ [`GLIDE_MIN_DRIFT`] (modulated); with areas, ≥ [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] area maxima per second |
+//! | 7 | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`PLUNGE_MIN_FROUDE`] (modulated: not caught by 4) |
+//! | 8 | lilter / chaotic | otherwise: swings, reverses and wanders |
+
+use serde::{Deserialize, Serialize};
+
+use crate::motion::class::{MotionClass, Regime};
+use crate::motion::rules::{self, Cond, Rule};
+use crate::motion::trajectory::Trajectory;
+
+// ---------------------------------------------------------------- record checks
+
+/// Lowest accepted sampling rate, Hz (the issue's floor: video at 25 frames
+/// per second; the fastest tumbling of paper squares, 26 rad/s, shows area
+/// maxima at 8 Hz, below that rate's Nyquist frequency of 12.5 Hz).
+pub const MIN_PATH_SAMPLE_RATE_HZ: f64 = 25.0;
+
+/// Relative slack on [`MIN_PATH_SAMPLE_RATE_HZ`] for time stamps printed
+/// with few decimals (as the full classifier's
+/// [`crate::motion::classify::SAMPLE_RATE_TOLERANCE`]).
+pub const SAMPLE_RATE_TOLERANCE: f64 = 0.01;
+
+/// Share of a long record's duration discarded as start-up transient (as
+/// the full classifier's [`crate::motion::classify::TRANSIENT_FRACTION`]).
+pub const TRANSIENT_FRACTION: f64 = 0.4;
+
+/// Shortest record that can be classified, s (the issue's floor).
+pub const MIN_PATH_DURATION_S: f64 = 0.5;
+
+/// An interval longer than this many median intervals is a gap (a dropped
+/// frame or more; jitter of time stamps stays well below).
+pub const GAP_FACTOR: f64 = 1.5;
+
+/// Longest gap bridged by interpolation, s: a tenth of a second, about half
+/// a turn of a tumbling paper square (our choice).
+pub const MAX_GAP_S: f64 = 0.1;
+
+/// Largest share of the window that may be interpolated gaps (our choice).
+pub const MAX_GAP_SHARE: f64 = 0.2;
+
+/// Records up to this long are classified whole, s: a real drop of about a
+/// metre lasts 1.0–1.5 s from release and the start is part of it (Howison
+/// et al. 2020); longer records lose their start as the full classifier's
+/// do, down to this length at least.
+pub const WHOLE_RECORD_S: f64 = 1.5;
+
+/// Fewest chord lengths of descent in the window: "not falling" below
+/// (our choice: the largest real squares fall about 4 diagonals in their
+/// shortest segments).
+pub const MIN_PATH_DESCENT_CHORDS: f64 = 2.0;
+
+/// Standard gravity, m/s² (for the Froude number).
+const STANDARD_GRAVITY: f64 = 9.80665;
+
+/// Half-width of the local linear fit that gives velocities, s. It spans
+/// ±4 frames at 98 fps: noise of 1 mm then moves a velocity by ~1.3 cm/s,
+/// while the descent-speed modulation of a tumbling square (twice its turn
+/// rate, ~6 Hz) keeps about half its amplitude.
+pub const SMOOTHING_S: f64 = 0.04;
+
+// ---------------------------------------------------------------- features
+
+/// A reversal must swing the horizontal velocity from +this fraction of the
+/// descent speed to −this along the swing axis (our choice: well above the
+/// noise of a tracked record, well below the swinging of a fluttering
+/// plate).
+pub const REVERSAL_SPEED_FRACTION: f64 = 0.15;
+
+/// Horizontal speeds below this fraction of the descent speed carry no
+/// direction to follow for a helix (our choice: a leaf autorotating about
+/// the vertical drags its centre round a circle of about a centimetre at
+/// a few tenths of a metre per second, 5–10 % of its descent speed).
+pub const HELIX_SPEED_FRACTION: f64 = 0.03;
+
+/// Speeds must also exceed this many times the noise the record's own
+/// noise leaves in a velocity (estimated from the record, see
+/// [`PathFeatures::position_noise_m`]).
+pub const NOISE_MULTIPLE: f64 = 4.0;
+
+/// Smallest swing of an area signal counted as a maximum, as a fraction of
+/// the signal's range over the window: the authors' own rate of tumbling
+/// counted maxima of at least 5 % prominence on clean signals; tracked
+/// silhouettes flicker by more, 20 % keeps the turns and drops the flicker
+/// (calibrated, docs/classification.md).
+pub const AREA_MIN_SWING: f64 = 0.2;
+
+/// Half-width of the moving average applied to area signals before
+/// counting maxima, s (one frame at 98 fps: silhouette flicker).
+pub const AREA_SMOOTHING_S: f64 = 0.01;
+
+// ---------------------------------------------------------------- rules
+
+/// Largest modulation of a steady descent: the spread of the descent speed
+/// about its trend, over its mean, noise removed (our choice: a leaf
+/// falling steadily or gliding has none, tumbling and rocking plates 7–100
+/// % — the real squares' smallest is 7 %, leafmagic's tumbling cards'
+/// 9 %).
+pub const STEADY_MAX_MODULATION: f64 = 0.04;
+
+/// Least drift ratio of a glide or a tumble: a path ≥ 5.7° from the
+/// vertical (the full classifier's
+/// [`crate::motion::classify::GLIDE_MIN_DRIFT_RATIO`]).
+pub const GLIDE_MIN_DRIFT: f64 = 0.1;
+
+/// Least Froude number U/√(gL) of a steady fall straight down that is not
+/// a floater's: a broadside plate falls slowly (a floater "seemed to float
+/// … gently down", Haumann et al. §4.1), a leaf spinning about the vertical
+/// or diving edge-on fast. Our choice, from leafmagic's own falls: its
+/// steady floaters fall at Fr 0.3–1.9, its spinners that fall straight
+/// down at 2.0–9 (docs/classification.md).
+pub const STEADY_MAX_FROUDE: f64 = 2.0;
+
+/// Least Froude number of a fall straight down (drift below
+/// [`GLIDE_MIN_DRIFT`]) that is a spinner's even when its descent is
+/// modulated: twice [`STEADY_MAX_FROUDE`]. Empirical, not clean: on
+/// leafmagic's own falls three spinners autorotating with a modulated
+/// descent fall at Fr 4.7–5.2, but two lilters at Fr 4.6–4.7 too; the rule
+/// gains one fall net on the corpus and three on the held-out falls, which
+/// were not looked at when it was chosen (docs/classification.md).
+pub const PLUNGE_MIN_FROUDE: f64 = 2.0 * STEADY_MAX_FROUDE;
+
+/// Least straightness |∫v_h dt| / ∫|v_h| dt of a tumble: the path is a
+/// straight slanted line (Mahadevan, Ryu & Samuel 1999: "descent along a
+/// path at a nearly constant incline"; people labelling the real squares:
+/// tumbling paper glides off on a straight slanted line, chaotic paper
+/// swings, reverses and wanders). Calibrated on the real squares
+/// (docs/classification.md).
+pub const TUMBLE_MIN_STRAIGHTNESS: f64 = 0.65;
+
+/// Least area maxima per second of a tumble when area signals are given:
+/// two maxima per turn, so a turn rate of at least 11 rad/s. Calibrated on
+/// the real squares (docs/classification.md).
+pub const TUMBLE_MIN_AREA_MAXIMA_PER_S: f64 = 3.5;
+
+/// Fewest reversals of the horizontal velocity of a flutter: two periods
+/// (the full classifier asks for three,
+/// [`crate::motion::classify::MIN_OSCILLATION_PERIODS`], over a window of
+/// seconds; a record of 1–1.5 s holds two of a flutter at 1.5 Hz, and the
+/// periodicity asked for below tells a regular swing from a chaotic one).
+pub const FLUTTER_MIN_REVERSALS: usize = 4;
+
+/// Least spread of a flutter's horizontal speed: it comes to rest at each
+/// reversal (the |·| of a sine has a spread of 0.48), where a helix seen
+/// along one axis also "reverses" at constant speed (our choice, half of
+/// the sine's).
+pub const FLUTTER_MIN_SPEED_SPREAD: f64 = 0.25;
+
+/// Least periodicity of a flutter's swing: flutter is periodic, chaos is
+/// not (Field et al. 1997). Our choice: leafmagic's and MuJoCo's
+/// flutterers swing at 0.9–1.0, its lilters below 0.7.
+pub const FLUTTER_MIN_PERIODICITY: f64 = 0.8;
+
+/// Fewest net turns of the horizontal velocity's direction, and its least
+/// consistency, of an autorotation: a helix (the full classifier's
+/// [`crate::motion::classify::AUTOROTATION_MIN_YAW_TURNS`] and
+/// [`crate::motion::classify::AUTOROTATION_MIN_YAW_CONSISTENCY`], on the
+/// path instead of the attitude), descending steadily (modulation below
+/// [`HELIX_MAX_MODULATION`]: autorotation is a steady state).
+pub const HELIX_MIN_TURNS: f64 = 1.0;
+/// See [`HELIX_MIN_TURNS`].
+pub const HELIX_MIN_CONSISTENCY: f64 = 0.9;
+/// Largest radius of an autorotation's helix, chords: a leaf spinning about
+/// the vertical drags its centre round a circle of about its own size,
+/// while a floater gliding in a turn describes a wide one (our choice:
+/// leafmagic's autorotating spinners circle at 0.2–3 chords, most of its
+/// turning floaters at 3–7; docs/classification.md).
+pub const HELIX_MAX_RADIUS_CHORDS: f64 = 3.0;
+/// See [`HELIX_MIN_TURNS`] (our choice: leafmagic's autorotating spinners
+/// modulate their descent by at most 9 %, chaotic paper by 13 % and more).
+pub const HELIX_MAX_MODULATION: f64 = 0.1;
+
+// ---------------------------------------------------------------- types
+
+/// The two thresholds calibrated on people's labels of the real paper
+/// squares (docs/classification.md): the rest are physical or taken from
+/// the full classifier and are not refitted.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Calibration {
+    /// [`TUMBLE_MIN_STRAIGHTNESS`].
+    pub tumble_min_straightness: f64,
+    /// [`TUMBLE_MIN_AREA_MAXIMA_PER_S`].
+    pub tumble_min_area_maxima_per_s: f64,
+}
+
+impl Default for Calibration {
+    fn default() -> Self {
+        Calibration {
+            tumble_min_straightness: TUMBLE_MIN_STRAIGHTNESS,
+            tumble_min_area_maxima_per_s: TUMBLE_MIN_AREA_MAXIMA_PER_S,
+        }
+    }
+}
+
+/// Which inputs a classification used.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Inputs {
+    /// The orientation (and the path): the full classifier.
+    Orientation,
+    /// The path and projected-area signals.
+    Areas,
+    /// The path only.
+    Path,
+}
+
+impl Inputs {
+    /// In words, for reports.
+    pub fn describe(self) -> &'static str {
+        match self {
+            Inputs::Orientation => "orientation and path",
+            Inputs::Areas => "path and projected areas (no orientation)",
+            Inputs::Path => "path only (no orientation, no areas)",
+        }
+    }
+}
+
+/// The numbers behind a decision from the path (and areas), measured over
+/// the window.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+pub struct PathFeatures {
+    /// Start of the window, s.
+    pub t_start_s: f64,
+    /// End of the window, s.
+    pub t_end_s: f64,
+    /// Samples in the window on the uniform grid.
+    pub samples: usize,
+    /// Sampling rate, Hz (1 / median interval): the grid's.
+    pub sample_rate_hz: f64,
+    /// Gaps (intervals over [`GAP_FACTOR`] median intervals) bridged by
+    /// interpolation in the window.
+    pub gaps: usize,
+    /// The longest of them, s (0 without).
+    pub longest_gap_s: f64,
+    /// Their total, s.
+    pub interpolated_s: f64,
+    /// Fall over the window, m.
+    pub descent_m: f64,
+    /// That fall in chord lengths.
+    pub descent_chords: f64,
+    /// Mean descent speed, m/s.
+    pub mean_descent_speed_m_s: f64,
+    /// Noise of the vertical position, m, estimated from the record (median
+    /// absolute second difference / (0.6745 √6)).
+    pub position_noise_m: f64,
+    /// The same for the horizontal position (the larger of x and y), m.
+    pub horizontal_noise_m: f64,
+    /// Modulation of the descent: the spread of the smoothed descent speed
+    /// about its linear trend, over its mean.
+    pub descent_speed_cv: f64,
+    /// What the record's noise alone would give as a modulation (its
+    /// spread in a velocity over the descent speed): a modulation below it
+    /// is not measured.
+    pub modulation_noise: f64,
+    /// Froude number U / √(g L) of the descent (Belmonte, Eisenberg & Moses
+    /// 1998), U the mean descent speed and L the chord.
+    pub froude_number: f64,
+    /// Horizontal displacement / descent.
+    pub drift_ratio: f64,
+    /// Angle of the mean path from the vertical, degrees (atan of the drift
+    /// ratio).
+    pub glide_angle_deg: f64,
+    /// |∫v_h dt| / ∫|v_h| dt: 1 = a straight path, 0 = back and forth.
+    pub straightness: f64,
+    /// Mean horizontal speed / mean descent speed.
+    pub horizontal_speed_ratio: f64,
+    /// Spread (std / mean) of the horizontal speed: a swing comes to rest
+    /// at each reversal (a sine's |·| has 0.48), a helix or a glide keeps
+    /// its speed (0).
+    pub horizontal_speed_spread: f64,
+    /// Reversals of the horizontal velocity along its dominant axis (from
+    /// above +[`REVERSAL_SPEED_FRACTION`] of the descent speed to below −).
+    pub reversals: usize,
+    /// [`PathFeatures::reversals`] per second.
+    pub reversals_per_s: f64,
+    /// Periodicity of the horizontal velocity along that axis (its
+    /// autocorrelation at the first peak; 1 = a regular swing).
+    pub swing_periodicity: f64,
+    /// Net turns of the direction of the horizontal velocity (signed).
+    pub path_turns: f64,
+    /// |net| / total turning of that direction: 1 = always the same way.
+    pub path_turn_consistency: f64,
+    /// Radius of the circle the centre goes round, in chords: the mean
+    /// horizontal speed over the net rate of turning of its direction
+    /// (infinite without turning).
+    #[serde(serialize_with = "finite_or_null")]
+    pub helix_radius_chords: f64,
+    /// Area signals used.
+    pub area_signals: usize,
+    /// Area maxima per second (mean over the signals), if any.
+    pub area_maxima_per_s: Option<f64>,
+    /// π × that: the turn rate of a plate turning about a horizontal axis,
+    /// rad/s.
+    pub area_turn_rate_rad_s: Option<f64>,
+    /// Periodicity of the area signals (the best one's autocorrelation at
+    /// its first peak; 1 = perfectly periodic), if any.
+    pub area_periodicity: Option<f64>,
+    /// Distance to the nearest class boundary, in threshold scale units,
+    /// clipped to [0, 1].
+    pub margin: f64,
+    /// Distance to the nearest regime boundary, same units.
+    pub regime_margin: f64,
+}
+
+/// Serializes a non-finite number as `null` (JSON has no infinity).
+fn finite_or_null<S: serde::Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+    if x.is_finite() {
+        s.serialize_f64(*x)
+    } else {
+        s.serialize_none()
+    }
+}
+
+/// What [`classify_path`] decided.
+#[derive(Clone, Debug)]
+pub struct PathVerdict {
+    /// Floater, spinner, lilter or undetermined.
+    pub class: MotionClass,
+    /// The finer regime.
+    pub regime: Regime,
+    /// Why.
+    pub reason: String,
+    /// Which inputs were used.
+    pub inputs: Inputs,
+    /// The numbers behind it.
+    pub features: PathFeatures,
+}
+
+// ---------------------------------------------------------------- classify
+
+/// Classifies a fall from its path, and from its area signals if it has any
+/// and `use_areas` is set; the orientation, if any, is not looked at.
+/// `size` is the leaf's chord (longest extent), m.
+pub fn classify_path(tr: &Trajectory, size: f64, use_areas: bool) -> PathVerdict {
+    classify_path_with(tr, size, use_areas, &Calibration::default())
+}
+
+/// [`classify_path`] with the thresholds calibrated on people's labels set
+/// otherwise: what cross-validation refits on part of the data.
+pub fn classify_path_with(
+    tr: &Trajectory,
+    size: f64,
+    use_areas: bool,
+    calibration: &Calibration,
+) -> PathVerdict {
+    let inputs = if use_areas && !tr.areas.is_empty() {
+        Inputs::Areas
+    } else {
+        Inputs::Path
+    };
+    let undetermined = |features: PathFeatures, reason: String| PathVerdict {
+        class: MotionClass::Undetermined,
+        regime: Regime::Undetermined,
+        reason,
+        inputs,
+        features,
+    };
+    let n = tr.time.len();
+    if !(size.is_finite() && size > 0.0) {
+        return undetermined(
+            PathFeatures::default(),
+            format!("leaf size must be positive and finite, got {size}"),
+        );
+    }
+    if tr.position.len() != n || tr.areas.iter().any(|a| a.values.len() != n) {
+        return undetermined(
+            PathFeatures::default(),
+            format!(
+                "inconsistent trajectory: {n} times, {} positions",
+                tr.position.len()
+            ),
+        );
+    }
+    for k in 0..n {
+        let finite = tr.time[k].is_finite()
+            && tr.position[k].iter().all(|x| x.is_finite())
+            && (!use_areas || tr.areas.iter().all(|a| a.values[k].is_finite()));
+        if !finite {
+            return undetermined(
+                PathFeatures::default(),
+                format!("non-finite value at sample {}", k + 1),
+            );
+        }
+        if k > 0 && tr.time[k] <= tr.time[k - 1] {
+            return undetermined(
+                PathFeatures::default(),
+                format!("time not strictly increasing at sample {}", k + 1),
+            );
+        }
+    }
+    let duration = if n > 0 {
+        tr.time[n - 1] - tr.time[0]
+    } else {
+        0.0
+    };
+    if n < 3 || duration < MIN_PATH_DURATION_S {
+        return undetermined(
+            PathFeatures {
+                samples: n,
+                ..PathFeatures::default()
+            },
+            format!(
+                "too short: {n} samples over {duration:.3} s (need at least {MIN_PATH_DURATION_S} s)"
+            ),
+        );
+    }
+    let mut dts: Vec<f64> = tr.time.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = dts.len() / 2;
+    let median_dt = *dts.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let rate = 1.0 / median_dt;
+    let mut f = PathFeatures {
+        sample_rate_hz: rate,
+        ..PathFeatures::default()
+    };
+    if rate < MIN_PATH_SAMPLE_RATE_HZ * (1.0 - SAMPLE_RATE_TOLERANCE) {
+        return undetermined(
+            f,
+            format!("sampled at {rate:.1} Hz, below the {MIN_PATH_SAMPLE_RATE_HZ} Hz minimum"),
+        );
+    }
+
+    // The window, then its gaps.
+    let t0 = tr.time[0];
+    let skip = (TRANSIENT_FRACTION * duration).min((duration - WHOLE_RECORD_S).max(0.0));
+    let t_start = t0 + skip;
+    let i0 = tr.time.partition_point(|&t| t < t_start - 1e-9).min(n - 1);
+    f.t_start_s = tr.time[i0];
+    f.t_end_s = tr.time[n - 1];
+    let window = f.t_end_s - f.t_start_s;
+    for k in i0..n - 1 {
+        let dt = tr.time[k + 1] - tr.time[k];
+        if dt > GAP_FACTOR * median_dt {
+            f.gaps += 1;
+            f.longest_gap_s = f.longest_gap_s.max(dt);
+            f.interpolated_s += dt - median_dt;
+        }
+    }
+    if f.longest_gap_s > MAX_GAP_S {
+        return undetermined(
+            f.clone(),
+            format!(
+                "too gappy: a gap of {:.3} s (longest bridged: {MAX_GAP_S} s)",
+                f.longest_gap_s
+            ),
+        );
+    }
+    if f.interpolated_s > MAX_GAP_SHARE * window {
+        return undetermined(
+            f.clone(),
+            format!(
+                "too gappy: {:.3} s of the {window:.3} s window missing in {} gaps (at most {:.0} %)",
+                f.interpolated_s,
+                f.gaps,
+                100.0 * MAX_GAP_SHARE
+            ),
+        );
+    }
+
+    // The uniform grid.
+    let m = ((window * rate) + 1e-6).floor() as usize + 1;
+    let times: Vec<f64> = (0..m).map(|k| f.t_start_s + k as f64 * median_dt).collect();
+    let grid = tr.sampled_at(&times);
+    f.samples = m;
+    measure_path(&grid, median_dt, size, &mut f);
+    if inputs == Inputs::Areas {
+        measure_areas(&grid, median_dt, &mut f);
+    }
+    // NaN-safe: a NaN descent is "not falling" too.
+    if f.descent_chords.is_nan() || f.descent_chords < MIN_PATH_DESCENT_CHORDS {
+        return undetermined(
+            f.clone(),
+            format!(
+                "not falling: {:.2} chord lengths of descent in the window {:.3}–{:.3} s (need {MIN_PATH_DESCENT_CHORDS})",
+                f.descent_chords, f.t_start_s, f.t_end_s
+            ),
+        );
+    }
+    decide(f, inputs, calibration)
+}
+
+/// Velocity by a local linear fit over ±`h` samples (truncated at the
+/// ends), per unit of `dt`.
+fn slope(x: &[f64], h: usize, dt: f64, out: &mut Vec<f64>) {
+    let n = x.len();
+    out.clear();
+    for k in 0..n {
+        let (a, b) = (k.saturating_sub(h), (k + h).min(n - 1));
+        let mean_j = 0.5 * (a + b) as f64;
+        let (mut num, mut den) = (0.0, 0.0);
+        for (j, &xj) in x.iter().enumerate().take(b + 1).skip(a) {
+            let d = j as f64 - mean_j;
+            num += d * xj;
+            den += d * d;
+        }
+        out.push(if den > 0.0 { num / (den * dt) } else { 0.0 });
+    }
+}
+
+/// The path features of a uniform record.
+fn measure_path(g: &Trajectory, dt: f64, size: f64, f: &mut PathFeatures) {
+    let m = g.len();
+    let duration = (m - 1) as f64 * dt;
+    let (pa, pb) = (g.position[0], g.position[m - 1]);
+    f.descent_m = pa.z - pb.z;
+    f.descent_chords = f.descent_m / size;
+    f.mean_descent_speed_m_s = f.descent_m / duration;
+    let horizontal = (pb.x - pa.x).hypot(pb.y - pa.y);
+    f.drift_ratio = if f.descent_m > 0.0 {
+        horizontal / f.descent_m
+    } else {
+        0.0
+    };
+    f.glide_angle_deg = f.drift_ratio.atan().to_degrees();
+
+    let h = ((SMOOTHING_S / dt).round() as usize).max(1);
+    let coord = |d: usize| g.position.iter().map(|p| p[d]).collect::<Vec<f64>>();
+    let (x, y, z) = (coord(0), coord(1), coord(2));
+    let (mut vx, mut vy, mut vz) = (Vec::new(), Vec::new(), Vec::new());
+    slope(&x, h, dt, &mut vx);
+    slope(&y, h, dt, &mut vy);
+    slope(&z, h, dt, &mut vz);
+    // The noise of the record and what it leaves in a velocity: the slope
+    // of a least-squares line through 2h + 1 points of independent noise σ
+    // has the spread σ / (dt √Σj²), Σj² = h(h + 1)(2h + 1)/3.
+    f.position_noise_m = noise(&z);
+    f.horizontal_noise_m = noise(&x).max(noise(&y));
+    let sum_j2 = (h * (h + 1) * (2 * h + 1)) as f64 / 3.0;
+    let noise_v = f.position_noise_m / (dt * sum_j2.sqrt());
+    let noise_vh = f.horizontal_noise_m / (dt * sum_j2.sqrt());
+
+    // The spread about a linear trend (a plate still speeding up is not
+    // modulating its descent), less what the noise puts there.
+    // Statistics of velocities leave out the h samples at each end, whose
+    // fits are one-sided (and three times noisier).
+    let inner = if m > 4 * h { h..m - h } else { 0..m };
+    let vz_inner = &vz[inner.clone()];
+    let mean_vz = vz_inner.iter().sum::<f64>() / vz_inner.len() as f64;
+    let residual = detrended(vz_inner);
+    let var_vz = residual.iter().map(|v| v * v).sum::<f64>() / residual.len() as f64;
+    (f.descent_speed_cv, f.modulation_noise) = if mean_vz != 0.0 {
+        (
+            (var_vz - noise_v * noise_v).max(0.0).sqrt() / mean_vz.abs(),
+            noise_v / mean_vz.abs(),
+        )
+    } else {
+        (0.0, 0.0)
+    };
+    f.froude_number = speed_of(f.mean_descent_speed_m_s) / (STANDARD_GRAVITY * size).sqrt();
+    let (sx, sy): (f64, f64) = (vx.iter().sum(), vy.iter().sum());
+    let path: f64 = vx.iter().zip(&vy).map(|(a, b)| a.hypot(*b)).sum();
+    f.straightness = if path > 0.0 { sx.hypot(sy) / path } else { 0.0 };
+    let speed = f.mean_descent_speed_m_s.abs();
+    f.horizontal_speed_ratio = if speed > 0.0 {
+        path / m as f64 / speed
+    } else {
+        0.0
+    };
+    // How much the horizontal speed itself varies: a swing passes through
+    // rest at every reversal, a helix keeps its speed.
+    let hs: Vec<f64> = vx[inner.clone()]
+        .iter()
+        .zip(&vy[inner.clone()])
+        .map(|(a, b)| a.hypot(*b))
+        .collect();
+    let hs_mean = hs.iter().sum::<f64>() / hs.len() as f64;
+    let hs_var = hs.iter().map(|v| (v - hs_mean).powi(2)).sum::<f64>() / hs.len() as f64;
+    f.horizontal_speed_spread = if hs_mean > 0.0 {
+        hs_var.sqrt() / hs_mean
+    } else {
+        0.0
+    };
+
+    // Reversals along the dominant horizontal axis of the velocity.
+    let (mut cxx, mut cxy, mut cyy) = (0.0, 0.0, 0.0);
+    for (a, b) in vx.iter().zip(&vy) {
+        cxx += a * a;
+        cxy += a * b;
+        cyy += b * b;
+    }
+    let angle = 0.5 * (2.0 * cxy).atan2(cxx - cyy);
+    let (ux, uy) = (angle.cos(), angle.sin());
+
+    let threshold = (REVERSAL_SPEED_FRACTION * speed).max(NOISE_MULTIPLE * noise_vh);
+    let mut state = 0i8;
+    for (a, b) in vx.iter().zip(&vy) {
+        let along = a * ux + b * uy;
+        let now = if along > threshold {
+            1
+        } else if along < -threshold {
+            -1
+        } else {
+            0
+        };
+        if now != 0 && now != state {
+            if state != 0 {
+                f.reversals += 1;
+            }
+            state = now;
+        }
+    }
+    f.reversals_per_s = f.reversals as f64 / duration;
+    let along: Vec<f64> = vx.iter().zip(&vy).map(|(a, b)| a * ux + b * uy).collect();
+    f.swing_periodicity = periodicity(&detrended(&along));
+
+    // Turning of the horizontal velocity's direction, where it is fast
+    // enough to have one.
+    // A direction is followed only between consecutive samples that both
+    // have one, so a swing through zero speed (a reversal) is not a turn.
+    let (mut net, mut total) = (0.0f64, 0.0f64);
+    let mut last: Option<f64> = None;
+    let threshold = (HELIX_SPEED_FRACTION * speed).max(NOISE_MULTIPLE * noise_vh);
+    for (a, b) in vx.iter().zip(&vy) {
+        if a.hypot(*b) < threshold {
+            last = None;
+            continue;
+        }
+        let phi = b.atan2(*a);
+        if let Some(prev) = last {
+            let d = (phi - prev + std::f64::consts::PI).rem_euclid(std::f64::consts::TAU)
+                - std::f64::consts::PI;
+            net += d;
+            total += d.abs();
+        }
+        last = Some(phi);
+    }
+    f.path_turns = net / std::f64::consts::TAU;
+    f.path_turn_consistency = if total > 0.0 { net.abs() / total } else { 0.0 };
+    // The radius of the circle the centre goes round: horizontal speed over
+    // the rate at which its direction turns.
+    let rate = net.abs() / duration;
+    f.helix_radius_chords = if rate > 0.0 {
+        (path / m as f64) / rate / size
+    } else {
+        f64::INFINITY
+    };
+}
+
+/// The spread of independent noise on `x`, from its second differences
+/// (which white noise of spread σ gives a spread of σ√6, and a smooth
+/// path sampled fast nearly none): their median absolute value / (0.6745
+/// √6), robust to the odd outlier.
+fn noise(x: &[f64]) -> f64 {
+    if x.len() < 3 {
+        return 0.0;
+    }
+    let mut d: Vec<f64> = x
+        .windows(3)
+        .map(|w| (w[0] - 2.0 * w[1] + w[2]).abs())
+        .collect();
+    let mid = d.len() / 2;
+    let median = *d.select_nth_unstable_by(mid, f64::total_cmp).1;
+    median / (0.6745 * 6f64.sqrt())
+}
+
+/// `y` minus its least-squares line.
+fn detrended(y: &[f64]) -> Vec<f64> {
+    let m = y.len();
+    let mean_t = 0.5 * (m.max(1) - 1) as f64;
+    let mean_y = y.iter().sum::<f64>() / m.max(1) as f64;
+    let (mut num, mut den) = (0.0, 0.0);
+    for (k, v) in y.iter().enumerate() {
+        let d = k as f64 - mean_t;
+        num += d * (v - mean_y);
+        den += d * d;
+    }
+    let b = if den > 0.0 { num / den } else { 0.0 };
+    y.iter()
+        .enumerate()
+        .map(|(k, v)| v - mean_y - b * (k as f64 - mean_t))
+        .collect()
+}
+
+/// |v|, for speeds.
+fn speed_of(v: f64) -> f64 {
+    v.abs()
+}
+
+/// Turning points of `y` with swings of at least `swing`: the number of
+/// maxima.
+fn maxima(y: &[f64], swing: f64) -> usize {
+    let (mut dir, mut count) = (0i8, 0usize);
+    let (mut lo, mut hi) = (y[0], y[0]);
+    let mut ext = y[0];
+    for &v in y {
+        match dir {
+            0 => {
+                lo = lo.min(v);
+                hi = hi.max(v);
+                if v - lo >= swing {
+                    dir = 1;
+                    ext = v;
+                } else if hi - v >= swing {
+                    dir = -1;
+                    ext = v;
+                }
+            }
+            1 => {
+                if v > ext {
+                    ext = v;
+                } else if ext - v >= swing {
+                    count += 1;
+                    dir = -1;
+                    ext = v;
+                }
+            }
+            _ => {
+                if v < ext {
+                    ext = v;
+                } else if v - ext >= swing {
+                    dir = 1;
+                    ext = v;
+                }
+            }
+        }
+    }
+    count
+}
+
+/// Normalised autocorrelation of `y` (zero mean) at its first local maximum
+/// after it first goes below zero; 0 if there is none within half the
+/// record.
+fn periodicity(y: &[f64]) -> f64 {
+    let n = y.len();
+    let var: f64 = y.iter().map(|v| v * v).sum();
+    if var <= 0.0 {
+        return 0.0;
+    }
+    let r = |lag: usize| -> f64 {
+        let s: f64 = (0..n - lag).map(|i| y[i] * y[i + lag]).sum();
+        s / var * n as f64 / (n - lag) as f64
+    };
+    let half = n / 2;
+    let mut lag = 1;
+    while lag < half && r(lag) > 0.0 {
+        lag += 1;
+    }
+    // Down to the trough, then up to the peak.
+    let mut now = r(lag);
+    while lag + 1 < half && r(lag + 1) <= now {
+        lag += 1;
+        now = r(lag);
+    }
+    while lag + 1 < half {
+        let next = r(lag + 1);
+        if next < now {
+            return now.clamp(-1.0, 1.0);
+        }
+        lag += 1;
+        now = next;
+    }
+    0.0
+}
+
+/// The area features of a uniform record.
+fn measure_areas(g: &Trajectory, dt: f64, f: &mut PathFeatures) {
+    let m = g.len();
+    let duration = (m - 1) as f64 * dt;
+    let h = (AREA_SMOOTHING_S / dt).round() as usize;
+    let (mut rate_sum, mut best_period) = (0.0f64, f64::NEG_INFINITY);
+    for a in &g.areas {
+        // Detrend (the paper nears or leaves the camera), then smooth.
+        let detrended = detrended(&a.values);
+        let smooth: Vec<f64> = (0..m)
+            .map(|k| {
+                let (lo, hi) = (k.saturating_sub(h), (k + h).min(m - 1));
+                detrended[lo..=hi].iter().sum::<f64>() / (hi - lo + 1) as f64
+            })
+            .collect();
+        let (lo, hi) = smooth
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, u), &v| {
+                (l.min(v), u.max(v))
+            });
+        let range = hi - lo;
+        if range > 0.0 {
+            rate_sum += maxima(&smooth, AREA_MIN_SWING * range) as f64 / duration;
+        }
+        best_period = best_period.max(periodicity(&detrended));
+        f.area_signals += 1;
+    }
+    if f.area_signals > 0 {
+        let rate = rate_sum / f.area_signals as f64;
+        f.area_maxima_per_s = Some(rate);
+        f.area_turn_rate_rad_s = Some(std::f64::consts::PI * rate);
+        f.area_periodicity = Some(best_period);
+    }
+}
+
+// ---------------------------------------------------------------- rules
+
+#[derive(Clone, Copy, PartialEq, Eq, Debug)]
+enum RuleId {
+    Helix,
+    Flutter,
+    Steady,
+    Plunge,
+    Glide,
+    Tumble,
+    FastPlunge,
+    Chaotic,
+}
+
+/// The ordered rules of the module docs, step 5 (first match wins).
+fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId>> {
+    use MotionClass as C;
+    let rule = |id, class, regime, conds| Rule {
+        id,
+        class,
+        regime,
+        conds,
+    };
+    // Steady: no modulation above the threshold, or none the noise lets
+    // one measure.
+    let steady_max = STEADY_MAX_MODULATION.max(f.modulation_noise);
+    let steady = || Cond::lt(f.descent_speed_cv, steady_max, STEADY_MAX_MODULATION);
+    let vertical = || Cond::lt(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT);
+    let mut tumble = vec![
+        Cond::ge(f.straightness, cal.tumble_min_straightness, 0.2),
+        Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT),
+    ];
+    if inputs == Inputs::Areas {
+        tumble.push(Cond::ge(
+            f.area_maxima_per_s.unwrap_or(0.0),
+            cal.tumble_min_area_maxima_per_s,
+            0.5 * TUMBLE_MIN_AREA_MAXIMA_PER_S,
+        ));
+    }
+    vec![
+        rule(
+            RuleId::Helix,
+            C::Spinner,
+            Regime::Autorotation,
+            vec![
+                Cond::ge(f.path_turns.abs(), HELIX_MIN_TURNS, 1.0),
+                Cond::ge(f.path_turn_consistency, HELIX_MIN_CONSISTENCY, 0.1),
+                Cond::lt(
+                    f.descent_speed_cv,
+                    HELIX_MAX_MODULATION,
+                    HELIX_MAX_MODULATION,
+                ),
+                Cond::lt(
+                    f.helix_radius_chords,
+                    HELIX_MAX_RADIUS_CHORDS,
+                    HELIX_MAX_RADIUS_CHORDS,
+                ),
+            ],
+        ),
+        rule(
+            RuleId::Flutter,
+            C::Floater,
+            Regime::Flutter,
+            vec![
+                Cond::ge(
+                    f.reversals as f64,
+                    FLUTTER_MIN_REVERSALS as f64,
+                    FLUTTER_MIN_REVERSALS as f64,
+                ),
+                Cond::ge(f.swing_periodicity, FLUTTER_MIN_PERIODICITY, 0.2),
+                Cond::ge(
+                    f.horizontal_speed_spread,
+                    FLUTTER_MIN_SPEED_SPREAD,
+                    FLUTTER_MIN_SPEED_SPREAD,
+                ),
+                vertical(),
+            ],
+        ),
+        rule(
+            RuleId::Steady,
+            C::Floater,
+            Regime::Steady,
+            vec![
+                steady(),
+                vertical().regime_only(),
+                Cond::lt(f.froude_number, STEADY_MAX_FROUDE, 0.5 * STEADY_MAX_FROUDE),
+            ],
+        ),
+        rule(
+            RuleId::Plunge,
+            C::Spinner,
+            Regime::Autorotation,
+            vec![
+                steady(),
+                vertical(),
+                Cond::ge(f.froude_number, STEADY_MAX_FROUDE, 0.5 * STEADY_MAX_FROUDE),
+            ],
+        ),
+        rule(
+            RuleId::Glide,
+            C::Floater,
+            Regime::Glide,
+            vec![
+                steady(),
+                Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT).regime_only(),
+            ],
+        ),
+        rule(RuleId::Tumble, C::Spinner, Regime::Tumble, tumble),
+        rule(
+            RuleId::FastPlunge,
+            C::Spinner,
+            Regime::Autorotation,
+            vec![
+                vertical(),
+                Cond::ge(f.froude_number, PLUNGE_MIN_FROUDE, 0.5 * STEADY_MAX_FROUDE),
+            ],
+        ),
+        rule(RuleId::Chaotic, C::Lilter, Regime::Chaotic, vec![]),
+    ]
+}
+
+/// Applies the rules and fills in margins and the reason.
+fn decide(f: PathFeatures, inputs: Inputs, calibration: &Calibration) -> PathVerdict {
+    verdict(f, inputs, calibration)
+}
+
+/// The decision for features already measured (what [`classify_path`]
+/// does after measuring): cross-validation refits [`Calibration`] without
+/// measuring again. `inputs` says whether the area features count.
+pub fn verdict(mut f: PathFeatures, inputs: Inputs, calibration: &Calibration) -> PathVerdict {
+    let rules = rules(&f, inputs, calibration);
+    let k = rules
+        .iter()
+        .position(Rule::fires)
+        .unwrap_or(rules.len() - 1);
+    (f.margin, f.regime_margin) = rules::margins(&rules, k);
+    let chosen = &rules[k];
+    PathVerdict {
+        class: chosen.class,
+        regime: chosen.regime,
+        reason: reason(chosen.id, &f),
+        inputs,
+        features: f,
+    }
+}
+
+/// Human-readable justification quoting the deciding features.
+fn reason(id: RuleId, f: &PathFeatures) -> String {
+    let areas = match (f.area_maxima_per_s, f.area_turn_rate_rad_s) {
+        (Some(m), Some(w)) => format!(", {m:.1} area maxima per second (≈ {w:.0} rad/s)"),
+        _ => String::new(),
+    };
+    match id {
+        RuleId::Helix => format!(
+            "autorotation: the path is a helix, its horizontal velocity turned {:.1} times the same way (consistency {:.2}), descending steadily at {:.2} m/s",
+            f.path_turns.abs(),
+            f.path_turn_consistency,
+            f.mean_descent_speed_m_s
+        ),
+        RuleId::Steady => format!(
+            "steady descent at {:.2} m/s (Froude number {:.2}, modulation {:.2}), drift ratio {:.2}",
+            f.mean_descent_speed_m_s, f.froude_number, f.descent_speed_cv, f.drift_ratio
+        ),
+        RuleId::FastPlunge => format!(
+            "falls straight down fast (Froude number {:.2} ≥ {PLUNGE_MIN_FROUDE}, drift ratio {:.2}), its descent modulated ({:.2}): a leaf spinning about the vertical, not a lilter rocking broadside",
+            f.froude_number, f.drift_ratio, f.descent_speed_cv
+        ),
+        RuleId::Plunge => format!(
+            "falls straight down steadily and fast (Froude number {:.2} ≥ {STEADY_MAX_FROUDE}, modulation {:.2}): a leaf spinning about the vertical; an edge-on dive would look the same without orientation or areas",
+            f.froude_number, f.descent_speed_cv
+        ),
+        RuleId::Glide => format!(
+            "glide: steady descent (modulation {:.2}) {:.0}° from the vertical (drift ratio {:.2}, straightness {:.2})",
+            f.descent_speed_cv, f.glide_angle_deg, f.drift_ratio, f.straightness
+        ),
+        RuleId::Tumble => format!(
+            "tumble: glides off on a straight line (straightness {:.2}) {:.0}° from the vertical, its descent modulated ({:.2}){areas}",
+            f.straightness, f.glide_angle_deg, f.descent_speed_cv
+        ),
+        RuleId::Flutter => format!(
+            "flutter: swings regularly from side to side ({} reversals in {:.2} s, periodicity {:.2}) about a vertical path (drift ratio {:.2})",
+            f.reversals,
+            f.t_end_s - f.t_start_s,
+            f.swing_periodicity,
+            f.drift_ratio
+        ),
+        RuleId::Chaotic => format!(
+            "chaotic: swings, reverses and wanders (straightness {:.2}, {} reversals, drift ratio {:.2}, modulation {:.2}){areas}",
+            f.straightness, f.reversals, f.drift_ratio, f.descent_speed_cv
+        ),
+    }
+}
