@@ -45,7 +45,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("pc2 + obj (clip + write 200 files)", |b| {
         b.iter(|| {
             let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
-            pc2::write_pc2(&clip, &dir.join("pc2")).unwrap()
+            pc2::write_pc2(&clip, &dir.join("pc2"), 30.0).unwrap()
         })
     });
     g.bench_function("preview page (clip + html)", |b| {

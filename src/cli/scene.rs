@@ -51,7 +51,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     if let Some(format) = args.export {
         let started = Instant::now();
         let clip = leafmagic::output::export::from_scene_run(&scene, &run, args.export_fps)?;
-        let files = output::write_clip(&clip, format, &dir, &scene.name)?;
+        let files = output::write_clip(&clip, format, &dir, &scene.name, args.export_host_fps)?;
         let bytes: u64 = files
             .iter()
             .filter_map(|f| std::fs::metadata(f).ok())
