@@ -278,25 +278,25 @@ fn glb_layout_accessors_targets_and_quaternions_follow_the_specification() {
     let nodes = doc["nodes"].as_array().unwrap();
     let node = |name: &str| nodes.iter().position(|n| n["name"] == name).unwrap();
     let mesh_of = |n: usize| &doc["meshes"][nodes[n]["mesh"].as_u64().unwrap() as usize];
-    // Deforming leaf and rope: three morph targets per particle, however
-    // many frames (sparse: one vertex each), named for Blender and three.js.
+    // Deforming leaf and rope: three morph targets per particle and one
+    // offset, however many frames (sparse: one vertex each but the offset),
+    // named for Blender and three.js.
     let mut targets_total = 0;
     for name in ["leaf", "rope"] {
         let o = clip.objects.iter().find(|o| o.name == name).unwrap();
         let mesh = mesh_of(node(name));
         let targets = mesh["primitives"][0]["targets"].as_array().unwrap();
-        assert_eq!(
-            targets.len(),
-            3 * o.vertex_count(),
-            "{name}: 3 targets per particle"
-        );
+        let n = o.vertex_count();
+        assert_eq!(targets.len(), 3 * n + 1, "{name}: 3 per particle + offset");
         assert_eq!(mesh["weights"].as_array().unwrap().len(), targets.len());
         let names = mesh["extras"]["targetNames"].as_array().unwrap();
         assert_eq!(names[0], "particle0.x");
         assert_eq!(names[5], "particle1.z");
-        for t in targets {
+        assert_eq!(names[3 * n], "offset");
+        for (k, t) in targets.iter().enumerate() {
             let a = &doc["accessors"][t["POSITION"].as_u64().unwrap() as usize];
-            assert_eq!(a["sparse"]["count"], 1, "{name}: a target moves one vertex");
+            let moved = if k < 3 * n { 1 } else { n };
+            assert_eq!(a["sparse"]["count"], moved, "{name}: target {k}");
             assert!(a["bufferView"].is_null());
         }
         targets_total += targets.len();
@@ -372,6 +372,19 @@ fn glb_layout_accessors_targets_and_quaternions_follow_the_specification() {
                     .unwrap()
                     .len();
                 assert_eq!(out.len(), k * clip.frames, "targets × frames");
+                // In 0 … 1, the range of a Blender shape key; each degree
+                // of freedom spans it; the offset is always 1.
+                assert!(out.iter().all(|w| (0.0..=1.0).contains(w)));
+                for j in 0..k - 1 {
+                    let w: Vec<f32> = out.iter().skip(j).step_by(k).copied().collect();
+                    let lo = w.iter().copied().fold(f32::INFINITY, f32::min);
+                    let hi = w.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                    assert!(
+                        lo == 0.0 && (hi == 1.0 || hi == 0.0),
+                        "target {j}: {lo} … {hi}"
+                    );
+                }
+                assert!(out.iter().skip(k - 1).step_by(k).all(|&w| w == 1.0));
             }
             "translation" => assert_eq!(out.len(), 3 * clip.frames),
             p => panic!("unexpected channel {p}"),
@@ -857,7 +870,11 @@ fn a_deforming_object_grows_linearly_with_its_frame_count() {
             .as_array()
             .unwrap()
             .len();
-        assert_eq!(k, 3 * model.len(), "3 targets per particle at {n} frames");
+        assert_eq!(
+            k,
+            3 * model.len() + 1,
+            "3 per particle + offset at {n} frames"
+        );
         let anim = &doc["animations"][0];
         let ch = anim["channels"]
             .as_array()

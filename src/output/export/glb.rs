@@ -259,22 +259,32 @@ fn sparse_vec3(
 /// morph targets, one per degree of freedom of the simulated mesh, whatever
 /// the number of frames.
 ///
-/// Without a render mesh, target (i, a) moves vertex i by one metre along
-/// glTF axis a, and its weight at frame k is the displacement of particle i
-/// from its rest place along that axis: base + Σ wₖ targets is then the
-/// local shape exactly. With a render mesh bound to the simulated triangles
-/// (Σ bᵢ pᵢ + h n, see [`super::render_mesh`]), target (i, a) moves each
-/// render vertex on a triangle of particle i by bᵢ along a, and target
-/// (T, a) moves each render vertex of triangle T by its offset h along a,
-/// weighted by the change of T's unit normal: exact again, because the
-/// binding is linear in the corners and in the normal.
+/// Without a render mesh, degree of freedom (i, a) is the displacement Δ of
+/// particle i from its rest place along glTF axis a, and its target moves
+/// vertex i along a: base + Σ Δ · targets is then the local shape exactly.
+/// With a render mesh bound to the simulated triangles (Σ bᵢ pᵢ + h n, see
+/// [`super::render_mesh`]), target (i, a) moves each render vertex on a
+/// triangle of particle i by bᵢ along a, and target (T, a) moves each render
+/// vertex of triangle T by its offset h along a, driven by the change of T's
+/// unit normal: exact again, because the binding is linear in the corners
+/// and in the normal.
+///
+/// Every weight is kept in 0 … 1, because Blender clamps a shape key's
+/// value to its slider range (0 … 1 unless set otherwise; a negative weight
+/// became 0 there, 2.3 mm off, measured): over the frames, degree of freedom
+/// j ranges over [lo, hi], its target is scaled by hi − lo and weighted
+/// (Δ − lo) / (hi − lo), and one more target, `offset`, weighted 1 at every
+/// frame, adds the Σ lo · targets this leaves out. Still linear in Δ, so
+/// LINEAR interpolation between keys is the interpolation of the shapes.
 struct Rig {
     /// Per target: (vertex indices, displacement per unit weight), glTF axes.
     targets: Vec<(Vec<u32>, Vec<[f32; 3]>)>,
     /// Target names (Blender's shape keys, three.js morph names).
     names: Vec<String>,
-    /// Weights per frame, `targets.len()` each.
+    /// Weights per frame, `targets.len()` each, all in 0 … 1.
     weights: Vec<Vec<f32>>,
+    /// The weights that give the rest shape (the mesh's default).
+    rest_weights: Vec<f32>,
 }
 
 fn axis(a: usize) -> [f32; 3] {
@@ -354,7 +364,7 @@ fn rig(o: &ClipObject, framed: &Framed) -> Rig {
         .iter()
         .map(to_gltf)
         .collect();
-    let weights = (0..framed.origin.len())
+    let raw: Vec<Vec<f32>> = (0..framed.origin.len())
         .map(|k| {
             let local = framed.local_at(k);
             let normals: Vec<[f32; 3]> = if o.render.is_some() {
@@ -377,11 +387,64 @@ fn rig(o: &ClipObject, framed: &Framed) -> Rig {
                 .collect()
         })
         .collect();
+    // Each weight's range over the frames, and the offset that brings its
+    // lower end to 0 (see the doc of `Rig`).
+    let count = base_count(o, n);
+    let mut offset = vec![[0.0f32; 3]; count];
+    let mut weights = raw.clone();
+    for (j, (ix, vals)) in targets.iter_mut().enumerate() {
+        let lo = raw.iter().map(|w| w[j]).fold(f32::INFINITY, f32::min);
+        let hi = raw.iter().map(|w| w[j]).fold(f32::NEG_INFINITY, f32::max);
+        let scale = if hi > lo { hi - lo } else { 1.0 };
+        for (v, d) in ix.iter().zip(vals.iter_mut()) {
+            for c in 0..3 {
+                offset[*v as usize][c] += lo * d[c];
+                d[c] *= scale;
+            }
+        }
+        for w in &mut weights {
+            w[j] = ((w[j] - lo) / scale).clamp(0.0, 1.0);
+        }
+    }
+    let moved: Vec<u32> = (0..count as u32)
+        .filter(|&v| offset[v as usize] != [0.0; 3])
+        .collect();
+    if !moved.is_empty() {
+        let vals = moved.iter().map(|&v| offset[v as usize]).collect();
+        targets.push((moved, vals));
+        names.push("offset".to_string());
+        weights.iter_mut().for_each(|w| w.push(1.0));
+    }
+    // The weights of the rest shape (Δ = 0), for the mesh's default.
+    let rest_weights = weights
+        .first()
+        .map(|_| {
+            let mut w: Vec<f32> = (0..raw[0].len())
+                .map(|j| {
+                    let lo = raw.iter().map(|w| w[j]).fold(f32::INFINITY, f32::min);
+                    let hi = raw.iter().map(|w| w[j]).fold(f32::NEG_INFINITY, f32::max);
+                    let scale = if hi > lo { hi - lo } else { 1.0 };
+                    ((0.0 - lo) / scale).clamp(0.0, 1.0)
+                })
+                .collect();
+            if names.last().is_some_and(|n| n == "offset") {
+                w.push(1.0);
+            }
+            w
+        })
+        .unwrap_or_default();
     Rig {
         targets,
         names,
         weights,
+        rest_weights,
     }
+}
+
+/// The number of vertices a rig's targets move: the render mesh's, or the
+/// simulated mesh's.
+fn base_count(o: &ClipObject, n: usize) -> usize {
+    o.render.as_ref().map_or(n, |r| r.vertex_count())
 }
 
 /// The mesh a client sees of an object, in its body frame at rest: the
@@ -556,7 +619,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 })
                 .collect();
             targets = Some(list);
-            weights = Some(vec![0.0; rig.targets.len()]);
+            weights = Some(rig.rest_weights.clone());
             // The names of the targets, where Blender and three.js look.
             mesh_extras = raw_extras(js!({ "targetNames": rig.names }));
         }
