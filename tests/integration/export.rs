@@ -1280,3 +1280,112 @@ fn blobs(mask: &[bool], width: usize, min: usize) -> usize {
     }
     count
 }
+
+/// A breeding run of prototype A (6 leaves, 1 generation, 3 s falls).
+fn small_run(dir: &Path) -> PathBuf {
+    let run = dir.join("run");
+    let o = leafmagic()
+        .args(["breed", "--population", "6", "--generations", "1"])
+        .args(["--seconds", "3", "--threads", "1", "--out"])
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    run
+}
+
+#[test]
+fn export_dresses_bred_leaves_with_a_render_mesh_at_a_start_height() {
+    let dir = scratch("dress");
+    let run = small_run(&dir);
+    // A render mesh in the prototype's own coordinates: its rest triangles
+    // split in four, lifted off the surface, with UVs.
+    let proto = LeafSpec::load("a").unwrap().model().unwrap();
+    let tris: Vec<[u32; 3]> = proto
+        .triangles
+        .iter()
+        .map(|t| t.corners.map(|i| i as u32))
+        .collect();
+    let mesh = super::usd::fine_mesh(&proto.rest_position, &tris);
+    let mut obj = String::new();
+    for p in &mesh.positions {
+        obj += &format!("v {} {} {}\n", p.x, p.y, p.z);
+    }
+    for t in &mesh.uvs {
+        obj += &format!("vt {} {}\n", t[0], t[1]);
+    }
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        obj += &format!("f {a}/{a} {b}/{b} {c}/{c}\n");
+    }
+    let obj_path = dir.join("fine.obj");
+    std::fs::write(&obj_path, obj).unwrap();
+    for format in ["glb", "usd"] {
+        let out = dir.join(format);
+        let o = leafmagic()
+            .arg("export")
+            .arg(&run)
+            .args(["--top", "1", "--format", format, "--start-height", "5"])
+            .arg("--render-mesh")
+            .arg(&obj_path)
+            .arg("--out")
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let index = std::fs::read_to_string(out.join("index.csv")).unwrap();
+        let id = index.lines().nth(1).unwrap().split(',').nth(1).unwrap();
+        if format == "glb" {
+            let bytes = std::fs::read(out.join(format!("leaf-{id}.glb"))).unwrap();
+            let (doc, bin) = split_glb(&bytes);
+            let shown = client_positions(&doc, &bin, 0);
+            assert_eq!(
+                shown[0].1.len(),
+                mesh.positions.len(),
+                "the render mesh is shown"
+            );
+            let z: f64 = shown[0].1.iter().map(|p| p.z).sum::<f64>() / shown[0].1.len() as f64;
+            assert!((z - 5.0).abs() < 0.02, "released at 5 m, not {z}");
+            let last = client_positions(&doc, &bin, 90);
+            let z_end = last[0].1.iter().map(|p| p.z).sum::<f64>() / last[0].1.len() as f64;
+            assert!(z_end < 4.0, "and falls from there ({z_end})");
+        } else {
+            let text = std::fs::read_to_string(out.join(format!("leaf-{id}.usda"))).unwrap();
+            assert!(text.contains("texCoord2f[] primvars:st"));
+            assert!(text.contains(&format!("custom string leafmagic:name = \"leaf-{id}\"")));
+        }
+    }
+    // A failed export leaves the directory as it was and names the file.
+    let out = dir.join("glb");
+    let before: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    std::fs::write(dir.join("bad.obj"), "v 0 0 0\nvt 0 0\nf 1/1 2/1 1/1\n").unwrap();
+    let o = leafmagic()
+        .arg("export")
+        .arg(&run)
+        .args(["--top", "2", "--format", "glb", "--render-mesh"])
+        .arg(dir.join("bad.obj"))
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let e = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        e.contains("bad.obj") && e.contains("line 3") && e.contains("out of range"),
+        "{e}"
+    );
+    let after: Vec<_> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(before, after, "the directory is as it was");
+    let strays: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains("partial"))
+        .collect();
+    assert!(strays.is_empty(), "no temporary left: {strays:?}");
+}

@@ -264,9 +264,23 @@ fn usda(clip: &Clip) -> Result<String, ExportError> {
             }
             Ok(())
         })?;
-        for (o, id) in clip.objects.iter().zip(&ids) {
-            object(t, clip, o, &root_id, id)?;
-        }
+        // Objects in parallel (formatting numbers is most of the work),
+        // joined in order: the same bytes with any number of threads.
+        use rayon::prelude::*;
+        let depth = t.depth;
+        let parts: Vec<String> = clip
+            .objects
+            .par_iter()
+            .zip(&ids)
+            .map(|(o, id)| {
+                let mut part = Text {
+                    s: String::new(),
+                    depth,
+                };
+                object(&mut part, clip, o, &root_id, id).map(|()| part.s)
+            })
+            .collect::<Result<_, ExportError>>()?;
+        parts.iter().for_each(|p| t.s.push_str(p));
         Ok(())
     })?;
     Ok(t.s)
