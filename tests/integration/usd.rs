@@ -54,6 +54,12 @@ pub fn pixar_python() -> Result<PathBuf, String> {
             "install",
             "--quiet",
             "--disable-pip-version-check",
+            // A network that hangs fails the install (and the test skips)
+            // instead of stalling CI.
+            "--timeout",
+            "30",
+            "--retries",
+            "1",
             USD_CORE,
         ])
         .output()
