@@ -1,11 +1,11 @@
-//! Export speed (issue 5): a 10 s, 100-leaf scene exported at 30 fps
-//! (100 deforming leaves × 301 frames) as .glb, as PC2 + OBJ, and as the
-//! preview page. The scene is simulated once, outside the timing; each
+//! Export speed (issues 5 and 21): a 10 s, 100-leaf scene exported at 30 fps
+//! (100 deforming leaves × 301 frames) as .glb, as USD (.usda), as PC2 +
+//! OBJ, and as the preview page. The scene is simulated once, outside the timing; each
 //! iteration resamples the recorded frames into a clip and writes it.
 //! The target is under a second per export.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::output::export::{self, glb, pc2};
+use leafmagic::output::export::{self, glb, pc2, usd};
 use leafmagic::sim::scene::Scene;
 use std::hint::black_box;
 use std::path::Path;
@@ -21,14 +21,16 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("leafmagic-bench-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let glb_size = glb::glb_bytes(&clip).unwrap().len();
+    let usd_size = usd::usd_bytes(&clip).unwrap().len();
     let page_size = leafmagic::output::preview::html(&clip, false)
         .unwrap()
         .len();
     eprintln!(
-        "scene: {} objects, {} frames at 30 fps; .glb {:.1} MB, page {:.2} MB",
+        "scene: {} objects, {} frames at 30 fps; .glb {:.1} MB, .usda {:.1} MB, page {:.2} MB",
         clip.objects.len(),
         clip.frames,
         glb_size as f64 / 1e6,
+        usd_size as f64 / 1e6,
         page_size as f64 / 1e6
     );
     let mut g = c.benchmark_group("export_100_leaves_10s_30fps");
@@ -42,10 +44,16 @@ fn bench(c: &mut Criterion) {
             glb::write_glb(&clip, &dir.join("scene.glb")).unwrap()
         })
     });
+    g.bench_function("usd (clip + write .usda)", |b| {
+        b.iter(|| {
+            let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
+            usd::write_usd(&clip, &dir.join("scene.usda")).unwrap()
+        })
+    });
     g.bench_function("pc2 + obj (clip + write 200 files)", |b| {
         b.iter(|| {
             let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
-            pc2::write_pc2(&clip, &dir.join("pc2")).unwrap()
+            pc2::write_pc2(&clip, &dir.join("pc2"), 30.0).unwrap()
         })
     });
     g.bench_function("preview page (clip + html)", |b| {

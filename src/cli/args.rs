@@ -95,12 +95,25 @@ pub struct ExportArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Also re-drop each leaf as breeding dropped it and write its fall:
-    /// `glb` (leaf-<id>.glb) or `pc2` (leaf-<id>.pc2 + leaf-<id>.obj).
+    /// `glb` (leaf-<id>.glb), `pc2` (leaf-<id>.pc2 + leaf-<id>.obj) or `usd`
+    /// (leaf-<id>.usda).
     #[arg(long)]
     pub format: Option<leafmagic::output::export::Format>,
     /// Frames per second of the exported motion.
     #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
     pub fps: f64,
+    /// Release height of each exported fall, m (z up): the leaf starts
+    /// here instead of at the origin.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub start_height: f64,
+    /// A finer textured mesh (OBJ with UVs, in the prototype leaf file's
+    /// coordinates) to export in place of the simulated one, bound to it.
+    #[arg(long)]
+    pub render_mesh: Option<PathBuf>,
+    /// The frame rate of the scene a PC2 cache is played in (its samples
+    /// are spaced host-fps / fps frames apart, so it plays in real time).
+    #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
+    pub host_fps: f64,
 }
 
 /// Arguments of `drop`.
@@ -206,12 +219,16 @@ pub struct SceneArgs {
     /// List what the compiled scene keeps and leaves out, then stop.
     #[arg(long)]
     pub explain: bool,
-    /// Also export the run: `glb` (DIR/<scene>.glb) or `pc2` (DIR/<object>.pc2 + .obj).
+    /// Also export the run: `glb` (DIR/<scene>.glb), `pc2` (DIR/<object>.pc2
+    /// + .obj) or `usd` (DIR/<scene>.usda).
     #[arg(long)]
     pub export: Option<leafmagic::output::export::Format>,
     /// Frames per second of the exported motion.
     #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
     pub export_fps: f64,
+    /// The frame rate of the scene a PC2 export is played in.
+    #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
+    pub export_host_fps: f64,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,

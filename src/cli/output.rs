@@ -1,17 +1,21 @@
 //! `export` and `preview`: a breeding run's leaves as leaf files (and their
-//! falls as glTF or PC2), and a self-contained HTML page that plays a run,
-//! a scene's output or a .glb file.
+//! falls as glTF, PC2 or USD), and a self-contained HTML page that plays a
+//! run, a scene's output or a .glb file.
 
 use super::args::{ExportArgs, PreviewArgs};
 use super::report;
 use anyhow::{Context, Result, bail};
 use leafmagic::breed::{self, Run};
-use leafmagic::output::export::{Clip, Format, glb, pc2};
+use leafmagic::output::export::render_mesh::{RenderMesh, read_obj};
+use leafmagic::output::export::{Clip, Format, glb, pc2, usd};
+use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// `export`: writes the chosen individuals of the last generation as leaf
-/// files, and with `--format` their falls.
+/// files, and with `--format` their falls. The output directory is written
+/// as a whole: into a temporary sibling first, renamed into place when
+/// complete, so a failure leaves what was there before.
 pub fn export(args: ExportArgs) -> Result<()> {
     let run = Run::open(&args.run)?;
     let Some(cp) = &run.checkpoint else {
@@ -20,6 +24,18 @@ pub fn export(args: ExportArgs) -> Result<()> {
             args.run.display()
         );
     };
+    if !(args.fps > 0.0 && args.fps.is_finite()) {
+        bail!("--fps must be a positive number, got {}", args.fps);
+    }
+    if !(args.host_fps > 0.0 && args.host_fps.is_finite()) {
+        bail!(
+            "--host-fps must be a positive number, got {}",
+            args.host_fps
+        );
+    }
+    if !args.start_height.is_finite() {
+        bail!("--start-height must be a finite number of metres");
+    }
     let ranked = breed::selection::rank(&cp.population);
     let chosen: Vec<&breed::Individual> = match (&args.top, &args.ids) {
         (Some(k), None) => {
@@ -41,36 +57,133 @@ pub fn export(args: ExportArgs) -> Result<()> {
             .collect::<Result<_>>()?,
         _ => bail!("give either --top K or --ids ID,..."),
     };
-    std::fs::create_dir_all(&args.out)
-        .with_context(|| format!("cannot create {}", args.out.display()))?;
-    breed::files::export_leaves(&run.proto, &chosen, &args.out)?;
-    println!("{}", report::output::leaves(chosen.len(), &args.out));
-    if let Some(format) = args.format {
-        let started = Instant::now();
+    // The render mesh is bound once, to the prototype's rest shape; each
+    // bred leaf carries the same binding on its own triangles.
+    let render = match &args.render_mesh {
+        None => None,
+        Some(path) => {
+            if args.format.is_none() {
+                bail!("--render-mesh needs --format (it dresses the exported falls)");
+            }
+            let mesh = read_obj(path)?;
+            let proto = run
+                .proto
+                .model()
+                .with_context(|| format!("{}: the prototype", args.run.display()))?;
+            let com = proto.centre_of_mass(&proto.rest_position);
+            let rest: Vec<Vector3<f64>> = proto.rest_position.iter().map(|x| x - com).collect();
+            let mut mesh = mesh;
+            mesh.positions.iter_mut().for_each(|p| *p -= com);
+            let triangles: Vec<[u32; 3]> = proto
+                .triangles
+                .iter()
+                .map(|t| t.corners.map(|i| i as u32))
+                .collect();
+            Some(RenderMesh::bind(
+                &path.display().to_string(),
+                &mesh,
+                &rest,
+                &triangles,
+            )?)
+        }
+    };
+    let started = Instant::now();
+    let out = &args.out;
+    let staging = staging_dir(out)?;
+    let result = (|| -> Result<Option<usize>> {
+        breed::files::export_leaves(&run.proto, &chosen, &staging)?;
+        let Some(format) = args.format else {
+            return Ok(None);
+        };
         let objects = leafmagic::output::export::drop_individuals(&run, &chosen, args.fps)?;
         let mut files = 0;
-        for o in objects {
+        for mut o in objects {
+            o.translate(Vector3::new(0.0, 0.0, args.start_height));
+            o.render = render.clone();
             let name = o.name.clone();
             let clip = leafmagic::output::export::side_by_side(&name, vec![o], args.fps, 0.0)?;
-            files += write_clip(&clip, format, &args.out, &name)?.len();
+            files += write_clip(&clip, format, &staging, &name, args.host_fps)?.len();
         }
-        println!(
-            "{}",
-            report::output::falls(
-                files,
-                format,
-                run.settings().seconds,
-                args.fps,
-                started.elapsed().as_secs_f64()
-            )
-        );
+        Ok(Some(files))
+    })();
+    match result {
+        Ok(files) => {
+            replace_dir(&staging, out)?;
+            println!("{}", report::output::leaves(chosen.len(), out));
+            if let (Some(files), Some(format)) = (files, args.format) {
+                println!(
+                    "{}",
+                    report::output::falls(
+                        files,
+                        format,
+                        run.settings().seconds,
+                        args.fps,
+                        started.elapsed().as_secs_f64()
+                    )
+                );
+            }
+            Ok(())
+        }
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&staging);
+            Err(e.context(format!(
+                "nothing was written to {} (it is as it was)",
+                out.display()
+            )))
+        }
+    }
+}
+
+/// A new, empty temporary sibling of `out` to write into.
+fn staging_dir(out: &Path) -> Result<PathBuf> {
+    let parent = out
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    std::fs::create_dir_all(parent)
+        .with_context(|| format!("cannot create {}", parent.display()))?;
+    let name = out
+        .file_name()
+        .with_context(|| format!("--out {}: not a directory name", out.display()))?
+        .to_string_lossy();
+    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&staging);
+    std::fs::create_dir(&staging)
+        .with_context(|| format!("cannot create {}", staging.display()))?;
+    Ok(staging)
+}
+
+/// Puts the complete `staging` directory where `out` is: the old `out`, if
+/// any, is moved aside first and removed after.
+fn replace_dir(staging: &Path, out: &Path) -> Result<()> {
+    let old = staging.with_extension("old");
+    let had = out.exists();
+    if had {
+        std::fs::rename(out, &old)
+            .with_context(|| format!("cannot move {} aside", out.display()))?;
+    }
+    if let Err(e) = std::fs::rename(staging, out) {
+        if had {
+            let _ = std::fs::rename(&old, out);
+        }
+        let _ = std::fs::remove_dir_all(staging);
+        return Err(e).with_context(|| format!("cannot move the export into {}", out.display()));
+    }
+    if had {
+        let _ = std::fs::remove_dir_all(&old);
     }
     Ok(())
 }
 
-/// Writes `clip` into `dir` in `format` (`<stem>.glb`, or a `.pc2` and an
-/// `.obj` per object); returns the paths.
-pub fn write_clip(clip: &Clip, format: Format, dir: &Path, stem: &str) -> Result<Vec<PathBuf>> {
+/// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, or a `.pc2` and an `.obj` per object, the cache's samples
+/// spaced for a scene at `host_fps`); returns the paths.
+pub fn write_clip(
+    clip: &Clip,
+    format: Format,
+    dir: &Path,
+    stem: &str,
+    host_fps: f64,
+) -> Result<Vec<PathBuf>> {
     std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
     Ok(match format {
         Format::Glb => {
@@ -78,7 +191,12 @@ pub fn write_clip(clip: &Clip, format: Format, dir: &Path, stem: &str) -> Result
             glb::write_glb(clip, &path)?;
             vec![path]
         }
-        Format::Pc2 => pc2::write_pc2(clip, dir)?,
+        Format::Usd => {
+            let path = dir.join(format!("{stem}.usda"));
+            usd::write_usd(clip, &path)?;
+            vec![path]
+        }
+        Format::Pc2 => pc2::write_pc2(clip, dir, host_fps)?,
     })
 }
 

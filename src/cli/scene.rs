@@ -64,7 +64,14 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     if let Some(format) = args.export {
         let started = Instant::now();
         let clip = leafmagic::output::export::from_scene_run(&scene, &run, args.export_fps)?;
-        let files = output::write_clip(&clip, format, staged.path(), &scene.name).map_err(|e| {
+        let files = output::write_clip(
+            &clip,
+            format,
+            staged.path(),
+            &scene.name,
+            args.export_host_fps,
+        )
+        .map_err(|e| {
             // Name the file as it would have been in the output.
             let message = format!("{e:#}").replace(
                 &staged.path().display().to_string(),

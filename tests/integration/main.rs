@@ -28,4 +28,5 @@ mod scenes;
 mod shards;
 mod stability;
 mod tearing;
+mod usd;
 mod validation;

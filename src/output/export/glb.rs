@@ -24,7 +24,8 @@
 //! ground height, the wind glyphs, the frame rate), node `extras` the
 //! object's kind and label; the previewer reads them back.
 
-use super::{Clip, ClipObject, ExportError, Motion};
+use super::frame::{Framed, outline_uvs, triangle_normals, vertex_normals};
+use super::{Clip, ClipObject, ExportError};
 use gltf::json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};
@@ -195,45 +196,46 @@ fn sampler_channel(
     });
 }
 
-/// The output of a `weights` channel for `n` keys and `n` morph targets:
-/// key k holds the one-hot vector e_k, so the accessor has n·n scalars, all
-/// zero but the n at flat index k·n + k. It is written as a sparse accessor
-/// (glTF 2.0 §3.6.2.3): no buffer view (all zeros), and the n indices
-/// (unsigned int, strictly increasing) and n ones that replace them, so it
-/// takes 8n bytes of the buffer instead of 4n².
-fn one_hot_weights(
+fn raw_extras(value: serde_json::Value) -> Option<Box<json::extras::RawValue>> {
+    serde_json::value::to_raw_value(&value).ok()
+}
+
+/// A morph target that moves few vertices: a sparse accessor (glTF 2.0
+/// §3.6.2.3) over `count` vertices, zero but for `values` at `indices`
+/// (strictly increasing), with the `min`/`max` of the whole, zeros
+/// included, as POSITION accessors require.
+fn sparse_vec3(
     root: &mut Root,
     bin: &mut Bin,
-    n: usize,
-    name: &str,
-) -> Result<Index<Accessor>, ExportError> {
-    let count = n * n;
-    // The last index, n·n − 1, must fit in an unsigned int.
-    if u32::try_from(count.saturating_sub(1)).is_err() {
-        return Err(ExportError::Data(format!(
-            "{name}: {n} frames are too many for the morph-target weights of a .glb \
-             (at most 65536); export fewer frames (--fps)"
-        )));
+    count: usize,
+    indices: &[u32],
+    values: &[[f32; 3]],
+) -> Index<Accessor> {
+    let (mut lo, mut hi) = bounds3(values);
+    if indices.len() < count {
+        for d in 0..3 {
+            lo[d] = lo[d].min(0.0);
+            hi[d] = hi[d].max(0.0);
+        }
     }
-    let indices: Vec<u8> = (0..n)
-        .flat_map(|k| ((k * n + k) as u32).to_le_bytes())
-        .collect();
-    let index_view = bin.view(root, &indices, None);
-    let value_view = bin.view(root, &f32_bytes(&vec![1.0; n]), None);
-    Ok(root.push(Accessor {
+    let index_bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+    let index_view = bin.view(root, &index_bytes, None);
+    let flat: Vec<f32> = values.iter().flatten().copied().collect();
+    let value_view = bin.view(root, &f32_bytes(&flat), None);
+    root.push(Accessor {
         buffer_view: None,
         byte_offset: None,
         count: USize64::from(count),
         component_type: Valid(GenericComponentType(ComponentType::F32)),
         extensions: None,
         extras: None,
-        type_: Valid(Type::Scalar),
-        min: None,
-        max: None,
+        type_: Valid(Type::Vec3),
+        min: Some(js!(lo)),
+        max: Some(js!(hi)),
         name: None,
         normalized: false,
         sparse: Some(json::accessor::sparse::Sparse {
-            count: USize64::from(n),
+            count: USize64::from(indices.len()),
             indices: json::accessor::sparse::Indices {
                 buffer_view: index_view,
                 byte_offset: USize64(0),
@@ -250,14 +252,246 @@ fn one_hot_weights(
             extensions: None,
             extras: None,
         }),
-    }))
+    })
 }
 
-fn raw_extras(value: serde_json::Value) -> Option<Box<json::extras::RawValue>> {
-    serde_json::value::to_raw_value(&value).ok()
+/// The deformation of an object in its moving frame as a fixed set of
+/// morph targets, one per degree of freedom of the simulated mesh, whatever
+/// the number of frames.
+///
+/// Without a render mesh, degree of freedom (i, a) is the displacement Δ of
+/// particle i from its rest place along glTF axis a, and its target moves
+/// vertex i along a: base + Σ Δ · targets is then the local shape exactly.
+/// With a render mesh bound to the simulated triangles (Σ bᵢ pᵢ + h n, see
+/// [`super::render_mesh`]), target (i, a) moves each render vertex on a
+/// triangle of particle i by bᵢ along a, and target (T, a) moves each render
+/// vertex of triangle T by its offset h along a, driven by the change of T's
+/// unit normal: exact again, because the binding is linear in the corners
+/// and in the normal.
+///
+/// Every weight is kept in 0 … 1, because Blender clamps a shape key's
+/// value to its slider range (0 … 1 unless set otherwise; a negative weight
+/// became 0 there, 2.3 mm off, measured): over the frames, degree of freedom
+/// j ranges over [lo, hi], its target is scaled by hi − lo and weighted
+/// (Δ − lo) / (hi − lo), and one more target, `offset`, weighted 1 at every
+/// frame, adds the Σ lo · targets this leaves out. Still linear in Δ, so
+/// LINEAR interpolation between keys is the interpolation of the shapes.
+struct Rig {
+    /// Per target: (vertex indices, displacement per unit weight), glTF axes.
+    targets: Vec<(Vec<u32>, Vec<[f32; 3]>)>,
+    /// Target names (Blender's shape keys, three.js morph names).
+    names: Vec<String>,
+    /// Weights per frame, `targets.len()` each, all in 0 … 1.
+    weights: Vec<Vec<f32>>,
+    /// The weights that give the rest shape (the mesh's default).
+    rest_weights: Vec<f32>,
+}
+
+fn axis(a: usize) -> [f32; 3] {
+    let mut e = [0.0; 3];
+    e[a] = 1.0;
+    e
+}
+
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+fn rig(o: &ClipObject, framed: &Framed) -> Rig {
+    let n = framed.rest.len();
+    let rest: Vec<[f32; 3]> = framed.rest.iter().map(to_gltf).collect();
+    // Which frames' displacements drive which target: particle moves, and
+    // for a render mesh the triangle normals' changes.
+    let mut targets = Vec::new();
+    let mut names = Vec::new();
+    let mut drivers: Vec<(usize, usize, bool)> = Vec::new(); // (particle or triangle, axis, is normal)
+    match &o.render {
+        None => {
+            for i in 0..n {
+                for (a, name) in AXES.iter().enumerate() {
+                    targets.push((vec![i as u32], vec![axis(a)]));
+                    names.push(format!("particle{i}.{name}"));
+                    drivers.push((i, a, false));
+                }
+            }
+        }
+        Some(r) => {
+            let mut by_particle: Vec<(Vec<u32>, Vec<f32>)> = vec![(Vec::new(), Vec::new()); n];
+            let mut by_triangle: Vec<(Vec<u32>, Vec<f32>)> =
+                vec![(Vec::new(), Vec::new()); o.triangles.len()];
+            for (v, b) in r.bindings.iter().enumerate() {
+                let t = o.triangles[b.triangle as usize];
+                for (slot, &i) in t.iter().enumerate() {
+                    let e = &mut by_particle[i as usize];
+                    // A vertex on two corners of one triangle cannot be; but
+                    // keep indices increasing and unique regardless.
+                    if e.0.last() == Some(&(v as u32)) {
+                        *e.1.last_mut().unwrap() += b.barycentric[slot] as f32;
+                    } else {
+                        e.0.push(v as u32);
+                        e.1.push(b.barycentric[slot] as f32);
+                    }
+                }
+                if b.offset != 0.0 {
+                    let e = &mut by_triangle[b.triangle as usize];
+                    e.0.push(v as u32);
+                    e.1.push(b.offset as f32);
+                }
+            }
+            for (i, (ix, w)) in by_particle.iter().enumerate() {
+                if ix.is_empty() {
+                    continue;
+                }
+                for (a, name) in AXES.iter().enumerate() {
+                    let vals = w.iter().map(|&w| axis(a).map(|e| e * w)).collect();
+                    targets.push((ix.clone(), vals));
+                    names.push(format!("particle{i}.{name}"));
+                    drivers.push((i, a, false));
+                }
+            }
+            for (t, (ix, h)) in by_triangle.iter().enumerate() {
+                if ix.is_empty() {
+                    continue;
+                }
+                for (a, name) in AXES.iter().enumerate() {
+                    let vals = h.iter().map(|&h| axis(a).map(|e| e * h)).collect();
+                    targets.push((ix.clone(), vals));
+                    names.push(format!("normal{t}.{name}"));
+                    drivers.push((t, a, true));
+                }
+            }
+        }
+    }
+    let rest_normals: Vec<[f32; 3]> = triangle_normals(&framed.rest, &o.triangles)
+        .iter()
+        .map(to_gltf)
+        .collect();
+    let raw: Vec<Vec<f32>> = (0..framed.origin.len())
+        .map(|k| {
+            let local = framed.local_at(k);
+            let normals: Vec<[f32; 3]> = if o.render.is_some() {
+                triangle_normals(local, &o.triangles)
+                    .iter()
+                    .map(to_gltf)
+                    .collect()
+            } else {
+                Vec::new()
+            };
+            drivers
+                .iter()
+                .map(|&(j, a, normal)| {
+                    if normal {
+                        normals[j][a] - rest_normals[j][a]
+                    } else {
+                        to_gltf(&local[j])[a] - rest[j][a]
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    // Each weight's range over the frames, and the offset that brings its
+    // lower end to 0 (see the doc of `Rig`).
+    let count = base_count(o, n);
+    let mut offset = vec![[0.0f32; 3]; count];
+    let mut weights = raw.clone();
+    for (j, (ix, vals)) in targets.iter_mut().enumerate() {
+        let lo = raw.iter().map(|w| w[j]).fold(f32::INFINITY, f32::min);
+        let hi = raw.iter().map(|w| w[j]).fold(f32::NEG_INFINITY, f32::max);
+        let scale = if hi > lo { hi - lo } else { 1.0 };
+        for (v, d) in ix.iter().zip(vals.iter_mut()) {
+            for c in 0..3 {
+                offset[*v as usize][c] += lo * d[c];
+                d[c] *= scale;
+            }
+        }
+        for w in &mut weights {
+            w[j] = ((w[j] - lo) / scale).clamp(0.0, 1.0);
+        }
+    }
+    let moved: Vec<u32> = (0..count as u32)
+        .filter(|&v| offset[v as usize] != [0.0; 3])
+        .collect();
+    if !moved.is_empty() {
+        let vals = moved.iter().map(|&v| offset[v as usize]).collect();
+        targets.push((moved, vals));
+        names.push("offset".to_string());
+        weights.iter_mut().for_each(|w| w.push(1.0));
+    }
+    // The weights of the rest shape (Δ = 0), for the mesh's default.
+    let rest_weights = weights
+        .first()
+        .map(|_| {
+            let mut w: Vec<f32> = (0..raw[0].len())
+                .map(|j| {
+                    let lo = raw.iter().map(|w| w[j]).fold(f32::INFINITY, f32::min);
+                    let hi = raw.iter().map(|w| w[j]).fold(f32::NEG_INFINITY, f32::max);
+                    let scale = if hi > lo { hi - lo } else { 1.0 };
+                    ((0.0 - lo) / scale).clamp(0.0, 1.0)
+                })
+                .collect();
+            if names.last().is_some_and(|n| n == "offset") {
+                w.push(1.0);
+            }
+            w
+        })
+        .unwrap_or_default();
+    Rig {
+        targets,
+        names,
+        weights,
+        rest_weights,
+    }
+}
+
+/// The number of vertices a rig's targets move: the render mesh's, or the
+/// simulated mesh's.
+fn base_count(o: &ClipObject, n: usize) -> usize {
+    o.render.as_ref().map_or(n, |r| r.vertex_count())
+}
+
+/// The mesh a client sees of an object, in its body frame at rest: the
+/// simulated vertices, or the render mesh placed on them.
+pub struct Shown {
+    /// Rest positions, body frame (simulator axes), m.
+    pub rest: Vec<V3>,
+    /// Triangles.
+    pub triangles: Vec<[u32; 3]>,
+    /// UVs (v up, as in OBJ and USD).
+    pub uvs: Vec<[f64; 2]>,
+}
+
+/// What is shown of `o` at rest (see [`Shown`]).
+pub fn shown(o: &ClipObject, framed: &Framed) -> Shown {
+    match &o.render {
+        Some(r) => Shown {
+            rest: r.place(&framed.rest, &o.triangles),
+            triangles: r.triangles.clone(),
+            uvs: r.uvs.clone(),
+        },
+        None => Shown {
+            rest: framed.rest.clone(),
+            triangles: o.triangles.clone(),
+            uvs: outline_uvs(&framed.rest),
+        },
+    }
+}
+
+/// The material name of an object's class (or kind): `<kind>-<label>`.
+pub fn material_name(o: &ClipObject) -> String {
+    if o.label.is_empty() {
+        o.kind.clone()
+    } else {
+        format!("{}-{}", o.kind, o.label)
+    }
 }
 
 /// The `.glb` bytes of `clip`.
+///
+/// Layout: one node per object, named as the object, whose `translation`
+/// and `rotation` carry the rigid part of its motion (the origin follows
+/// the object: its centre, turned with it); its mesh (`<object>-mesh`)
+/// holds the rest shape in that frame with smooth normals and UVs, and a
+/// deforming object's mesh a fixed set of morph targets keyed once per
+/// frame (see `Rig`), so the file grows linearly with the frames. The scene
+/// is `<clip>-scene`, the animation `motion`.
 ///
 /// # Errors
 /// [`ExportError::Data`] if the clip is inconsistent ([`Clip::validate`]) or
@@ -291,7 +525,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
     let mut materials = std::collections::BTreeMap::new();
     for o in &clip.objects {
         let rgb = colour(o);
-        let key = format!("{}/{}", o.kind, o.label);
+        let key = material_name(o);
         let material = *materials.entry(key.clone()).or_insert_with(|| {
             root.push(json::Material {
                 name: Some(key),
@@ -307,20 +541,45 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 ..Default::default()
             })
         });
-        let frame0 = o.positions(0);
-        let base: Vec<[f32; 3]> = match &o.motion {
-            Motion::Rigid { local, .. } => local.iter().map(to_gltf).collect(),
-            Motion::Deforming { .. } => frame0.iter().map(to_gltf).collect(),
-        };
+        let framed = o.framed();
+        let surface = shown(o, &framed);
+        let base: Vec<[f32; 3]> = surface.rest.iter().map(to_gltf).collect();
         let position = vec3_accessor(&mut root, &mut bin, &base, true);
-        let (indices, mode) = if o.triangles.is_empty() {
+        let mut attributes = vec![(Valid(json::mesh::Semantic::Positions), position)];
+        let (indices, mode) = if surface.triangles.is_empty() {
             (
                 o.segments.iter().flatten().copied().collect::<Vec<u32>>(),
                 json::mesh::Mode::Lines,
             )
         } else {
+            let normals: Vec<[f32; 3]> = vertex_normals(&surface.rest, &surface.triangles)
+                .iter()
+                .map(to_gltf)
+                .collect();
+            let normal = vec3_accessor(&mut root, &mut bin, &normals, true);
+            attributes.push((Valid(json::mesh::Semantic::Normals), normal));
+            // glTF's UV origin is the top left: v runs down.
+            let uv: Vec<f32> = surface
+                .uvs
+                .iter()
+                .flat_map(|t| [t[0] as f32, 1.0 - t[1] as f32])
+                .collect();
+            let view = bin.view(
+                &mut root,
+                &f32_bytes(&uv),
+                Some(json::buffer::Target::ArrayBuffer),
+            );
+            let texcoord = accessor(
+                &mut root,
+                view,
+                surface.uvs.len(),
+                ComponentType::F32,
+                Type::Vec2,
+                None,
+            );
+            attributes.push((Valid(json::mesh::Semantic::TexCoords(0)), texcoord));
             (
-                o.triangles.iter().flatten().copied().collect(),
+                surface.triangles.iter().flatten().copied().collect(),
                 json::mesh::Mode::Triangles,
             )
         };
@@ -345,34 +604,31 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
         } else {
             mode
         };
+        let rig = (animate && framed.deforms()).then(|| rig(o, &framed));
         let mut targets = None;
         let mut weights = None;
-        if let (Motion::Deforming { frames }, true) = (&o.motion, animate) {
-            let mut list = Vec::with_capacity(frames.len());
-            for f in frames {
-                let d: Vec<[f32; 3]> = f
-                    .iter()
-                    .zip(&base)
-                    .map(|(x, b)| {
-                        let p = to_gltf(x);
-                        [p[0] - b[0], p[1] - b[1], p[2] - b[2]]
-                    })
-                    .collect();
-                list.push(json::mesh::MorphTarget {
-                    positions: Some(vec3_accessor(&mut root, &mut bin, &d, true)),
+        let mut mesh_extras = None;
+        if let Some(rig) = &rig {
+            let list = rig
+                .targets
+                .iter()
+                .map(|(ix, vals)| json::mesh::MorphTarget {
+                    positions: Some(sparse_vec3(&mut root, &mut bin, base.len(), ix, vals)),
                     normals: None,
                     tangents: None,
-                });
-            }
-            weights = Some(vec![0.0; frames.len()]);
+                })
+                .collect();
             targets = Some(list);
+            weights = Some(rig.rest_weights.clone());
+            // The names of the targets, where Blender and three.js look.
+            mesh_extras = raw_extras(js!({ "targetNames": rig.names }));
         }
         let mesh = root.push(json::Mesh {
             extensions: None,
-            extras: None,
-            name: Some(o.name.clone()),
+            extras: mesh_extras,
+            name: Some(format!("{}-mesh", o.name)),
             primitives: vec![json::mesh::Primitive {
-                attributes: [(Valid(json::mesh::Semantic::Positions), position)].into(),
+                attributes: attributes.into_iter().collect(),
                 extensions: None,
                 extras: None,
                 indices: index_accessor,
@@ -382,23 +638,26 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
             }],
             weights,
         });
-        let (translation, rotation) = match &o.motion {
-            Motion::Rigid {
-                translation,
-                rotation,
-                ..
-            } => (
-                Some(to_gltf(&translation[0])),
-                Some(json::scene::UnitQuaternion(quat_to_gltf(&rotation[0]))),
-            ),
-            Motion::Deforming { .. } => (None, None),
-        };
+        let mut extras = js!({"kind": o.kind, "label": o.label});
+        if !o.regime.is_empty() {
+            extras["regime"] = js!(o.regime);
+        }
+        if !o.features.is_empty() {
+            extras["features"] = o
+                .features
+                .iter()
+                .map(|(k, v)| (k.clone(), js!(v)))
+                .collect::<serde_json::Map<_, _>>()
+                .into();
+        }
         let node = root.push(json::Node {
             mesh: Some(mesh),
             name: Some(o.name.clone()),
-            translation,
-            rotation,
-            extras: raw_extras(js!({"kind": o.kind, "label": o.label})),
+            translation: Some(to_gltf(&framed.origin[0])),
+            rotation: Some(json::scene::UnitQuaternion(quat_to_gltf(
+                &framed.rotation[0],
+            ))),
+            extras: raw_extras(extras),
             ..Default::default()
         });
         nodes.push(node);
@@ -415,42 +674,35 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
             let out = accessor(root, view, count, ComponentType::F32, type_, None);
             sampler_channel(&mut samplers, &mut channels, time_accessor, out, node, path);
         };
-        match &o.motion {
-            Motion::Rigid {
-                translation,
-                rotation,
-                ..
-            } => {
-                let t: Vec<f32> = translation.iter().flat_map(to_gltf).collect();
-                channel(
-                    &mut root,
-                    &mut bin,
-                    t,
-                    Type::Vec3,
-                    translation.len(),
-                    json::animation::Property::Translation,
-                );
-                let r: Vec<f32> = rotation.iter().flat_map(quat_to_gltf).collect();
-                channel(
-                    &mut root,
-                    &mut bin,
-                    r,
-                    Type::Vec4,
-                    rotation.len(),
-                    json::animation::Property::Rotation,
-                );
-            }
-            Motion::Deforming { frames } => {
-                let out = one_hot_weights(&mut root, &mut bin, frames.len(), &o.name)?;
-                sampler_channel(
-                    &mut samplers,
-                    &mut channels,
-                    time_accessor,
-                    out,
-                    node,
-                    json::animation::Property::MorphTargetWeights,
-                );
-            }
+        let t: Vec<f32> = framed.origin.iter().flat_map(to_gltf).collect();
+        channel(
+            &mut root,
+            &mut bin,
+            t,
+            Type::Vec3,
+            framed.origin.len(),
+            json::animation::Property::Translation,
+        );
+        let r: Vec<f32> = framed.rotation.iter().flat_map(quat_to_gltf).collect();
+        channel(
+            &mut root,
+            &mut bin,
+            r,
+            Type::Vec4,
+            framed.rotation.len(),
+            json::animation::Property::Rotation,
+        );
+        if let Some(rig) = rig {
+            let w: Vec<f32> = rig.weights.into_iter().flatten().collect();
+            let count = w.len();
+            channel(
+                &mut root,
+                &mut bin,
+                w,
+                Type::Scalar,
+                count,
+                json::animation::Property::MorphTargetWeights,
+            );
         }
     }
     if animate {
@@ -466,10 +718,13 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
         extensions: None,
         extras: raw_extras(js!({"leafmagic": {
             "fps": clip.fps,
+            "frames": clip.frames,
+            "start_s": 0.0,
+            "end_s": clip.duration(),
             "ground": clip.ground,
             "wind": clip.wind,
         }})),
-        name: Some(clip.name.clone()),
+        name: Some(format!("{}-scene", clip.name)),
         nodes,
     });
     root.scene = Some(scene);

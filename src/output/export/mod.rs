@@ -14,11 +14,16 @@
 //! a body frame and carry a pose per frame; deforming objects (mass-spring
 //! leaves, sheets, ropes) carry every vertex's position per frame.
 
+pub mod frame;
 pub mod glb;
 pub mod pc2;
 mod read;
+pub mod render_mesh;
+pub mod usd;
 
+pub use frame::{Body, Framed};
 pub use read::{from_glb, from_glb_bytes, from_scene_dir};
+pub use render_mesh::RenderMesh;
 
 use crate::motion::trajectory::Trajectory;
 use crate::physics::field::{
@@ -42,17 +47,27 @@ pub const DEFAULT_FPS: f64 = 30.0;
 /// An export file format.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
-    /// Binary glTF 2.0 (`.glb`): meshes, node TRS animation for rigid
-    /// objects, one morph target per frame for deforming ones.
+    /// Binary glTF 2.0 (`.glb`): meshes with normals and UVs, node TRS
+    /// animation for the rigid part of every object's motion, a fixed set of
+    /// morph targets for the deformation of deforming ones.
     Glb,
     /// PC2 point cache (`.pc2`) with the rest-pose mesh (`.obj`), per object.
     Pc2,
+    /// USD (`.usda`, text): an Xform per object with the rigid part of its
+    /// motion time-sampled, and a Mesh with its points, normals and UVs.
+    Usd,
 }
 
 /// A name that is no export format's.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("unknown export format '{0}' (expected glb or pc2)")]
-pub struct UnknownFormat(pub String);
+pub enum UnknownFormat {
+    /// Not a format at all.
+    #[error("unknown export format '{0}' (expected glb, pc2, usd or usda)")]
+    Unknown(String),
+    /// Binary USD, which is made from the text by Pixar's library.
+    #[error("{}", usd::USDC_HINT)]
+    Usdc,
+}
 
 impl FromStr for Format {
     type Err = UnknownFormat;
@@ -60,7 +75,9 @@ impl FromStr for Format {
         match s {
             "glb" => Ok(Format::Glb),
             "pc2" => Ok(Format::Pc2),
-            _ => Err(UnknownFormat(s.to_string())),
+            "usd" | "usda" => Ok(Format::Usd),
+            "usdc" => Err(UnknownFormat::Usdc),
+            _ => Err(UnknownFormat::Unknown(s.to_string())),
         }
     }
 }
@@ -70,6 +87,7 @@ impl fmt::Display for Format {
         f.write_str(match self {
             Format::Glb => "glb",
             Format::Pc2 => "pc2",
+            Format::Usd => "usd",
         })
     }
 }
@@ -145,10 +163,21 @@ pub struct ClipObject {
     pub kind: String,
     /// A label to show next to it (the motion class of a bred leaf), may be empty.
     pub label: String,
+    /// The sub-regime of its motion class, may be empty.
+    pub regime: String,
+    /// Numbers that describe it (a bred leaf's features: descent speed,
+    /// drift, turns, …), SI units, written as custom attributes where the
+    /// format has them.
+    pub features: Vec<(String, f64)>,
     /// Surface triangles (vertex indices).
     pub triangles: Vec<[u32; 3]>,
     /// Line segments (vertex indices), for ropes.
     pub segments: Vec<[u32; 2]>,
+    /// Its rest shape in its own body frame, when known (leaves, rigid
+    /// objects); else the first frame stands for it ([`frame`]).
+    pub body: Option<Body>,
+    /// A finer textured mesh bound to this one, exported in its place.
+    pub render: Option<RenderMesh>,
     /// The motion.
     pub motion: Motion,
 }
@@ -174,6 +203,16 @@ impl ClipObject {
                 .map(|x| translation[k] + rotation[k] * x)
                 .collect(),
             Motion::Deforming { frames } => frames[k].clone(),
+        }
+    }
+
+    /// World positions of the vertices a client is shown at frame `k`: the
+    /// render mesh placed on the simulated vertices, or those.
+    pub fn shown_positions(&self, k: usize) -> Vec<V3> {
+        let p = self.positions(k);
+        match &self.render {
+            Some(r) => r.place(&p, &self.triangles),
+            None => p,
         }
     }
 
@@ -293,6 +332,13 @@ impl Clip {
         if self.objects.is_empty() {
             return bad("no objects to export".into());
         }
+        let mut names = std::collections::BTreeSet::new();
+        if let Some(o) = self.objects.iter().find(|o| !names.insert(o.name.as_str())) {
+            return bad(format!(
+                "two objects are named {}; names must be unique",
+                o.name
+            ));
+        }
         for o in &self.objects {
             let n = o.vertex_count();
             let frames_ok = match &o.motion {
@@ -327,6 +373,30 @@ impl Clip {
                 .all(|&i| (i as usize) < n);
             if !in_range {
                 return bad(format!("object {}: a vertex index is out of range", o.name));
+            }
+            if let Some(b) = &o.body
+                && (b.rest.len() != n || b.mass.len() != n || !b.mass.iter().all(|m| *m > 0.0))
+            {
+                return bad(format!(
+                    "object {}: its rest shape has {} vertices and {} positive masses, expected {n}",
+                    o.name,
+                    b.rest.len(),
+                    b.mass.iter().filter(|m| **m > 0.0).count()
+                ));
+            }
+            if let Some(r) = &o.render {
+                let m = r.vertex_count();
+                let ok = r.uvs.len() == m
+                    && r.bindings
+                        .iter()
+                        .all(|b| (b.triangle as usize) < o.triangles.len())
+                    && r.triangles.iter().flatten().all(|&i| (i as usize) < m);
+                if !ok {
+                    return bad(format!(
+                        "object {}: the render mesh {} does not fit it (its bindings, UVs or triangles are out of range)",
+                        o.name, r.source
+                    ));
+                }
             }
         }
         Ok(())
@@ -432,6 +502,16 @@ pub(crate) fn build_scene_clip(
         } else {
             Vec::new()
         };
+        // A leaf's or rigid object's own frame: its model alone, turned as
+        // released (the frame its pose trajectory is given in).
+        let body = obj.pose.as_ref().map(|frame| {
+            let m = &frame.model;
+            let com = m.centre_of_mass(&m.rest_position);
+            Body {
+                rest: m.rest_position.iter().map(|x| x - com).collect(),
+                mass: m.mass.clone(),
+            }
+        });
         let motion = match (obj.rigid_body, &obj.pose, poses.get(o).copied().flatten()) {
             (Some(_), Some(frame), Some(traj)) => {
                 let m = &frame.model;
@@ -460,8 +540,12 @@ pub(crate) fn build_scene_clip(
             name: obj.name.clone(),
             kind: kind_name(obj.kind).to_string(),
             label: String::new(),
+            regime: String::new(),
+            features: Vec::new(),
             triangles,
             segments,
+            body,
+            render: None,
             motion,
         });
     }
@@ -516,12 +600,20 @@ pub fn drop_clip(
         return Err(ExportError::Data(format!("{name}: no frames recorded")));
     };
     let count = frame_count(t0, t1, fps);
+    let com = model.centre_of_mass(&model.rest_position);
     Ok(ClipObject {
         name: name.to_string(),
         kind: "leaf".to_string(),
         label: label.to_string(),
+        regime: String::new(),
+        features: Vec::new(),
         triangles: model.triangles.iter().map(|t| to_u32(&t.corners)).collect(),
         segments: Vec::new(),
+        body: Some(Body {
+            rest: model.rest_position.iter().map(|x| x - com).collect(),
+            mass: model.mass.clone(),
+        }),
+        render: None,
         motion: Motion::Deforming {
             frames: resample_positions(time, &frames, fps, count),
         },
@@ -580,7 +672,26 @@ pub fn drop_individuals(
                 .genome
                 .model(&run.proto)
                 .map_err(|e| ExportError::Data(format!("{name}: invalid leaf: {e}")))?;
-            drop_clip(&name, ind.eval.class_name(), &model, seconds, fps)
+            let mut o = drop_clip(&name, ind.eval.class_name(), &model, seconds, fps)?;
+            o.features = vec![("score".to_string(), ind.eval.score)];
+            if let Some(f) = ind.eval.fall() {
+                o.regime = f.regime.to_string();
+                o.features.extend(
+                    [
+                        ("margin", f.margin),
+                        ("descent_m_s", f.descent_m_s),
+                        ("drift_ratio", f.drift_ratio),
+                        ("net_turns", f.net_turns),
+                        ("yaw_turns", f.yaw_turns),
+                        ("spin_rad_s", f.spin_rad_s),
+                        ("reversals", f.reversals as f64),
+                        ("flips", f.flips as f64),
+                        ("tilt_deg", f.tilt_deg),
+                    ]
+                    .map(|(k, v)| (k.to_string(), v)),
+                );
+            }
+            Ok(o)
         })
         .collect()
 }
@@ -617,14 +728,21 @@ mod tests {
         assert_eq!("glb".parse::<Format>(), Ok(Format::Glb));
         assert_eq!("pc2".parse::<Format>(), Ok(Format::Pc2));
         let e = "fbx".parse::<Format>().unwrap_err().to_string();
-        assert!(e.contains("fbx") && e.contains("glb or pc2"), "{e}");
+        assert!(e.contains("fbx") && e.contains("glb, pc2, usd"), "{e}");
+        assert_eq!("usd".parse::<Format>(), Ok(Format::Usd));
+        assert_eq!("usda".parse::<Format>(), Ok(Format::Usd));
+        let e = "usdc".parse::<Format>().unwrap_err().to_string();
+        assert!(e.contains("usd-core") && e.contains("Export"), "{e}");
     }
 
     #[test]
     fn side_by_side_spaces_objects_about_the_origin() {
         let model = crate::leaf::LeafSpec::load("a").unwrap().model().unwrap();
         let a = drop_clip("a", "", &model, 0.5, 30.0).unwrap();
-        let b = a.clone();
+        let mut b = a.clone();
+        let e = side_by_side("pair", vec![a.clone(), b.clone()], 30.0, 0.2).unwrap_err();
+        assert!(e.to_string().contains("two objects are named a"), "{e}");
+        b.name = "b".into();
         let clip = side_by_side("pair", vec![a.clone(), b], 30.0, 0.2).unwrap();
         assert_eq!(clip.frames, 16);
         let d = clip.objects[1].centre(0) - clip.objects[0].centre(0);

@@ -51,11 +51,16 @@ pub fn pc2_bytes(samples: &[Vec<[f32; 3]>], start_frame: f32, sample_rate: f32) 
     out
 }
 
-/// One object's vertex positions per frame, f32, simulator axes.
+/// The frame rate of the scene a cache is played in unless asked otherwise:
+/// 24 fps, the default of Blender, Maya and Houdini.
+pub const DEFAULT_HOST_FPS: f64 = 24.0;
+
+/// One object's shown vertex positions per frame (the render mesh's, if it
+/// has one), f32, simulator axes.
 pub fn object_samples(clip: &Clip, o: &ClipObject) -> Vec<Vec<[f32; 3]>> {
     (0..clip.frames)
         .map(|k| {
-            o.positions(k)
+            o.shown_positions(k)
                 .iter()
                 .map(|v| [v.x as f32, v.y as f32, v.z as f32])
                 .collect()
@@ -65,7 +70,9 @@ pub fn object_samples(clip: &Clip, o: &ClipObject) -> Vec<Vec<[f32; 3]>> {
 
 /// The OBJ text of an object at its first sample: `v` lines in cache order
 /// (f32 values printed in their shortest round-trip form, so they read back
-/// bit for bit), then faces (`f`, 1-based) or lines (`l`).
+/// bit for bit), `vt` lines (one UV per vertex, see
+/// [`super::frame::outline_uvs`], or the render mesh's own), then faces
+/// (`f v/vt`, 1-based) or lines (`l`).
 pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
     let mut s = format!(
         "# leafmagic {}: {} ({}), vertex order = the .pc2 point order\no {}\n",
@@ -77,8 +84,21 @@ pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
     for p in first {
         let _ = writeln!(s, "v {} {} {}", p[0], p[1], p[2]);
     }
-    for t in &o.triangles {
-        let _ = writeln!(s, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
+    let (triangles, uvs) = match &o.render {
+        Some(r) => (r.triangles.clone(), r.uvs.clone()),
+        None => {
+            let body = o.body_or_first_frame();
+            (o.triangles.clone(), super::frame::outline_uvs(&body.rest))
+        }
+    };
+    if !triangles.is_empty() {
+        for t in &uvs {
+            let _ = writeln!(s, "vt {} {}", t[0] as f32, t[1] as f32);
+        }
+    }
+    for t in &triangles {
+        let [a, b, c] = t.map(|i| i + 1);
+        let _ = writeln!(s, "f {a}/{a} {b}/{b} {c}/{c}");
     }
     for l in &o.segments {
         let _ = writeln!(s, "l {} {}", l[0] + 1, l[1] + 1);
@@ -88,11 +108,18 @@ pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
 
 /// Writes `<object>.pc2` and `<object>.obj` for every object of `clip` into
 /// `dir` (created if missing), atomically; returns the paths written. The
-/// cache's samples are the clip's frames, one per frame from frame 0
-/// (sampleRate 1), at the clip's frame rate.
-pub fn write_pc2(clip: &Clip, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
+/// cache's samples are the clip's frames from frame 0, spaced `host_fps /
+/// fps` frames of a scene at `host_fps` apart (the header's sampleRate), so
+/// that it plays in real time there.
+pub fn write_pc2(clip: &Clip, dir: &Path, host_fps: f64) -> Result<Vec<PathBuf>, ExportError> {
     clip.validate()?;
+    if !(host_fps > 0.0 && host_fps.is_finite()) {
+        return Err(ExportError::Data(format!(
+            "the host frame rate must be positive, got {host_fps}"
+        )));
+    }
     std::fs::create_dir_all(dir).map_err(|e| ExportError::io(dir, e))?;
+    let sample_rate = (host_fps / clip.fps) as f32;
     // Objects in parallel: each atomic write waits for its fsync, and a
     // scene of a hundred leaves is two hundred files.
     use rayon::prelude::*;
@@ -102,7 +129,7 @@ pub fn write_pc2(clip: &Clip, dir: &Path) -> Result<Vec<PathBuf>, ExportError> {
         .map(|o| {
             let samples = object_samples(clip, o);
             let pc2 = dir.join(format!("{}.pc2", o.name));
-            crate::util::io::write_atomic(&pc2, &pc2_bytes(&samples, 0.0, 1.0))
+            crate::util::io::write_atomic(&pc2, &pc2_bytes(&samples, 0.0, sample_rate))
                 .map_err(|e| ExportError::io(&pc2, e))?;
             let obj = dir.join(format!("{}.obj", o.name));
             crate::util::io::write_atomic(&obj, obj_text(o, &samples[0]).as_bytes())

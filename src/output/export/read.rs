@@ -202,6 +202,10 @@ struct NodeExtras {
     kind: String,
     #[serde(default)]
     label: String,
+    #[serde(default)]
+    regime: String,
+    #[serde(default)]
+    features: std::collections::BTreeMap<String, f64>,
 }
 
 /// Keyframes of one animated property: times and values (flattened, `width`
@@ -444,8 +448,12 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
                 node_extras.kind
             },
             label: node_extras.label,
+            regime: node_extras.regime,
+            features: node_extras.features.into_iter().collect(),
             triangles,
             segments,
+            body: None,
+            render: None,
             motion,
         });
     }

@@ -163,8 +163,12 @@ mod tests {
                 name: "o".into(),
                 kind: "leaf".into(),
                 label: "floater".into(),
+                regime: String::new(),
+                features: vec![],
                 triangles: vec![[0, 1, 2]],
                 segments: vec![],
+                body: None,
+                render: None,
                 motion: Motion::Deforming {
                     frames: vec![
                         vec![Vector3::zeros(), Vector3::x(), Vector3::y()],

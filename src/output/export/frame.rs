@@ -1,0 +1,310 @@
+//! An object's motion split into a moving frame and a shape in it: the
+//! rigid part (origin and rotation per frame, what a glTF node's TRS or a
+//! USD Xform carries, so the object's origin follows it) and the deformation
+//! relative to it (the local shape per frame). Also what dressing a mesh
+//! needs from its rest shape: smooth vertex normals and UVs.
+//!
+//! The frame of a deforming object is fitted like the pose of a leaf
+//! ([`crate::physics::pose`]): its origin is the mass-weighted centre of the
+//! vertices, its rotation the one that best maps the rest shape onto them
+//! (mass-weighted least squares). The split is exact whatever rotation is
+//! chosen (the local shape is Rᵀ(x − c)); the fit only keeps the local
+//! deformation small, so that what clients interpolate between keys is
+//! mostly the rigid motion.
+
+use super::{ClipObject, Motion};
+use crate::physics::pose::best_rotation;
+use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+type V3 = Vector3<f64>;
+
+/// The rest shape of an object in its own body frame.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Body {
+    /// Vertices in the body frame (for a leaf: z the plate normal, x the
+    /// long axis), with the origin at their mass-weighted centre, m.
+    pub rest: Vec<V3>,
+    /// The weight of each vertex in the frame fit (its mass, kg).
+    pub mass: Vec<f64>,
+}
+
+/// An object's motion as a moving frame and a shape in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Framed {
+    /// Origin of the body frame per frame (world, m).
+    pub origin: Vec<V3>,
+    /// Body-to-world rotation per frame, without sign jumps between frames.
+    pub rotation: Vec<UnitQuaternion<f64>>,
+    /// The shape in the body frame: one entry per frame, or a single entry
+    /// for a rigid object (its shape never changes).
+    pub local: Vec<Vec<V3>>,
+    /// The rest shape the deformation is measured from (the body's rest,
+    /// or the first frame), body frame.
+    pub rest: Vec<V3>,
+}
+
+impl Framed {
+    /// The local shape at frame `k`.
+    pub fn local_at(&self, k: usize) -> &[V3] {
+        &self.local[k.min(self.local.len() - 1)]
+    }
+
+    /// Whether the shape changes over time.
+    pub fn deforms(&self) -> bool {
+        self.local.len() > 1
+    }
+}
+
+/// Whether points lie within `tol` of one line (a rope, or one point): then
+/// no rotation is defined by them and the frame does not turn.
+fn collinear(points: &[V3], tol: f64) -> bool {
+    let Some(&a) = points.first() else {
+        return true;
+    };
+    let Some(far) = points
+        .iter()
+        .max_by(|p, q| (*p - a).norm().total_cmp(&(*q - a).norm()))
+    else {
+        return true;
+    };
+    let axis = far - a;
+    if axis.norm() < tol {
+        return true;
+    }
+    let u = axis.normalize();
+    points.iter().all(|p| {
+        let d = p - a;
+        (d - u * d.dot(&u)).norm() < tol
+    })
+}
+
+/// The rotation R maximising Σ mᵢ (R rᵢ)·(pᵢ − c) with no previous frame to
+/// start from: by the singular value decomposition of A (Kabsch), with the
+/// sign fixed so that R is a proper rotation.
+fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    let svd = a.svd(true, true);
+    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+        return UnitQuaternion::identity();
+    };
+    let d = (u * v_t).determinant().signum();
+    let r = u * Matrix3::from_diagonal(&V3::new(1.0, 1.0, d)) * v_t;
+    UnitQuaternion::from_matrix(&r)
+}
+
+impl ClipObject {
+    /// The body of the object: its own if it has one, else the first frame
+    /// about its centroid, all vertices weighted alike.
+    pub fn body_or_first_frame(&self) -> Body {
+        if let Some(b) = &self.body {
+            return b.clone();
+        }
+        let p = self.positions(0);
+        let c = p.iter().sum::<V3>() / p.len().max(1) as f64;
+        Body {
+            rest: p.iter().map(|x| x - c).collect(),
+            mass: vec![1.0; p.len()],
+        }
+    }
+
+    /// The motion as a moving frame and a shape in it (see the module doc).
+    pub fn framed(&self) -> Framed {
+        match &self.motion {
+            Motion::Rigid {
+                local,
+                translation,
+                rotation,
+            } => Framed {
+                origin: translation.clone(),
+                rotation: rotation.clone(),
+                local: vec![local.clone()],
+                rest: local.clone(),
+            },
+            Motion::Deforming { frames } => {
+                let body = self.body_or_first_frame();
+                let total: f64 = body.mass.iter().sum();
+                let turns = !collinear(&body.rest, 1e-9);
+                let mut origin = Vec::with_capacity(frames.len());
+                let mut rotation = Vec::with_capacity(frames.len());
+                let mut local = Vec::with_capacity(frames.len());
+                let mut previous: Option<UnitQuaternion<f64>> = None;
+                for f in frames {
+                    let c = f.iter().zip(&body.mass).map(|(x, m)| x * *m).sum::<V3>() / total;
+                    let q = if turns {
+                        let mut a = Matrix3::zeros();
+                        for ((p, r), m) in f.iter().zip(&body.rest).zip(&body.mass) {
+                            a += (p - c) * (r * *m).transpose();
+                        }
+                        // Newton from the previous frame keeps the quaternion
+                        // continuous; the first frame starts from Kabsch.
+                        best_rotation(&a, previous.unwrap_or_else(|| kabsch(&a)))
+                    } else {
+                        UnitQuaternion::identity()
+                    };
+                    let inv = q.inverse();
+                    local.push(f.iter().map(|x| inv * (x - c)).collect());
+                    origin.push(c);
+                    rotation.push(q);
+                    previous = Some(q);
+                }
+                Framed {
+                    origin,
+                    rotation,
+                    local,
+                    rest: body.rest,
+                }
+            }
+        }
+    }
+}
+
+/// Unit normals of triangles (zero for a degenerate one).
+pub fn triangle_normals(points: &[V3], triangles: &[[u32; 3]]) -> Vec<V3> {
+    triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| points[i as usize]);
+            (b - a)
+                .cross(&(c - a))
+                .try_normalize(0.0)
+                .unwrap_or_default()
+        })
+        .collect()
+}
+
+/// Smooth vertex normals: the area-weighted mean of the normals of the
+/// triangles around each vertex (the sum of their cross products),
+/// normalised; +z of the frame for a vertex on no triangle.
+pub fn vertex_normals(points: &[V3], triangles: &[[u32; 3]]) -> Vec<V3> {
+    let mut sum = vec![V3::zeros(); points.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| points[i as usize]);
+        let n = (b - a).cross(&(c - a));
+        for &i in t {
+            sum[i as usize] += n;
+        }
+    }
+    sum.into_iter()
+        .map(|n| n.try_normalize(1e-30).unwrap_or_else(V3::z))
+        .collect()
+}
+
+/// UVs over the bounding box of the rest shape seen along its body z (for a
+/// leaf, its outline seen from above): u = (x − x_min) / (x_max − x_min),
+/// v = (y − y_min) / (y_max − y_min), both in 0 … 1. A flat extent (a rope)
+/// maps to 0.
+pub fn outline_uvs(rest: &[V3]) -> Vec<[f64; 2]> {
+    let range = |d: usize| {
+        let lo = rest.iter().map(|p| p[d]).fold(f64::INFINITY, f64::min);
+        let hi = rest.iter().map(|p| p[d]).fold(f64::NEG_INFINITY, f64::max);
+        (lo, hi - lo)
+    };
+    let ((x0, dx), (y0, dy)) = (range(0), range(1));
+    let unit = |x: f64, lo: f64, d: f64| if d > 0.0 { (x - lo) / d } else { 0.0 };
+    rest.iter()
+        .map(|p| [unit(p.x, x0, dx), unit(p.y, y0, dy)])
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn object(frames: Vec<Vec<V3>>, body: Option<Body>) -> ClipObject {
+        ClipObject {
+            name: "o".into(),
+            kind: "leaf".into(),
+            label: String::new(),
+            regime: String::new(),
+            features: Vec::new(),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            segments: vec![],
+            body,
+            render: None,
+            motion: Motion::Deforming { frames },
+        }
+    }
+
+    #[test]
+    fn a_rigidly_moving_shape_has_a_constant_local_shape_and_the_true_frame() {
+        // A square turned by a known rotation and moved: the fitted frame is
+        // that rotation and the centre, and the local shape the rest shape.
+        let rest = vec![
+            V3::new(-0.1, -0.05, 0.0),
+            V3::new(0.1, -0.05, 0.0),
+            V3::new(0.1, 0.05, 0.0),
+            V3::new(-0.1, 0.05, 0.0),
+        ];
+        let body = Body {
+            rest: rest.clone(),
+            mass: vec![1.0, 2.0, 1.0, 2.0],
+        };
+        // Mass-weighted centre of the rest shape is not at the origin here,
+        // so shift it first.
+        let c: V3 = rest.iter().zip(&body.mass).map(|(x, m)| x * *m).sum::<V3>() / 6.0;
+        let body = Body {
+            rest: rest.iter().map(|x| x - c).collect(),
+            ..body
+        };
+        let frames: Vec<Vec<V3>> = (0..20)
+            .map(|k| {
+                let q =
+                    UnitQuaternion::from_scaled_axis(V3::new(0.3, -2.0, 1.0) * (k as f64 * 0.2));
+                let t = V3::new(1.0, 2.0, -0.5 * k as f64);
+                body.rest.iter().map(|x| t + q * x).collect()
+            })
+            .collect();
+        let o = object(frames.clone(), Some(body.clone()));
+        let f = o.framed();
+        for (k, frame) in frames.iter().enumerate() {
+            let q = UnitQuaternion::from_scaled_axis(V3::new(0.3, -2.0, 1.0) * (k as f64 * 0.2));
+            assert!(f.rotation[k].angle_to(&q) < 1e-9, "frame {k}");
+            assert!((f.origin[k] - V3::new(1.0, 2.0, -0.5 * k as f64)).norm() < 1e-12);
+            for (a, b) in f.local_at(k).iter().zip(&body.rest) {
+                assert!((a - b).norm() < 1e-9);
+            }
+            if k > 0 {
+                assert!(f.rotation[k].coords.dot(&f.rotation[k - 1].coords) > 0.0);
+            }
+            // The split is exact: origin + R · local is the input.
+            for (x, l) in frame.iter().zip(f.local_at(k)) {
+                assert!((x - (f.origin[k] + f.rotation[k] * l)).norm() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn a_rope_does_not_turn_its_frame() {
+        let line =
+            |s: f64| -> Vec<V3> { (0..4).map(|i| V3::new(i as f64 * s, 0.0, 1.0)).collect() };
+        let mut o = object(vec![line(0.1), line(0.12)], None);
+        o.triangles.clear();
+        let f = o.framed();
+        assert_eq!(f.rotation[1], UnitQuaternion::identity());
+        assert!((f.local_at(1)[3].x - 0.18).abs() < 1e-12);
+    }
+
+    #[test]
+    fn normals_and_uvs_of_a_flat_square() {
+        let p = vec![
+            V3::new(0.0, 0.0, 0.0),
+            V3::new(2.0, 0.0, 0.0),
+            V3::new(2.0, 1.0, 0.0),
+            V3::new(0.0, 1.0, 0.0),
+        ];
+        let n = vertex_normals(&p, &[[0, 1, 2], [0, 2, 3]]);
+        assert!(n.iter().all(|n| (n - V3::z()).norm() < 1e-15));
+        assert_eq!(
+            outline_uvs(&p),
+            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
+        );
+        // A fold: the vertex on the crease gets the mean of both sides.
+        let q = vec![
+            V3::new(0.0, 0.0, 0.0),
+            V3::new(1.0, 0.0, 0.0),
+            V3::new(0.0, 1.0, 1.0),
+            V3::new(0.0, -1.0, 1.0),
+        ];
+        let n = vertex_normals(&q, &[[0, 1, 2], [0, 3, 1]]);
+        assert!((n[0] - V3::z()).norm() < 1e-12, "{:?}", n[0]);
+    }
+}
