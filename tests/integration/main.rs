@@ -21,4 +21,5 @@ mod scenes;
 mod shards;
 mod stability;
 mod tearing;
+mod unsteady;
 mod validation;
