@@ -15,6 +15,7 @@ mod invariants;
 mod layers;
 mod leaves;
 mod like;
+mod plate_cli;
 mod rigid;
 mod scene_files;
 mod scenes;
