@@ -16,6 +16,7 @@ mod layers;
 mod leaves;
 mod like;
 mod plate_cli;
+mod real_falls;
 mod rigid;
 mod scene_files;
 mod scenes;
