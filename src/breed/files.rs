@@ -90,7 +90,18 @@ pub fn export_leaves(
     let mut index = String::from("rank,id,file,class,regime,score,descent_m_s\n");
     for (rank, ind) in chosen.iter().enumerate() {
         let e = ind.eval.record();
+        // Never an invalid leaf file: the genome within its bounds, the
+        // leaf a valid model (a resumed run checks genomes already).
+        let invalid = |message: String| BreedError::Leaf {
+            id: ind.id,
+            message,
+        };
+        ind.genome
+            .check(proto)
+            .map_err(|e| invalid(format!("genome: {e}")))?;
         let mut leaf = ind.genome.to_leaf(proto);
+        leaf.model()
+            .map_err(|e| invalid(format!("not a valid leaf: {e}")))?;
         leaf.name = format!("{}-{}", proto.name, ind.id);
         let file = format!("leaf-{}.toml", ind.id);
         let text = format!(

@@ -18,7 +18,7 @@
 //! [`archive`] is the MAP-Elites archive; [`run`] is the driver and the run
 //! directory ([`files`] its tables, [`plot`] its plots); [`shard`],
 //! [`worker`] and [`executor`] spread a generation over processes and
-//! machines.
+//! machines; [`verify`] checks a run directory before it is used again.
 //!
 //! May use: [`crate::sim`], [`crate::leaf`], [`crate::motion`],
 //! [`crate::physics`], [`crate::util`].
@@ -33,6 +33,7 @@ pub mod run;
 pub mod selection;
 pub mod settings;
 pub mod shard;
+pub mod verify;
 pub mod worker;
 
 pub use evaluate::{evaluate, like_score, score};

@@ -300,6 +300,12 @@ pub struct Checkpoint {
     /// The MAP-Elites archive (empty unless `settings.archive`).
     #[serde(default)]
     pub archive: Vec<ArchiveEntry>,
+    /// Content hashes (FNV-1a 64, 16 hex digits) of `run.toml` and of every
+    /// `gen-NNN.csv` up to this generation, as written: what a resumed run
+    /// checks the files against ([`super::verify`]). Empty in a checkpoint
+    /// written before hashes were recorded.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub fnv1a64: std::collections::BTreeMap<String, String>,
 }
 
 /// One occupied cell of the archive.

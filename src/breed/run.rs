@@ -11,11 +11,17 @@ use super::population::{
 use super::selection::{self, next_scale, rank, summarise};
 use super::settings::BreedSettings;
 use super::shard;
+use super::verify::{
+    Damage, RUN_FILE, check_checkpoint, check_generation_file, content_hash, decode_checkpoint,
+    encode_checkpoint,
+};
 use crate::leaf::LeafSpec;
 use crate::motion::trajectory::Trajectory;
 use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
-use crate::physics::run::{check_budget, resolve_step};
+use crate::physics::run::{
+    Command as RunCommand, MAX_BREED_WORK, Work, check_budget, resolve_step,
+};
 use crate::sim::accuracy::{ErrorEstimate, error_estimate};
 use crate::sim::drop::{DropParams, FRAME_RATE, drop_leaf};
 use crate::util::io::write_atomic;
@@ -38,9 +44,12 @@ pub struct Run {
     /// The fall of the best leaf, by id, once [`Run::write_best`] has
     /// dropped it (a `--like` run), so it is not dropped again.
     best_fall: Option<(u64, Trajectory)>,
+    /// Set when this process wrote run.toml ([`Run::create`]): whether it
+    /// also made the directory. A run that fails before generation 0 is
+    /// recorded takes back what it wrote, so nothing half-started is left.
+    created: Option<bool>,
 }
 
-const RUN_FILE: &str = "run.toml";
 /// The example fall of a `--like` run.
 const EXAMPLE_FILE: &str = "example.csv";
 /// The overlay of the example's and the best leaf's falls.
@@ -90,6 +99,24 @@ fn prototype_step(
     Ok((model, dt))
 }
 
+/// The work of a whole run, from the prototype (its variants differ by the
+/// bounded factors of their genomes): every drop of every generation, and
+/// the error estimate's run. Refused, naming the prototype, past `limit`.
+fn check_run_work(
+    proto: &LeafSpec,
+    settings: &BreedSettings,
+    limit: f64,
+) -> Result<(), BreedError> {
+    let source = &settings.prototype;
+    let (model, dt) = prototype_step(proto, source, settings.seconds.max(ERROR_ESTIMATE_SECONDS))?;
+    let frame_dt = 1.0 / FRAME_RATE;
+    let integrator = DropParams::default().integrator;
+    let mut work = Work::of(&model, integrator, dt, true, settings.seconds, frame_dt);
+    work.runs = (settings.population * settings.generations) as f64;
+    work.check(&model, frame_dt, limit, RunCommand::Breed)
+        .map_err(|e| BreedError::Refused(format!("--prototype {source}: {e}")))
+}
+
 /// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
 /// at the integrator and auto step its drops use.
 fn prototype_error(proto: &LeafSpec, source: &str) -> Result<ErrorEstimate, BreedError> {
@@ -97,8 +124,12 @@ fn prototype_error(proto: &LeafSpec, source: &str) -> Result<ErrorEstimate, Bree
     // The drop's step need not divide a second: estimate over the whole
     // number of steps nearest to ERROR_ESTIMATE_SECONDS.
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
-    error_estimate(&model, DropParams::default().integrator, dt, seconds)
-        .map_err(|e| BreedError::Refused(format!("error estimate of the prototype: {e}")))
+    error_estimate(&model, DropParams::default().integrator, dt, seconds).map_err(|e| {
+        BreedError::Refused(format!(
+            "--prototype {source}: the prototype's own fall, which run.toml records as the \
+             run's error estimate, failed: {e}"
+        ))
+    })
 }
 
 impl Run {
@@ -106,11 +137,21 @@ impl Run {
     /// directory holding a different run (or other files) is refused and
     /// left untouched.
     pub fn create(dir: &Path, settings: BreedSettings) -> Result<Run, BreedError> {
+        Run::create_within(dir, settings, MAX_BREED_WORK)
+    }
+
+    /// [`Run::create`], refusing a new run whose estimated work (every drop
+    /// of every generation, in particle-steps) exceeds `max_work`.
+    pub fn create_within(
+        dir: &Path,
+        settings: BreedSettings,
+        max_work: f64,
+    ) -> Result<Run, BreedError> {
         settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
             .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
         if dir.join(RUN_FILE).exists() {
-            let existing = Run::open(dir)?;
+            let existing = Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?;
             if existing.settings != settings {
                 return Err(BreedError::Refused(format!(
                     "{} holds a different run (its run.toml has other settings); choose another --out or --resume it",
@@ -119,7 +160,17 @@ impl Run {
             }
             return Ok(existing);
         }
+        if dir.exists() && !dir.is_dir() {
+            return Err(BreedError::Refused(format!(
+                "--out {}: is a file, not a directory; a run directory is a folder (created if \
+                 absent): name another --out or remove the file",
+                dir.display()
+            )));
+        }
         if dir.exists() {
+            // A run killed while writing run.toml leaves its temporary
+            // only: the run never started, and may be started again here.
+            remove_stale_temporaries(dir);
             let non_empty = std::fs::read_dir(dir)
                 .map_err(|e| io_err(dir, e))?
                 .next()
@@ -133,12 +184,15 @@ impl Run {
         }
         let integrator = DropParams::default().integrator;
         // Checked before anything is written: the drops, and the error
-        // estimate beside generation 0, must be able to finish.
+        // estimate beside generation 0, must be able to finish, and the
+        // whole run must fit its work limit.
         let (_, dt) = prototype_step(
             &proto,
             &settings.prototype,
             settings.seconds.max(ERROR_ESTIMATE_SECONDS),
         )?;
+        check_run_work(&proto, &settings, max_work)?;
+        let created_dir = !dir.exists();
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
         let example = match &settings.like {
@@ -175,12 +229,14 @@ impl Run {
             settings,
             timing: Vec::new(),
             best_fall: None,
+            created: Some(created_dir),
         })
     }
 
-    /// Opens an existing run directory (for `--resume`). Temporary files left
-    /// by a writer that was killed mid-write are removed: the rename never
-    /// happened, so they hold nothing the run needs.
+    /// Opens an existing run directory, checked ([`Run::load`]) but not
+    /// repaired (what `merge`, `export` and `preview` use). Temporary files
+    /// left by a writer that was killed mid-write are removed: the rename
+    /// never happened, so they hold nothing the run needs.
     pub fn open(dir: &Path) -> Result<Run, BreedError> {
         for d in [dir.to_path_buf(), dir.join("best")] {
             remove_stale_temporaries(&d);
@@ -188,28 +244,136 @@ impl Run {
         Run::load(dir)
     }
 
+    /// Opens a run directory to go on with it (`breed --resume`): checked
+    /// as [`Run::load`] does, and what is damaged but can be recomputed is
+    /// repaired, each repair said through `note`. A generation file that
+    /// differs from what the checkpoint recorded, or a checkpoint that
+    /// fails its digest or any check, is recomputed: the run directory
+    /// keeps the state of its last generation only, so the generations are
+    /// run again from the last state that is intact (generation 0, or the
+    /// checkpoint itself for its own generation's files). The run is
+    /// deterministic, so the result is byte-identical to an uninterrupted
+    /// run. A damaged `run.toml` cannot be recomputed and is refused.
+    pub fn resume(dir: &Path, note: &mut dyn FnMut(&str)) -> Result<Run, BreedError> {
+        for d in [dir.to_path_buf(), dir.join("best")] {
+            remove_stale_temporaries(&d);
+        }
+        let (mut run, finding) = Run::inspect(dir)?;
+        match finding {
+            None => {}
+            Some(Finding::Replay(damage)) => {
+                note(&format!(
+                    "{damage}; recomputing the run from generation 0 (the run is deterministic: \
+                     every file comes out as an uninterrupted run's)"
+                ));
+                run.checkpoint = None;
+                run.timing.clear();
+            }
+            Some(Finding::Rewrite(damage)) => {
+                note(&format!(
+                    "{damage}; rewriting it from checkpoint.json, which holds that generation"
+                ));
+                if let Some(cp) = &run.checkpoint {
+                    let path = run.dir.join(generation_file(cp.generation));
+                    let bytes = population_csv(cp.generation, &cp.population);
+                    write_atomic(&path, bytes.as_bytes()).map_err(|e| io_err(&path, e))?;
+                }
+            }
+        }
+        run.restore_tables(note)?;
+        Ok(run)
+    }
+
     /// Reads a run directory without changing anything in it: what a shard
     /// process uses, since the driver (or other shards) may be writing there
-    /// at the same time and their temporary files are not stale.
+    /// at the same time and their temporary files are not stale. Every file
+    /// is checked first ([`super::verify`]); a damaged one is refused,
+    /// naming the file, the field and the reason (`breed --resume` repairs
+    /// what can be recomputed).
     pub fn load(dir: &Path) -> Result<Run, BreedError> {
+        match Run::inspect(dir)? {
+            (run, None) => Ok(run),
+            (_, Some(Finding::Replay(d) | Finding::Rewrite(d))) => Err(BreedError::File {
+                path: d.file.clone(),
+                message: format!(
+                    "{}: {}; `leafmagic breed --resume {}` recomputes it",
+                    d.field,
+                    d.reason,
+                    dir.display()
+                ),
+            }),
+        }
+    }
+
+    /// Reads and checks a run directory: run.toml (an error if damaged),
+    /// then the checkpoint and the generation files (a [`Finding`]).
+    fn inspect(dir: &Path) -> Result<(Run, Option<Finding>), BreedError> {
         let path = dir.join(RUN_FILE);
-        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        if !dir.is_dir() {
+            return Err(BreedError::Refused(format!(
+                "{}: {}; there is no run to resume there",
+                dir.display(),
+                if dir.exists() {
+                    "is a file, not a run directory"
+                } else {
+                    "no such directory"
+                }
+            )));
+        }
+        if !path.exists() {
+            return Err(BreedError::Refused(format!(
+                "{}: no run.toml, so no run was set up there: a run stopped before it wrote \
+                 run.toml has bred nothing and cannot be resumed; start it again with the same \
+                 settings and `--out {}` (a directory that is empty but for temporaries is reused)",
+                dir.display(),
+                dir.display()
+            )));
+        }
+        let run_toml = std::fs::read(&path).map_err(|e| io_err(&path, e))?;
+        let text = String::from_utf8(run_toml.clone())
+            .map_err(|_| io_err(&path, "not UTF-8 text: damaged"))?;
         let run_file: RunFile = toml::from_str(&text).map_err(|e| io_err(&path, e))?;
         run_file.settings.validate().map_err(|e| io_err(&path, e))?;
+        run_file
+            .prototype_leaf
+            .model()
+            .map_err(|e| io_err(&path, format!("prototype_leaf: {e}")))?;
+        let proto = run_file.prototype_leaf;
+        let settings = run_file.settings;
         let cp_path = dir.join(CHECKPOINT_FILE);
+        let mut finding = None;
         let checkpoint = if cp_path.exists() {
-            let text = std::fs::read_to_string(&cp_path).map_err(|e| io_err(&cp_path, e))?;
-            let cp: Checkpoint = serde_json::from_str(&text).map_err(|e| io_err(&cp_path, e))?;
-            if cp.settings != run_file.settings {
-                return Err(io_err(
-                    &cp_path,
-                    "checkpoint does not belong to this run.toml",
-                ));
+            let cp = std::fs::read(&cp_path)
+                .map_err(|e| Damage::new(&cp_path, "(file)", format!("cannot be read: {e}")))
+                .and_then(|b| {
+                    String::from_utf8(b)
+                        .map_err(|_| Damage::new(&cp_path, "(file)", "not UTF-8 text: damaged"))
+                })
+                .and_then(|t| decode_checkpoint(&t, &cp_path))
+                .and_then(|cp| {
+                    check_checkpoint(&cp, &settings, &proto, &run_toml, &cp_path)?;
+                    Ok(cp)
+                });
+            match cp {
+                Ok(cp) => Some(cp),
+                // run.toml changed under the checkpoint: nothing to recompute from.
+                Err(d) if d.file == path => {
+                    return Err(BreedError::File {
+                        path: d.file,
+                        message: format!("{}: {}", d.field, d.reason),
+                    });
+                }
+                Err(d) => {
+                    finding = Some(Finding::Replay(d));
+                    None
+                }
             }
-            Some(cp)
         } else {
             None
         };
+        if let Some(cp) = &checkpoint {
+            finding = check_generation_files(dir, cp);
+        }
         // Timing of the generations done before (lost rows read as NaN: the
         // file is informative only).
         let done = checkpoint.as_ref().map_or(0, |c| c.generation + 1);
@@ -222,14 +386,43 @@ impl Run {
         let timing = (0..done)
             .map(|g| previous.get(g).copied().unwrap_or(f64::NAN))
             .collect();
-        Ok(Run {
+        let run = Run {
             dir: dir.to_path_buf(),
-            proto: run_file.prototype_leaf,
+            proto,
             checkpoint,
-            settings: run_file.settings,
+            settings,
             timing,
             best_fall: None,
-        })
+            created: None,
+        };
+        Ok((run, finding))
+    }
+
+    /// Rewrites generations.csv and generations.svg where they differ from
+    /// what the checkpoint's history gives (they are rewritten after every
+    /// generation, so only damage makes them differ).
+    fn restore_tables(&self, note: &mut dyn FnMut(&str)) -> Result<(), BreedError> {
+        let Some(cp) = &self.checkpoint else {
+            return Ok(());
+        };
+        let tables = [
+            ("generations.csv", generations_csv(&cp.history).into_bytes()),
+            (
+                "generations.svg",
+                plot::generations_svg(&cp.history, &self.plot_title())?.into_bytes(),
+            ),
+        ];
+        for (name, bytes) in tables {
+            let path = self.dir.join(name);
+            if std::fs::read(&path).ok().as_deref() != Some(&bytes[..]) {
+                note(&format!(
+                    "{}: missing or not what checkpoint.json gives; rewritten from it",
+                    path.display()
+                ));
+                self.write(name, &bytes)?;
+            }
+        }
+        Ok(())
     }
 
     /// The run's settings.
@@ -292,8 +485,16 @@ impl Run {
             let (evals, estimate) = rayon::join(evaluate_all, || {
                 prototype_error(proto, &self.settings.prototype)
             });
+            // A failed estimate takes back the run this process created (a
+            // failed evaluation keeps it: its shard files are resumable).
             let evals = evals?;
-            self.complete_run_file(estimate?)?;
+            match estimate {
+                Ok(estimate) => self.complete_run_file(estimate)?,
+                Err(e) => {
+                    self.take_back();
+                    return Err(e);
+                }
+            }
             evals
         } else {
             evaluate_all()?
@@ -395,7 +596,7 @@ impl Run {
         if s.archive {
             update_archive(&mut archive, generation, &population);
         }
-        let checkpoint = Checkpoint {
+        let mut checkpoint = Checkpoint {
             settings: s.clone(),
             generation,
             population,
@@ -409,14 +610,49 @@ impl Run {
             next_id,
             history,
             archive,
+            // The hashes of the earlier generations' files, to which
+            // write_generation adds this one's and run.toml's.
+            fnv1a64: self
+                .checkpoint
+                .as_ref()
+                .map(|c| c.fnv1a64.clone())
+                .unwrap_or_default()
+                .into_iter()
+                .filter(|(name, _)| {
+                    name.starts_with("gen-") && name.as_str() < generation_file(generation).as_str()
+                })
+                .collect(),
         };
-        self.write_generation(&checkpoint)?;
+        self.write_generation(&mut checkpoint)?;
         // The checkpoint now holds the generation: its shard files (if an
         // executor wrote any) are merged and go.
         shard::remove_merged(&self.dir, Some(generation));
         progress.finish_generation(&summary);
         self.checkpoint = Some(checkpoint);
         Ok(())
+    }
+
+    /// Removes what [`Run::create`] wrote (run.toml, the example, shard
+    /// files of generation 0, the directory if it made it) when generation
+    /// 0 cannot be completed: a run that never recorded a generation is not
+    /// left behind to be taken for a started one. Does nothing for a run
+    /// this process did not create.
+    fn take_back(&mut self) {
+        let Some(made_dir) = self.created.take() else {
+            return;
+        };
+        if self.checkpoint.is_some() {
+            return;
+        }
+        for name in [RUN_FILE, EXAMPLE_FILE] {
+            let _ = std::fs::remove_file(self.dir.join(name));
+        }
+        let _ = std::fs::remove_dir_all(self.dir.join(shard::SHARDS_DIR));
+        remove_stale_temporaries(&self.dir);
+        if made_dir {
+            // Only succeeds when empty.
+            let _ = std::fs::remove_dir(&self.dir);
+        }
     }
 
     /// Adds the prototype's error estimate to run.toml (if it is not there
@@ -441,26 +677,35 @@ impl Run {
     /// Writes gen-NNN.csv, generations.csv, timing.csv, generations.svg
     /// (class counts per generation), then the checkpoint
     /// (last, so a kill between them only repeats this generation).
-    fn write_generation(&self, cp: &Checkpoint) -> Result<(), BreedError> {
-        self.write(
-            &format!("gen-{:03}.csv", cp.generation),
-            population_csv(cp.generation, &cp.population).as_bytes(),
-        )?;
+    fn write_generation(&self, cp: &mut Checkpoint) -> Result<(), BreedError> {
+        let table = population_csv(cp.generation, &cp.population);
+        let run_toml = self.dir.join(RUN_FILE);
+        let run_bytes = std::fs::read(&run_toml).map_err(|e| io_err(&run_toml, e))?;
+        cp.fnv1a64
+            .insert(RUN_FILE.to_string(), content_hash(&run_bytes));
+        cp.fnv1a64.insert(
+            generation_file(cp.generation),
+            content_hash(table.as_bytes()),
+        );
+        self.write(&generation_file(cp.generation), table.as_bytes())?;
         self.write("generations.csv", generations_csv(&cp.history).as_bytes())?;
         let mut timing = String::from("generation,wall_s\n");
         for (g, t) in self.timing.iter().enumerate() {
             let _ = writeln!(timing, "{g},{t}");
         }
         self.write("timing.csv", timing.as_bytes())?;
-        let title = format!(
+        let svg = plot::generations_svg(&cp.history, &self.plot_title())?;
+        self.write("generations.svg", svg.as_bytes())?;
+        let json = encode_checkpoint(cp).map_err(|e| io_err(&self.dir.join(CHECKPOINT_FILE), e))?;
+        self.write(CHECKPOINT_FILE, json.as_bytes())
+    }
+
+    /// The title of generations.svg.
+    fn plot_title(&self) -> String {
+        format!(
             "{}: breeding toward {} (population {}, seed {})",
             self.proto.name, self.settings.target, self.settings.population, self.settings.seed
-        );
-        let svg = plot::generations_svg(&cp.history, &title)?;
-        self.write("generations.svg", svg.as_bytes())?;
-        let json =
-            serde_json::to_string(cp).map_err(|e| io_err(&self.dir.join(CHECKPOINT_FILE), e))?;
-        self.write(CHECKPOINT_FILE, json.as_bytes())
+        )
     }
 
     /// The best individuals of the last generation as leaf files that `drop`
@@ -476,14 +721,15 @@ impl Run {
             std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
             let members: Vec<&Individual> = cp.archive.iter().map(|e| &e.individual).collect();
             export_leaves(&self.proto, &members, &dir)?;
+            // The top bins are open above: their upper edge is empty, never
+            // `inf` (no output file holds a non-finite number); the note
+            // line says so before the header.
             let mut csv = String::from(
-                "descent_min_m_s,descent_max_m_s,spin_min_rad_s,spin_max_rad_s,generation,id,class,regime,score,descent_m_s,spin_rad_s,file\n",
+                "# descent_max_m_s and spin_max_rad_s are empty for the top bins, which are open above\n\
+                 descent_min_m_s,descent_max_m_s,spin_min_rad_s,spin_max_rad_s,generation,id,class,regime,score,descent_m_s,spin_rad_s,file\n",
             );
-            let edge = |edges: &[f64], k: usize| {
-                edges
-                    .get(k + 1)
-                    .map_or(String::from("inf"), |e| e.to_string())
-            };
+            let edge =
+                |edges: &[f64], k: usize| edges.get(k + 1).map_or(String::new(), f64::to_string);
             for e in &cp.archive {
                 let i = &e.individual;
                 let r = i.eval.record();
@@ -567,5 +813,79 @@ impl Run {
     /// Summaries of the completed generations.
     pub fn history(&self) -> &[GenerationSummary] {
         self.checkpoint.as_ref().map_or(&[], |c| &c.history)
+    }
+}
+
+/// What a check of a run directory found to repair.
+enum Finding {
+    /// The checkpoint, or the file of an earlier generation than its own,
+    /// is damaged: the run must be recomputed from generation 0.
+    Replay(Damage),
+    /// The file of the checkpoint's own generation is damaged: it is
+    /// rewritten from the checkpoint.
+    Rewrite(Damage),
+}
+
+/// `gen-NNN.csv`.
+fn generation_file(generation: usize) -> String {
+    format!("gen-{generation:03}.csv")
+}
+
+/// Checks every generation file up to the checkpoint's against the hashes
+/// it recorded (a checkpoint without hashes: its own generation's file
+/// against what its population gives).
+fn check_generation_files(dir: &Path, cp: &Checkpoint) -> Option<Finding> {
+    let own = generation_file(cp.generation);
+    for g in 0..=cp.generation {
+        let name = generation_file(g);
+        let path = dir.join(&name);
+        let checked = match cp.fnv1a64.get(&name) {
+            Some(recorded) => check_generation_file(&path, recorded),
+            None if name == own => {
+                let expected = population_csv(cp.generation, &cp.population);
+                check_generation_file(&path, &content_hash(expected.as_bytes()))
+            }
+            None if cp.fnv1a64.is_empty() => Ok(()),
+            None => Err(Damage::new(
+                &dir.join(CHECKPOINT_FILE),
+                "fnv1a64",
+                format!("records no content hash for {name}"),
+            )),
+        };
+        if let Err(d) = checked {
+            return Some(if name == own && d.file == path {
+                Finding::Rewrite(d)
+            } else {
+                Finding::Replay(d)
+            });
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A run whose generation 0 cannot be completed (the prototype's error
+    /// estimate failed) is taken back: run.toml goes, and so does the
+    /// directory if this process made it; a directory that was there before
+    /// stays, empty again.
+    #[test]
+    fn a_run_that_never_completed_generation_0_is_taken_back() {
+        let dir = std::env::temp_dir().join(format!("leafmagic-take-back-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut run = Run::create(&dir, BreedSettings::default_run()).unwrap();
+        assert!(dir.join(RUN_FILE).exists());
+        run.take_back();
+        assert!(!dir.exists(), "the directory it made is left");
+
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut run = Run::create(&dir, BreedSettings::default_run()).unwrap();
+        assert!(dir.join(RUN_FILE).exists());
+        run.take_back();
+        let left: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
+        assert!(dir.is_dir() && left.is_empty(), "{left:?}");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -62,6 +62,9 @@ pub struct BreedArgs {
     /// `leafmagic shard` tasks and merged with `leafmagic merge` (Kubernetes, hand-run arrays).
     #[arg(long, conflicts_with_all = ["resume", "executor", "shards", "threads"])]
     pub create_only: bool,
+    /// Refuse a run whose estimated work (particles × steps of every drop) exceeds this.
+    #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
+    pub max_work: f64,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
     #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features"])]
     pub resume: Option<PathBuf>,
@@ -128,6 +131,9 @@ pub struct DropArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Refuse a drop whose estimated work (particles × steps) exceeds this.
+    #[arg(long, default_value_t = leafmagic::physics::run::MAX_WORK, value_parser = parse_work)]
+    pub max_work: f64,
 }
 
 /// Arguments of `check`.
@@ -232,6 +238,12 @@ pub struct SceneArgs {
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// Refuse a scene whose estimated work (particles × steps) exceeds this.
+    #[arg(long, default_value_t = leafmagic::physics::run::MAX_WORK, value_parser = parse_work)]
+    pub max_work: f64,
+    /// Refuse a scene whose recorded frames would take more memory than this many bytes.
+    #[arg(long, default_value_t = leafmagic::sim::scene::MAX_MEMORY, value_parser = parse_work)]
+    pub max_memory: f64,
 }
 
 /// Arguments of `compare`.
@@ -315,6 +327,16 @@ fn parse_dt(s: &str) -> Result<TimeStep, String> {
         Err(format!(
             "the time step must be a positive number of seconds, got {s}"
         ))
+    }
+}
+
+/// `--max-work`, `--max-memory`: a positive number (`1e10` is fine).
+fn parse_work(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(v) if v > 0.0 && !v.is_nan() => Ok(v),
+        _ => Err(format!(
+            "expected a positive number such as 1e10, got '{s}'"
+        )),
     }
 }
 

@@ -18,7 +18,7 @@ use std::time::Instant;
 /// generations and reports them.
 pub fn breed(args: BreedArgs) -> Result<()> {
     let mut run = match &args.resume {
-        Some(dir) => Run::open(dir)?,
+        Some(dir) => Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?,
         None => {
             let settings = BreedSettings {
                 prototype: args.prototype.clone(),
@@ -46,7 +46,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 .out
                 .clone()
                 .unwrap_or_else(|| default_run_dir(&settings));
-            Run::create(&dir, settings)?
+            Run::create_within(&dir, settings, args.max_work)?
         }
     };
     if args.create_only {

@@ -33,8 +33,26 @@ pub fn drop(args: DropArgs) -> Result<()> {
             }
         }
     }
-    let result =
-        drop::drop_leaf(&model, &params).map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;
+    let failed = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: {e}", args.leaf);
+    let work = drop::drop_work(&model, &params).map_err(|e| failed(&e))?;
+    let frame_dt = 1.0 / drop::FRAME_RATE;
+    let mut bar = super::progress::long_run(&work, &model, frame_dt, "drop", args.max_work);
+    let mut tick = |k: u64, _: u64| {
+        if let Some(b) = &bar {
+            b.set_position(k);
+        }
+    };
+    let result = drop::drop_leaf_within(
+        &model,
+        &params,
+        args.max_work,
+        bar.is_some()
+            .then_some(&mut tick as &mut dyn FnMut(u64, u64)),
+    )
+    .map_err(|e| failed(&e))?;
+    if let Some(b) = bar.take() {
+        b.finish_and_clear();
+    }
     if let Some(path) = &args.out {
         result
             .trajectory
@@ -83,6 +101,9 @@ pub fn check(args: CheckArgs) -> Result<()> {
     }
     let (spec, model) = input::leaf(&args.leaf)?;
     let est = stability::estimate(&model);
+    // What `drop` refuses, `check` refuses, with the same message.
+    leafmagic::physics::run::check_estimate(&est)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;
     let frame = 1.0 / drop::FRAME_RATE;
     let rows: Vec<_> = Integrator::ALL
         .iter()

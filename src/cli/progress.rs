@@ -2,6 +2,8 @@
 //! count of each class so far and the best score (indicatif).
 
 use leafmagic::breed::{self, GenerationSummary};
+use leafmagic::physics::model::Model;
+use leafmagic::physics::run::Work;
 
 /// A progress bar per generation on a terminal; nothing when piped.
 pub struct Bar {
@@ -72,4 +74,48 @@ impl breed::Progress for Bar {
             bar.finish_and_clear();
         }
     }
+}
+
+/// For a run whose estimated work is long ([`Work::is_long`]) but within
+/// `limit`: a note on stderr with the estimate (and the implicit
+/// integrator's step count where it is fewer), and a bar over its frames
+/// on a terminal. `None` for a short run, or one that will be refused.
+pub fn long_run(
+    work: &Work,
+    model: &Model,
+    frame_dt: f64,
+    what: &str,
+    limit: f64,
+) -> Option<indicatif::ProgressBar> {
+    use std::io::IsTerminal;
+    if !work.is_long() || work.particle_steps() > limit {
+        return None;
+    }
+    let work = &work.clone().explained(model, frame_dt);
+    let implicit = work.implicit_steps.map_or(String::new(), |n| {
+        format!("; the implicit integrator would take {n:.0} steps")
+    });
+    let why = work.why();
+    let why = if why.is_empty() {
+        String::new()
+    } else {
+        format!(" ({why})")
+    };
+    eprintln!(
+        "note: this {what} needs about {}{why}{implicit}",
+        work.describe()
+    );
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let frames = work.frames as u64;
+    let bar = indicatif::ProgressBar::new(frames);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{what} [{{bar:30}}] {{pos}}/{{len}} frames ({{elapsed}}, {{eta}} left)"
+        ))
+        .expect("valid template")
+        .progress_chars("=> "),
+    );
+    Some(bar)
 }

@@ -3,7 +3,7 @@
 
 use super::args::SceneArgs;
 use super::{output, report};
-use anyhow::{Context, Result};
+use anyhow::Result;
 use leafmagic::physics::run;
 use leafmagic::sim::scene::{self, Scene};
 use serde_json::json;
@@ -12,7 +12,9 @@ use std::time::Instant;
 /// `scene`: loads, compiles and runs a scene file, or with `--explain`
 /// lists its decisions and stops.
 pub fn scene(args: SceneArgs) -> Result<()> {
-    let scene = Scene::load(&args.file)?;
+    let mut scene = Scene::load(&args.file)?;
+    scene.max_work = args.max_work;
+    scene.max_memory = args.max_memory;
     let decisions = scene.explain();
     let frame = 1.0 / scene.frame_rate;
     if args.explain {
@@ -37,26 +39,45 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         print!("{}", report::scene::explain(&scene, &dt, &decisions));
         return Ok(());
     }
+    let failed = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: {e}", args.file.display());
+    let work = scene.work(args.seconds).map_err(|e| failed(&e))?;
+    let mut bar = super::progress::long_run(&work, &scene.model, frame, "scene", args.max_work);
     let run = scene
-        .run(args.seconds)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
+        .run_observed(args.seconds, |k, _| {
+            if let Some(b) = &bar {
+                b.set_position(k);
+            }
+        })
+        .map_err(|e| failed(&e))?;
+    if let Some(b) = bar.take() {
+        b.finish_and_clear();
+    }
     let dir = args
         .out
         .clone()
         .unwrap_or_else(|| scene::default_out_dir(&scene));
-    let mut written = run
-        .write(&scene, &dir)
-        .with_context(|| format!("cannot write to {}", dir.display()))?;
+    // The directory is written as a whole, the export with it: a failure
+    // leaves the previous output as it was and names the file.
+    let staged = scene::Staged::new(&dir)?;
+    let mut written = run.write_staged(&scene, &staged)?;
     let mut export_note = None;
     if let Some(format) = args.export {
         let started = Instant::now();
         let clip = leafmagic::output::export::from_scene_run(&scene, &run, args.export_fps)?;
-        let files = output::write_clip(&clip, format, &dir, &scene.name)?;
+        let files = output::write_clip(&clip, format, staged.path(), &scene.name).map_err(|e| {
+            // Name the file as it would have been in the output.
+            let message = format!("{e:#}").replace(
+                &staged.path().display().to_string(),
+                &dir.display().to_string(),
+            );
+            anyhow::anyhow!("{message}; nothing was changed in {}", dir.display())
+        })?;
         let bytes: u64 = files
             .iter()
             .filter_map(|f| std::fs::metadata(f).ok())
             .map(|m| m.len())
             .sum();
+        let files: Vec<_> = files.iter().map(|f| staged.final_path(f)).collect();
         export_note = Some(report::scene::export_note(
             format,
             &clip,
@@ -66,6 +87,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         ));
         written.extend(files);
     }
+    staged.commit()?;
     let s = &run.stats;
     if args.json {
         let out = json!({

@@ -8,6 +8,7 @@
 
 use crate::leaf::{Bounds, LeafSpec};
 use crate::physics::model::{Model, ModelError};
+use crate::util::number::shown;
 use rand::Rng;
 use rand_distr::{Distribution, Normal};
 use serde::{Deserialize, Serialize};
@@ -130,6 +131,91 @@ impl Genome {
     }
 }
 
+/// A gene outside what the prototype allows: which gene, and why.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct GenomeError {
+    /// The gene, as the genome's fields name it (`mass_factor[3]`).
+    pub field: String,
+    /// What is wrong with it.
+    pub reason: String,
+}
+
+impl Genome {
+    /// Checks the genome against its prototype: one gene per fold, per
+    /// particle and per stiffness group (the prototype's groups, sorted),
+    /// every gene finite and within the prototype's [`Bounds`] — what every
+    /// genome [`mutate`] draws satisfies, so a genome read back from disk
+    /// that does not was damaged or edited, and would make an invalid leaf
+    /// (a mass factor of −1, a size of 1e300).
+    ///
+    /// # Errors
+    /// The first gene that fails, with the reason.
+    pub fn check(&self, proto: &LeafSpec) -> Result<(), GenomeError> {
+        let b = &proto.bounds;
+        let fail = |field: String, reason: String| Err(GenomeError { field, reason });
+        let count = |field: &str, got: usize, want: usize, what: &str| {
+            if got == want {
+                Ok(())
+            } else {
+                fail(
+                    field.to_string(),
+                    format!("{got} genes, but the prototype has {want} {what}"),
+                )
+            }
+        };
+        let within = |field: String, v: f64, range: [f64; 2]| {
+            if v.is_finite() && range[0] <= v && v <= range[1] {
+                Ok(())
+            } else {
+                fail(
+                    field,
+                    format!(
+                        "{} is outside the prototype's bounds [{}, {}]",
+                        shown(v),
+                        shown(range[0]),
+                        shown(range[1])
+                    ),
+                )
+            }
+        };
+        count("fold_deg", self.fold_deg.len(), proto.folds.len(), "folds")?;
+        for (k, &v) in self.fold_deg.iter().enumerate() {
+            within(format!("fold_deg[{k}]"), v, b.fold_deg)?;
+        }
+        count(
+            "mass_factor",
+            self.mass_factor.len(),
+            proto.particles.len(),
+            "particles",
+        )?;
+        for (k, &v) in self.mass_factor.iter().enumerate() {
+            within(format!("mass_factor[{k}]"), v, b.mass_factor)?;
+        }
+        within(
+            "total_mass_factor".to_string(),
+            self.total_mass_factor,
+            b.total_mass_factor,
+        )?;
+        let groups: Vec<String> = Genome::of_prototype(proto)
+            .stiffness_factor
+            .into_iter()
+            .map(|(g, _)| g)
+            .collect();
+        let have: Vec<&String> = self.stiffness_factor.iter().map(|(g, _)| g).collect();
+        if have.iter().copied().ne(groups.iter()) {
+            return fail(
+                "stiffness_factor".to_string(),
+                format!("groups {have:?}, but the prototype's are {groups:?}"),
+            );
+        }
+        for (g, v) in &self.stiffness_factor {
+            within(format!("stiffness_factor.{g}"), *v, b.stiffness_factor)?;
+        }
+        within("size_factor".to_string(), self.size_factor, b.size_factor)
+    }
+}
+
 /// A variant of `genome`: every gene perturbed with spread proportional to
 /// `scale` (1 for the paper's first round), clamped to `bounds`. Fold angles
 /// are normal, positive factors log-normal (so they stay positive and
@@ -231,6 +317,31 @@ mod tests {
         g.size_factor = 2.0;
         let leaf = g.to_leaf(&proto);
         assert!((total(&leaf) - 6.0 * total(&proto)).abs() < 1e-15 * 6.0);
+    }
+
+    #[test]
+    fn drawn_genomes_pass_their_check_and_damaged_ones_name_the_gene() {
+        for p in ["a", "b"] {
+            let proto = LeafSpec::load(p).unwrap();
+            let g = Genome::of_prototype(&proto);
+            for seed in 0..200 {
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+                let v = mutate(&g, &proto.bounds, 2.0, &mut rng);
+                assert_eq!(v.check(&proto), Ok(()), "{p} seed {seed}");
+            }
+            let mut bad = g.clone();
+            bad.size_factor = 1e300;
+            assert_eq!(bad.check(&proto).unwrap_err().field, "size_factor");
+            let mut bad = g.clone();
+            bad.mass_factor[3] = -1.0;
+            assert_eq!(bad.check(&proto).unwrap_err().field, "mass_factor[3]");
+            let mut bad = g.clone();
+            bad.fold_deg.pop();
+            assert!(bad.check(&proto).unwrap_err().reason.contains("folds"));
+            let mut bad = g.clone();
+            bad.stiffness_factor[0].1 = f64::NAN;
+            assert!(bad.check(&proto).is_err());
+        }
     }
 
     #[test]

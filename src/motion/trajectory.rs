@@ -93,7 +93,14 @@ pub enum TrajectoryError {
         message: String,
     },
     /// A row with the wrong number of fields (truncated or extra columns).
-    #[error("{file}: line {line} (data row {row}): {found} fields, expected 8 (truncated row?)")]
+    #[error(
+        "{file}: line {line} (data row {row}): {found} fields where the header `{CSV_HEADER}` has 8: {}",
+        if *.found < 8 {
+            "the row is cut short (a truncated file?); complete or delete it"
+        } else {
+            "remove the extra fields (a trailing comma counts as one)"
+        }
+    )]
     FieldCount {
         /// Name of the source.
         file: String,
@@ -258,6 +265,17 @@ impl Trajectory {
                 csv::ErrorKind::Io(error) => TrajectoryError::Io {
                     file: file(),
                     error,
+                },
+                // Said as a sentence, not the CSV reader's debug form.
+                csv::ErrorKind::Utf8 { pos, err } => TrajectoryError::Csv {
+                    file: file(),
+                    line: pos.map_or(line, |p| p.line()),
+                    message: format!(
+                        "field {} is not UTF-8 text (bad byte after {} valid bytes of the field); \
+                         a trajectory CSV is plain text: save it as UTF-8 or ASCII",
+                        err.field() + 1,
+                        err.valid_up_to()
+                    ),
                 },
                 kind => TrajectoryError::Csv {
                     file: file(),

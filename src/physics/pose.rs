@@ -57,6 +57,16 @@ impl PoseTracker {
         for (p, r) in position.iter().zip(&self.weighted_rest) {
             a += (p - com) * r.transpose();
         }
+        // The fit depends on A's direction only. Scaled by the power of two
+        // that brings its largest entry near 1, every product of the fit is
+        // the same bits times a power of two (ordinary leaves get the same
+        // rotation to the last bit), and masses far from 1 kg (1e200 kg, or
+        // a heavy particle beside light ones) no longer overflow or
+        // underflow the Hessian's cofactors (≈ |A|²).
+        let largest = a.amax();
+        if largest.is_finite() && largest > 0.0 {
+            a *= 2f64.powi(-(largest.log2().round() as i32));
+        }
         let guess = self.last_turn * self.rotation;
         let mut q = best_rotation(&a, guess);
         // Keep the hemisphere of the previous frame so the CSV has no sign
@@ -100,7 +110,9 @@ pub fn best_rotation(a: &Matrix3<f64>, start: UnitQuaternion<f64>) -> UnitQuater
             _ => g / (trace.abs() + 1e-300),
         };
         let angle = delta.norm();
-        if angle.is_nan() {
+        // A Newton step through a nearly singular Hessian can overflow: keep
+        // the last (finite) rotation rather than turn by infinity into NaN.
+        if !angle.is_finite() {
             break;
         }
         // Turn by δ with the first-order quaternion (1, δ/2), normalised: a

@@ -89,29 +89,7 @@ fn resolve(
         TimeStep::Fixed(h) => Err(StepError::NotPositive(h)),
         TimeStep::Auto => {
             let estimate = stability::estimate(model);
-            if !estimate.is_finite() {
-                let rates = [
-                    ("ω_max", estimate.omega_max, "rad/s"),
-                    ("its upper bound", estimate.omega_upper, "rad/s"),
-                    (
-                        "the top mode's damping rate",
-                        estimate.mode_damping_rate,
-                        "1/s",
-                    ),
-                    ("the drag rate", estimate.drag_rate, "1/s"),
-                ];
-                let bad: Vec<String> = rates
-                    .iter()
-                    .filter(|r| !r.1.is_finite())
-                    .map(|(name, v, unit)| format!("{name} = {v} {unit}"))
-                    .collect();
-                return Err(StepError::Overflow {
-                    rates: bad.join(", "),
-                    stiffest_spring: estimate
-                        .stiffest_spring
-                        .filter(|_| !estimate.omega_lower.is_finite()),
-                });
-            }
+            check_estimate(&estimate)?;
             if onto_frames {
                 estimate.auto_dt(integrator, frame_dt)
             } else {
@@ -122,6 +100,46 @@ fn resolve(
     }
 }
 
+/// Refuses a stability estimate with a rate that overflows f64 (a stiffness,
+/// damping or drag coefficient too large, or a mass too small): no step can
+/// be chosen from it. What `drop` refuses, `check` refuses with the same
+/// message.
+///
+/// # Errors
+/// [`StepError::Overflow`], naming the rates and the stiffest spring.
+pub fn check_estimate(estimate: &stability::StabilityEstimate) -> Result<(), StepError> {
+    if estimate.is_finite() {
+        return Ok(());
+    }
+    let rates = [
+        ("ω_max", estimate.omega_max, "rad/s"),
+        ("its upper bound", estimate.omega_upper, "rad/s"),
+        (
+            "the top mode's damping rate",
+            estimate.mode_damping_rate,
+            "1/s",
+        ),
+        ("the drag rate", estimate.drag_rate, "1/s"),
+    ];
+    let bad: Vec<String> = rates
+        .iter()
+        .filter(|r| !r.1.is_finite())
+        .map(|(name, v, unit)| {
+            if v.is_nan() {
+                format!("{name} is not a number (inf − inf)")
+            } else {
+                format!("{name} = {v} {unit}")
+            }
+        })
+        .collect();
+    Err(StepError::Overflow {
+        rates: bad.join(", "),
+        stiffest_spring: estimate
+            .stiffest_spring
+            .filter(|_| !estimate.omega_lower.is_finite()),
+    })
+}
+
 /// Most steps, or output frames, one run may take. Far beyond any useful
 /// run (a scene of a hundred leaves takes hours for 10⁸ steps): a run that
 /// needs more has a step far too small (a very stiff or very light model
@@ -129,12 +147,18 @@ fn resolve(
 /// is refused up front instead of running for ever.
 pub const MAX_STEPS: f64 = 1e8;
 
-/// A number for a message: plain when moderate, else in scientific notation.
+/// A number for a message: plain when moderate, to four significant
+/// figures (`69906`, not `69905.89149035318`), else in scientific notation.
 fn quantity(v: f64) -> String {
+    let plain = format!("{v}");
     if v != 0.0 && !(1e-3..1e6).contains(&v.abs()) {
         format!("{v:.3e}")
+    } else if plain.len() > 8 {
+        // |v| in [1e-3, 1e6): 0 to 6 decimals keep four figures.
+        let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+        format!("{v:.decimals$}")
     } else {
-        format!("{v}")
+        plain
     }
 }
 
@@ -246,6 +270,9 @@ pub enum StepError {
         /// Frames per second.
         frame_rate: f64,
     },
+    /// More work than the limit: the estimate, why, and what to do.
+    #[error(transparent)]
+    TooMuchWork(Box<WorkError>),
     /// More steps than [`MAX_STEPS`].
     #[error(
         "{} s at dt = {dt:.3e} s needs {} steps of {integrator} (the limit is \
@@ -266,9 +293,356 @@ pub enum StepError {
     },
 }
 
-/// A step count for a message; "over 1e308" when it overflows.
+/// Work is counted in particle-steps (particles × steps, times runs): what
+/// the step loop costs, whatever the model. Above this a run is long enough
+/// that a terminal should show its progress (about 1.3 s of one core for a
+/// leaf, which has some 4 elements per particle, at [`REFERENCE_RATE`]).
+pub const LONG_WORK: f64 = 3e7;
+/// The default limit of one drop or one scene, in particle-steps: about 45 s
+/// of one core for a leaf at [`REFERENCE_RATE`] (a scene of dense sheets,
+/// with 6 elements per particle, some 70 s). The default breed is 3.7e7 for all its
+/// 800 drops; the shipped scenes are at most 1.3e6. `--max-work` raises it.
+pub const MAX_WORK: f64 = 1e9;
+/// The default limit of a whole breeding run (every drop of every
+/// generation), in particle-steps: about 75 minutes of one core for leaves
+/// at [`REFERENCE_RATE`], 10⁴ leaves × 8 generations of prototype A being
+/// 3.7e9. `breed --max-work` raises it.
+pub const MAX_BREED_WORK: f64 = 1e11;
+/// Element-steps per second of one core (elements: particles, springs,
+/// triangles and hinges; what a step touches), for the time a message
+/// quotes. Measured here: a drop of prototype A with every spring at 1e8
+/// N/m, 3.96e7 Verlet steps of 28 elements, took 12.2 s (9.1e7/s); the tear
+/// scene with 1e9 N/m springs, 1.13e7 steps of 1745 elements, is predicted
+/// at 3.6 minutes by this rate, and the issue measured 7 on a machine 2.3×
+/// slower on the drop. Machines differ by 2×: a guide, not a promise.
+pub const REFERENCE_RATE: f64 = 9e7;
+
+/// What a run will cost before it starts: particles × steps (× runs), the
+/// step and why it is that small.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Work {
+    /// Particles stepped.
+    pub particles: usize,
+    /// Particles, springs, triangles and hinges: what a step touches, for
+    /// the time estimate.
+    pub elements: usize,
+    /// Steps of one run.
+    pub steps: f64,
+    /// Output frames of one run.
+    pub frames: f64,
+    /// Runs of this size (1 but for a breed: population × generations).
+    pub runs: f64,
+    /// The integrator.
+    pub integrator: Integrator,
+    /// The step, s.
+    pub dt: f64,
+    /// Why the step is what it is.
+    pub reason: StepReason,
+    /// Steps one run would take with the implicit integrator, when that is
+    /// fewer (its step is not bounded by stiffness or lightness).
+    pub implicit_steps: Option<f64>,
+}
+
+/// What sets a run's step.
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepReason {
+    /// A fixed step, as given.
+    Fixed,
+    /// The output frame (nothing stiff bounds the step below it).
+    Frame,
+    /// The auto step, bounded by stability: the stiffest spring and the
+    /// lightest particle, and which of the spring mode and the drag rate
+    /// bounds it.
+    Stability {
+        /// The stiffest spring: index, its two particles, k (N/m).
+        spring: Option<(usize, usize, usize, f64)>,
+        /// ω_max, rad/s.
+        omega_max: f64,
+        /// The lightest free particle and its mass, kg.
+        lightest: (usize, f64),
+        /// The fastest drag rate γ, 1/s.
+        drag_rate: f64,
+        /// Whether the drag rate, not the spring mode, bounds the step.
+        drag_bound: bool,
+    },
+}
+
+impl Work {
+    /// The work of `seconds` of `model` at step `dt` (`auto`: chosen by
+    /// stability) with output frames of `frame_dt`. Cheap: why the step is
+    /// what it is is found only when asked ([`Work::explained`]).
+    pub fn of(
+        model: &Model,
+        integrator: Integrator,
+        dt: f64,
+        auto: bool,
+        seconds: f64,
+        frame_dt: f64,
+    ) -> Work {
+        Work {
+            particles: model.len(),
+            elements: model.len()
+                + model.springs.len()
+                + model.triangles.len()
+                + model.hinges.len(),
+            steps: seconds / dt,
+            frames: (seconds / frame_dt).round(),
+            runs: 1.0,
+            integrator,
+            dt,
+            reason: if auto {
+                StepReason::Frame
+            } else {
+                StepReason::Fixed
+            },
+            implicit_steps: None,
+        }
+    }
+
+    /// The same estimate with the reason filled in: for an auto step below
+    /// the frame, the stiffest spring, the lightest particle and which of
+    /// the spring mode and the drag rate bounds the step (one stability
+    /// estimate of `model`); and the implicit integrator's step count.
+    pub fn explained(mut self, model: &Model, frame_dt: f64) -> Work {
+        let estimate = stability::estimate(model);
+        let seconds = self.steps * self.dt;
+        if self.reason == StepReason::Frame && self.dt < frame_dt * (1.0 - 1e-12) {
+            let integrator = self.integrator;
+            let spring = estimate.stiffest_spring.map(|k| {
+                let s = &model.springs[k];
+                (k, s.i, s.j, s.stiffness)
+            });
+            let lightest = (
+                estimate.lightest_particle,
+                model
+                    .mass
+                    .get(estimate.lightest_particle)
+                    .copied()
+                    .unwrap_or(0.0),
+            );
+            let by_spring = stability::largest_stable_step(
+                integrator,
+                estimate.omega_max.powi(2),
+                estimate.mode_damping_rate,
+            );
+            let by_drag = stability::largest_stable_step(integrator, 0.0, estimate.drag_rate);
+            let drag_bound = match (by_spring, by_drag) {
+                (Some(a), Some(b)) => b < a,
+                (None, Some(_)) => true,
+                _ => false,
+            };
+            self.reason = StepReason::Stability {
+                spring,
+                omega_max: estimate.omega_max,
+                lightest,
+                drag_rate: estimate.drag_rate,
+                drag_bound,
+            };
+        }
+        self.implicit_steps = estimate
+            .auto_step(Integrator::Implicit, frame_dt)
+            .map(|h| (seconds / h).ceil())
+            .filter(|&n| self.integrator != Integrator::Implicit && n < self.steps);
+        self
+    }
+
+    /// Particle-steps in all.
+    pub fn particle_steps(&self) -> f64 {
+        self.particles as f64 * self.steps * self.runs
+    }
+
+    /// Whether the run is long enough to show its progress ([`LONG_WORK`]).
+    pub fn is_long(&self) -> bool {
+        self.particle_steps() > LONG_WORK
+    }
+
+    /// The estimate as a phrase: "2.8e8 particle-steps (7 particles × 3.96e7
+    /// steps of verlet at dt = 2.527e-7 s), about 12 s of one core".
+    pub fn describe(&self) -> String {
+        let runs = if self.runs > 1.0 {
+            format!(" × {} runs", quantity(self.runs))
+        } else {
+            String::new()
+        };
+        format!(
+            "{:.2e} particle-steps ({} particles × {} steps of {} at dt = {:.3e} s{runs}), {}",
+            self.particle_steps(),
+            self.particles,
+            step_count(self.steps),
+            self.integrator,
+            self.dt,
+            duration_phrase(self.elements as f64 * self.steps * self.runs / REFERENCE_RATE)
+        )
+    }
+
+    /// Why the step is that small, as a phrase (empty for a fixed step or
+    /// the frame).
+    pub fn why(&self) -> String {
+        match &self.reason {
+            StepReason::Fixed => "the step is the fixed one asked for".to_string(),
+            StepReason::Frame => String::new(),
+            StepReason::Stability {
+                spring,
+                omega_max,
+                lightest,
+                drag_rate,
+                drag_bound,
+            } => {
+                let spring = spring.map_or(String::new(), |(k, i, j, stiffness)| {
+                    format!(
+                        "the stiffest spring is spring {k} (particles {i}–{j}, k = {} N/m)",
+                        quantity(stiffness)
+                    )
+                });
+                let light = format!(
+                    "the lightest particle is particle {} ({} kg)",
+                    lightest.0,
+                    quantity(lightest.1)
+                );
+                let bound = if *drag_bound {
+                    format!("the drag rate γ = {} 1/s", quantity(*drag_rate))
+                } else {
+                    format!("the stiffest mode ω_max = {} rad/s", quantity(*omega_max))
+                };
+                let parts: Vec<String> = [spring, light]
+                    .into_iter()
+                    .filter(|p| !p.is_empty())
+                    .collect();
+                format!(
+                    "the {} stability limit is set by {bound}: {}",
+                    self.integrator,
+                    parts.join(", ")
+                )
+            }
+        }
+    }
+
+    /// Refuses the run when it exceeds `limit` particle-steps; the error
+    /// explains the step from `model` ([`Work::explained`]).
+    ///
+    /// # Errors
+    /// [`StepError::TooMuchWork`]: the estimate, the reason and the remedy
+    /// for `command`.
+    pub fn check(
+        &self,
+        model: &Model,
+        frame_dt: f64,
+        limit: f64,
+        command: Command,
+    ) -> Result<(), StepError> {
+        if self.particle_steps() <= limit {
+            return Ok(());
+        }
+        Err(StepError::TooMuchWork(Box::new(WorkError {
+            work: self.clone().explained(model, frame_dt),
+            limit,
+            command,
+        })))
+    }
+}
+
+/// Seconds as a rough phrase ("about 12 s", "about 7 minutes", "about 3
+/// hours").
+fn duration_phrase(seconds: f64) -> String {
+    let s = if !seconds.is_finite() {
+        "longer than the age of the universe".to_string()
+    } else if seconds < 1.0 {
+        "under a second".to_string()
+    } else if seconds < 120.0 {
+        format!("about {seconds:.0} s")
+    } else if seconds < 7200.0 {
+        format!("about {:.0} minutes", seconds / 60.0)
+    } else if seconds < 3.0 * 86400.0 {
+        format!("about {:.0} hours", seconds / 3600.0)
+    } else {
+        format!("about {} days", quantity((seconds / 86400.0).round()))
+    };
+    format!("{s} of one core")
+}
+
+/// Which command's remedies a [`WorkError`] names.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Command {
+    /// `drop`.
+    Drop,
+    /// `scene`.
+    Scene,
+    /// `breed` (its drops always use the default integrator).
+    Breed,
+}
+
+/// A run refused before it starts because its estimated work exceeds the
+/// limit: the estimate, why the step is so small, and what to do.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}", self.message())]
+pub struct WorkError {
+    /// The estimate.
+    pub work: Work,
+    /// The limit it exceeds, particle-steps.
+    pub limit: f64,
+    /// Whose remedies to name.
+    pub command: Command,
+}
+
+impl WorkError {
+    fn message(&self) -> String {
+        let w = &self.work;
+        let what = match self.command {
+            Command::Drop => "this drop",
+            Command::Scene => "this scene",
+            Command::Breed => "this breeding run",
+        };
+        let why = w.why();
+        let why = if why.is_empty() {
+            String::new()
+        } else {
+            format!("; {why}")
+        };
+        let implicit = w.implicit_steps.map(|n| match self.command {
+            Command::Drop => format!(
+                "use `--integrator implicit` (stable at any step: {} steps)",
+                step_count(n)
+            ),
+            Command::Scene => format!(
+                "set `integrator = \"implicit\"` in the scene file (stable at any step: {} steps)",
+                step_count(n)
+            ),
+            Command::Breed => String::new(),
+        });
+        let mut remedies: Vec<String> = implicit.into_iter().filter(|r| !r.is_empty()).collect();
+        remedies.push(match self.command {
+            Command::Drop => {
+                "soften the stiffest springs or make the lightest particles heavier, or shorten --seconds"
+                    .to_string()
+            }
+            Command::Scene => {
+                "soften the stiffest springs or make the lightest particles heavier, or shorten `duration` (or --seconds)"
+                    .to_string()
+            }
+            Command::Breed => {
+                "breeding drops every leaf with verlet at its auto step: soften or weight the prototype, or lower --seconds, --population or --generations"
+                    .to_string()
+            }
+        });
+        remedies.push(format!(
+            "raise the limit with `--max-work {:.1e}`",
+            w.particle_steps() * 1.01
+        ));
+        format!(
+            "{what} needs about {} — more than the limit of {:.1e} particle-steps{why}. To run it: {}",
+            w.describe(),
+            self.limit,
+            remedies.join("; ")
+        )
+    }
+}
+
+/// A step count for a message: whole below a million, then scientific;
+/// "over 1e308" when it overflows.
 fn step_count(steps: f64) -> String {
-    if steps.is_finite() {
+    if steps.is_finite() && steps < 1e6 {
+        format!("{:.0}", steps.ceil())
+    } else if steps.is_finite() {
         format!("{steps:.2e}")
     } else {
         "over 1e308".to_string()
@@ -294,9 +668,71 @@ pub fn run_sampled(
     frames: u64,
     mut on_frame: impl FnMut(u64, &[Vector3<f64>]),
 ) -> Result<RunStats, SimError> {
+    run_sampled_until(model, state, integrator, dt, frame_dt, frames, |k, x| {
+        on_frame(k, x);
+        Ok(())
+    })
+}
+
+/// A frame that a caller of [`run_sampled_until`] or [`run_frames_until`]
+/// found bad: a pose fit that is not finite though the particles are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PoseFault {
+    /// The particle that dominates the mass-weighted sums.
+    pub particle: usize,
+    /// Its mass-weighted offset m·|x − c|, kg·m (may be non-finite).
+    pub value: f64,
+}
+
+impl PoseFault {
+    /// The fault of a pose that is not finite: the particle with the
+    /// largest mass-weighted offset from the centre `c` (from the origin if
+    /// `c` is not finite), among `members` of the model (all if `None`).
+    pub fn of(model: &Model, x: &[Vector3<f64>], c: &Vector3<f64>, members: &[usize]) -> PoseFault {
+        let centre = if c.iter().all(|v| v.is_finite()) {
+            *c
+        } else {
+            Vector3::zeros()
+        };
+        let (particle, value) = x
+            .iter()
+            .zip(members)
+            .map(|(p, &i)| (i, model.mass[i] * (p - centre).norm()))
+            .fold(
+                (members.first().copied().unwrap_or(0), -1.0f64),
+                |best, cur| {
+                    if (!cur.1.is_finite() && best.1.is_finite()) || cur.1 > best.1 {
+                        cur
+                    } else {
+                        best
+                    }
+                },
+            );
+        PoseFault { particle, value }
+    }
+}
+
+/// [`run_sampled`] with an `on_frame` that may stop the run: a
+/// [`PoseFault`] it returns becomes the simulator's diagnosis of the step
+/// that reached that frame ([`SimError::Diverged`], quantity `pose`).
+pub fn run_sampled_until(
+    model: &Model,
+    state: &mut State,
+    integrator: Integrator,
+    dt: f64,
+    frame_dt: f64,
+    frames: u64,
+    mut on_frame: impl FnMut(u64, &[Vector3<f64>]) -> Result<(), PoseFault>,
+) -> Result<RunStats, SimError> {
     let t0 = state.time;
     let mut sim = Simulator::new(model, integrator);
-    on_frame(0, &state.position);
+    let fault = |sim: &mut Simulator, state: &State, f: PoseFault| {
+        let step = sim.steps().saturating_sub(1);
+        sim.diagnose(model, state, dt, step, f.particle, "pose", f.value)
+    };
+    if let Err(f) = on_frame(0, &state.position) {
+        return Err(fault(&mut sim, state, f));
+    }
     let start = Instant::now();
     let broken_before = state.broken_springs();
     let n = state.position.len();
@@ -317,8 +753,8 @@ pub fn run_sampled(
         sim.step(model, state, dt)?;
         while k <= frames && k as f64 * frame_dt <= end * (1.0 + 1e-12) {
             let s = within(k as f64 * frame_dt, begin, dt);
-            if s >= 1.0 - 1e-12 {
-                on_frame(k, &state.position);
+            let sampled = if s >= 1.0 - 1e-12 {
+                on_frame(k, &state.position)
             } else {
                 hermite(
                     &x0,
@@ -329,7 +765,10 @@ pub fn run_sampled(
                     s,
                     &mut sample,
                 );
-                on_frame(k, &sample);
+                on_frame(k, &sample)
+            };
+            if let Err(f) = sampled {
+                return Err(fault(&mut sim, state, f));
             }
             k += 1;
         }
@@ -385,10 +824,33 @@ pub fn run_frames(
     frames: u64,
     mut on_frame: impl FnMut(u64, &State),
 ) -> Result<RunStats, SimError> {
+    run_frames_until(model, state, integrator, dt, frame_dt, frames, |k, s| {
+        on_frame(k, s);
+        Ok(())
+    })
+}
+
+/// [`run_frames`] with an `on_frame` that may stop the run, as
+/// [`run_sampled_until`].
+pub fn run_frames_until(
+    model: &Model,
+    state: &mut State,
+    integrator: Integrator,
+    dt: f64,
+    frame_dt: f64,
+    frames: u64,
+    mut on_frame: impl FnMut(u64, &State) -> Result<(), PoseFault>,
+) -> Result<RunStats, SimError> {
     let steps_per_frame = (frame_dt / dt).round().max(1.0) as u64;
     let t0 = state.time;
     let mut sim = Simulator::new(model, integrator);
-    on_frame(0, state);
+    let fault = |sim: &mut Simulator, state: &State, f: PoseFault| {
+        let step = sim.steps().saturating_sub(1);
+        sim.diagnose(model, state, dt, step, f.particle, "pose", f.value)
+    };
+    if let Err(f) = on_frame(0, state) {
+        return Err(fault(&mut sim, state, f));
+    }
     let start = Instant::now();
     let broken_before = state.broken_springs();
     for k in 1..=frames {
@@ -397,7 +859,9 @@ pub fn run_frames(
         }
         // Pin the clock to the frame grid so output times carry no round-off drift.
         state.time = t0 + k as f64 * frame_dt;
-        on_frame(k, state);
+        if let Err(f) = on_frame(k, state) {
+            return Err(fault(&mut sim, state, f));
+        }
     }
     Ok(RunStats::of(
         &sim,
@@ -406,4 +870,101 @@ pub fn run_frames(
         start,
         state.broken_springs() - broken_before,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::leaf::LeafSpec;
+    use crate::physics::integrate::Divergence;
+
+    /// A frame whose pose the caller finds not finite stops the run with the
+    /// simulator's diagnosis of the step that reached it.
+    #[test]
+    fn a_pose_fault_stops_the_run_with_the_diagnosis_of_its_step() {
+        let model = LeafSpec::load("a").unwrap().model().unwrap();
+        let mut state = State::at_rest(&model);
+        let (dt, frame_dt) = (1e-3, 1.0 / 240.0);
+        let err = run_sampled_until(
+            &model,
+            &mut state,
+            Integrator::Verlet,
+            dt,
+            frame_dt,
+            10,
+            |k, _| {
+                if k == 3 {
+                    Err(PoseFault {
+                        particle: 4,
+                        value: f64::INFINITY,
+                    })
+                } else {
+                    Ok(())
+                }
+            },
+        )
+        .unwrap_err();
+        let SimError::Diverged(d) = &err else {
+            panic!("{err}");
+        };
+        let d: &Divergence = d;
+        // Frame 3 at 12.5 ms is reached by step 12 (0-based) of 1 ms.
+        assert_eq!((d.step, d.particle, d.quantity), (12, 4, "pose"));
+        let text = err.to_string();
+        assert!(
+            text.contains("pose") && text.contains("step 12") && text.contains("particle 4"),
+            "{text}"
+        );
+        assert!(
+            text.contains("dominant force term") && text.contains("likely cause"),
+            "{text}"
+        );
+        assert!(!text.contains("NaN") && !text.contains("inf "), "{text}");
+    }
+
+    #[test]
+    fn quantities_in_messages_are_short() {
+        assert_eq!(quantity(69905.89149035318), "69906");
+        assert_eq!(quantity(4.0 / 3.0), "1.333");
+        assert_eq!(quantity(0.0013333333333), "0.001333");
+        assert_eq!(quantity(2400.0), "2400");
+        assert_eq!(quantity(1e8), "1.000e8");
+        assert_eq!(quantity(7.217e-6), "7.217e-6");
+    }
+
+    /// The work of a stiff leaf is explained by its stiffest spring, and the
+    /// refusal names the remedies.
+    #[test]
+    fn a_refusal_names_the_stiffest_spring_and_the_remedies() {
+        let mut spec = LeafSpec::load("a").unwrap();
+        for s in &mut spec.springs {
+            s.stiffness = 1e8;
+        }
+        let model = spec.model().unwrap();
+        let frame_dt = 1.0 / 240.0;
+        let dt = resolve_step(&model, Integrator::Verlet, TimeStep::Auto, frame_dt).unwrap();
+        let work = Work::of(&model, Integrator::Verlet, dt, true, 10.0, frame_dt);
+        // 10 s at the auto step: about 4e7 steps of 7 particles.
+        assert!(
+            (2e8..4e8).contains(&work.particle_steps()),
+            "{}",
+            work.describe()
+        );
+        let text = work
+            .check(&model, frame_dt, MAX_WORK / 10.0, Command::Drop)
+            .unwrap_err()
+            .to_string();
+        for w in [
+            "spring 0",
+            "k = 1.000e8 N/m",
+            "`--integrator implicit` (stable at any step: 2400 steps)",
+            "--max-work",
+        ] {
+            assert!(text.contains(w), "no {w:?} in {text}");
+        }
+        assert!(
+            work.check(&model, frame_dt, MAX_WORK, Command::Drop)
+                .is_ok()
+        );
+    }
 }

@@ -301,7 +301,13 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         let q = y[i] * inv_sqrt_m[i];
         c_eff += q.dot(&(air.blocks[i] * q));
     }
-    let omega = omega2.max(0.0).sqrt();
+    // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
+    // an unbounded mode, not a zero one: `max` would make it 0 and hide it.
+    let omega = if omega2.is_nan() {
+        f64::INFINITY
+    } else {
+        omega2.max(0.0).sqrt()
+    };
     let zeta = if omega > 0.0 {
         c_eff / (2.0 * omega)
     } else {

@@ -6,7 +6,10 @@ use crate::physics::integrate::SimError;
 use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::pose::PoseTracker;
-use crate::physics::run::{RunStats, StepError, check_budget, resolve_step, run_sampled};
+use crate::physics::run::{
+    Command, MAX_WORK, PoseFault, RunStats, StepError, Work, check_budget, resolve_step,
+    run_sampled_until,
+};
 use crate::physics::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
 
@@ -60,14 +63,50 @@ pub fn release_rotation(tilt_deg: [f64; 2]) -> UnitQuaternion<f64> {
 }
 
 /// Drops `model` from rest, centre of mass at the origin, tilted as asked,
-/// and records its pose every frame.
+/// and records its pose every frame; refused past [`MAX_WORK`].
 pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropError> {
+    drop_leaf_within(model, params, MAX_WORK, None)
+}
+
+/// The work of a drop before it runs ([`Work`]): what `drop_leaf_within`
+/// checks against its limit, and what a caller shows when it is long.
+///
+/// # Errors
+/// Bad settings: the step ([`resolve_step`]), the duration, the step and
+/// frame counts ([`check_budget`]).
+pub fn drop_work(model: &Model, params: &DropParams) -> Result<Work, DropError> {
     let frame_dt = 1.0 / FRAME_RATE;
     let dt = resolve_step(model, params.integrator, params.dt, frame_dt)?;
     if !(params.seconds > 0.0 && params.seconds.is_finite()) {
         return Err(StepError::Duration(params.seconds).into());
     }
     check_budget(params.seconds, dt, FRAME_RATE, params.integrator)?;
+    Ok(Work::of(
+        model,
+        params.integrator,
+        dt,
+        params.dt == TimeStep::Auto,
+        params.seconds,
+        frame_dt,
+    ))
+}
+
+/// [`drop_leaf`] refused past `max_work` particle-steps, calling
+/// `progress(frame, frames)` after every frame if given.
+///
+/// # Errors
+/// [`DropError`]: bad settings, too much work, divergence, a pose that is
+/// not finite.
+pub fn drop_leaf_within(
+    model: &Model,
+    params: &DropParams,
+    max_work: f64,
+    mut progress: Option<&mut dyn FnMut(u64, u64)>,
+) -> Result<DropResult, DropError> {
+    let frame_dt = 1.0 / FRAME_RATE;
+    let work = drop_work(model, params)?;
+    work.check(model, frame_dt, max_work, Command::Drop)?;
+    let dt = work.dt;
     let frames = (params.seconds * FRAME_RATE).round() as u64;
     let release = release_rotation(params.tilt_deg);
     let mut state = State::released(model, release, Vector3::zeros());
@@ -76,7 +115,8 @@ pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropE
     let mut particles = params
         .record_particles
         .then(|| Vec::with_capacity(frames as usize + 1));
-    let stats = run_sampled(
+    let all: Vec<usize> = (0..model.len()).collect();
+    let stats = run_sampled_until(
         model,
         &mut state,
         params.integrator,
@@ -85,10 +125,20 @@ pub fn drop_leaf(model: &Model, params: &DropParams) -> Result<DropResult, DropE
         frames,
         |k, x| {
             let (c, q) = tracker.pose(model, x);
+            // A pose that is not finite while the particles are (the
+            // simulator checks those) stops the run with a diagnosis, never
+            // a NaN frame in the trajectory.
+            if !(c.iter().all(|v| v.is_finite()) && q.coords.iter().all(|v| v.is_finite())) {
+                return Err(PoseFault::of(model, x, &c, &all));
+            }
             trajectory.push(k as f64 * frame_dt, c, q);
             if let Some(p) = particles.as_mut() {
                 p.push(x.to_vec());
             }
+            if let Some(report) = progress.as_mut() {
+                report(k, frames);
+            }
+            Ok(())
         },
     )
     .map_err(DropError::Sim)?;

@@ -391,3 +391,138 @@ fn seeded_copies_are_reproducible_and_within_their_spread() {
         assert!((centre.z - 1.0).abs() < 0.1 + 0.02, "{centre:?}");
     }
 }
+
+/// Every file of a directory by name.
+fn files_of(dir: &Path) -> std::collections::BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// Runs `scene FILE --out DIR ARGS` under a file size limit of `blocks`
+/// (ulimit -f, SIGXFSZ ignored so a write past it fails with EFBIG, as on a
+/// full disk).
+fn scene_with_file_limit(
+    file: &Path,
+    dir: &Path,
+    args: &[&str],
+    blocks: u32,
+) -> std::process::Output {
+    Command::new("sh")
+        .arg("-c")
+        .arg(format!(
+            "trap '' XFSZ; ulimit -f {blocks}; bin=\"$0\" file=\"$1\" out=\"$2\"; shift 2; \
+             exec \"$bin\" scene \"$file\" --out \"$out\" \"$@\""
+        ))
+        .arg(env!("CARGO_BIN_EXE_leafmagic"))
+        .arg(file)
+        .arg(dir)
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+/// A scene's output directory is written as a whole: a write that fails (a
+/// full disk, simulated by a file size limit) names the file and leaves the
+/// previous output exactly as it was, or no directory at all on a first
+/// run; a re-run replaces the old files instead of writing beside them; a
+/// file or a foreign directory as --out is refused and left alone.
+#[test]
+fn scene_output_directories_are_replaced_whole_or_left_as_they_were() {
+    let work = std::env::temp_dir().join(format!("leafmagic-scene-out-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).unwrap();
+    let file = scene_path("swings");
+    let out = work.join("swings");
+    let first = leafmagic()
+        .arg("scene")
+        .arg(&file)
+        .args(["--seconds", "0.5", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        first.status.success(),
+        "{}",
+        String::from_utf8_lossy(&first.stderr)
+    );
+    let before = files_of(&out);
+    assert!(before.contains_key("summary.toml"), "{:?}", before.keys());
+    // A stale file of an older run goes when the directory is replaced.
+    std::fs::write(out.join("stale.csv"), "t\n").unwrap();
+    let before = files_of(&out);
+
+    // "Full disk": the particle CSVs of 2 s (about 58 kB each) pass 40 blocks.
+    let failed = scene_with_file_limit(&file, &out, &["--seconds", "2"], 40);
+    let stderr = String::from_utf8_lossy(&failed.stderr);
+    assert!(!failed.status.success());
+    assert!(
+        stderr.contains(&format!("{}/", out.display()))
+            && stderr.contains(".csv")
+            && stderr.contains("nothing was changed"),
+        "the error does not name the file: {stderr}"
+    );
+    assert_eq!(
+        files_of(&out),
+        before,
+        "a failed run changed the previous output"
+    );
+    let siblings: Vec<_> = std::fs::read_dir(&work)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        siblings,
+        vec!["swings".to_string()],
+        "temporaries left: {siblings:?}"
+    );
+
+    // A first run that fails leaves nothing (no lone CSV).
+    let fresh = work.join("fresh");
+    let failed = scene_with_file_limit(&file, &fresh, &["--seconds", "2"], 40);
+    assert!(!failed.status.success());
+    assert!(!fresh.exists());
+
+    // A re-run that succeeds replaces the directory: the stale file is gone.
+    let again = leafmagic()
+        .arg("scene")
+        .arg(&file)
+        .args(["--seconds", "0.5", "--out"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(again.status.success());
+    let after = files_of(&out);
+    assert!(!after.contains_key("stale.csv"), "{:?}", after.keys());
+
+    // --out naming a file, or a directory that is not a scene's output.
+    let plain = work.join("plain");
+    std::fs::write(&plain, "keep").unwrap();
+    let foreign = work.join("foreign");
+    std::fs::create_dir_all(&foreign).unwrap();
+    std::fs::write(foreign.join("notes.txt"), "keep").unwrap();
+    for (target, says) in [(&plain, "is a file"), (&foreign, "not a scene's output")] {
+        let r = leafmagic()
+            .arg("scene")
+            .arg(&file)
+            .args(["--seconds", "0.1", "--out"])
+            .arg(target)
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&r.stderr);
+        assert!(!r.status.success() && stderr.contains(says), "{stderr}");
+    }
+    assert_eq!(std::fs::read_to_string(&plain).unwrap(), "keep");
+    assert_eq!(
+        std::fs::read_to_string(foreign.join("notes.txt")).unwrap(),
+        "keep"
+    );
+    let _ = std::fs::remove_dir_all(&work);
+}

@@ -65,9 +65,51 @@ fn solver_failed(step: u64, time: f64, iterations: usize, residual: f64) -> Stri
     )
 }
 
+/// The dominant term of a [`Divergence`] whose wind is not finite at the
+/// particle: the cause is the field, not the integration.
+pub const WIND_NOT_FINITE: &str = "aero: the wind field is not finite at the particle";
+
 impl fmt::Display for Divergence {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let d = self;
+        if d.quantity == "pose" {
+            return write!(
+                f,
+                "the leaf's pose (centre of mass and best-fit rotation) became non-finite at step {} \
+                 (t = {:.6} s) while every particle is finite: particle {} dominates the \
+                 mass-weighted sums (m·|x − c| = {}); dominant force term on it: {} ({}); \
+                 integrator {}, dt = {:.3e} s; likely cause: masses so large that the \
+                 mass-weighted sums overflow f64 (total mass or m·x past 1e308): give the \
+                 particles realistic masses (a leaf weighs grams)",
+                d.step,
+                d.time,
+                d.particle,
+                if d.value.is_finite() {
+                    format!("{:.3e} kg·m", d.value)
+                } else {
+                    "not finite".to_string()
+                },
+                d.dominant_force.0,
+                if d.dominant_force.1.is_finite() {
+                    format!("{:.3e} N", d.dominant_force.1)
+                } else {
+                    "not finite".to_string()
+                },
+                d.integrator,
+                d.dt
+            );
+        }
+        if d.dominant_force.0 == WIND_NOT_FINITE {
+            return write!(
+                f,
+                "simulation diverged at step {} (t = {:.6} s): particle {} {} became non-finite; \
+                 dominant force term: aero (the wind field is not finite at the particle); \
+                 integrator {}, dt = {:.3e} s; likely cause: a wind primitive too extreme for \
+                 f64 (a core radius so small that its square is 0, or a strength past 1e308): \
+                 give every core_radius a physical size (millimetres or more)",
+                d.step, d.time, d.particle, d.quantity, d.integrator, d.dt
+            );
+        }
         let kind = if d.value.is_finite() {
             "ran away"
         } else {

@@ -7,7 +7,7 @@ mod divergence;
 mod implicit;
 
 pub use breaking::{BreakLimit, break_limits, break_springs};
-pub use divergence::{Divergence, RUNAWAY_DISTANCE, RUNAWAY_SPEED, SimError};
+pub use divergence::{Divergence, RUNAWAY_DISTANCE, RUNAWAY_SPEED, SimError, WIND_NOT_FINITE};
 
 use crate::physics::contact::ContactSolver;
 use crate::physics::forces::{ForceTerms, Forces};
@@ -352,8 +352,15 @@ impl Simulator {
         Err(self.diagnose(model, s, dt, step, i, quantity, value))
     }
 
+    /// The diagnosis of a bad value of `quantity` ("position", "velocity",
+    /// or "pose" for a pose fit that overflowed while the particles are
+    /// finite) at `particle` after step `step`: the force terms on it, the
+    /// stable step, the stiffest spring. A force term that is not finite
+    /// is named before any finite one (NaN compares false with everything,
+    /// so a plain maximum would name gravity); a wind that is not finite at
+    /// the particle is named as the cause.
     #[allow(clippy::too_many_arguments)]
-    fn diagnose(
+    pub fn diagnose(
         &mut self,
         model: &Model,
         s: &State,
@@ -372,6 +379,39 @@ impl Simulator {
             particle,
         );
         let estimate = stability::estimate(model);
+        let named = [
+            ("gravity", terms.gravity),
+            ("spring", terms.spring),
+            ("bending", terms.bending),
+            ("aero", terms.aero),
+            ("drag", terms.drag),
+        ];
+        let x = s.position[particle];
+        let wind_bad = x.iter().all(|c| c.is_finite())
+            && !model.wind.is_still()
+            && [s.time - dt, s.time]
+                .iter()
+                .any(|&t| !model.wind.velocity(&x, t).iter().all(|c| c.is_finite()));
+        // |F| without overflow (nalgebra's norm squares first: 1e200 N
+        // would read as inf); NaN when a component is not finite.
+        let magnitude = |f: &V3| {
+            if !f.iter().all(|c| c.is_finite()) {
+                return f64::NAN;
+            }
+            let m = f.amax();
+            if m > 0.0 { m * (f / m).norm() } else { 0.0 }
+        };
+        let dominant = if wind_bad {
+            (WIND_NOT_FINITE, f64::NAN)
+        } else {
+            named
+                .iter()
+                .map(|(name, f)| (*name, magnitude(f)))
+                .fold(("none", 0.0f64), |best, t| {
+                    let worse = (t.1.is_nan() && !best.1.is_nan()) || t.1 > best.1;
+                    if worse { t } else { best }
+                })
+        };
         SimError::Diverged(Box::new(Divergence {
             step,
             time: s.time,
@@ -381,7 +421,7 @@ impl Simulator {
             integrator: self.integrator,
             dt,
             dt_max: estimate.dt_max(self.integrator),
-            dominant_force: terms.dominant(),
+            dominant_force: dominant,
             stiffest_spring: estimate.stiffest_spring,
         }))
     }

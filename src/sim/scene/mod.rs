@@ -19,7 +19,7 @@ mod run;
 mod shapes;
 mod spec;
 
-pub use run::{RunError, RunStats, SceneRun};
+pub use run::{OutputError, RunError, RunStats, SceneRun, Staged};
 pub use spec::{
     DtSpec, FixedPoint, LeafObject, Pin, RigidObject, RopeObject, SceneSpec, Shape, SheetObject,
 };
@@ -40,6 +40,19 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 type V3 = Vector3<f64>;
+
+/// Most particles a scene may hold (all objects together). Checked from the
+/// counts in the file before anything is built, so that a cylinder, rope or
+/// sheet of 10⁸ segments (or 10⁸ copies of a leaf) is refused at once, with
+/// `--explain` too, instead of allocating gigabytes. The shipped scenes
+/// hold at most 273.
+pub const MAX_PARTICLES: usize = 1_000_000;
+/// Most springs a scene may hold (a sheet has about four per particle).
+pub const MAX_SPRINGS: usize = 4_000_000;
+/// The default limit of the memory a scene run records (every recorded
+/// particle and pose at every frame, and their CSV text), bytes; `scene
+/// --max-memory` raises it. The shipped scenes record at most 7 MB.
+pub const MAX_MEMORY: f64 = 2e9;
 
 /// A scene file that could not be read, parsed or compiled.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -151,6 +164,12 @@ pub struct Scene {
     pub frame_rate: f64,
     /// Items the compiler left out of the model, with the reason.
     pub pruned: Vec<String>,
+    /// A run is refused past this many particle-steps
+    /// ([`crate::physics::run::MAX_WORK`] unless raised).
+    pub max_work: f64,
+    /// A recorded run is refused past this many bytes of frames
+    /// ([`MAX_MEMORY`] unless raised).
+    pub max_memory: f64,
 }
 
 impl Scene {
@@ -443,6 +462,47 @@ impl Builder {
         }
     }
 
+    /// Refuses an object that would take the scene past [`MAX_PARTICLES`]
+    /// or [`MAX_SPRINGS`], before it is built. Counts arrive as f64 so that
+    /// products of counts from the file cannot overflow.
+    fn reserve(
+        &self,
+        ctx: &Ctx<'_>,
+        field: &str,
+        what: &str,
+        particles: f64,
+        springs: f64,
+    ) -> Result<(), SceneError> {
+        let have = self.parts.mass.len() as f64;
+        let have_springs = self.parts.springs.len() as f64;
+        if have + particles > MAX_PARTICLES as f64 {
+            return Err(ctx.err(
+                field,
+                format!(
+                    "{what} makes {} particles{}, more than a scene may hold ({MAX_PARTICLES} in all); \
+                     use fewer segments, cells or copies",
+                    count_text(particles),
+                    if have > 0.0 {
+                        format!(" beside the {have} already placed")
+                    } else {
+                        String::new()
+                    }
+                ),
+            ));
+        }
+        if have_springs + springs > MAX_SPRINGS as f64 {
+            return Err(ctx.err(
+                field,
+                format!(
+                    "{what} makes {} springs, more than a scene may hold ({MAX_SPRINGS} in all); \
+                     use fewer segments, cells or copies",
+                    count_text(springs)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// The scene path of a model item named by [`ModelError`].
     fn owner_of(&self, item: &str) -> Option<String> {
         let index = |prefix: &str| -> Option<usize> {
@@ -615,6 +675,8 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
         duration: spec.duration,
         frame_rate: spec.frame_rate,
         pruned: b.pruned,
+        max_work: crate::physics::run::MAX_WORK,
+        max_memory: MAX_MEMORY,
     })
 }
 
@@ -693,6 +755,22 @@ fn add_leaf(
             "a leaf with fixed particles cannot be rigid",
         ));
     }
+    let copies = obj.count as f64;
+    b.reserve(
+        ctx,
+        &field("count"),
+        &format!(
+            "count = {} copies of a leaf of {} particles",
+            obj.count,
+            leaf.len()
+        ),
+        copies * leaf.len() as f64,
+        if obj.rigid {
+            0.0
+        } else {
+            copies * leaf.springs.len() as f64
+        },
+    )?;
     let base = rotation_xyz(obj.rotation_deg);
     for copy in 0..obj.count {
         let name = if obj.count == 1 {
@@ -843,7 +921,14 @@ fn add_rigid(
             if rings < 2 {
                 return Err(ctx.err(field("rings"), format!("must be ≥ 2, got {rings}")));
             }
-            let wall_each = obj.mass / (segments * rings) as f64;
+            b.reserve(
+                ctx,
+                &field("segments"),
+                &format!("a cylinder of {segments} segments × {rings} rings"),
+                segments as f64 * rings as f64 + 1.0,
+                0.0,
+            )?;
+            let wall_each = obj.mass / (segments as f64 * rings as f64);
             let base = match obj.base_mass {
                 Some(m) => {
                     ctx.positive(&field("base_mass"), m)?;
@@ -935,6 +1020,14 @@ fn add_sheet(
     ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
     ctx.vector(&field("velocity"), &obj.velocity)?;
     let [nx, ny] = obj.cells;
+    let (fx, fy) = (nx as f64, ny as f64);
+    b.reserve(
+        ctx,
+        &field("cells"),
+        &format!("a sheet of {nx} × {ny} cells"),
+        (fx + 1.0) * (fy + 1.0),
+        fx * (fy + 1.0) + fy * (fx + 1.0) + 2.0 * fx * fy,
+    )?;
     let mut part = shapes::sheet(
         obj.size[0],
         obj.size[1],
@@ -1049,6 +1142,13 @@ fn add_rope(
     if let Some(e) = obj.break_strain {
         ctx.positive(&field("break_strain"), e)?;
     }
+    b.reserve(
+        ctx,
+        &field("segments"),
+        &format!("a rope of {} segments", obj.segments),
+        obj.segments as f64 - 1.0,
+        obj.segments as f64,
+    )?;
     let a = rope_end(ctx, b, &field("from"), &obj.from)?;
     let z = rope_end(ctx, b, &field("to"), &obj.to)?;
     if a == z {
@@ -1096,6 +1196,15 @@ fn add_rope(
         &path,
     );
     Ok(())
+}
+
+/// A count for a message: whole below 10⁹, else in scientific notation.
+fn count_text(n: f64) -> String {
+    if n < 1e9 {
+        format!("{n:.0}")
+    } else {
+        format!("{n:.2e}")
+    }
 }
 
 /// The default output directory of a scene: `runs/scene-<name>`.

@@ -5,10 +5,11 @@ use super::{ObjectKind, Scene};
 use crate::motion::trajectory::Trajectory;
 use crate::physics::integrate::SimError;
 use crate::physics::params::Integrator;
+use crate::physics::params::TimeStep;
 use crate::physics::pose::PoseTracker;
-use crate::physics::run::{StepError, check_budget, resolve_dt};
+use crate::physics::run::{Command, PoseFault, StepError, Work, check_budget, resolve_dt};
 use crate::physics::state::State;
-use crate::util::io::{particle_csv, write_atomic};
+use crate::util::io::particle_csv;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -24,6 +25,21 @@ pub enum RunError {
     /// The simulation diverged or its solver failed.
     #[error(transparent)]
     Sim(#[from] SimError),
+    /// The recording would not fit the memory limit.
+    #[error(
+        "recording this scene would take about {:.2e} bytes (every recorded particle and pose \
+         at every frame), more than the limit of {limit:.1e}: lower `frame_rate` or the duration \
+         (or --seconds), record fewer deforming objects, or raise the limit with \
+         `--max-memory {:.1e}`",
+        .bytes,
+        .bytes * 1.01
+    )]
+    Memory {
+        /// The estimate, bytes.
+        bytes: f64,
+        /// The limit, bytes.
+        limit: f64,
+    },
 }
 
 /// Numbers of a finished run. Everything but `wall_s` depends only on the
@@ -75,18 +91,36 @@ impl Scene {
     pub fn run_with(
         &self,
         seconds: Option<f64>,
-        on_frame: impl FnMut(u64, &State),
+        mut on_frame: impl FnMut(u64, &State),
+    ) -> Result<(RunStats, State), RunError> {
+        self.run_until(seconds, |k, s| {
+            on_frame(k, s);
+            Ok(())
+        })
+    }
+
+    /// [`Scene::run_with`] with an `on_frame` that may stop the run with a
+    /// [`PoseFault`] (the simulator's diagnosis of that step).
+    pub fn run_until(
+        &self,
+        seconds: Option<f64>,
+        on_frame: impl FnMut(u64, &State) -> Result<(), PoseFault>,
     ) -> Result<(RunStats, State), RunError> {
         let seconds = seconds.unwrap_or(self.duration);
         if !(seconds > 0.0 && seconds.is_finite()) {
             return Err(StepError::Duration(seconds).into());
         }
-        let frame_dt = 1.0 / self.frame_rate;
-        let dt = resolve_dt(&self.model, self.integrator, self.dt, frame_dt)?;
-        check_budget(seconds, dt, self.frame_rate, self.integrator)?;
+        let work = self.work(Some(seconds))?;
+        work.check(
+            &self.model,
+            1.0 / self.frame_rate,
+            self.max_work,
+            Command::Scene,
+        )?;
+        let (frame_dt, dt) = (1.0 / self.frame_rate, work.dt);
         let frames = (seconds * self.frame_rate).round().max(1.0) as u64;
         let mut state = self.initial.clone();
-        let run = crate::physics::run::run_frames(
+        let run = crate::physics::run::run_frames_until(
             &self.model,
             &mut state,
             self.integrator,
@@ -111,9 +145,68 @@ impl Scene {
         Ok((stats, state))
     }
 
+    /// What a run of `seconds` (default: the duration) will cost, before it
+    /// starts: particles × steps, the step and why ([`Work`]).
+    ///
+    /// # Errors
+    /// Bad settings: the duration, the step, the step and frame counts.
+    pub fn work(&self, seconds: Option<f64>) -> Result<Work, StepError> {
+        let seconds = seconds.unwrap_or(self.duration);
+        if !(seconds > 0.0 && seconds.is_finite()) {
+            return Err(StepError::Duration(seconds));
+        }
+        let frame_dt = 1.0 / self.frame_rate;
+        let dt = resolve_dt(&self.model, self.integrator, self.dt, frame_dt)?;
+        check_budget(seconds, dt, self.frame_rate, self.integrator)?;
+        Ok(Work::of(
+            &self.model,
+            self.integrator,
+            dt,
+            self.dt == TimeStep::Auto,
+            seconds,
+            frame_dt,
+        ))
+    }
+
+    /// Bytes a recorded run of `seconds` holds before it is written: every
+    /// recorded particle (24 bytes, and up to 75 of CSV text) and pose (64,
+    /// and up to 200) at every frame.
+    pub fn recorded_bytes(&self, seconds: Option<f64>) -> f64 {
+        let frames = (seconds.unwrap_or(self.duration) * self.frame_rate).round() + 1.0;
+        let particles: usize = self
+            .objects
+            .iter()
+            .filter(|o| o.writes_particles())
+            .map(|o| o.particles.len())
+            .sum();
+        let poses = self.objects.iter().filter(|o| o.pose.is_some()).count();
+        frames * (particles as f64 * 99.0 + poses as f64 * 264.0)
+    }
+
     /// Runs the scene and records every object: poses of leaves and rigid
     /// objects, particle positions of deforming ones.
     pub fn run(&self, seconds: Option<f64>) -> Result<SceneRun, RunError> {
+        self.run_observed(seconds, |_, _| {})
+    }
+
+    /// [`Scene::run`], calling `progress(frame, frames)` after every frame.
+    /// Refused before anything is allocated if the recording would pass
+    /// [`Scene::max_memory`].
+    pub fn run_observed(
+        &self,
+        seconds: Option<f64>,
+        mut progress: impl FnMut(u64, u64),
+    ) -> Result<SceneRun, RunError> {
+        let bytes = self.recorded_bytes(seconds);
+        if bytes > self.max_memory {
+            return Err(RunError::Memory {
+                bytes,
+                limit: self.max_memory,
+            });
+        }
+        let total = (seconds.unwrap_or(self.duration) * self.frame_rate)
+            .round()
+            .max(1.0) as u64;
         let mut trackers: Vec<Option<PoseTracker>> = self
             .objects
             .iter()
@@ -135,7 +228,8 @@ impl Scene {
             .collect();
         let mut time = Vec::new();
         let mut scratch = Vec::new();
-        let (stats, final_state) = self.run_with(seconds, |_, s| {
+        let (stats, final_state) = self.run_until(seconds, |k, s| {
+            progress(k, total);
             time.push(s.time);
             for (o, obj) in self.objects.iter().enumerate() {
                 scratch.clear();
@@ -144,12 +238,17 @@ impl Scene {
                     (&mut trackers[o], &mut poses[o], &obj.pose)
                 {
                     let (c, q) = tracker.pose(&frame.model, &scratch);
+                    if !(c.iter().all(|v| v.is_finite()) && q.coords.iter().all(|v| v.is_finite()))
+                    {
+                        return Err(PoseFault::of(&self.model, &scratch, &c, &obj.particles));
+                    }
                     traj.push(s.time, c, q);
                 }
                 if let Some(rec) = &mut particles[o] {
                     rec.push(scratch.clone());
                 }
             }
+            Ok(())
         })?;
         Ok(SceneRun {
             stats,
@@ -188,12 +287,175 @@ struct Summary<'a> {
     objects: Vec<ObjectSummary>,
 }
 
+/// A file of a scene's output that could not be written, named as it
+/// would have been in the output directory (which is left as it was).
+#[derive(Debug, thiserror::Error)]
+#[error("{}: {message}", .path.display())]
+pub struct OutputError {
+    /// The file (or the directory, when it is the directory that is wrong).
+    pub path: PathBuf,
+    /// Why, and what was left.
+    pub message: String,
+}
+
+/// An output directory written as a whole: files go into a temporary
+/// sibling (`.<name>.<pid>.tmp`), which [`Staged::commit`] renames into
+/// place once everything is written. A failure, or a drop without commit,
+/// removes the sibling and leaves the directory as it was: the previous
+/// run's files, or nothing. A directory is replaced only if it is empty or
+/// a scene's output (it holds `summary.toml`), so no other folder is ever
+/// swept away.
+#[derive(Debug)]
+pub struct Staged {
+    dir: PathBuf,
+    tmp: PathBuf,
+    committed: bool,
+}
+
+impl Staged {
+    /// Starts writing `dir`.
+    ///
+    /// # Errors
+    /// `dir` is a file, or a directory that is not a scene's output, or the
+    /// sibling cannot be made.
+    pub fn new(dir: &Path) -> Result<Staged, OutputError> {
+        let refuse = |message: String| OutputError {
+            path: dir.to_path_buf(),
+            message,
+        };
+        if dir.exists() && !dir.is_dir() {
+            return Err(refuse(
+                "is a file, not a directory; a scene writes a folder of files: name another \
+                 --out or remove the file"
+                    .to_string(),
+            ));
+        }
+        if dir.is_dir() && !dir.join("summary.toml").exists() {
+            let empty = std::fs::read_dir(dir)
+                .map_err(|e| refuse(format!("cannot be read: {e}")))?
+                .next()
+                .is_none();
+            if !empty {
+                return Err(refuse(
+                    "exists and is not a scene's output (no summary.toml); a scene's output \
+                     replaces its directory as a whole, so it will not replace this one: name \
+                     another --out"
+                        .to_string(),
+                ));
+            }
+        }
+        let name = dir
+            .file_name()
+            .map_or_else(|| "out".to_string(), |n| n.to_string_lossy().into_owned());
+        let parent = match dir.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        std::fs::create_dir_all(&parent).map_err(|e| OutputError {
+            path: parent.clone(),
+            message: format!("cannot create the directory: {e}"),
+        })?;
+        let tmp = parent.join(format!(".{name}.{}.tmp", std::process::id()));
+        let _ = std::fs::remove_dir_all(&tmp);
+        std::fs::create_dir(&tmp).map_err(|e| OutputError {
+            path: tmp.clone(),
+            message: format!("cannot create the temporary directory: {e}"),
+        })?;
+        Ok(Staged {
+            dir: dir.to_path_buf(),
+            tmp,
+            committed: false,
+        })
+    }
+
+    /// Where files are written until the commit.
+    pub fn path(&self) -> &Path {
+        &self.tmp
+    }
+
+    /// The final path of a file written into [`Staged::path`].
+    pub fn final_path(&self, written: &Path) -> PathBuf {
+        written
+            .strip_prefix(&self.tmp)
+            .map_or_else(|_| written.to_path_buf(), |rel| self.dir.join(rel))
+    }
+
+    /// Writes `bytes` as `name`, or names the file and says nothing changed.
+    pub fn write(&self, name: &str, bytes: &[u8]) -> Result<PathBuf, OutputError> {
+        let path = self.tmp.join(name);
+        std::fs::write(&path, bytes).map_err(|e| self.failed(name, &e))?;
+        Ok(path)
+    }
+
+    /// The error of a file that could not be written.
+    pub fn failed(&self, name: &str, e: &dyn std::fmt::Display) -> OutputError {
+        OutputError {
+            path: self.dir.join(name),
+            message: format!(
+                "cannot be written: {e}; nothing was changed in {}",
+                self.dir.display()
+            ),
+        }
+    }
+
+    /// Renames the written directory into place (the previous one, if any,
+    /// is moved aside first and removed after).
+    ///
+    /// # Errors
+    /// A rename failed; the previous directory is put back if it can be.
+    pub fn commit(mut self) -> Result<(), OutputError> {
+        let fail = |e: std::io::Error| OutputError {
+            path: self.dir.clone(),
+            message: format!("cannot be replaced: {e}"),
+        };
+        let old = self.tmp.with_extension("old");
+        let had = self.dir.exists();
+        if had {
+            let _ = std::fs::remove_dir_all(&old);
+            std::fs::rename(&self.dir, &old).map_err(fail)?;
+        }
+        if let Err(e) = std::fs::rename(&self.tmp, &self.dir) {
+            if had {
+                let _ = std::fs::rename(&old, &self.dir);
+            }
+            return Err(fail(e));
+        }
+        self.committed = true;
+        if had {
+            let _ = std::fs::remove_dir_all(&old);
+        }
+        Ok(())
+    }
+}
+
+impl Drop for Staged {
+    fn drop(&mut self) {
+        if !self.committed {
+            let _ = std::fs::remove_dir_all(&self.tmp);
+        }
+    }
+}
+
 impl SceneRun {
     /// Writes `DIR/<object>.csv` (pose `t,x,y,z,qw,qx,qy,qz`) for leaves and
     /// rigid objects, `DIR/<object>-particles.csv` for deforming objects, and
-    /// `DIR/summary.toml`; every file atomically. Returns the paths written.
-    pub fn write(&self, scene: &Scene, dir: &Path) -> std::io::Result<Vec<PathBuf>> {
-        std::fs::create_dir_all(dir)?;
+    /// `DIR/summary.toml`, as a whole ([`Staged`]): a failure leaves `DIR`
+    /// as it was and names the file. Returns the paths written.
+    pub fn write(&self, scene: &Scene, dir: &Path) -> Result<Vec<PathBuf>, OutputError> {
+        let staged = Staged::new(dir)?;
+        let written = self.write_staged(scene, &staged)?;
+        staged.commit()?;
+        Ok(written)
+    }
+
+    /// [`SceneRun::write`] into a [`Staged`] directory that the caller
+    /// commits (after adding files of its own, such as an export). Returns
+    /// the final paths.
+    pub fn write_staged(
+        &self,
+        scene: &Scene,
+        staged: &Staged,
+    ) -> Result<Vec<PathBuf>, OutputError> {
         let mut written = Vec::new();
         let mut objects = Vec::new();
         for (o, obj) in scene.objects.iter().enumerate() {
@@ -218,16 +480,16 @@ impl SceneRun {
             summary.end = centre(&self.final_state.position);
             if let Some(traj) = &self.poses[o] {
                 let name = format!("{}.csv", obj.name);
-                let path = dir.join(&name);
-                traj.write_csv(&path)?;
-                written.push(path);
+                let bytes = traj
+                    .try_to_csv_bytes()
+                    .map_err(|e| staged.failed(&name, &e))?;
+                written.push(staged.final_path(&staged.write(&name, &bytes)?));
                 summary.pose = Some(name);
             }
             if let Some(frames) = &self.particles[o] {
                 let name = format!("{}-particles.csv", obj.name);
-                let path = dir.join(&name);
-                write_atomic(&path, &particle_csv(&self.time, frames))?;
-                written.push(path);
+                let path = staged.write(&name, &particle_csv(&self.time, frames))?;
+                written.push(staged.final_path(&path));
                 summary.positions = Some(name);
             }
             if obj.kind != ObjectKind::Fixed {
@@ -252,10 +514,9 @@ impl SceneRun {
             pruned: &scene.pruned,
             objects,
         };
-        let text = toml::to_string(&summary).map_err(std::io::Error::other)?;
-        let path = dir.join("summary.toml");
-        write_atomic(&path, text.as_bytes())?;
-        written.push(path);
+        let text = toml::to_string(&summary).map_err(|e| staged.failed("summary.toml", &e))?;
+        let path = staged.write("summary.toml", text.as_bytes())?;
+        written.push(staged.final_path(&path));
         Ok(written)
     }
 }

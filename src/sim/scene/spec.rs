@@ -25,7 +25,7 @@ pub struct SceneSpec {
     #[serde(default = "default_frame_rate")]
     pub frame_rate: f64,
     /// Time integrator.
-    #[serde(default = "default_integrator")]
+    #[serde(default = "default_integrator", deserialize_with = "integrator_name")]
     pub integrator: Integrator,
     /// Time step, s, or `"auto"` (from the stability estimate).
     #[serde(default)]
@@ -69,6 +69,25 @@ fn default_integrator() -> Integrator {
 
 fn default_gravity() -> [f64; 3] {
     [0.0, 0.0, -STANDARD_GRAVITY]
+}
+
+/// An integrator's name: a string, said so when it is anything else (serde's
+/// own message for an enum, "wanted string or table", names neither the
+/// choices nor what was found).
+fn integrator_name<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Error> {
+    struct V;
+    impl Visitor<'_> for V {
+        type Value = Integrator;
+        fn expecting(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+            f.write_str(
+                "the name of an integrator in quotes: \"euler\", \"symplectic\", \"verlet\", \"rk4\" or \"implicit\"",
+            )
+        }
+        fn visit_str<E: de::Error>(self, v: &str) -> Result<Integrator, E> {
+            v.parse().map_err(E::custom)
+        }
+    }
+    d.deserialize_any(V)
 }
 
 fn one() -> usize {
