@@ -2,6 +2,8 @@
 //! values: what the command line accepts, apart from what the commands do.
 //! The doc comments here are the `--help` text.
 
+use leafmagic::leaf::AeroLawName;
+use leafmagic::leaf::plates::{PAPER_AREAL_DENSITY, PlateShape};
 use leafmagic::motion::classify::MotionClass;
 use leafmagic::physics::params::{Integrator, TimeStep};
 use leafmagic::sim::stress::{self, ExplicitPolicy};
@@ -164,6 +166,30 @@ pub struct CheckArgs {
     /// With --stress --explicit substep: the most sub-steps per step (a warning says when it clamps).
     #[arg(long, default_value_t = stress::DEFAULT_SUBSTEP_CAP)]
     pub substep_cap: u64,
+}
+
+/// Arguments of `plate`.
+#[derive(clap::Args, Debug)]
+pub struct PlateArgs {
+    /// Outline: square, circle, hexagon or rectangle.
+    #[arg(long)]
+    pub shape: PlateShape,
+    /// Twice the inradius, metres: a square's side, a circle's diameter, a
+    /// hexagon's flat-to-flat width, a rectangle's width (short side).
+    #[arg(long, allow_negative_numbers = true)]
+    pub size: f64,
+    /// Length over width (rectangles only; at least 1).
+    #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
+    pub aspect: f64,
+    /// Mass per area, kg/m² (70 g/m² paper by default).
+    #[arg(long, default_value_t = PAPER_AREAL_DENSITY, allow_negative_numbers = true)]
+    pub areal_density: f64,
+    /// Aerodynamic law: linear, quadratic or unsteady.
+    #[arg(long, default_value = "unsteady")]
+    pub law: AeroLawName,
+    /// Leaf file to write (standard output if absent).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
 }
 
 /// Arguments of `classify`.

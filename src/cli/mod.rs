@@ -14,6 +14,7 @@ mod drop;
 mod input;
 mod motion;
 mod output;
+mod plate;
 mod progress;
 mod report;
 mod scene;
@@ -21,7 +22,7 @@ mod scene;
 use anyhow::Result;
 use args::{
     AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, MergeArgs,
-    PreviewArgs, SceneArgs, ShardArgs,
+    PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -43,6 +44,9 @@ pub enum Command {
     Export(ExportArgs),
     /// Drop a leaf from rest in still air and record its fall.
     Drop(DropArgs),
+    /// Write a flat plate (square, circle, hexagon or rectangle) of paper as a
+    /// leaf file: a uniform rigid plate, 70 g/m² and the unsteady law by default.
+    Plate(PlateArgs),
     /// Report the stable time step of a leaf for each integrator, with warnings.
     Check(CheckArgs),
     /// Name the motion of a recorded fall (pose CSV t,x,y,z,qw,qx,qy,qz).
@@ -72,6 +76,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(args) => output::export(args),
         Command::Drop(args) => drop::drop(args),
         Command::Check(args) => drop::check(args),
+        Command::Plate(args) => plate::plate(args),
         Command::Classify(args) => motion::classify(args),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Scene(args) => scene::scene(args),

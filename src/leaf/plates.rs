@@ -114,6 +114,7 @@ pub fn square_card(side: f64, sigma: f64, aero: AeroSpec) -> LeafSpec {
         triangles,
         folds: Vec::new(),
         wind: Default::default(),
+        rigid: false,
     }
 }
 
@@ -165,6 +166,71 @@ pub fn reynolds(speed: f64, chord: f64) -> f64 {
 mod tests {
     use super::*;
 
+    /// The lumped mass gives a uniform plate's moments of inertia within
+    /// 2 % for every shape; every triangle faces +z; the areal density is
+    /// the one asked for.
+    #[test]
+    fn plates_have_a_uniform_plates_inertia_within_two_percent() {
+        for (shape, aspect) in [
+            (PlateShape::Square, 1.0),
+            (PlateShape::Rectangle, 4.0),
+            (PlateShape::Rectangle, 1.5),
+            (PlateShape::Hexagon, 1.0),
+            (PlateShape::Circle, 1.0),
+        ] {
+            let size = 0.05;
+            let spec = plate(shape, size, aspect, 0.07, AeroSpec::unsteady()).unwrap();
+            let model = spec.model().unwrap();
+            assert!((areal_density(&model) - 0.07).abs() < 1e-12);
+            let x = &model.rest_position;
+            for t in &model.triangles {
+                let [a, b, c] = t.corners;
+                assert!((x[b] - x[a]).cross(&(x[c] - x[a])).z > 0.0, "{shape:?}");
+            }
+            let m = model.total_mass();
+            let ix: f64 = x
+                .iter()
+                .zip(&model.mass)
+                .map(|(p, w)| w * p.y * p.y)
+                .sum::<f64>()
+                / m;
+            let iy: f64 = x
+                .iter()
+                .zip(&model.mass)
+                .map(|(p, w)| w * p.x * p.x)
+                .sum::<f64>()
+                / m;
+            let [ex, ey] = uniform_plate_moments(shape, size, aspect);
+            println!(
+                "{shape:?} x{aspect}: I_x {:.4}, I_y {:.4} of uniform",
+                ix / ex,
+                iy / ey
+            );
+            assert!(
+                (ix / ex - 1.0).abs() < 0.02 && (iy / ey - 1.0).abs() < 0.02,
+                "{shape:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn bad_plates_name_the_flag() {
+        let bad = |s, size, aspect, sigma| {
+            plate(s, size, aspect, sigma, AeroSpec::unsteady())
+                .unwrap_err()
+                .field
+        };
+        assert_eq!(bad(PlateShape::Square, -0.05, 1.0, 0.07), "--size");
+        assert_eq!(bad(PlateShape::Square, f64::NAN, 1.0, 0.07), "--size");
+        assert_eq!(bad(PlateShape::Square, 0.05, 1.0, 0.0), "--areal-density");
+        assert_eq!(
+            bad(PlateShape::Square, 0.05, 1.0, f64::INFINITY),
+            "--areal-density"
+        );
+        assert_eq!(bad(PlateShape::Square, 0.05, 2.0, 0.07), "--aspect");
+        assert_eq!(bad(PlateShape::Rectangle, 0.05, 0.5, 0.07), "--aspect");
+    }
+
     #[test]
     fn card_has_the_asked_density_and_the_square_i_star() {
         let spec = square_card(0.05, 0.08, AeroSpec::quadratic());
@@ -180,5 +246,305 @@ mod tests {
             (lumped / uniform - 2.0).abs() < 1e-9,
             "{lumped} vs {uniform}"
         );
+    }
+}
+
+/// The outline of a flat plate written by [`plate`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlateShape {
+    /// A square; size = its side.
+    Square,
+    /// A circle; size = its diameter.
+    Circle,
+    /// A regular hexagon with a corner on +x; size = its flat-to-flat width.
+    Hexagon,
+    /// A rectangle, long side along x; size = its width (the short side),
+    /// length = aspect × width.
+    Rectangle,
+}
+
+impl PlateShape {
+    /// The name on the command line.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PlateShape::Square => "square",
+            PlateShape::Circle => "circle",
+            PlateShape::Hexagon => "hexagon",
+            PlateShape::Rectangle => "rectangle",
+        }
+    }
+}
+
+impl std::str::FromStr for PlateShape {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "square" => Ok(PlateShape::Square),
+            "circle" => Ok(PlateShape::Circle),
+            "hexagon" => Ok(PlateShape::Hexagon),
+            "rectangle" => Ok(PlateShape::Rectangle),
+            other => Err(format!(
+                "unknown plate shape '{other}': expected square, circle, hexagon or rectangle"
+            )),
+        }
+    }
+}
+
+/// Areal density of 70 g/m² paper, the real falls' (docs/real-falls.md), kg/m².
+pub const PAPER_AREAL_DENSITY: f64 = 0.070;
+
+/// Cells across the short side of a square or rectangular plate: its mass,
+/// lumped a third of each triangle's on each corner, then gives a uniform
+/// plate's moment of inertia to 1/n² (1.6 %; a test holds ≤ 2 %).
+pub const PLATE_CELLS: usize = 8;
+
+/// Rings of a hexagonal or circular plate's triangular mesh (the same
+/// bound: a test holds ≤ 2 %).
+pub const PLATE_RINGS: usize = 8;
+
+/// A bad plate request, naming the argument.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct PlateError {
+    /// The argument, as the command line names it (`--size`).
+    pub field: String,
+    /// Why it is refused.
+    pub reason: String,
+}
+
+/// A flat plate of `shape`, `size` (m; see [`PlateShape`]), `aspect`
+/// (length over width; rectangles only) and areal density `sigma` (kg/m²)
+/// in the x-y plane, centred on the origin, normal +z: a fine triangle mesh
+/// (mass lumped from the triangles, a third on each corner) moved as one
+/// rigid body, the uniform rigid plate of the falling-plate literature.
+/// Squares and rectangles: [`PLATE_CELLS`] cells across, each cut into four
+/// triangles about its centre (symmetric about both centre lines and, for
+/// a square, both diagonals); hexagons: a triangular lattice of
+/// [`PLATE_RINGS`] rings; circles: the same rings laid on circles.
+///
+/// # Errors
+/// A size, aspect or density that is not finite and positive (an aspect
+/// other than 1 on a shape that has none), naming the flag.
+pub fn plate(
+    shape: PlateShape,
+    size: f64,
+    aspect: f64,
+    sigma: f64,
+    aero: AeroSpec,
+) -> Result<LeafSpec, PlateError> {
+    plate_meshed(shape, size, aspect, sigma, aero, 1)
+}
+
+/// [`plate`] with `refine` times as many cells or rings across (1 is
+/// [`plate`]'s mesh): for convergence studies.
+///
+/// # Errors
+/// As [`plate`]; `refine` 0 is refused.
+pub fn plate_meshed(
+    shape: PlateShape,
+    size: f64,
+    aspect: f64,
+    sigma: f64,
+    aero: AeroSpec,
+    refine: usize,
+) -> Result<LeafSpec, PlateError> {
+    if refine == 0 {
+        return Err(PlateError {
+            field: "refine".to_string(),
+            reason: "must be at least 1".to_string(),
+        });
+    }
+    let positive = |field: &str, value: f64, unit: &str| {
+        if value.is_finite() && value > 0.0 {
+            Ok(())
+        } else {
+            Err(PlateError {
+                field: field.to_string(),
+                reason: format!("must be a finite number > 0 {unit}, got {value}"),
+            })
+        }
+    };
+    positive("--size", size, "m")?;
+    positive("--areal-density", sigma, "kg/m²")?;
+    positive("--aspect", aspect, "")?;
+    if shape != PlateShape::Rectangle && aspect != 1.0 {
+        return Err(PlateError {
+            field: "--aspect".to_string(),
+            reason: format!(
+                "only a rectangle has an aspect ratio (a {} has 1), got {aspect}",
+                shape.as_str()
+            ),
+        });
+    }
+    if shape == PlateShape::Rectangle && aspect < 1.0 {
+        return Err(PlateError {
+            field: "--aspect".to_string(),
+            reason: format!(
+                "is length over width, at least 1 (size is the short side), got {aspect}"
+            ),
+        });
+    }
+    let (cells, rings) = (PLATE_CELLS * refine, PLATE_RINGS * refine);
+    let (points, triangles) = match shape {
+        PlateShape::Square => grid_mesh(size, size, cells, cells),
+        PlateShape::Rectangle => {
+            // Cells at most twice as long as wide along the plate.
+            let along = ((cells as f64 * aspect / 2.0).ceil() as usize).max(cells);
+            grid_mesh(aspect * size, size, along, cells)
+        }
+        PlateShape::Hexagon => ring_mesh(size / 3f64.sqrt(), rings, false),
+        PlateShape::Circle => ring_mesh(0.5 * size, rings, true),
+    };
+    let mut mass = vec![0.0; points.len()];
+    for t in &triangles {
+        let [a, b, c] = t.map(|i| Vector3::new(points[i][0], points[i][1], 0.0));
+        let share = sigma * 0.5 * (b - a).cross(&(c - a)).norm() / 3.0;
+        for &i in t {
+            mass[i] += share;
+        }
+    }
+    let particles = points
+        .iter()
+        .zip(&mass)
+        .map(|(p, &m)| ParticleSpec {
+            position: [p[0], p[1], 0.0],
+            mass: m,
+            fixed: false,
+            drag: 0.0,
+        })
+        .collect();
+    let triangles = triangles
+        .into_iter()
+        .map(|corners| TriangleSpec {
+            corners,
+            flap: None,
+            alpha_n: None,
+            alpha_t: None,
+        })
+        .collect();
+    let aspect_tag = if shape == PlateShape::Rectangle {
+        format!("-x{aspect}")
+    } else {
+        String::new()
+    };
+    Ok(LeafSpec {
+        name: format!(
+            "plate-{}-{:.1}mm{aspect_tag}-{:.0}gsm",
+            shape.as_str(),
+            size * 1e3,
+            sigma * 1e3
+        ),
+        aero,
+        bounds: Default::default(),
+        bending: None,
+        gravity: [0.0, 0.0, -STANDARD_GRAVITY],
+        particles,
+        springs: Vec::new(),
+        triangles,
+        folds: Vec::new(),
+        wind: Default::default(),
+        rigid: true,
+    })
+}
+
+/// A `length` (x) × `width` (y) rectangle of nx × ny cells, each cut into
+/// four counter-clockwise triangles about its centre.
+fn grid_mesh(length: f64, width: f64, nx: usize, ny: usize) -> (Vec<[f64; 2]>, Vec<[usize; 3]>) {
+    let mut points = Vec::with_capacity((nx + 1) * (ny + 1) + nx * ny);
+    for j in 0..=ny {
+        for i in 0..=nx {
+            points.push([
+                length * (i as f64 / nx as f64 - 0.5),
+                width * (j as f64 / ny as f64 - 0.5),
+            ]);
+        }
+    }
+    let node = |i: usize, j: usize| j * (nx + 1) + i;
+    let mut triangles = Vec::with_capacity(4 * nx * ny);
+    for j in 0..ny {
+        for i in 0..nx {
+            let centre = points.len();
+            points.push([
+                length * ((i as f64 + 0.5) / nx as f64 - 0.5),
+                width * ((j as f64 + 0.5) / ny as f64 - 0.5),
+            ]);
+            let ring = [
+                node(i, j),
+                node(i + 1, j),
+                node(i + 1, j + 1),
+                node(i, j + 1),
+            ];
+            for k in 0..4 {
+                triangles.push([centre, ring[k], ring[(k + 1) % 4]]);
+            }
+        }
+    }
+    (points, triangles)
+}
+
+/// A hexagon of circumradius `radius` (corner on +x) as a triangular
+/// lattice of `rings` rings (6 rings² triangles), or with `circle` the same
+/// rings laid evenly on circles of radius k/rings × `radius`.
+fn ring_mesh(radius: f64, rings: usize, circle: bool) -> (Vec<[f64; 2]>, Vec<[usize; 3]>) {
+    let corner = |j: usize| {
+        let a = std::f64::consts::FRAC_PI_3 * (j % 6) as f64;
+        [radius * a.cos(), radius * a.sin()]
+    };
+    let mut points = vec![[0.0, 0.0]];
+    // ring_start[k]: index of ring k's first point; ring k has 6k points.
+    let mut ring_start = vec![0usize];
+    for k in 1..=rings {
+        ring_start.push(points.len());
+        let scale = k as f64 / rings as f64;
+        for m in 0..6 * k {
+            let p = if circle {
+                let a = 2.0 * std::f64::consts::PI * m as f64 / (6 * k) as f64;
+                [scale * radius * a.cos(), scale * radius * a.sin()]
+            } else {
+                let (j, s) = (m / k, m % k);
+                let (p0, p1) = (corner(j), corner(j + 1));
+                let f = s as f64 / k as f64;
+                [
+                    scale * (p0[0] + (p1[0] - p0[0]) * f),
+                    scale * (p0[1] + (p1[1] - p0[1]) * f),
+                ]
+            };
+            points.push(p);
+        }
+    }
+    let at = |k: usize, m: usize| {
+        if k == 0 {
+            0
+        } else {
+            ring_start[k] + m % (6 * k)
+        }
+    };
+    let mut triangles = Vec::with_capacity(6 * rings * rings);
+    for k in 1..=rings {
+        for j in 0..6 {
+            // Side j of ring k: outer points o_0..o_k, inner i_0..i_{k−1}.
+            let outer = |s: usize| at(k, j * k + s);
+            let inner = |s: usize| at(k - 1, j * (k - 1) + s);
+            for s in 0..k {
+                triangles.push([outer(s), outer(s + 1), inner(s)]);
+                if s + 1 < k {
+                    triangles.push([inner(s), outer(s + 1), inner(s + 1)]);
+                }
+            }
+        }
+    }
+    (points, triangles)
+}
+
+/// A uniform plate's principal moments of inertia per unit mass about its
+/// two in-plane symmetry axes (x, y), m²: what [`plate`]'s lumped mass
+/// approximates.
+pub fn uniform_plate_moments(shape: PlateShape, size: f64, aspect: f64) -> [f64; 2] {
+    match shape {
+        PlateShape::Square => [size * size / 12.0; 2],
+        PlateShape::Rectangle => [size * size / 12.0, (aspect * size).powi(2) / 12.0],
+        // Regular hexagon of side s: I = (5/24) M s² about any in-plane axis.
+        PlateShape::Hexagon => [5.0 / 24.0 * size * size / 3.0; 2],
+        PlateShape::Circle => [size * size / 16.0; 2],
     }
 }

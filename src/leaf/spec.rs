@@ -4,10 +4,10 @@
 //! Every field is documented in `prototypes/README.md`.
 
 use crate::physics::field::WindField;
-use crate::physics::model::QuadraticAero;
 use crate::physics::model::{
-    AeroLaw, Hinge, Model, ModelError, ModelParts, STANDARD_GRAVITY, Spring, Triangle,
+    AeroLaw, Hinge, Model, ModelError, ModelParts, RigidGroup, STANDARD_GRAVITY, Spring, Triangle,
 };
+use crate::physics::model::{QuadraticAero, UnsteadyAero};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -50,6 +50,12 @@ pub struct LeafSpec {
     /// Wind (still air when absent).
     #[serde(default, skip_serializing_if = "WindField::is_still")]
     pub wind: WindField,
+    /// Move all particles as one rigid body (after Hahn 1988, as scenes'
+    /// rigid objects): springs and bending then change nothing. What
+    /// `leafmagic plate` writes: a uniform rigid plate, as in the
+    /// falling-plate literature.
+    #[serde(default, skip_serializing_if = "is_false")]
+    pub rigid: bool,
 }
 
 fn default_gravity() -> [f64; 3] {
@@ -57,8 +63,10 @@ fn default_gravity() -> [f64; 3] {
 }
 
 /// The aerodynamic law of a leaf: `[aero] law = "linear"` (eq. 9–10, the
-/// default) with `alpha_n`, `alpha_t`; or `law = "quadratic"`
-/// ([`crate::physics::forces::quadratic`]) with optional overrides of its literature coefficients.
+/// default) with `alpha_n`, `alpha_t`; `law = "quadratic"`
+/// ([`crate::physics::forces::quadratic`]) or `law = "unsteady"`
+/// ([`crate::physics::forces::unsteady`]) with optional overrides of their
+/// literature coefficients.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AeroSpec {
@@ -71,13 +79,14 @@ pub struct AeroSpec {
     /// Tangential coefficient αᵗ, kg/(m²·s) (linear law; required there).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub alpha_t: Option<f64>,
-    /// Air density ρ, kg/m³ (quadratic law; default 1.2).
+    /// Air density ρ, kg/m³ (quadratic law, default 1.2; unsteady, 1.204).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub air_density: Option<f64>,
-    /// C_D edge-on (quadratic law; default 0.4).
+    /// C_D edge-on (quadratic law, default 0.4; unsteady: form drag beyond
+    /// skin friction, default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cd_parallel: Option<f64>,
-    /// C_D face-on (quadratic law; default 2.4).
+    /// C_D face-on (quadratic and unsteady laws; default 2.4).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cd_normal: Option<f64>,
     /// C_L★ in C_L = C_L★ sin 2α (quadratic law; default 1.2).
@@ -87,9 +96,34 @@ pub struct AeroSpec {
     /// behind the leading edge (quadratic law; default 0.25).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cop_leading: Option<f64>,
-    /// C_R of the rotational lift (quadratic law; default π).
+    /// C_R of the rotational lift (quadratic law, default 0; unsteady, π).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotational_lift: Option<f64>,
+    /// Kinematic viscosity ν, m²/s (unsteady law; default 1.516e-5).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kinematic_viscosity: Option<f64>,
+    /// Factor on the potential-flow added mass (unsteady law; default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub added_mass: Option<f64>,
+    /// Factor on laminar skin friction (unsteady law; default 1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub skin_friction: Option<f64>,
+    /// C_T of the translational circulation (unsteady law; default 1.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub translational_lift: Option<f64>,
+    /// μ₁ of the rotational damping (unsteady law; default 0.2).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotational_damping: Option<f64>,
+    /// μ₂ of the rotational damping beyond drag (unsteady law; default 0).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotational_damping_quadratic: Option<f64>,
+    /// Buoyancy on or off (unsteady law; default off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub buoyancy: Option<bool>,
+    /// Density of the leaf's material for buoyancy, kg/m³ (unsteady law;
+    /// default 1008, paper).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub solid_density: Option<f64>,
 }
 
 /// The name of an aerodynamic law in a leaf file.
@@ -101,59 +135,163 @@ pub enum AeroLawName {
     Linear,
     /// Quadratic drag with lift and a moving centre of pressure.
     Quadratic,
+    /// Added mass, translational and rotational circulation, rotational
+    /// damping, drag by angle of attack and skin friction.
+    Unsteady,
 }
+
+impl AeroLawName {
+    /// The name as leaf files write it.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            AeroLawName::Linear => "linear",
+            AeroLawName::Quadratic => "quadratic",
+            AeroLawName::Unsteady => "unsteady",
+        }
+    }
+}
+
+impl std::str::FromStr for AeroLawName {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "linear" => Ok(AeroLawName::Linear),
+            "quadratic" => Ok(AeroLawName::Quadratic),
+            "unsteady" => Ok(AeroLawName::Unsteady),
+            other => Err(format!(
+                "unknown aerodynamic law '{other}': expected linear, quadratic or unsteady"
+            )),
+        }
+    }
+}
+
+/// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
+/// `alpha_t` apart).
+const KEY_LAWS: [(&str, &[AeroLawName]); 14] = {
+    use AeroLawName::{Quadratic as Q, Unsteady as U};
+    [
+        ("air_density", &[Q, U]),
+        ("cd_parallel", &[Q, U]),
+        ("cd_normal", &[Q, U]),
+        ("cl_amplitude", &[Q]),
+        ("cop_leading", &[Q]),
+        ("rotational_lift", &[Q, U]),
+        ("kinematic_viscosity", &[U]),
+        ("added_mass", &[U]),
+        ("skin_friction", &[U]),
+        ("translational_lift", &[U]),
+        ("rotational_damping", &[U]),
+        ("rotational_damping_quadratic", &[U]),
+        ("buoyancy", &[U]),
+        ("solid_density", &[U]),
+    ]
+};
 
 impl AeroSpec {
     /// The paper's linear law with these coefficients.
     pub fn linear(alpha_n: f64, alpha_t: f64) -> AeroSpec {
         AeroSpec {
-            law: AeroLawName::Linear,
             alpha_n: Some(alpha_n),
             alpha_t: Some(alpha_t),
+            ..AeroSpec::named(AeroLawName::Linear)
+        }
+    }
+
+    /// The quadratic law with the literature's coefficients.
+    pub fn quadratic() -> AeroSpec {
+        AeroSpec::named(AeroLawName::Quadratic)
+    }
+
+    /// The unsteady law with its default coefficients.
+    pub fn unsteady() -> AeroSpec {
+        AeroSpec::named(AeroLawName::Unsteady)
+    }
+
+    /// Law `law` with no key set (the linear law then still needs its α).
+    pub fn named(law: AeroLawName) -> AeroSpec {
+        AeroSpec {
+            law,
+            alpha_n: None,
+            alpha_t: None,
             air_density: None,
             cd_parallel: None,
             cd_normal: None,
             cl_amplitude: None,
             cop_leading: None,
             rotational_lift: None,
+            kinematic_viscosity: None,
+            added_mass: None,
+            skin_friction: None,
+            translational_lift: None,
+            rotational_damping: None,
+            rotational_damping_quadratic: None,
+            buoyancy: None,
+            solid_density: None,
         }
     }
 
-    /// The quadratic law with the literature's coefficients.
-    pub fn quadratic() -> AeroSpec {
-        AeroSpec {
-            law: AeroLawName::Quadratic,
-            alpha_n: None,
-            alpha_t: None,
-            ..AeroSpec::linear(0.0, 0.0)
-        }
+    /// Which optional keys are set.
+    fn set_keys(&self) -> [(&'static str, bool); 14] {
+        let set = [
+            self.air_density.is_some(),
+            self.cd_parallel.is_some(),
+            self.cd_normal.is_some(),
+            self.cl_amplitude.is_some(),
+            self.cop_leading.is_some(),
+            self.rotational_lift.is_some(),
+            self.kinematic_viscosity.is_some(),
+            self.added_mass.is_some(),
+            self.skin_friction.is_some(),
+            self.translational_lift.is_some(),
+            self.rotational_damping.is_some(),
+            self.rotational_damping_quadratic.is_some(),
+            self.buoyancy.is_some(),
+            self.solid_density.is_some(),
+        ];
+        std::array::from_fn(|k| (KEY_LAWS[k].0, set[k]))
     }
 
     /// The model's law. Each law's own fields are required or defaulted,
-    /// the other law's fields are rejected by name (a coefficient that
+    /// the other laws' fields are rejected by name (a coefficient that
     /// would be silently ignored is a mistake).
     pub fn resolve(&self) -> Result<AeroLaw, ModelError> {
         let field = |name: &str, reason: String| ModelError {
             item: format!("aero.{name}"),
             reason,
         };
-        let quadratic_fields = [
-            ("air_density", self.air_density),
-            ("cd_parallel", self.cd_parallel),
-            ("cd_normal", self.cd_normal),
-            ("cl_amplitude", self.cl_amplitude),
-            ("cop_leading", self.cop_leading),
-            ("rotational_lift", self.rotational_lift),
-        ];
-        match self.law {
+        let law = self.law;
+        let own_keys = || {
+            KEY_LAWS
+                .iter()
+                .filter(|(_, laws)| laws.contains(&law))
+                .map(|(k, _)| *k)
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        for (k, (name, set)) in self.set_keys().into_iter().enumerate() {
+            if set && !KEY_LAWS[k].1.contains(&law) {
+                let owners: Vec<String> = KEY_LAWS[k]
+                    .1
+                    .iter()
+                    .map(|l| format!("\"{}\"", l.as_str()))
+                    .collect();
+                let takes = if law == AeroLawName::Linear {
+                    "alpha_n and alpha_t".to_string()
+                } else {
+                    own_keys()
+                };
+                return Err(field(
+                    name,
+                    format!(
+                        "belongs to law = {}; law = \"{}\" takes {takes}",
+                        owners.join(" or "),
+                        law.as_str()
+                    ),
+                ));
+            }
+        }
+        match law {
             AeroLawName::Linear => {
-                if let Some((name, _)) = quadratic_fields.iter().find(|(_, v)| v.is_some()) {
-                    return Err(field(
-                        name,
-                        "belongs to law = \"quadratic\"; the linear law takes alpha_n and alpha_t"
-                            .to_string(),
-                    ));
-                }
                 for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
                     if value.is_none() {
                         return Err(field(
@@ -162,30 +300,55 @@ impl AeroSpec {
                         ));
                     }
                 }
-                Ok(AeroLaw::Linear)
+                return Ok(AeroLaw::Linear);
             }
-            AeroLawName::Quadratic => {
+            _ => {
                 for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
                     if value.is_some() {
                         return Err(field(
                             name,
-                            "not used by law = \"quadratic\" (remove it; its coefficients are air_density, cd_parallel, cd_normal, cl_amplitude, cop_leading)".to_string(),
+                            format!(
+                                "not used by law = \"{}\" (remove it; its coefficients are {})",
+                                law.as_str(),
+                                own_keys()
+                            ),
                         ));
                     }
                 }
-                let d = QuadraticAero::default();
-                let law = QuadraticAero {
-                    air_density: self.air_density.unwrap_or(d.air_density),
-                    cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
-                    cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
-                    cl_amplitude: self.cl_amplitude.unwrap_or(d.cl_amplitude),
-                    cop_leading: self.cop_leading.unwrap_or(d.cop_leading),
-                    rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
-                };
-                law.validate()?;
-                Ok(AeroLaw::Quadratic(law))
             }
         }
+        if law == AeroLawName::Quadratic {
+            let d = QuadraticAero::default();
+            let law = QuadraticAero {
+                air_density: self.air_density.unwrap_or(d.air_density),
+                cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
+                cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
+                cl_amplitude: self.cl_amplitude.unwrap_or(d.cl_amplitude),
+                cop_leading: self.cop_leading.unwrap_or(d.cop_leading),
+                rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
+            };
+            law.validate()?;
+            return Ok(AeroLaw::Quadratic(law));
+        }
+        let d = UnsteadyAero::default();
+        let law = UnsteadyAero {
+            air_density: self.air_density.unwrap_or(d.air_density),
+            kinematic_viscosity: self.kinematic_viscosity.unwrap_or(d.kinematic_viscosity),
+            added_mass: self.added_mass.unwrap_or(d.added_mass),
+            cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
+            cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
+            skin_friction: self.skin_friction.unwrap_or(d.skin_friction),
+            translational_lift: self.translational_lift.unwrap_or(d.translational_lift),
+            rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
+            rotational_damping: self.rotational_damping.unwrap_or(d.rotational_damping),
+            rotational_damping_quadratic: self
+                .rotational_damping_quadratic
+                .unwrap_or(d.rotational_damping_quadratic),
+            buoyancy: self.buoyancy.unwrap_or(d.buoyancy),
+            solid_density: self.solid_density.unwrap_or(d.solid_density),
+        };
+        law.validate()?;
+        Ok(AeroLaw::Unsteady(law))
     }
 }
 
@@ -564,11 +727,14 @@ impl LeafSpec {
                     t.alpha_n.or(self.aero.alpha_n).unwrap_or_default(),
                     t.alpha_t.or(self.aero.alpha_t).unwrap_or_default(),
                 ),
-                AeroLaw::Quadratic(_) => {
+                law => {
                     if t.alpha_n.is_some() || t.alpha_t.is_some() {
                         return Err(ModelError {
                             item: format!("triangle[{k}].alpha_n"),
-                            reason: "per-triangle α is not used by law = \"quadratic\"".to_string(),
+                            reason: format!(
+                                "per-triangle α is not used by law = \"{}\"",
+                                law.name()
+                            ),
                         });
                     }
                     (0.0, 0.0)
@@ -591,6 +757,13 @@ impl LeafSpec {
             aero,
             wind: self.wind.clone(),
             gravity: Vector3::from(self.gravity),
+            rigid: if self.rigid {
+                vec![RigidGroup {
+                    members: (0..n).collect(),
+                }]
+            } else {
+                Vec::new()
+            },
             ..Default::default()
         })
     }

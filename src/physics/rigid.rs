@@ -41,7 +41,25 @@ type V3 = Vector3<f64>;
 /// rigid-body acceleration under the body's summed force and torque (see
 /// the module documentation). Called with forces in `force`, before the
 /// division by mass, so that the caller's aᵢ = fᵢ/mᵢ gives the rigid value.
-pub fn accelerations(bodies: &[RigidBody], x: &[V3], v: &[V3], force: &mut [V3]) {
+///
+/// With added mass (`added` holds each particle's tensor Mᵢ; empty: none),
+/// each member's inertia is Kᵢ = mᵢ I + Mᵢ and the body's acceleration
+/// (A, α) solves the 6 × 6 Newton–Euler system
+/// Σ Kᵢ aᵢ = Σ fᵢ, Σ rᵢ × Kᵢ aᵢ = Σ rᵢ × fᵢ with
+/// aᵢ = A + α × rᵢ + ω × (ω × rᵢ) — which reduces to the equations above
+/// when every Mᵢ is 0 (Σ mᵢ rᵢ = 0 about the centre of mass). The member's
+/// force is then replaced by Kᵢ aᵢ, so the caller's per-particle solve
+/// Kᵢ⁻¹ (Kᵢ aᵢ) gives the rigid value.
+pub fn accelerations(
+    bodies: &[RigidBody],
+    x: &[V3],
+    v: &[V3],
+    force: &mut [V3],
+    added: &[Matrix3<f64>],
+) {
+    if !added.is_empty() {
+        return accelerations_with_added_mass(bodies, x, v, force, added);
+    }
     for body in bodies {
         let (c, vc) = body.centre(x, v);
         let mut f = V3::zeros();
@@ -69,18 +87,112 @@ pub fn accelerations(bodies: &[RigidBody], x: &[V3], v: &[V3], force: &mut [V3])
     }
 }
 
+fn skew(r: &V3) -> Matrix3<f64> {
+    Matrix3::new(0.0, -r.z, r.y, r.z, 0.0, -r.x, -r.y, r.x, 0.0)
+}
+
+fn accelerations_with_added_mass(
+    bodies: &[RigidBody],
+    x: &[V3],
+    v: &[V3],
+    force: &mut [V3],
+    added: &[Matrix3<f64>],
+) {
+    for body in bodies {
+        let (c, vc) = body.centre(x, v);
+        let mut l = V3::zeros();
+        let mut inertia = Matrix3::zeros();
+        for (&i, &m) in body.members.iter().zip(&body.member_mass) {
+            let r = x[i] - c;
+            l += r.cross(&(v[i] - vc)) * m;
+            inertia += (Matrix3::identity() * r.norm_squared() - r * r.transpose()) * m;
+        }
+        let omega = inertia.try_inverse().unwrap_or_else(Matrix3::zeros) * l;
+        // Blocks of [ΣK, −ΣK[r]×; Σ[r]×K, −Σ[r]×K[r]×] (A, α) = rhs.
+        let mut system = nalgebra::Matrix6::<f64>::zeros();
+        let mut rhs = nalgebra::Vector6::<f64>::zeros();
+        for (&i, &m) in body.members.iter().zip(&body.member_mass) {
+            let r = x[i] - c;
+            let k = Matrix3::identity() * m + added[i];
+            let rx = skew(&r);
+            let centripetal = omega.cross(&omega.cross(&r));
+            let kc = k * centripetal;
+            let blocks = [k, -(k * rx), rx * k, -(rx * k * rx)];
+            for (b, blk) in blocks.iter().enumerate() {
+                let (row, col) = (3 * (b / 2), 3 * (b % 2));
+                for p in 0..3 {
+                    for q in 0..3 {
+                        system[(row + p, col + q)] += blk[(p, q)];
+                    }
+                }
+            }
+            let (f, tau) = (force[i] - kc, r.cross(&force[i]) - r.cross(&kc));
+            for p in 0..3 {
+                rhs[p] += f[p];
+                rhs[3 + p] += tau[p];
+            }
+        }
+        // Members off the rigid shape only by round-off keep the system
+        // invertible; a singular one means a non-finite state, which the
+        // divergence check reports.
+        let solution = system
+            .lu()
+            .solve(&rhs)
+            .unwrap_or_else(nalgebra::Vector6::zeros);
+        let lin = V3::new(solution[0], solution[1], solution[2]);
+        let alpha = V3::new(solution[3], solution[4], solution[5]);
+        for (&i, &m) in body.members.iter().zip(&body.member_mass) {
+            let r = x[i] - c;
+            let a = lin + alpha.cross(&r) + omega.cross(&omega.cross(&r));
+            force[i] = (Matrix3::identity() * m + added[i]) * a;
+        }
+    }
+}
+
 /// The after-step pass that puts every body's members back on its rigid
 /// shape; holds each body's last rotation to warm-start the fit.
 #[derive(Clone, Debug)]
 pub struct RigidProjector {
     rotation: Vec<UnitQuaternion<f64>>,
+    /// Whether a projection has run (the first one finds its own start).
+    started: bool,
+}
+
+/// Of the 24 rotations of a cube (as products of quarter turns about x, y
+/// and z), the one that maximises tr(Rᵀ A), identity on a tie: within 63°
+/// of any rotation, where the Newton fit of [`pose::best_rotation`]
+/// converges. A body released turned far from its rest layout (a plate
+/// dropped on edge at a random yaw) would otherwise be fitted from the
+/// identity, half a turn away, and could land on the wrong extremum.
+fn cube_start(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
+    let quarter = std::f64::consts::FRAC_PI_2;
+    let mut best = (a.trace(), UnitQuaternion::identity());
+    for i in 0..4 {
+        for j in 0..4 {
+            for k in 0..4 {
+                let q = UnitQuaternion::from_euler_angles(
+                    i as f64 * quarter,
+                    j as f64 * quarter,
+                    k as f64 * quarter,
+                );
+                let f = (q.to_rotation_matrix().matrix().transpose() * a).trace();
+                if f > best.0 * (1.0 + 1e-12) + 1e-300 {
+                    best = (f, q);
+                }
+            }
+        }
+    }
+    best.1
 }
 
 impl RigidProjector {
-    /// A projector for `bodies`, starting from the rest orientation.
+    /// A projector for `bodies`; its first projection finds each body's
+    /// orientation from the nearest of the 24 rotations of a cube,
+    /// later ones start from the last.
     pub fn new(bodies: &[RigidBody]) -> RigidProjector {
         RigidProjector {
             rotation: vec![UnitQuaternion::identity(); bodies.len()],
+            started: false,
         }
     }
 
@@ -93,6 +205,8 @@ impl RigidProjector {
     /// Makes every body exactly rigid again, keeping its centre of mass,
     /// momentum and angular momentum (see the module documentation).
     pub fn project(&mut self, bodies: &[RigidBody], state: &mut State) {
+        let first = !self.started;
+        self.started = true;
         for (body, rotation) in bodies.iter().zip(&mut self.rotation) {
             let (x, v) = (&mut state.position, &mut state.velocity);
             let (c, vc) = body.centre(x, v);
@@ -106,6 +220,9 @@ impl RigidProjector {
                 .zip(&body.offsets)
             {
                 a += (x[i] - c) * (b * m).transpose();
+            }
+            if first {
+                *rotation = cube_start(&a);
             }
             let q = pose::best_rotation(&a, *rotation);
             *rotation = q;

@@ -44,11 +44,14 @@ pub struct StabilityEstimate {
     /// Damping ratio ζ of the top mode.
     pub zeta: f64,
     /// Largest drag rate γ of any particle, 1/s: α A / m under the linear
-    /// law; under the quadratic law its bound at the reference speed
-    /// ([`crate::physics::forces::quadratic::drag_rate`]).
+    /// law; under the quadratic and unsteady laws their bounds at the
+    /// reference speed ([`crate::physics::forces::quadratic::drag_rate`],
+    /// [`crate::physics::forces::unsteady::drag_rate`]).
     pub drag_rate: f64,
     /// The part of [`StabilityEstimate::drag_rate`] that the implicit
-    /// integrator treats explicitly (the quadratic law), 1/s; 0 otherwise.
+    /// integrator treats explicitly (the quadratic law, and the unsteady
+    /// law but for its added mass, which the implicit matrix holds), 1/s;
+    /// 0 otherwise.
     pub explicit_drag_rate: f64,
     /// The spring with the largest k (1/mᵢ + 1/mⱼ).
     pub stiffest_spring: Option<usize>,
@@ -277,7 +280,10 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     // it moves no scheme's spring limit by more than ~1 %, well inside
     // AUTO_SAFETY; its own limit is the drag bound.
     let air = air_damping(model);
-    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model);
+    // Only the model's own law gives a non-zero rate. The unsteady law's
+    // bound divides by each particle's effective mass, added mass included.
+    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model)
+        + crate::physics::forces::unsteady::drag_rate(model);
     let mut c_eff = 0.0;
     for (s, &(i, j, dir, _)) in model.springs.iter().zip(&dirs) {
         let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];

@@ -116,9 +116,10 @@ impl Terms {
                     crate::physics::model::AeroLaw::Linear => {
                         count(model.triangles.len(), "triangles")
                     }
-                    crate::physics::model::AeroLaw::Quadratic(_) => format!(
-                        "{}, quadratic law",
-                        count(model.triangles.len(), "triangles")
+                    law => format!(
+                        "{}, {} law",
+                        count(model.triangles.len(), "triangles"),
+                        law.name()
                     ),
                 },
             },

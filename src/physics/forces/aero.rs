@@ -1,10 +1,12 @@
 //! The per-triangle aerodynamics of eq. 6–10: the paper's linear law, or
-//! the quadratic law of [`super::quadratic`] where the model chooses it.
+//! the quadratic law of [`super::quadratic`] or the unsteady law of
+//! [`super::unsteady`] where the model chooses it.
 
 use super::quadratic::quadratic_forces;
 use super::surfaces::surface;
+use super::unsteady::unsteady_forces;
 use crate::physics::model::{AeroLaw, Model};
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 
 type V3 = Vector3<f64>;
 
@@ -24,7 +26,9 @@ type V3 = Vector3<f64>;
 ///
 /// `wind` holds G at every particle, or is `None` in still air. A model
 /// with [`AeroLaw::Quadratic`] gets that law instead
-/// ([`quadratic_forces`]).
+/// ([`quadratic_forces`]); with [`AeroLaw::Unsteady`], that law's
+/// velocity-dependent forces ([`unsteady_forces`]; its added mass is not a
+/// force but a term of Newton's law, see [`triangle_aero_solved`]).
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
     triangle_aero_intact(model, x, v, wind, &[], force);
 }
@@ -41,8 +45,32 @@ pub fn triangle_aero_intact(
     torn: &[bool],
     force: &mut [V3],
 ) {
-    if let AeroLaw::Quadratic(law) = &model.aero {
-        return quadratic_forces(law, model, x, v, wind, torn, force);
+    if matches!(model.aero, AeroLaw::Unsteady(_)) {
+        let mut added = vec![Matrix3::zeros(); model.len()];
+        return triangle_aero_solved(model, x, v, wind, torn, force, &mut added);
+    }
+    triangle_aero_solved(model, x, v, wind, torn, force, &mut [])
+}
+
+/// [`triangle_aero_intact`], and under the unsteady law each particle's
+/// added-mass tensor M_i = Σ m_k n nᵀ added into `added` (one per particle,
+/// zeroed by the caller; unused under the other laws), which Newton's law
+/// then solves for: (m_i I + M_i) a_i = f_i.
+pub fn triangle_aero_solved(
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+    added: &mut [Matrix3<f64>],
+) {
+    match &model.aero {
+        AeroLaw::Quadratic(law) => return quadratic_forces(law, model, x, v, wind, torn, force),
+        AeroLaw::Unsteady(law) => {
+            return unsteady_forces(law, model, x, v, wind, torn, force, added);
+        }
+        AeroLaw::Linear => {}
     }
     for (t, tri) in model.triangles.iter().enumerate() {
         let Some((big_n, n2)) = surface(t, tri, x, torn) else {

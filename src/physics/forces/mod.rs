@@ -11,18 +11,19 @@ pub mod quadratic;
 mod springs;
 mod surfaces;
 mod tears;
+pub mod unsteady;
 
-pub use aero::{triangle_aero, triangle_aero_intact};
+pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_solved};
 pub use drag::particle_drag;
 pub use gravity::gravity;
 pub use hinges::{MIN_HINGE_HEIGHT_RATIO, dihedral, fold_rate, hinge_rest, hinges};
 pub use springs::springs;
 pub use tears::{Tears, edge_springs, hinge_springs};
 
-use crate::physics::model::Model;
+use crate::physics::model::{AeroLaw, Model};
 use crate::physics::rigid;
 use crate::physics::terms::Terms;
-use nalgebra::Vector3;
+use nalgebra::{Matrix3, Vector3};
 use tears::tear_mask;
 
 type V3 = Vector3<f64>;
@@ -74,6 +75,9 @@ pub struct Forces {
     hinge_springs: Vec<[Option<usize>; 5]>,
     /// What broken springs have torn (empty until one breaks).
     torn: Tears,
+    /// Each particle's added-mass tensor M_i of the last evaluation, under
+    /// the unsteady law (empty otherwise).
+    added: Vec<Matrix3<f64>>,
 }
 
 impl Forces {
@@ -106,7 +110,19 @@ impl Forces {
                 Vec::new()
             },
             torn: Tears::default(),
+            added: if terms.aero && matches!(model.aero, AeroLaw::Unsteady(_)) {
+                vec![Matrix3::zeros(); model.len()]
+            } else {
+                Vec::new()
+            },
         }
+    }
+
+    /// Each particle's added-mass tensor M_i at the last force evaluation
+    /// (empty unless the model's law has added mass): Newton's law is then
+    /// (m_i I + M_i) a_i = f_i.
+    pub fn added_mass(&self) -> &[Matrix3<f64>] {
+        &self.added
     }
 
     /// Marks as torn the triangles with a broken edge spring (`alive[s]`
@@ -172,17 +188,24 @@ impl Forces {
         }
         // Moved out for the call (no allocation): the wind borrows self.
         let torn = std::mem::take(&mut self.torn.triangles);
+        let mut added = std::mem::take(&mut self.added);
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
-            triangle_aero_intact(model, x, v, wind, &torn, force);
+            added.fill(Matrix3::zeros());
+            triangle_aero_solved(model, x, v, wind, &torn, force, &mut added);
         }
         if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
         self.torn.triangles = torn;
+        self.added = added;
     }
 
     /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.
+    /// Under the unsteady law, (m_i I + M_i) a_i = F_i with each particle's
+    /// added-mass tensor M_i, solved per particle (a 3 × 3 system) or per
+    /// rigid body (6 × 6), never lagged: lagged, added mass heavier than
+    /// the body would make every explicit step unstable.
     pub fn acceleration(
         &mut self,
         model: &Model,
@@ -194,14 +217,27 @@ impl Forces {
     ) {
         self.total(model, x, v, alive, t, acc);
         if self.terms.rigid {
-            rigid::accelerations(&model.rigid, x, v, acc);
+            rigid::accelerations(&model.rigid, x, v, acc, &self.added);
         }
-        for (a, &w) in acc.iter_mut().zip(&model.inv_mass) {
-            *a *= w;
+        if self.added.is_empty() {
+            for (a, &w) in acc.iter_mut().zip(&model.inv_mass) {
+                *a *= w;
+            }
+            return;
+        }
+        for ((a, &w), added) in acc.iter_mut().zip(&model.inv_mass).zip(&self.added) {
+            if w == 0.0 {
+                *a = V3::zeros();
+            } else if added.trace() > 0.0 {
+                *a = solve_mass(1.0 / w, added, a);
+            } else {
+                *a *= w;
+            }
         }
     }
 
-    /// Each force term on particle `p` separately.
+    /// Each force term on particle `p` separately (the unsteady law's
+    /// velocity-dependent forces as its aero term).
     pub fn terms_on(
         &mut self,
         model: &Model,
@@ -232,5 +268,18 @@ impl Forces {
         };
         self.scratch = scratch;
         terms
+    }
+}
+
+/// Solves (m I + M) a = f for a symmetric positive semi-definite added-mass
+/// tensor M (m > 0, so the matrix is positive definite): by cofactors,
+/// exact to round-off.
+#[inline]
+pub fn solve_mass(m: f64, added: &Matrix3<f64>, f: &V3) -> V3 {
+    let k = Matrix3::identity() * m + added;
+    match k.try_inverse() {
+        Some(inv) => inv * f,
+        // Only a non-finite M gets here; the divergence check reports it.
+        None => f / m,
     }
 }

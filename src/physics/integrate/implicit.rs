@@ -75,9 +75,10 @@ impl ImplicitScratch {
         h: f64,
         f0: &[V3],
         torn: &Tears,
+        added: &[Matrix3<f64>],
     ) -> Result<(), (usize, f64)> {
         let imp = self;
-        imp.linearise(model, s, h, torn);
+        imp.linearise(model, s, h, torn, added);
         // b = h (f0 + h K v0), K = ∂f/∂x = −Σ S_k (see linearise).
         let b = &mut imp.b;
         for (bi, f) in b.iter_mut().zip(f0) {
@@ -126,7 +127,16 @@ impl ImplicitScratch {
         }
     }
 
-    fn linearise(&mut self, model: &Model, s: &State, h: f64, torn: &Tears) {
+    /// `added`: each particle's added-mass tensor (empty: none), which joins
+    /// the mass on the diagonal (backward Euler on (M + M_a) v̇ = f).
+    fn linearise(
+        &mut self,
+        model: &Model,
+        s: &State,
+        h: f64,
+        torn: &Tears,
+        added: &[Matrix3<f64>],
+    ) {
         for (k, spring) in model.springs.iter().enumerate() {
             let d = s.position[spring.i] - s.position[spring.j];
             let l = d.norm();
@@ -163,6 +173,9 @@ impl ImplicitScratch {
         }
         for (i, blk) in self.particle_blocks.iter_mut().enumerate() {
             *blk = Matrix3::identity() * (model.mass[i] + h * model.particle_drag[i]);
+            if let Some(m) = added.get(i) {
+                *blk += m;
+            }
         }
         for (t, tri) in model.triangles.iter().enumerate() {
             if torn.triangles.get(t).copied().unwrap_or(false) {

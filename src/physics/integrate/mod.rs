@@ -292,13 +292,20 @@ impl Simulator {
             s.time,
             &mut self.acc,
         );
-        imp.step(model, s, h, &self.acc, self.forces.torn())
-            .map_err(|(iterations, residual)| SimError::SolverFailed {
-                step: self.steps,
-                time: s.time,
-                iterations,
-                residual,
-            })
+        imp.step(
+            model,
+            s,
+            h,
+            &self.acc,
+            self.forces.torn(),
+            self.forces.added_mass(),
+        )
+        .map_err(|(iterations, residual)| SimError::SolverFailed {
+            step: self.steps,
+            time: s.time,
+            iterations,
+            residual,
+        })
     }
 
     /// Non-finite or runaway values stop the run with a diagnosis. The

@@ -1,7 +1,8 @@
 //! Which aerodynamic law a model's triangles obey, and the coefficients of
-//! the quadratic law with their sources. The forces themselves are in
-//! [`crate::physics::forces`] (the linear law of eq. 9–10 and
-//! [`crate::physics::forces::quadratic`]).
+//! the quadratic and unsteady laws with their sources. The forces themselves
+//! are in [`crate::physics::forces`] (the linear law of eq. 9–10,
+//! [`crate::physics::forces::quadratic`] and
+//! [`crate::physics::forces::unsteady`]).
 
 use super::error::ModelError;
 use serde::{Deserialize, Serialize};
@@ -16,6 +17,22 @@ pub enum AeroLaw {
     /// Quadratic drag with lift and a moving centre of pressure, per
     /// triangle ([`crate::physics::forces::quadratic`]); the triangles' α must then be 0.
     Quadratic(QuadraticAero),
+    /// Unsteady thin-plate aerodynamics per triangle: added mass with its
+    /// fluid impulse, translational and rotational circulation, rotational
+    /// damping, drag by angle of attack with skin friction
+    /// ([`crate::physics::forces::unsteady`]); the triangles' α must be 0.
+    Unsteady(UnsteadyAero),
+}
+
+impl AeroLaw {
+    /// The name leaf and scene files give the law (`[aero] law = "..."`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            AeroLaw::Linear => "linear",
+            AeroLaw::Quadratic(_) => "quadratic",
+            AeroLaw::Unsteady(_) => "unsteady",
+        }
+    }
 }
 
 /// Density of air at 20 °C and sea level, kg/m³.
@@ -179,5 +196,156 @@ impl QuadraticAero {
                 share * (3.0 * c + dcd.hypot(dcl)) + c * shift * lever
             })
             .fold(0.0, f64::max)
+    }
+}
+
+/// Density of dry air at 20 °C and 101.325 kPa, kg/m³: the unsteady law's
+/// default (the quadratic law keeps its rounded [`AIR_DENSITY`]).
+pub const AIR_DENSITY_20C: f64 = 1.204;
+/// Kinematic viscosity of dry air at 20 °C, m²/s.
+pub const AIR_VISCOSITY_20C: f64 = 1.516e-5;
+
+/// The unsteady law's coefficients. Every one has a source in
+/// [`crate::physics::forces::unsteady`]'s module docs; one set serves every
+/// shape and size (the lengths the law needs come from the leaf's own
+/// geometry, [`crate::physics::model::SurfaceGeometry`]).
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+pub struct UnsteadyAero {
+    /// Fluid density ρ, kg/m³.
+    pub air_density: f64,
+    /// Kinematic viscosity ν of the fluid, m²/s (0: inviscid, no skin friction).
+    pub kinematic_viscosity: f64,
+    /// Factor on the potential-flow added mass of the plate (1 = the
+    /// potential-flow value; 0 switches added mass off).
+    pub added_mass: f64,
+    /// C_D face-on (α = π/2).
+    pub cd_normal: f64,
+    /// Pressure (form) drag coefficient edge-on (α = 0), on top of skin
+    /// friction.
+    pub cd_parallel: f64,
+    /// Factor on laminar (Blasius) skin friction, 1.328/√Re on each face.
+    pub skin_friction: f64,
+    /// C_T of the translational circulation: C_L = C_T sin 2α.
+    pub translational_lift: f64,
+    /// C_R of the rotational circulation Γ = ½ C_R c² ω.
+    pub rotational_lift: f64,
+    /// μ₁ of the rotational damping torque (μ₁ |v| + μ₂ a |ω|) ω per unit
+    /// (π/2) ρ a² A.
+    pub rotational_damping: f64,
+    /// μ₂ of the rotational damping torque (on top of what drag on each
+    /// triangle's own velocity already damps).
+    pub rotational_damping_quadratic: f64,
+    /// Buoyancy: an upward force ρ (m/ρ_s) g on every particle.
+    pub buoyancy: bool,
+    /// Density of the leaf's material ρ_s for buoyancy, kg/m³.
+    pub solid_density: f64,
+}
+
+/// Default C_D face-on: APW 2005's A + B = 2.4 (docs/falling-plates.md,
+/// "APW quasi-steady model").
+pub const UNSTEADY_CD_NORMAL: f64 = 2.4;
+/// Default form drag edge-on beyond skin friction: a paper sheet is
+/// 1/1000 as thick as it is wide, so none (APW's 0.4 is for plates 1/8
+/// thick).
+pub const UNSTEADY_CD_PARALLEL: f64 = 0.0;
+/// Default C_T: APW 2005's 1.2.
+pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 1.2;
+/// Default C_R: APW 2005's π.
+pub const UNSTEADY_ROTATIONAL_LIFT: f64 = std::f64::consts::PI;
+/// Default μ₁: APW 2005's 0.2.
+pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.2;
+/// Default μ₂ beyond drag on each triangle's own velocity: none (that drag
+/// already gives APW's μ₂ = 0.2; see [`crate::physics::forces::unsteady`]).
+pub const UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC: f64 = 0.0;
+/// Density of paper, kg/m³ (70 g/m² paper is 69 µm thick:
+/// docs/falling-plates.md, "Measured regimes").
+pub const PAPER_DENSITY: f64 = 1008.0;
+
+impl Default for UnsteadyAero {
+    fn default() -> Self {
+        UnsteadyAero {
+            air_density: AIR_DENSITY_20C,
+            kinematic_viscosity: AIR_VISCOSITY_20C,
+            added_mass: 1.0,
+            cd_normal: UNSTEADY_CD_NORMAL,
+            cd_parallel: UNSTEADY_CD_PARALLEL,
+            skin_friction: 1.0,
+            translational_lift: UNSTEADY_TRANSLATIONAL_LIFT,
+            rotational_lift: UNSTEADY_ROTATIONAL_LIFT,
+            rotational_damping: UNSTEADY_ROTATIONAL_DAMPING,
+            rotational_damping_quadratic: UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC,
+            buoyancy: false,
+            solid_density: PAPER_DENSITY,
+        }
+    }
+}
+
+impl UnsteadyAero {
+    /// The coefficients by name, as leaf files spell them.
+    pub fn coefficients(&self) -> [(&'static str, f64); 11] {
+        [
+            ("air_density", self.air_density),
+            ("kinematic_viscosity", self.kinematic_viscosity),
+            ("added_mass", self.added_mass),
+            ("cd_normal", self.cd_normal),
+            ("cd_parallel", self.cd_parallel),
+            ("skin_friction", self.skin_friction),
+            ("translational_lift", self.translational_lift),
+            ("rotational_lift", self.rotational_lift),
+            ("rotational_damping", self.rotational_damping),
+            (
+                "rotational_damping_quadratic",
+                self.rotational_damping_quadratic,
+            ),
+            ("solid_density", self.solid_density),
+        ]
+    }
+
+    /// Every coefficient finite and in its physical range; errors name the
+    /// field as `aero.<name>`.
+    pub fn validate(&self) -> Result<(), ModelError> {
+        let err = |name: &str, reason: String| ModelError {
+            item: format!("aero.{name}"),
+            reason,
+        };
+        for (name, value) in self.coefficients() {
+            if !value.is_finite() {
+                return Err(err(name, format!("must be a finite number, got {value}")));
+            }
+            if value < 0.0 {
+                return Err(err(name, format!("must be ≥ 0, got {value}")));
+            }
+        }
+        for (name, value, unit) in [
+            ("air_density", self.air_density, "kg/m³"),
+            ("solid_density", self.solid_density, "kg/m³"),
+            ("cd_normal", self.cd_normal, ""),
+        ] {
+            if value <= 0.0 {
+                return Err(err(name, format!("must be > 0 {unit}, got {value}")));
+            }
+        }
+        // In-plane drag C_D∥ + (C_D⊥ − C_D∥ − 2C_T) sin²α must stay ≥ 0 or
+        // the air would push a sliding plate forwards.
+        if 2.0 * self.translational_lift > self.cd_normal {
+            return Err(err(
+                "translational_lift",
+                format!(
+                    "must be at most cd_normal/2 = {} (larger lift makes the in-plane drag negative), got {}",
+                    0.5 * self.cd_normal,
+                    self.translational_lift
+                ),
+            ));
+        }
+        // Something must resist an edge-on fall, or it would never end (and
+        // the stability estimate would have no speed bound).
+        if self.cd_parallel == 0.0 && (self.skin_friction == 0.0 || self.kinematic_viscosity == 0.0)
+        {
+            return Err(err(
+                "cd_parallel",
+                "must be > 0 when there is no skin friction (kinematic_viscosity or skin_friction is 0): nothing would resist an edge-on fall".to_string(),
+            ));
+        }
+        Ok(())
     }
 }

@@ -11,15 +11,23 @@ mod elements;
 mod error;
 mod ground;
 mod rigid_body;
+mod surface_geometry;
 
 pub use aero_law::{
-    AIR_DENSITY, APW_ROTATIONAL_LIFT, AeroLaw, CD_NORMAL, CD_PARALLEL, CL_AMPLITUDE, COP_LEADING,
-    QuadraticAero, ROTATIONAL_LIFT,
+    AIR_DENSITY, AIR_DENSITY_20C, AIR_VISCOSITY_20C, APW_ROTATIONAL_LIFT, AeroLaw, CD_NORMAL,
+    CD_PARALLEL, CL_AMPLITUDE, COP_LEADING, PAPER_DENSITY, QuadraticAero, ROTATIONAL_LIFT,
+    UNSTEADY_CD_NORMAL, UNSTEADY_CD_PARALLEL, UNSTEADY_ROTATIONAL_DAMPING,
+    UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC, UNSTEADY_ROTATIONAL_LIFT, UNSTEADY_TRANSLATIONAL_LIFT,
+    UnsteadyAero,
 };
 pub use elements::{DEGENERATE_TRIANGLE_RATIO, Hinge, Spring, Triangle};
 pub use error::ModelError;
 pub use ground::Ground;
 pub use rigid_body::{MIN_INERTIA_RATIO, RigidBody, RigidGroup, inertia_tensor};
+pub use surface_geometry::{
+    ADDED_MASS_EXPONENT, ADDED_MASS_PREFACTOR, CHORD_SAMPLES, SurfaceGeometry, plates,
+    surface_geometry,
+};
 
 use crate::physics::field::WindField;
 use nalgebra::Vector3;
@@ -60,6 +68,9 @@ pub struct Model {
     pub ground: Option<Ground>,
     /// Particle sets moved as rigid bodies (scenes).
     pub rigid: Vec<RigidBody>,
+    /// Under the unsteady law, each triangle's share of its plate (added
+    /// mass, chords), measured on the rest shape; empty under the others.
+    pub surfaces: Vec<SurfaceGeometry>,
 }
 
 /// The raw parts of a model, before validation.
@@ -273,16 +284,23 @@ impl Model {
         for (axis, value) in parts.gravity.iter().enumerate() {
             finite(&format!("gravity[{axis}]"), *value)?;
         }
-        if let AeroLaw::Quadratic(law) = &parts.aero {
-            law.validate()?;
-            // The quadratic law replaces the linear one: leftover α would be
-            // ignored by the forces yet damp the implicit step and the
-            // stability estimate.
+        match &parts.aero {
+            AeroLaw::Linear => {}
+            AeroLaw::Quadratic(law) => law.validate()?,
+            AeroLaw::Unsteady(law) => law.validate()?,
+        }
+        if parts.aero != AeroLaw::Linear {
+            // These laws replace the linear one: leftover α would be ignored
+            // by the forces yet damp the implicit step and the stability
+            // estimate.
             for (t, tri) in parts.triangles.iter().enumerate() {
                 if tri.alpha_n != 0.0 || tri.alpha_t != 0.0 {
                     return Err(err(
                         format!("triangle[{t}].alpha_n"),
-                        "the quadratic aerodynamic law uses no αⁿ, αᵗ: they must be 0",
+                        format!(
+                            "the {} aerodynamic law uses no αⁿ, αᵗ: they must be 0",
+                            parts.aero.name()
+                        ),
                     ));
                 }
             }
@@ -308,6 +326,12 @@ impl Model {
             }
             rigid.push(body);
         }
+        let surfaces = if matches!(parts.aero, AeroLaw::Unsteady(_)) {
+            let corners: Vec<[usize; 3]> = parts.triangles.iter().map(|t| t.corners).collect();
+            surface_geometry(&parts.rest_position, &corners)
+        } else {
+            Vec::new()
+        };
         let inv_mass = parts
             .mass
             .iter()
@@ -328,6 +352,7 @@ impl Model {
             gravity: parts.gravity,
             ground: parts.ground,
             rigid,
+            surfaces,
         })
     }
 

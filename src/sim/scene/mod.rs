@@ -613,9 +613,12 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
         return Err(ctx.err("(document)", "the scene has no objects"));
     }
 
-    if let (AeroLaw::Quadratic(_), Some(first)) = (&b.parts.aero, &b.aero_from) {
+    if let (AeroLaw::Quadratic(_) | AeroLaw::Unsteady(_), Some(first)) =
+        (&b.parts.aero, &b.aero_from)
+    {
         // Rigid bodies and sheets carry linear-law coefficients; under the
-        // quadratic law they would be silently ignored, so say so instead.
+        // quadratic or unsteady law they would be silently ignored, so say
+        // so instead.
         if let Some(t) = b
             .parts
             .triangles
@@ -625,7 +628,8 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
             return Err(ctx.err(
                 b.triangle_owner[t].clone(),
                 format!(
-                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the quadratic law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)"
+                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the {} law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)",
+                    b.parts.aero.name()
                 ),
             ));
         }
@@ -1210,8 +1214,5 @@ pub fn default_out_dir(scene: &Scene) -> PathBuf {
 
 /// The name of an aerodynamic law as leaf files spell it.
 fn law_name(law: &AeroLaw) -> &'static str {
-    match law {
-        AeroLaw::Linear => "linear",
-        AeroLaw::Quadratic(_) => "quadratic",
-    }
+    law.name()
 }

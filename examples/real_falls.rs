@@ -1,0 +1,98 @@
+//! The real-falls experiment (Howison, Hughes & Iida 2020) in leafmagic:
+//! paper squares of each size bin's median side, 70 g/m², released flat
+//! and on edge, filmed and labelled as the experiment did, side by side
+//! with the real falls in tests/data/real-falls/squares (docs/real-falls.md).
+//!
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME KEY=VALUE ...]
+
+use leafmagic::leaf::{AeroLawName, AeroSpec};
+use leafmagic::sim::real_falls::{self, BinStats};
+use std::path::Path;
+
+fn main() {
+    let mut releases = 12;
+    let mut seed = 1;
+    let mut aero = AeroSpec::unsteady();
+    let mut args = std::env::args().skip(1);
+    let mut extra = Vec::new();
+    while let Some(a) = args.next() {
+        match a.as_str() {
+            "--releases" => {
+                releases = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--releases N")
+            }
+            "--seed" => seed = args.next().and_then(|v| v.parse().ok()).expect("--seed S"),
+            "--law" => {
+                let law: AeroLawName = args.next().expect("--law NAME").parse().expect("a law");
+                aero = if law == AeroLawName::Linear {
+                    AeroSpec::linear(0.47, 0.047)
+                } else {
+                    AeroSpec::named(law)
+                };
+            }
+            kv => extra.push(kv.to_string()),
+        }
+    }
+    if !extra.is_empty() {
+        // KEY=VALUE pairs go through the leaf-file parser, so they are
+        // checked exactly as a leaf file's [aero] table is.
+        let mut table = toml::to_string(&aero).expect("serialises");
+        for kv in &extra {
+            table.push_str(kv);
+            table.push('\n');
+        }
+        aero = toml::from_str(&table).unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
+    }
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
+    let real = real_falls::read_squares(&dir).expect("the real falls");
+    let t0 = std::time::Instant::now();
+    let cmp = real_falls::compare(&real, &aero, releases, seed).expect("the experiment runs");
+    let wall = t0.elapsed().as_secs_f64();
+    let law = toml::to_string(&real_falls::experiment_air(aero.clone()))
+        .unwrap()
+        .replace('\n', " ");
+    println!(
+        "real falls of 70 g/m² paper squares against leafmagic plates ({releases} releases per bin, seed {seed}; [aero] {law})"
+    );
+    println!();
+    println!(
+        "{:<9} {:>12} {:>12} {:>15} {:>15} {:>15} {:>15} {:>6}",
+        "side cm",
+        "real T:C:S",
+        "sim T:C:S",
+        "fT real/sim",
+        "v m/s real/sim",
+        "drift real/sim",
+        "Ω rad/s r/s",
+        "score"
+    );
+    let cell = |r: f64, s: f64, d: usize| format!("{r:.d$} / {s:.d$}");
+    let counts = |b: &BinStats| format!("{}:{}:{}", b.counts[0], b.counts[1], b.counts[2]);
+    for ((r, s), p) in cmp.real.iter().zip(&cmp.sim).zip(&cmp.parts) {
+        println!(
+            "{:<9.1} {:>12} {:>12} {:>15} {:>15} {:>15} {:>15} {:>6.2}",
+            r.side * 100.0,
+            counts(r),
+            counts(s),
+            cell(r.tumbling, s.tumbling, 2),
+            cell(r.descent, s.descent, 3),
+            cell(r.drift, s.drift, 2),
+            cell(r.omega, s.omega, 1),
+            p.iter().sum::<f64>()
+        );
+    }
+    let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;
+    println!();
+    println!(
+        "score {:.2} = fT {:.2} + v {:.2} + drift {:.2} + Ω {:.2} (mean over {} bins; {:.1} s wall)",
+        cmp.score(),
+        mean(0),
+        mean(1),
+        mean(2),
+        mean(3),
+        cmp.parts.len(),
+        wall
+    );
+}

@@ -1,0 +1,42 @@
+//! `plate`: writes a flat plate of paper as a leaf file (the falling-plate
+//! literature's uniform rigid plate, [`leafmagic::leaf::plates::plate`]).
+
+use super::args::PlateArgs;
+use anyhow::{Context, Result};
+use leafmagic::leaf::AeroLawName;
+use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::plates::plate as build_plate;
+
+/// Linear-law coefficients of a `--law linear` plate: the paper's
+/// prototypes' values (prototypes/leaf-a.toml).
+const LINEAR_ALPHA: (f64, f64) = (0.47, 0.047);
+
+/// `plate`: builds the plate, checks it makes a valid model and writes it
+/// (to `--out`, atomically, or to standard output).
+pub fn plate(args: PlateArgs) -> Result<()> {
+    let aero = match args.law {
+        AeroLawName::Linear => AeroSpec::linear(LINEAR_ALPHA.0, LINEAR_ALPHA.1),
+        law => AeroSpec::named(law),
+    };
+    let spec = build_plate(args.shape, args.size, args.aspect, args.areal_density, aero)?;
+    spec.model()
+        .with_context(|| format!("the plate {} is not a valid leaf", spec.name))?;
+    let text = spec.to_toml();
+    match &args.out {
+        Some(path) => {
+            leafmagic::util::io::write_atomic(path, text.as_bytes())
+                .with_context(|| format!("cannot write {}", path.display()))?;
+            let model = spec.model()?;
+            eprintln!(
+                "wrote {} ({}: {} particles, {} triangles, {:.3} g)",
+                path.display(),
+                spec.name,
+                model.len(),
+                model.triangles.len(),
+                model.total_mass() * 1e3
+            );
+        }
+        None => print!("{text}"),
+    }
+    Ok(())
+}

@@ -1,0 +1,746 @@
+//! The unsteady law for triangles: added mass with the fluid impulse that
+//! comes with it, circulation from translation and from rotation,
+//! rotational damping, drag by angle of attack with skin friction, and
+//! optional buoyancy. What each triangle needs to know about its plate is
+//! measured once ([`crate::physics::model::SurfaceGeometry`]).
+//!
+//! # Why
+//!
+//! The quasi-steady laws miss what makes real paper flutter and tumble
+//! (docs/real-falls.md): the air a plate sets moving (added mass, 0.2–0.6
+//! of a paper card's own), the torque that comes with it (the Munk moment,
+//! which is also what puts a thin aerofoil's centre of pressure at its
+//! quarter chord), the lift from the plate's own rotation that Andersen,
+//! Pesavento & Wang (2005, "APW") found dominant in flutter and tumble,
+//! and damping of the rotation.
+//!
+//! # Added mass as a fluid impulse
+//!
+//! Each corner k of a triangle carries a share m_k of its plate's added
+//! mass along the triangle's normal n (Lamb 1932, §§ 117–121: the flow's
+//! impulse is what the body gave it; for a flat plate it is normal to the
+//! plate). With w_k the corner's velocity relative to the air, the fluid
+//! impulse is p_k = m_k (n·w_k) n and the air pushes back with −dp_k/dt:
+//!
+//! f_k = −m_k (n·ẇ_k) n − m_k (ṅ·w_k) n − m_k (n·w_k) ṅ,
+//!
+//! the last two from the normal turning. The impulse sits at the corners,
+//! so the fluid's angular impulse is Σ x_k × p_k; its rate has, besides
+//! the moment of the f_k, the part −Σ ẋ_k × p_k, a couple on the triangle:
+//!
+//! C = −Σ_k w_k × p_k = −Q × n,  Q = Σ_k m_k (n·w_k) w_k.
+//!
+//! For a plate moving at an angle it is Kirchhoff's Munk moment
+//! −w × m_a (w·n) n, which turns the plate broadside. A couple in the
+//! plane of a triangle is applied as normal forces λ_k n on its corners,
+//! λ_k = ∇β_k·(n × C) (β_k the barycentric coordinates: Σλ_k = 0 and
+//! Σ x_k × λ_k n = C exactly). With the couple the law is energy-exact:
+//! the power of all these forces is −dT/dt, T = ½ Σ m_k (n·w_k)² the
+//! flow's kinetic energy, for any motion of the triangle, rigid or not —
+//! so added rotational inertia and the Munk moment follow without a
+//! rigid-body assumption (a test checks the identity).
+//!
+//! The first term, −m_k n nᵀ a_k, is the added mass proper: it is moved to
+//! the left of Newton's law and solved, (m_i I + M_i) a_i = f_i with
+//! M_i = Σ m_k n nᵀ over the triangles at particle i — a 3 × 3 system per
+//! particle ([`super::Forces::acceleration`]), or the 6 × 6 of a rigid
+//! body ([`crate::physics::rigid`]). Lagged explicitly it would be
+//! unstable for a body lighter than its added mass. The wind's own
+//! acceleration (the force an accelerating stream puts on a body at rest)
+//! is left out: the impulse is written with the relative velocity of a
+//! steady wind.
+//!
+//! # Circulation, drag, damping
+//!
+//! With u the air's velocity relative to the triangle (means over its
+//! corners), A its area, q = u·n and α its angle of attack (sin α = |q|/|u|):
+//!
+//! - drag and translational lift, APW's C_D(α) = C_D∥ cos²α + C_D⊥ sin²α
+//!   and translational circulation C_L = C_T sin 2α (APW 2005; Wang, Birch
+//!   & Dickinson 2004), F = ½ ρ A |u| [(C_D∥ + (C_D⊥ − C_D∥ − 2C_T) q²/|u|²) u
+//!   + 2 C_T q n], shared equally by the corners;
+//! - C_D∥ = `cd_parallel` + skin friction: laminar Blasius friction,
+//!   1.328/√Re on each face, Re = |u∥| c∥/ν on the plate's chord c∥ along
+//!   the in-plane flow (Schlichting, *Boundary-Layer Theory*, ch. 7). A
+//!   paper sheet is a thousandth as thick as it is wide, so `cd_parallel`
+//!   (form drag edge-on) defaults to 0 where APW's 0.4 was fitted to plates
+//!   an eighth as thick;
+//! - rotational circulation Γ = ½ C_R c² ω (APW, C_R = π), c the plate's
+//!   chord through the triangle across the rotation axis and ω = n × ṅ the
+//!   triangle's in-plane angular velocity: F = ½ ρ C_R c A (u × ω) at the
+//!   centroid, which does no work on a rigid plate;
+//! - rotational damping, APW's τ = (μ₁ + μ₂|ω̃|) ω̃ in their units, per area
+//!   τ = −(π/2) ρ A a² (μ₁ |u| + μ₂ a |ω|) ω with a = c/2, applied as a
+//!   couple. Drag on each triangle's own velocity already damps rotation
+//!   quadratically — for a 2-D plate of half-chord a, ρ C_D⊥ a⁴ ω|ω|/4 =
+//!   0.60 ρ a⁴ ω|ω| per span with C_D⊥ = 2.4, against APW's
+//!   π μ₂ ρ a⁴ ω|ω| = 0.63 ρ a⁴ ω|ω| — so μ₂ defaults to 0 and μ₁ to APW's
+//!   0.2;
+//! - buoyancy (optional): ρ (m_i/ρ_s) g upward on every particle.
+//!
+//! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
+//! table). One set serves every shape and size; the lengths come from each
+//! leaf's own geometry.
+
+use super::surfaces::surface;
+use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
+use nalgebra::{Matrix3, Vector3};
+use std::ops::AddAssign;
+
+type V3 = Vector3<f64>;
+
+/// Laminar skin friction on one face, 1.328/√Re (Blasius).
+pub const BLASIUS: f64 = 1.328;
+
+/// Reynolds numbers below this are taken as this in the skin-friction
+/// coefficient (Blasius' law is for Re ≫ 1; below, the force is already
+/// negligible).
+pub const MIN_REYNOLDS: f64 = 1.0;
+
+/// Factor on the fastest steady fall ([`edge_on_speed`]) that bounds the
+/// air speed of any triangle for the stability estimate (as the quadratic
+/// law's [`super::quadratic::SPEED_MARGIN`]).
+pub const SPEED_MARGIN: f64 = 2.0;
+
+/// Edge-on drag coefficient C_D∥ at in-plane relative speed `speed` along
+/// a chord `chord`: form drag plus skin friction on both faces.
+#[inline]
+pub fn cd_parallel(law: &UnsteadyAero, speed: f64, chord: f64) -> f64 {
+    let friction = if law.kinematic_viscosity > 0.0 && law.skin_friction > 0.0 {
+        let re = (speed * chord / law.kinematic_viscosity).max(MIN_REYNOLDS);
+        2.0 * BLASIUS * law.skin_friction / re.sqrt()
+    } else {
+        0.0
+    };
+    law.cd_parallel + friction
+}
+
+/// Adds the unsteady law's velocity-dependent forces on every triangle of
+/// `model` that is not torn (`torn[t]`; an empty mask tears none), and
+/// each corner's added-mass tensor m_k n nᵀ into `added` (which the caller
+/// zeroes). `wind` holds G at every particle, or is `None` in still air.
+/// See the module docs for the equations.
+#[allow(clippy::too_many_arguments)]
+pub fn unsteady_forces(
+    law: &UnsteadyAero,
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+    added: &mut [Matrix3<f64>],
+) {
+    let rho = law.air_density;
+    let half_rho = 0.5 * rho;
+    let rho_added = rho * law.added_mass;
+    let third = 1.0 / 3.0;
+    let half_pi_rho = std::f64::consts::FRAC_PI_2 * rho;
+    let damped = law.rotational_damping != 0.0 || law.rotational_damping_quadratic != 0.0;
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+            continue;
+        };
+        let geom: &SurfaceGeometry = &model.surfaces[t];
+        let corners = tri.corners;
+        let [a, b, c] = corners;
+        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
+        let doubled = n2.sqrt();
+        let n = big_n / doubled;
+        let area = 0.5 * doubled;
+        let w = match wind {
+            Some(g) => [v[a] - g[a], v[b] - g[b], v[c] - g[c]],
+            None => [v[a], v[b], v[c]],
+        };
+        // ṅ = (Ṅ − n (n·Ṅ))/|N|; the dual basis ∇β of the corners.
+        let n_dot_raw = (v[b] - v[a]).cross(&e2) + e1.cross(&(v[c] - v[a]));
+        let n_dot = (n_dot_raw - n * n.dot(&n_dot_raw)) / doubled;
+        let grad_b = e2.cross(&big_n) / n2;
+        let grad_c = big_n.cross(&e1) / n2;
+        let grads = [-(grad_b + grad_c), grad_b, grad_c];
+        let mut f = [V3::zeros(); 3];
+        // In-plane vector whose projection on the corner gradients gives
+        // the normal forces of the triangle's couples (n × C).
+        let mut couple_arm = V3::zeros();
+
+        if rho_added > 0.0 {
+            let mut q = V3::zeros();
+            let nn = n * n.transpose();
+            for k in 0..3 {
+                let m = rho_added * geom.added_mass[k];
+                let wn = n.dot(&w[k]);
+                f[k] -= (n * n_dot.dot(&w[k]) + n_dot * wn) * m;
+                q += w[k] * (m * wn);
+                added[corners[k]] += nn * m;
+            }
+            // Munk couple C = −Q × n: n × C = −Q∥.
+            couple_arm -= q - n * n.dot(&q);
+        }
+
+        let u = -(w[0] + w[1] + w[2]) * third;
+        let u2 = u.norm_squared();
+        let speed = u2.sqrt();
+        if u2 > f64::MIN_POSITIVE {
+            let qn = u.dot(&n);
+            let u_plane = u - n * qn;
+            let along = u_plane.norm();
+            let cd_par = if along > 0.0 {
+                let d = u_plane / along;
+                cd_parallel(law, along, geom.chord(d.dot(&grad_b), d.dot(&grad_c)))
+            } else {
+                law.cd_parallel
+            };
+            let k_normal = law.cd_normal - cd_par - 2.0 * law.translational_lift;
+            let drag = (u * (cd_par + k_normal * qn * qn / u2)
+                + n * (2.0 * law.translational_lift * qn))
+                * (half_rho * area * speed * third);
+            for fk in &mut f {
+                *fk += drag;
+            }
+        }
+
+        let omega = n.cross(&n_dot);
+        let w2 = omega.norm_squared();
+        if w2 > f64::MIN_POSITIVE && (law.rotational_lift != 0.0 || damped) {
+            let spin = w2.sqrt();
+            let across = n.cross(&omega) / spin;
+            let chord = geom.chord(across.dot(&grad_b), across.dot(&grad_c));
+            if law.rotational_lift != 0.0 {
+                // A plate of finite span s along the axis sheds tip
+                // vortices: Prandtl's lifting line scales a wing's
+                // circulation by AR/(AR + 2), AR = s/c (→ 1 in 2-D).
+                let axis = omega / spin;
+                let span = geom.chord(axis.dot(&grad_b), axis.dot(&grad_c));
+                let finite = span / (span + 2.0 * chord);
+                let lift = u.cross(&omega)
+                    * (half_rho * law.rotational_lift * finite * chord * area * third);
+                for fk in &mut f {
+                    *fk += lift;
+                }
+            }
+            if damped {
+                // τ = −(π/2) ρ A a² (μ₁|u| + μ₂ a |ω|) ω, a = c/2: n × τ.
+                let half = 0.5 * chord;
+                let rate = half_pi_rho
+                    * area
+                    * half
+                    * half
+                    * (law.rotational_damping * speed
+                        + law.rotational_damping_quadratic * half * spin);
+                couple_arm -= n.cross(&omega) * rate;
+            }
+        }
+
+        for k in 0..3 {
+            force[corners[k]] += f[k] + n * grads[k].dot(&couple_arm);
+        }
+    }
+    if law.buoyancy {
+        let lift = -model.gravity * (rho / law.solid_density);
+        for (fi, &m) in force.iter_mut().zip(&model.mass) {
+            *fi += lift * m;
+        }
+    }
+}
+
+/// The flow's kinetic energy T = ½ Σ m_k (n·w_k)² of every intact triangle's
+/// added mass, J (w relative to `wind`, or to still air): with the body's
+/// own kinetic energy, what the added-mass forces conserve.
+pub fn added_mass_energy(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>) -> f64 {
+    let AeroLaw::Unsteady(law) = &model.aero else {
+        return 0.0;
+    };
+    let rho_added = law.air_density * law.added_mass;
+    let mut energy = 0.0;
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let Some((big_n, n2)) = surface(t, tri, x, &[]) else {
+            continue;
+        };
+        let n = big_n / n2.sqrt();
+        for (k, &i) in tri.corners.iter().enumerate() {
+            let w = match wind {
+                Some(g) => v[i] - g[i],
+                None => v[i],
+            };
+            energy += 0.5 * rho_added * model.surfaces[t].added_mass[k] * n.dot(&w).powi(2);
+        }
+    }
+    energy
+}
+
+/// The plate's added mass at rest per plate (the sum of its corners'
+/// shares, times ρ and the law's factor), kg, in the order of
+/// [`crate::physics::model::plates`]; empty under the other laws.
+pub fn plate_added_masses(model: &Model) -> Vec<f64> {
+    let AeroLaw::Unsteady(law) = &model.aero else {
+        return Vec::new();
+    };
+    let corners: Vec<[usize; 3]> = model.triangles.iter().map(|t| t.corners).collect();
+    crate::physics::model::plates(&corners)
+        .iter()
+        .map(|plate| {
+            plate
+                .iter()
+                .map(|&t| model.surfaces[t].added_mass.iter().sum::<f64>())
+                .sum::<f64>()
+                * law.air_density
+                * law.added_mass
+        })
+        .collect()
+}
+
+/// Fastest steady fall of `model` under `law`: edge-on, its weight carried
+/// by in-plane drag alone, M g = ½ ρ A C_D∥(V) V², on the longest chord of
+/// any triangle (the least skin friction), m/s.
+pub fn edge_on_speed(law: &UnsteadyAero, model: &Model) -> f64 {
+    let area = model.surface_area();
+    if area <= 0.0 {
+        return 0.0;
+    }
+    let chord = model
+        .surfaces
+        .iter()
+        .flat_map(|g| g.chords.iter().copied())
+        .fold(0.0, f64::max);
+    let weight = model.total_mass() * model.gravity.norm();
+    let drag =
+        |speed: f64| 0.5 * law.air_density * area * cd_parallel(law, speed, chord) * speed * speed;
+    // Drag grows without bound with speed (at least as V^1.5): bisect.
+    let (mut lo, mut hi) = (0.0, 1.0);
+    while drag(hi) < weight && hi < 1e6 {
+        hi *= 2.0;
+    }
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if drag(mid) < weight {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    hi
+}
+
+/// Per-triangle bounds shared by the particle and rigid-body rates, at
+/// relative speed `v_ref` and rotation rate `omega_ref` (module docs for
+/// the terms).
+struct TriangleBounds {
+    /// ‖∂F/∂u‖ of drag, translational lift and skin friction, N·s/m.
+    drag: f64,
+    /// Rotational lift ½ρ C_R c A: multiplies (ω, |u|) in its derivatives.
+    rot_lift: f64,
+    /// Rotational damping (π/2) ρ A a²: its couple's scale, with a = c/2.
+    damping: f64,
+    /// a = half the longest chord, m.
+    half_chord: f64,
+    /// Each corner's added mass, kg.
+    added: [f64; 3],
+}
+
+fn triangle_bounds(
+    law: &UnsteadyAero,
+    geom: &SurfaceGeometry,
+    area: f64,
+    u_ref: f64,
+    q_ref: f64,
+) -> TriangleBounds {
+    let rho = law.air_density;
+    let chord_max = geom.chords.iter().copied().fold(0.0, f64::max);
+    let chord_min = geom
+        .chords
+        .iter()
+        .copied()
+        .filter(|&c| c > 0.0)
+        .fold(f64::INFINITY, f64::min)
+        .min(chord_max)
+        .max(1e-12);
+    // F = ½ρA [C_D∥ |u| u + k q² u/|u| + 2 C_T |u| q n], k = C_D⊥ − C_D∥ − 2C_T:
+    // ‖∂‖ ≤ ½ρA [(2 C_D∥ + 1.5 C_f) |u| + 4 |k| |q| + 2 C_T (|u| + |q|)]
+    // (skin friction C_f ∝ |u|^−½, so its force grows as |u|^1.5), with
+    // |u| ≤ u_ref and the normal part |q| ≤ q_ref.
+    let cf = cd_parallel(law, u_ref, chord_min) - law.cd_parallel;
+    let k = (law.cd_normal - law.cd_parallel - 2.0 * law.translational_lift).abs() + cf;
+    TriangleBounds {
+        drag: 0.5
+            * rho
+            * area
+            * ((2.0 * law.cd_parallel + 1.5 * cf) * u_ref
+                + 4.0 * k * q_ref
+                + 2.0 * law.translational_lift * (u_ref + q_ref)),
+        rot_lift: 0.5 * rho * law.rotational_lift * chord_max * area,
+        damping: std::f64::consts::FRAC_PI_2 * rho * area * (0.5 * chord_max).powi(2),
+        half_chord: 0.5 * chord_max,
+        added: std::array::from_fn(|k| rho * law.added_mass * geom.added_mass[k]),
+    }
+}
+
+/// Fastest face-on fall of `model` under `law`, M g = ½ ρ A C_D⊥ V², m/s:
+/// what bounds the normal part of the air's relative velocity.
+pub fn face_on_speed(law: &UnsteadyAero, model: &Model) -> f64 {
+    let area = model.surface_area();
+    if area <= 0.0 {
+        return 0.0;
+    }
+    (2.0 * model.total_mass() * model.gravity.norm() / (law.air_density * area * law.cd_normal))
+        .sqrt()
+}
+
+/// Largest rate of the explicit part of the unsteady law, 1/s (0 under the
+/// other laws): a Gershgorin bound at the rest shape, every relative speed
+/// up to v_ref = wind bound + [`SPEED_MARGIN`] × [`edge_on_speed`].
+///
+/// - A particle of no rigid body: ‖(m_i I + M_i)⁻¹ Σⱼ ∂f_i/∂v_j‖, term by
+///   term with every corner moving independently (|ṅ| ≤ v_ref Σ 1/h_j);
+///   forces along a triangle's normal are divided by the particle's
+///   effective mass along it, |(m I + M)⁻¹ n| (M its rest added-mass
+///   tensor, which a rigid motion only turns), in-plane ones by m — the
+///   added mass these terms scale with also slows the particle they push,
+///   so a very light leaf's rate stays bounded.
+/// - A rigid body: its members cannot move apart, so corner-by-corner
+///   bounds would be far too pessimistic (a fine plate's triangles are
+///   small, its rotation slow); its rate is measured instead
+///   ([`rigid_body_rate`]).
+///
+/// The normal part of any triangle's relative velocity is bounded by
+/// q_ref = wind bound + [`SPEED_MARGIN`] × [`face_on_speed`]: faster, the
+/// face-on drag exceeds the weight several times and brakes it within
+/// V/g (a test measures it in falls of plates and the recipes).
+pub fn drag_rate(model: &Model) -> f64 {
+    let (particles, bodies) = drag_rate_parts(model);
+    particles.max(bodies)
+}
+
+/// [`drag_rate`] split: (free particles, rigid bodies).
+pub fn drag_rate_parts(model: &Model) -> (f64, f64) {
+    let AeroLaw::Unsteady(law) = &model.aero else {
+        return (0.0, 0.0);
+    };
+    let wind = model.wind.speed_bound();
+    let v_ref = wind + SPEED_MARGIN * edge_on_speed(law, model);
+    let q_ref = wind + SPEED_MARGIN * face_on_speed(law, model);
+    let x = &model.rest_position;
+    let n = model.len();
+    let mut body_of: Vec<Option<usize>> = vec![None; n];
+    for (b, body) in model.rigid.iter().enumerate() {
+        for &i in &body.members {
+            body_of[i] = Some(b);
+        }
+    }
+    let mut tensor = vec![Matrix3::<f64>::zeros(); n];
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let [a, b, c] = tri.corners;
+        let nrm = (x[b] - x[a]).cross(&(x[c] - x[a])).normalize();
+        for (k, &i) in tri.corners.iter().enumerate() {
+            tensor[i] += nrm
+                * nrm.transpose()
+                * (law.air_density * law.added_mass * model.surfaces[t].added_mass[k]);
+        }
+    }
+    let mut normal_rate = vec![0.0; n];
+    let mut plane_rate = vec![0.0; n];
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let geom = &model.surfaces[t];
+        let [a, b, c] = tri.corners;
+        let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));
+        let doubled = big_n.norm();
+        let nrm = big_n / doubled;
+        let area = 0.5 * doubled;
+        let tb = triangle_bounds(law, geom, area, v_ref, q_ref);
+        let m_sum: f64 = tb.added.iter().sum();
+        let rigid = tri
+            .corners
+            .iter()
+            .map(|&i| body_of[i])
+            .reduce(|p, q| if p == q { p } else { None })
+            .flatten();
+        if rigid.is_some() {
+            continue;
+        }
+        let heights: [f64; 3] = std::array::from_fn(|k| {
+            let (j, l) = (tri.corners[(k + 1) % 3], tri.corners[(k + 2) % 3]);
+            doubled / (x[l] - x[j]).norm()
+        });
+        let s: f64 = heights.iter().map(|h| 1.0 / h).sum();
+        // |ṅ| ≤ Σⱼ |n·w_j|/h_j with every corner at v_ref.
+        let omega_ref = v_ref * s;
+        // A third of drag and rotational lift on each corner, each corner
+        // velocity a third of u: summed over the corners, a third of the
+        // triangle's rate.
+        let drag = tb.drag / 3.0;
+        let rot_lift = tb.rot_lift * (omega_ref + v_ref * s) / 3.0;
+        let tau = tb.damping
+            * (law.rotational_damping * (omega_ref + v_ref * s)
+                + 2.0 * law.rotational_damping_quadratic * tb.half_chord * omega_ref * s);
+        for (k, &i) in tri.corners.iter().enumerate() {
+            let h = heights[k];
+            // −m_k (ṅ·w_k) n (normal) and −m_k (n·w_k) ṅ (in-plane), each
+            // ≤ m_k (v_ref s + ω_ref); the Munk couple's λ_k = ∇β_k·Q∥ with
+            // ‖∂Q/∂w_j‖ ≤ 2 m_j v_ref.
+            let gyro = tb.added[k] * (v_ref * s + omega_ref);
+            let munk = 2.0 * v_ref * m_sum / h;
+            let along_n = (model.mass[i] * Matrix3::identity() + tensor[i])
+                .try_inverse()
+                .map_or(1.0 / model.mass[i], |inv| (inv * nrm).norm());
+            normal_rate[i] += (gyro + munk + tau / h) * along_n;
+            plane_rate[i] += (gyro + drag + rot_lift) / model.mass[i];
+        }
+    }
+    let bound = (0..n)
+        .filter(|&i| !model.fixed[i] && body_of[i].is_none())
+        .map(|i| normal_rate[i] + plane_rate[i])
+        .fold(0.0, f64::max);
+    let particles = if bound > 0.0 {
+        let free: Vec<bool> = (0..n)
+            .map(|i| !model.fixed[i] && body_of[i].is_none())
+            .collect();
+        bound.min(MEASURED_MARGIN * free_particle_rate(law, model, &free, &tensor, v_ref, q_ref))
+    } else {
+        bound
+    };
+    let bodies = (0..model.rigid.len())
+        .map(|b| rigid_body_rate(law, model, b, v_ref, q_ref))
+        .fold(0.0, f64::max);
+    (particles, bodies)
+}
+
+/// Factor on the measured rate of the free particles ([`free_particle_rate`])
+/// before it replaces the corner-by-corner bound: the measurement samples
+/// states, so it is kept with a margin.
+pub const MEASURED_MARGIN: f64 = 1.5;
+
+/// Power iterations per sampled state in [`free_particle_rate`].
+const POWER_ITERATIONS: usize = 40;
+
+/// The rate of the free particles (`free[i]`) under the unsteady law, 1/s:
+/// the spectral radius of K⁻¹ ∂f/∂v (K_i = m_i I + M_i, the rest
+/// added-mass tensors `tensor`), by power iteration on central-difference
+/// products ∂f/∂v · y at the rest shape, for the relative velocities of
+/// [`rigid_body_rate`] (speeds q_ref and v_ref along nine directions of the
+/// leaf's best-fit frame, with and without a rotation of rate
+/// 2 v_ref / chord about each in-plane axis). The corner-by-corner bound
+/// of [`drag_rate`] lets every corner move independently at v_ref and is
+/// far above what a leaf's motion reaches (60× on prototype A); this is a
+/// measurement, not a bound, which `--dt auto` keeps with
+/// [`MEASURED_MARGIN`] and its safety factor, and a test checks drops at
+/// the auto step against half of it.
+pub fn free_particle_rate(
+    law: &UnsteadyAero,
+    model: &Model,
+    free: &[bool],
+    tensor: &[Matrix3<f64>],
+    v_ref: f64,
+    q_ref: f64,
+) -> f64 {
+    let x = &model.rest_position;
+    let n = model.len();
+    let members: Vec<usize> = (0..n).filter(|&i| free[i]).collect();
+    if members.is_empty() {
+        return 0.0;
+    }
+    let centre = members.iter().map(|&i| x[i]).sum::<V3>() / members.len() as f64;
+    let mut cov = Matrix3::zeros();
+    let mut chord: f64 = 0.0;
+    for &i in &members {
+        let r = x[i] - centre;
+        cov += r * r.transpose();
+        chord = chord.max(2.0 * r.norm());
+    }
+    let eig = cov.symmetric_eigen();
+    let mut order = [0usize, 1, 2];
+    // Largest spread first: the normal (least spread) is axes[2].
+    order.sort_by(|&p, &q| eig.eigenvalues[q].total_cmp(&eig.eigenvalues[p]));
+    let axes: [V3; 3] = order.map(|k| eig.eigenvectors.column(k).into());
+    let omega_ref = 2.0 * v_ref / chord.max(f64::MIN_POSITIVE);
+    let inverse: Vec<Matrix3<f64>> = (0..n)
+        .map(|i| {
+            (Matrix3::identity() * model.mass[i] + tensor[i])
+                .try_inverse()
+                .unwrap_or_else(Matrix3::zeros)
+        })
+        .collect();
+    let mut f_plus = vec![V3::zeros(); n];
+    let mut f_minus = vec![V3::zeros(); n];
+    let mut added = vec![Matrix3::zeros(); n];
+    let mut v = vec![V3::zeros(); n];
+    let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
+    let mut worst: f64 = 0.0;
+    for d in RATE_DIRECTIONS {
+        let dir = to_world(d).normalize();
+        for speed in [q_ref, v_ref] {
+            let mut vel = dir * speed;
+            let normal = vel.dot(&axes[2]);
+            if normal.abs() > q_ref {
+                vel -= axes[2] * (normal - q_ref * normal.signum());
+            }
+            for spin in [V3::zeros(), axes[0] * omega_ref, axes[1] * omega_ref] {
+                let base: Vec<V3> = (0..n).map(|i| vel + spin.cross(&(x[i] - centre))).collect();
+                // A deterministic start with every component.
+                let mut y: Vec<V3> = (0..n)
+                    .map(|i| {
+                        if free[i] {
+                            let k = i as f64;
+                            V3::new(1.0 + 0.37 * k, -0.6 + 0.11 * k, 0.8 - 0.23 * k)
+                        } else {
+                            V3::zeros()
+                        }
+                    })
+                    .collect();
+                let norm = |y: &[V3]| y.iter().map(|a| a.norm_squared()).sum::<f64>().sqrt();
+                let mut log_growth = Vec::with_capacity(POWER_ITERATIONS);
+                for _ in 0..POWER_ITERATIONS {
+                    let size = norm(&y);
+                    if size <= 0.0 || !size.is_finite() {
+                        break;
+                    }
+                    let eps = 1e-6 * v_ref.max(1e-9) / size;
+                    for (sign, out) in [(1.0, &mut f_plus), (-1.0, &mut f_minus)] {
+                        for i in 0..n {
+                            v[i] = base[i] + y[i] * (sign * eps);
+                        }
+                        out.fill(V3::zeros());
+                        unsteady_forces(law, model, x, &v, None, &[], out, &mut added);
+                    }
+                    for i in 0..n {
+                        y[i] = if free[i] {
+                            inverse[i] * (f_plus[i] - f_minus[i]) / (2.0 * eps)
+                        } else {
+                            V3::zeros()
+                        };
+                    }
+                    log_growth.push((norm(&y) / size).ln());
+                }
+                // The mean growth over the second half: the spectral radius
+                // (a complex pair makes single ratios oscillate).
+                let tail = &log_growth[log_growth.len() / 2..];
+                if !tail.is_empty() {
+                    let rate = (tail.iter().sum::<f64>() / tail.len() as f64).exp();
+                    if rate.is_finite() {
+                        worst = worst.max(rate);
+                    }
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// Directions of the relative velocity, in the body frame of the rest
+/// shape, at which [`rigid_body_rate`] measures: along each axis and the
+/// diagonals between the plate's plane and its normal.
+const RATE_DIRECTIONS: [[f64; 3]; 9] = [
+    [1.0, 0.0, 0.0],
+    [0.0, 1.0, 0.0],
+    [0.0, 0.0, 1.0],
+    [1.0, 0.0, 1.0],
+    [1.0, 0.0, -1.0],
+    [0.0, 1.0, 1.0],
+    [0.0, 1.0, -1.0],
+    [1.0, 1.0, 1.0],
+    [1.0, -1.0, 0.3],
+];
+
+/// The rate of rigid body `b` under the unsteady law, 1/s: the largest
+/// |eigenvalue| of M_g⁻¹ ∂(F, τ)/∂(V, ω), with M_g the body's generalised
+/// mass (its own and added, the 6 × 6 of [`crate::physics::rigid`]),
+/// measured by central differences at the rest shape for relative speeds
+/// |V| ∈ {q_ref, v_ref} along nine directions (the normal part of
+/// the larger capped at q_ref, as in a fall: see [`drag_rate`]), each with
+/// and without a rotation of rate 2 v_ref / chord about each in-plane axis.
+/// A measurement at sampled states, not a bound; `--dt auto` keeps
+/// [`crate::physics::stability::AUTO_SAFETY`] below it and a test checks
+/// drops at the auto step against half of it.
+pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, q_ref: f64) -> f64 {
+    let body = &model.rigid[b];
+    let x = &model.rest_position;
+    let centre = body
+        .members
+        .iter()
+        .zip(&body.member_mass)
+        .map(|(&i, &m)| x[i] * m)
+        .sum::<V3>()
+        / body.mass;
+    // The body's frame: its principal axes (the plate normal has the largest moment).
+    let eig = body.inertia.symmetric_eigen();
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&p, &q| eig.eigenvalues[p].total_cmp(&eig.eigenvalues[q]));
+    let axes: [V3; 3] = order.map(|k| eig.eigenvectors.column(k).into());
+    let mut chord: f64 = 0.0;
+    for &i in &body.members {
+        for &j in &body.members {
+            chord = chord.max((x[i] - x[j]).norm());
+        }
+    }
+    let omega_ref = 2.0 * v_ref / chord.max(f64::MIN_POSITIVE);
+    let n = model.len();
+    let mut v = vec![V3::zeros(); n];
+    let mut f = vec![V3::zeros(); n];
+    let mut added = vec![Matrix3::zeros(); n];
+    let mut load = |vel: V3, omega: V3, added: &mut Vec<Matrix3<f64>>| -> (V3, V3) {
+        for &i in &body.members {
+            v[i] = vel + omega.cross(&(x[i] - centre));
+        }
+        f.fill(V3::zeros());
+        added.fill(Matrix3::zeros());
+        unsteady_forces(law, model, x, &v, None, &[], &mut f, added);
+        let mut total = (V3::zeros(), V3::zeros());
+        for &i in &body.members {
+            total.0 += f[i];
+            total.1 += (x[i] - centre).cross(&f[i]);
+        }
+        total
+    };
+    // Generalised mass at rest.
+    load(V3::zeros(), V3::zeros(), &mut added);
+    let mut mass = nalgebra::Matrix6::<f64>::zeros();
+    for (&i, &m) in body.members.iter().zip(&body.member_mass) {
+        let r = x[i] - centre;
+        let k = Matrix3::identity() * m + added[i];
+        let rx = Matrix3::new(0.0, -r.z, r.y, r.z, 0.0, -r.x, -r.y, r.x, 0.0);
+        let blocks = [k, -(k * rx), rx * k, -(rx * k * rx)];
+        for (q, blk) in blocks.iter().enumerate() {
+            mass.fixed_view_mut::<3, 3>(3 * (q / 2), 3 * (q % 2))
+                .add_assign(blk);
+        }
+    }
+    let Some(inverse) = mass.try_inverse() else {
+        return f64::INFINITY;
+    };
+    let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
+    let mut worst: f64 = 0.0;
+    for d in RATE_DIRECTIONS {
+        let dir = to_world(d).normalize();
+        for speed in [q_ref, v_ref] {
+            // The normal part (along axes[2]) no larger than q_ref.
+            let mut vel = dir * speed;
+            let normal = vel.dot(&axes[2]);
+            if normal.abs() > q_ref {
+                vel -= axes[2] * (normal - q_ref * normal.signum());
+            }
+            for spin in [V3::zeros(), axes[0] * omega_ref, axes[1] * omega_ref] {
+                let mut jac = nalgebra::Matrix6::<f64>::zeros();
+                let hv = 1e-6 * v_ref.max(1e-9);
+                let hw = 1e-6 * omega_ref.max(1e-9);
+                for col in 0..6 {
+                    let mut e = nalgebra::Vector6::<f64>::zeros();
+                    e[col] = if col < 3 { hv } else { hw };
+                    let dv = V3::new(e[0], e[1], e[2]);
+                    let dw = V3::new(e[3], e[4], e[5]);
+                    let (fp, tp) = load(vel + dv, spin + dw, &mut added);
+                    let (fm, tm) = load(vel - dv, spin - dw, &mut added);
+                    let step = 2.0 * e[col];
+                    for row in 0..3 {
+                        jac[(row, col)] = (fp[row] - fm[row]) / step;
+                        jac[(row + 3, col)] = (tp[row] - tm[row]) / step;
+                    }
+                }
+                let rate = (inverse * jac)
+                    .complex_eigenvalues()
+                    .iter()
+                    .map(|z| z.norm())
+                    .fold(0.0, f64::max);
+                worst = worst.max(rate);
+            }
+        }
+    }
+    worst
+}

@@ -1,0 +1,880 @@
+//! The real-falls experiment of Howison, Hughes & Iida (2020, *Nature
+//! Machine Intelligence* 2, 68) redone in the simulator, and the
+//! comparison with their tracked falls of paper squares
+//! (`tests/data/real-falls/squares/`, docs/real-falls.md).
+//!
+//! Both sides are measured the same way, as the experiment measured its
+//! drops (its `classifyBehaviour.m`, re-implemented from its description):
+//! a fall is filmed at 98 frames per second by two cameras looking down at
+//! it; the first frames of a flat release, until the paper has moved 0.2 ×
+//! its half-side sideways, are cut off as "steady"; the rest is one
+//! segment, labelled tumbling or chaotic by the nearer of two cluster
+//! centres in the plane of two features — projected-area maxima per second
+//! (`Osc`, the two cameras averaged) and the spread of the per-frame fall
+//! (`SpeedZ`). The centres are the means of the real segments of each of
+//! the authors' automatic labels. Per size bin: the fraction tumbling among
+//! tumbling + chaotic segments (the real side by people's labels), the
+//! median descent speed dz/t and drift √(dx² + dy²)/dz over those segments,
+//! and the median tumbling rate Ω = π × area maxima per second.
+//!
+//! The simulated cameras are the experiment's rig (positions, optical axes
+//! and focal lengths decoded from its calibration files by the project's
+//! `realfalls` tool; constants below) as ideal pinholes: no pixel rounding,
+//! no smallest blob.
+
+use crate::leaf::AeroSpec;
+use crate::leaf::plates::{PlateShape, plate};
+use crate::physics::model::{Model, STANDARD_GRAVITY};
+use crate::physics::params::{Integrator, TimeStep};
+use crate::physics::run::{StepError, resolve_step, run_sampled};
+use crate::physics::state::State;
+use nalgebra::{UnitQuaternion, Vector3};
+use rand::rngs::Xoshiro256PlusPlus;
+use rand::{RngExt, SeedableRng};
+use rayon::prelude::*;
+use std::path::Path;
+
+type V3 = Vector3<f64>;
+
+/// Frames per second of the experiment's cameras.
+pub const FPS: f64 = 98.0;
+/// Fluid density of the experiment (the authors' value), kg/m³.
+pub const AIR_DENSITY: f64 = 1.2754;
+/// Kinematic viscosity of the experiment's air, m²/s.
+pub const AIR_VISCOSITY: f64 = 1.48e-5;
+/// Areal density of the experiment's paper, kg/m².
+pub const PAPER: f64 = 0.070;
+
+/// The experiment's size bins, on the half-side r (m): [lo, hi).
+pub const SQUARE_BINS: [(f64, f64); 5] = [
+    (0.015, 0.019),
+    (0.019, 0.0225),
+    (0.0225, 0.030),
+    (0.030, 0.040),
+    (0.040, 0.0505),
+];
+
+/// A flat release: at rest, centre 1.000 m above the floor.
+pub const FLAT_HEIGHT: f64 = 1.000;
+/// An edge-on release: at rest from 1.160 m, filmed from 1.097 m (real
+/// on-edge drops are first seen there, already at about 1.1 m/s).
+pub const EDGE_HEIGHT: f64 = 1.160;
+/// Height of the first filmed frame of an edge-on release, m.
+pub const EDGE_SEEN: f64 = 1.097;
+/// The end of every fall that is trimmed (classifyBehaviour.m), m.
+pub const FLOOR_TRIM: f64 = 0.05;
+
+/// One camera of the rig: centre (m, the data's frame: x, y, height),
+/// unit optical axis and focal lengths (px).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Centre of projection, m.
+    pub centre: [f64; 3],
+    /// Unit optical axis.
+    pub axis: [f64; 3],
+    /// Focal lengths f_x, f_y, px.
+    pub focal: [f64; 2],
+}
+
+/// The experiment's two cameras (Video Processing/Extrinsics.mat and
+/// stereoParams.mat of the authors' data, as decoded by the project's
+/// realfalls tool).
+pub const CAMERAS: [Camera; 2] = [
+    Camera {
+        centre: [-0.1220, -0.2652, 1.8123],
+        axis: [0.4370, 0.3798, -0.8153],
+        focal: [501.62, 502.46],
+    },
+    Camera {
+        centre: [-0.1425, 0.7581, 1.8062],
+        axis: [0.3940, -0.0857, -0.9151],
+        focal: [501.60, 502.21],
+    },
+];
+
+/// Where the paper was let go (horizontal position, m), from the same source.
+pub const DROP_POINT: [f64; 2] = [0.9157, 0.4033];
+
+/// A label: the experiment's 1 (tumbling), 2 (chaotic), 3 (steady start).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Label {
+    /// Turning end over end, gliding off on a slanted line.
+    Tumbling,
+    /// Swinging, reversing and wandering.
+    Chaotic,
+    /// The first frames of a flat release (a release artefact).
+    Steady,
+}
+
+impl Label {
+    fn from_code(code: u32) -> Option<Label> {
+        match code {
+            1 => Some(Label::Tumbling),
+            2 => Some(Label::Chaotic),
+            3 => Some(Label::Steady),
+            _ => None,
+        }
+    }
+}
+
+/// A segment's features (classifyBehaviour.m).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Features {
+    /// Sideways displacements and the fall, m.
+    pub dx: f64,
+    /// See `dx`.
+    pub dy: f64,
+    /// |Δz|, m.
+    pub dz: f64,
+    /// Duration: frames / [`FPS`], s.
+    pub time: f64,
+    /// Projected-area maxima per second, mean of the two cameras.
+    pub osc: f64,
+    /// Standard deviation of the per-frame change of height, m.
+    pub speed_z: f64,
+}
+
+impl Features {
+    /// Descent speed dz/t, m/s.
+    pub fn descent(&self) -> f64 {
+        self.dz / self.time
+    }
+    /// Drift √(dx² + dy²)/dz.
+    pub fn drift(&self) -> f64 {
+        self.dx.hypot(self.dy) / self.dz
+    }
+}
+
+/// A filmed fall or segment: positions (x, y relative to the first frame,
+/// z the height) and the two cameras' projected areas, at [`FPS`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Film {
+    /// Centre of the paper per frame, m.
+    pub position: Vec<V3>,
+    /// Projected area per frame, per camera (any unit).
+    pub area: [Vec<f64>; 2],
+}
+
+impl Film {
+    /// Frames.
+    pub fn len(&self) -> usize {
+        self.position.len()
+    }
+    /// No frame.
+    pub fn is_empty(&self) -> bool {
+        self.position.is_empty()
+    }
+    fn slice(&self, from: usize, to: usize) -> Film {
+        Film {
+            position: self.position[from..to].to_vec(),
+            area: [
+                self.area[0][from..to].to_vec(),
+                self.area[1][from..to].to_vec(),
+            ],
+        }
+    }
+
+    /// The features, or `None` if a step between frames exceeds 0.1 m (the
+    /// experiment drops such a segment) or there are fewer than 3 frames.
+    pub fn features(&self) -> Option<Features> {
+        let p = &self.position;
+        let n = p.len();
+        if n < 3 || p.windows(2).any(|w| (w[1] - w[0]).norm() > 0.1) {
+            return None;
+        }
+        let time = n as f64 / FPS;
+        let steps: Vec<f64> = p.windows(2).map(|w| w[1].z - w[0].z).collect();
+        let mean = steps.iter().sum::<f64>() / steps.len() as f64;
+        let var = steps.iter().map(|s| (s - mean).powi(2)).sum::<f64>() / (steps.len() - 1) as f64;
+        Some(Features {
+            dx: p[n - 1].x - p[0].x,
+            dy: p[n - 1].y - p[0].y,
+            dz: (p[n - 1].z - p[0].z).abs(),
+            time,
+            osc: (count_peaks(&self.area[0]) + count_peaks(&self.area[1])) as f64 / (2.0 * time),
+            speed_z: var.sqrt(),
+        })
+    }
+
+    /// The tumbling rate Ω = π × area maxima per second, rad/s: frames above
+    /// [`FLOOR_TRIM`], the first 30 dropped, maxima of prominence at least
+    /// 5 % of the range, (count − 1) over the time from the first to the
+    /// last; the mean of the cameras with at least 3; `None` if neither has.
+    pub fn tumbling_rate(&self) -> Option<f64> {
+        let keep: Vec<usize> = (0..self.len())
+            .filter(|&k| self.position[k].z >= FLOOR_TRIM)
+            .collect();
+        let mut rates = Vec::new();
+        for area in &self.area {
+            let a: Vec<f64> = keep.iter().skip(30).map(|&k| area[k]).collect();
+            if a.len() < 30 {
+                continue;
+            }
+            let (lo, hi) = a
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), &v| {
+                    (l.min(v), h.max(v))
+                });
+            let peaks = prominent_peaks(&a, 0.05 * (hi - lo));
+            if peaks.len() >= 3 {
+                let span = (peaks[peaks.len() - 1] - peaks[0]) as f64 / FPS;
+                rates.push((peaks.len() - 1) as f64 / span);
+            }
+        }
+        (!rates.is_empty())
+            .then(|| std::f64::consts::PI * rates.iter().sum::<f64>() / rates.len() as f64)
+    }
+}
+
+/// Local maxima of `y` strictly above both neighbours (a flat top counts
+/// once), the ends excluded: MATLAB's `findpeaks` without options.
+pub fn count_peaks(y: &[f64]) -> usize {
+    let n = y.len();
+    let mut count = 0;
+    let mut i = 1;
+    while i + 1 < n {
+        if y[i] > y[i - 1] {
+            let mut j = i;
+            while j + 1 < n && y[j + 1] == y[i] {
+                j += 1;
+            }
+            if j + 1 < n && y[j + 1] < y[i] {
+                count += 1;
+            }
+            i = j + 1;
+        } else {
+            i += 1;
+        }
+    }
+    count
+}
+
+/// Indices of the local maxima of `y` (a flat top at its middle, rounded
+/// down) with prominence at least `min_prominence`: the height above the
+/// higher of the lowest points between it and the nearest higher sample on
+/// either side (or the signal's end), as SciPy's `find_peaks` defines it.
+pub fn prominent_peaks(y: &[f64], min_prominence: f64) -> Vec<usize> {
+    let n = y.len();
+    let mut out = Vec::new();
+    let mut i = 1;
+    while i + 1 < n {
+        if y[i] > y[i - 1] {
+            let mut j = i;
+            while j + 1 < n && y[j + 1] == y[i] {
+                j += 1;
+            }
+            if j + 1 < n && y[j + 1] < y[i] {
+                let peak = (i + j) / 2;
+                let h = y[peak];
+                let mut left_min = h;
+                let mut k = i;
+                while k > 0 {
+                    k -= 1;
+                    if y[k] > h {
+                        break;
+                    }
+                    left_min = left_min.min(y[k]);
+                }
+                let mut right_min = h;
+                let mut k = j;
+                while k + 1 < n {
+                    k += 1;
+                    if y[k] > h {
+                        break;
+                    }
+                    right_min = right_min.min(y[k]);
+                }
+                if h - left_min.max(right_min) >= min_prominence {
+                    out.push(peak);
+                }
+            }
+            i = j + 1;
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// MATLAB's `smooth(y)`: a 5-point moving average whose span shrinks at the
+/// ends (what the experiment's tracking applied to positions and areas).
+pub fn smooth5(y: &[f64]) -> Vec<f64> {
+    let n = y.len();
+    (0..n)
+        .map(|i| {
+            let k = 2.min(i).min(n - 1 - i);
+            y[i - k..=i + k].iter().sum::<f64>() / (2 * k + 1) as f64
+        })
+        .collect()
+}
+
+/// One real segment of `tests/data/real-falls/squares/`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RealSegment {
+    /// File name without extension.
+    pub name: String,
+    /// Half the side, m.
+    pub radius: f64,
+    /// Released on edge (else flat).
+    pub on_edge: bool,
+    /// People's label.
+    pub human: Label,
+    /// The authors' k-means label.
+    pub auto: Label,
+    /// The segment as filmed.
+    pub film: Film,
+}
+
+/// Why the real data cannot be read.
+#[derive(Debug, thiserror::Error)]
+#[error("{file}: {reason}")]
+pub struct RealFallsError {
+    /// The file.
+    pub file: String,
+    /// What is wrong.
+    pub reason: String,
+}
+
+/// Reads `labels.csv` and every segment it lists from `dir`.
+pub fn read_squares(dir: &Path) -> Result<Vec<RealSegment>, RealFallsError> {
+    let fail = |file: &Path, reason: String| RealFallsError {
+        file: file.display().to_string(),
+        reason,
+    };
+    let labels = dir.join("labels.csv");
+    let text =
+        std::fs::read_to_string(&labels).map_err(|e| fail(&labels, format!("cannot read: {e}")))?;
+    let mut out = Vec::new();
+    for (line, row) in text.lines().enumerate().skip(1) {
+        let f: Vec<&str> = row.split(',').collect();
+        let bad = |what: &str| fail(&labels, format!("line {}: {what}", line + 1));
+        if f.len() < 7 {
+            return Err(bad(
+                "expected name,shape,radius_m,width_px,release_vertical,human,auto,rows",
+            ));
+        }
+        let num = |k: usize| {
+            f[k].trim()
+                .parse::<f64>()
+                .map_err(|_| bad(&format!("column {} is not a number", k + 1)))
+        };
+        let label = |k: usize| {
+            f[k].trim()
+                .parse::<u32>()
+                .ok()
+                .and_then(Label::from_code)
+                .ok_or_else(|| bad(&format!("column {} is not a label 1, 2 or 3", k + 1)))
+        };
+        let name = f[0].trim().to_string();
+        let path = dir.join(format!("{name}.csv"));
+        let data =
+            std::fs::read_to_string(&path).map_err(|e| fail(&path, format!("cannot read: {e}")))?;
+        let mut film = Film::default();
+        for (k, r) in data.lines().enumerate().skip(1) {
+            let v: Vec<f64> = r
+                .split(',')
+                .map(|s| s.trim().parse::<f64>())
+                .collect::<Result<_, _>>()
+                .map_err(|_| fail(&path, format!("line {}: not numbers", k + 1)))?;
+            if v.len() != 6 {
+                return Err(fail(
+                    &path,
+                    format!("line {}: expected t,x,y,z,area1,area2", k + 1),
+                ));
+            }
+            film.position.push(V3::new(v[1], v[2], v[3]));
+            film.area[0].push(v[4]);
+            film.area[1].push(v[5]);
+        }
+        out.push(RealSegment {
+            name,
+            radius: num(2)?,
+            on_edge: num(4)? != 0.0,
+            human: label(5)?,
+            auto: label(6)?,
+            film,
+        });
+    }
+    Ok(out)
+}
+
+/// The two cluster centres (Osc, SpeedZ) of tumbling and chaotic segments:
+/// the means of the real segments of each automatic label.
+pub fn centres(real: &[RealSegment]) -> [[f64; 2]; 2] {
+    let mean = |label: Label| {
+        let f: Vec<Features> = real
+            .iter()
+            .filter(|s| s.auto == label)
+            .filter_map(|s| s.film.features())
+            .collect();
+        let n = f.len().max(1) as f64;
+        [
+            f.iter().map(|f| f.osc).sum::<f64>() / n,
+            f.iter().map(|f| f.speed_z).sum::<f64>() / n,
+        ]
+    };
+    [mean(Label::Tumbling), mean(Label::Chaotic)]
+}
+
+/// The experiment's rule: the label of the nearer centre.
+pub fn label_of(f: &Features, centres: &[[f64; 2]; 2]) -> Label {
+    let d = |c: [f64; 2]| (f.osc - c[0]).powi(2) + (f.speed_z - c[1]).powi(2);
+    if d(centres[0]) <= d(centres[1]) {
+        Label::Tumbling
+    } else {
+        Label::Chaotic
+    }
+}
+
+/// One size bin's numbers, real or simulated.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct BinStats {
+    /// Falls (drops) in the bin.
+    pub drops: usize,
+    /// Tumbling, chaotic and steady segments.
+    pub counts: [usize; 3],
+    /// Fraction tumbling among tumbling + chaotic (NaN without any).
+    pub tumbling: f64,
+    /// Median descent speed, m/s.
+    pub descent: f64,
+    /// Median drift.
+    pub drift: f64,
+    /// Median tumbling rate over the drops that give one, rad/s.
+    pub omega: f64,
+    /// Drops with a tumbling rate.
+    pub omega_drops: usize,
+    /// The plate's side, m (the bin's median).
+    pub side: f64,
+}
+
+/// Median of the finite values (NaN if none).
+pub fn median(values: impl IntoIterator<Item = f64>) -> f64 {
+    let mut v: Vec<f64> = values.into_iter().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// One labelled segment with its features, and its drop's tumbling rate.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Measured {
+    /// The label.
+    pub label: Label,
+    /// The features.
+    pub features: Features,
+}
+
+fn stats(segments: &[Measured], omegas: &[Option<f64>], drops: usize, side: f64) -> BinStats {
+    let count = |l: Label| segments.iter().filter(|s| s.label == l).count();
+    let (t, c, s) = (
+        count(Label::Tumbling),
+        count(Label::Chaotic),
+        count(Label::Steady),
+    );
+    let moving: Vec<&Measured> = segments
+        .iter()
+        .filter(|s| s.label != Label::Steady)
+        .collect();
+    BinStats {
+        drops,
+        counts: [t, c, s],
+        tumbling: if t + c > 0 {
+            t as f64 / (t + c) as f64
+        } else {
+            f64::NAN
+        },
+        descent: median(moving.iter().map(|s| s.features.descent())),
+        drift: median(moving.iter().map(|s| s.features.drift())),
+        omega: median(omegas.iter().flatten().copied()),
+        omega_drops: omegas.iter().flatten().count(),
+        side,
+    }
+}
+
+/// The real side of the table: per bin of [`SQUARE_BINS`], people's labels.
+/// Each drop has one tumbling or chaotic segment; its tumbling rate is
+/// measured on that segment.
+pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
+    SQUARE_BINS
+        .iter()
+        .map(|&(lo, hi)| {
+            let inside: Vec<&RealSegment> = real
+                .iter()
+                .filter(|s| (lo..hi).contains(&s.radius))
+                .collect();
+            let segments: Vec<Measured> = inside
+                .iter()
+                .filter_map(|s| {
+                    s.film.features().map(|features| Measured {
+                        label: s.human,
+                        features,
+                    })
+                })
+                .collect();
+            let moving: Vec<&&RealSegment> =
+                inside.iter().filter(|s| s.human != Label::Steady).collect();
+            let omegas: Vec<Option<f64>> = moving.iter().map(|s| s.film.tumbling_rate()).collect();
+            let side = 2.0 * median(moving.iter().map(|s| s.radius));
+            stats(&segments, &omegas, moving.len(), side)
+        })
+        .collect()
+}
+
+/// How a plate is let go.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Release {
+    /// On edge (else flat).
+    pub on_edge: bool,
+    /// Body to world at release.
+    pub rotation: UnitQuaternion<f64>,
+}
+
+/// The `k`-th of `n` releases of bin `bin` at `seed`: the first half flat
+/// (tilted 1–5° about a horizontal axis at a random azimuth), the rest on
+/// edge (90 ± 1–5° about one in-plane axis, ±5° about the other), each at
+/// a random in-plane angle and turned by a random yaw.
+pub fn release(seed: u64, bin: usize, k: usize, n: usize) -> Release {
+    let on_edge = k >= n.div_ceil(2);
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(
+        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64,
+    );
+    let tau = std::f64::consts::TAU;
+    let psi = rng.random_range(0.0..tau);
+    let yaw = rng.random_range(0.0..tau);
+    let (tx, ty) = if on_edge {
+        let d = rng.random_range(1.0..5.0)
+            * if rng.random_range(0.0..1.0) < 0.5 {
+                1.0
+            } else {
+                -1.0
+            };
+        (90.0 + d, rng.random_range(-5.0..5.0))
+    } else {
+        let t: f64 = rng.random_range(1.0..5.0);
+        let a: f64 = rng.random_range(0.0..tau);
+        (t * a.cos(), t * a.sin())
+    };
+    let axis = |v: V3| nalgebra::Unit::new_normalize(v);
+    let rotation = UnitQuaternion::from_axis_angle(&axis(V3::z()), yaw)
+        * UnitQuaternion::from_axis_angle(&axis(V3::x()), f64::to_radians(tx))
+        * UnitQuaternion::from_axis_angle(&axis(V3::y()), f64::to_radians(ty))
+        * UnitQuaternion::from_axis_angle(&axis(V3::z()), psi);
+    Release { on_edge, rotation }
+}
+
+/// Why a simulated release failed.
+#[derive(Debug, thiserror::Error)]
+pub enum ExperimentError {
+    /// The plate could not be built.
+    #[error(transparent)]
+    Plate(#[from] crate::leaf::plates::PlateError),
+    /// The plate's model is invalid.
+    #[error(transparent)]
+    Model(#[from] crate::physics::model::ModelError),
+    /// No step could be chosen.
+    #[error(transparent)]
+    Step(#[from] StepError),
+    /// The fall diverged.
+    #[error(transparent)]
+    Sim(#[from] crate::physics::integrate::SimError),
+}
+
+/// The camera's projected area of every triangle of `model` at `x`, px.
+fn projected_area(model: &Model, x: &[V3], camera: &Camera) -> f64 {
+    let c = V3::from(camera.centre);
+    let axis = V3::from(camera.axis);
+    let f2 = camera.focal[0] * camera.focal[1];
+    model
+        .triangles
+        .iter()
+        .map(|t| {
+            let [a, b, cc] = t.corners;
+            let big_n = (x[b] - x[a]).cross(&(x[cc] - x[a]));
+            let r = (x[a] + x[b] + x[cc]) / 3.0 - c;
+            let depth = r.dot(&axis);
+            0.5 * f2 * big_n.dot(&r).abs() / depth.powi(3)
+        })
+        .sum()
+}
+
+fn centroid(model: &Model, x: &[V3]) -> V3 {
+    let (mut sum, mut total) = (V3::zeros(), 0.0);
+    for t in &model.triangles {
+        let [a, b, c] = t.corners;
+        let area = 0.5 * (x[b] - x[a]).cross(&(x[c] - x[a])).norm();
+        sum += (x[a] + x[b] + x[c]) * (area / 3.0);
+        total += area;
+    }
+    sum / total
+}
+
+/// A simulated drop as the cameras saw it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SimulatedDrop {
+    /// The release.
+    pub on_edge: bool,
+    /// The labelled segments (a flat release's steady start included).
+    pub segments: Vec<Measured>,
+    /// The tumbling rate of the whole filmed drop.
+    pub omega: Option<f64>,
+    /// The plate's normal turned past the horizontal this many times.
+    pub flips: usize,
+    /// Simulated seconds to the floor.
+    pub seconds: f64,
+}
+
+/// Longest fall simulated, s: a drop that has not reached the floor by
+/// then is filmed as far as it got.
+pub const MAX_SECONDS: f64 = 8.0;
+
+/// Drops `model` (a plate of half-side `radius`) as `release` says, films
+/// it and measures it as the experiment did.
+pub fn simulate_drop(
+    model: &Model,
+    radius: f64,
+    release: &Release,
+    centres: &[[f64; 2]; 2],
+) -> Result<SimulatedDrop, ExperimentError> {
+    let frame_dt = 1.0 / FPS;
+    let dt = resolve_step(model, Integrator::Verlet, TimeStep::Auto, frame_dt)?;
+    let height = if release.on_edge {
+        EDGE_HEIGHT
+    } else {
+        FLAT_HEIGHT
+    };
+    let start = V3::new(DROP_POINT[0], DROP_POINT[1], height);
+    let mut state = State::released(model, release.rotation, start);
+    let mut raw = Film::default();
+    let mut normals = Vec::new();
+    let record = |x: &[V3], raw: &mut Film, normals: &mut Vec<f64>| {
+        raw.position.push(centroid(model, x));
+        for (k, cam) in CAMERAS.iter().enumerate() {
+            raw.area[k].push(projected_area(model, x, cam));
+        }
+        let t = &model.triangles[0];
+        let [a, b, c] = t.corners;
+        normals.push((x[b] - x[a]).cross(&(x[c] - x[a])).z);
+    };
+    // In chunks of 0.5 s until the floor.
+    let chunk = (0.5 * FPS).round() as u64;
+    record(&state.position, &mut raw, &mut normals);
+    while raw.position.last().is_some_and(|p| p.z > 0.0) && state.time < MAX_SECONDS {
+        run_sampled(
+            model,
+            &mut state,
+            Integrator::Verlet,
+            dt,
+            frame_dt,
+            chunk,
+            |k, x| {
+                if k > 0 {
+                    record(x, &mut raw, &mut normals);
+                }
+            },
+        )?;
+    }
+    let seconds = state.time;
+    // Film: from the first frame at or below the first filmed height, cut
+    // at the first below the floor; smoothed; x, y from the first frame.
+    let first = if release.on_edge {
+        raw.position
+            .iter()
+            .position(|p| p.z <= EDGE_SEEN)
+            .unwrap_or(0)
+    } else {
+        0
+    };
+    let last = raw
+        .position
+        .iter()
+        .position(|p| p.z < 0.0)
+        .unwrap_or(raw.len());
+    let cut = raw.slice(first, last.max(first));
+    let flips = normals[first..last.max(first)]
+        .windows(2)
+        .filter(|w| w[0].signum() != w[1].signum())
+        .count();
+    let coord = |k: usize| smooth5(&cut.position.iter().map(|p| p[k]).collect::<Vec<_>>());
+    let (xs, ys, zs) = (coord(0), coord(1), coord(2));
+    let mut film = Film {
+        position: (0..cut.len())
+            .map(|k| V3::new(xs[k] - xs[0], ys[k] - ys[0], zs[k]))
+            .collect(),
+        area: [smooth5(&cut.area[0]), smooth5(&cut.area[1])],
+    };
+    let omega = film.tumbling_rate();
+    // Segments (classifyBehaviour.m): trim the end below FLOOR_TRIM; a flat
+    // release's start until 0.2 r sideways is steady.
+    let mut n = film.len();
+    while n > 0 && film.position[n - 1].z < FLOOR_TRIM {
+        n -= 1;
+    }
+    film = film.slice(0, n);
+    let threshold = if release.on_edge { 0.01 } else { 0.2 * radius };
+    let mut tc = 1;
+    while tc < n && film.position[tc - 1].xy().norm() < threshold {
+        tc += 1;
+    }
+    let mut segments = Vec::new();
+    let mut push = |from: usize, to: usize, steady: bool| {
+        if let Some(features) = film.slice(from, to).features() {
+            let label = if steady {
+                Label::Steady
+            } else {
+                label_of(&features, centres)
+            };
+            segments.push(Measured { label, features });
+        }
+    };
+    if !release.on_edge && tc > 2 {
+        push(0, tc, true);
+        if n > tc + 10 {
+            push(tc - 1, n, false);
+        }
+    } else if !release.on_edge {
+        push(0, n, false);
+    } else if n > tc + 10 {
+        push(tc - 1, n, false);
+    }
+    Ok(SimulatedDrop {
+        on_edge: release.on_edge,
+        segments,
+        omega,
+        flips,
+        seconds,
+    })
+}
+
+/// The simulated side of one bin: `releases` drops of a square plate of
+/// side `side` under `aero` (air and paper of the experiment).
+pub fn simulate_bin(
+    side: f64,
+    aero: &AeroSpec,
+    bin: usize,
+    releases: usize,
+    seed: u64,
+    centres: &[[f64; 2]; 2],
+) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
+    let spec = plate(PlateShape::Square, side, 1.0, PAPER, aero.clone())?;
+    let model = spec.model()?;
+    let drops: Vec<SimulatedDrop> = (0..releases)
+        .into_par_iter()
+        .map(|k| {
+            simulate_drop(
+                &model,
+                0.5 * side,
+                &release(seed, bin, k, releases),
+                centres,
+            )
+        })
+        .collect::<Result<_, _>>()?;
+    let segments: Vec<Measured> = drops
+        .iter()
+        .flat_map(|d| d.segments.iter().copied())
+        .collect();
+    let omegas: Vec<Option<f64>> = drops.iter().map(|d| d.omega).collect();
+    Ok((stats(&segments, &omegas, drops.len(), side), drops))
+}
+
+/// The experiment's air in an `[aero]` table of law `law`: its density and
+/// viscosity (the unsteady law), its density (the quadratic law).
+pub fn experiment_air(mut aero: AeroSpec) -> AeroSpec {
+    if aero.law != crate::leaf::AeroLawName::Linear {
+        aero.air_density.get_or_insert(AIR_DENSITY);
+    }
+    if aero.law == crate::leaf::AeroLawName::Unsteady {
+        aero.kinematic_viscosity.get_or_insert(AIR_VISCOSITY);
+    }
+    aero
+}
+
+/// The score's four parts for one bin: |Δ fraction tumbling|, |ln v ratio|,
+/// |ln drift ratio|, |ln Ω ratio| (values floored at 0.01; a value the
+/// simulation cannot give costs 1), as docs/real-falls.md defines them.
+pub fn bin_score(real: &BinStats, sim: &BinStats) -> [f64; 4] {
+    let log_ratio = |a: f64, b: f64| {
+        if a.is_finite() && b.is_finite() {
+            (a.max(0.01) / b.max(0.01)).ln().abs()
+        } else {
+            1.0
+        }
+    };
+    [
+        if sim.tumbling.is_finite() && real.tumbling.is_finite() {
+            (sim.tumbling - real.tumbling).abs()
+        } else {
+            1.0
+        },
+        log_ratio(sim.descent, real.descent),
+        log_ratio(sim.drift, real.drift),
+        log_ratio(sim.omega, real.omega),
+    ]
+}
+
+/// The whole comparison: the real table, the simulated one and the score.
+#[derive(Clone, Debug)]
+pub struct Comparison {
+    /// Per bin, the real side.
+    pub real: Vec<BinStats>,
+    /// Per bin, the simulated side.
+    pub sim: Vec<BinStats>,
+    /// Per bin, the score's parts.
+    pub parts: Vec<[f64; 4]>,
+    /// Every simulated drop, per bin.
+    pub drops: Vec<Vec<SimulatedDrop>>,
+}
+
+impl Comparison {
+    /// The mean over bins of the summed parts.
+    pub fn score(&self) -> f64 {
+        self.parts
+            .iter()
+            .map(|p| p.iter().sum::<f64>())
+            .sum::<f64>()
+            / self.parts.len() as f64
+    }
+}
+
+/// Simulates the experiment for every bin of the real table (`releases`
+/// per bin) under `aero` and compares.
+pub fn compare(
+    real_segments: &[RealSegment],
+    aero: &AeroSpec,
+    releases: usize,
+    seed: u64,
+) -> Result<Comparison, ExperimentError> {
+    let real = real_table(real_segments);
+    let centres = centres(real_segments);
+    let aero = experiment_air(aero.clone());
+    let mut sim = Vec::new();
+    let mut drops = Vec::new();
+    for (bin, r) in real.iter().enumerate() {
+        let (s, d) = simulate_bin(r.side, &aero, bin, releases, seed, &centres)?;
+        sim.push(s);
+        drops.push(d);
+    }
+    let parts = real
+        .iter()
+        .zip(&sim)
+        .map(|(r, s)| bin_score(r, s))
+        .collect();
+    Ok(Comparison {
+        real,
+        sim,
+        parts,
+        drops,
+    })
+}
+
+/// Mahadevan, Ryu & Samuel's scaling of a tumbling card, Ω ∝ √(σ g/ρ)/w:
+/// the dimensionless rate Ω w / √(σ g / ρ) of a plate of width `width`.
+pub fn tumbling_number(omega: f64, width: f64, sigma: f64, rho: f64) -> f64 {
+    omega * width / (sigma * STANDARD_GRAVITY / rho).sqrt()
+}

@@ -1,0 +1,82 @@
+//! The real-falls experiment (docs/real-falls.md): the real side of the
+//! table computed from tests/data/real-falls/squares, and the simulated
+//! side under the unsteady law with its one default set of coefficients.
+//! The targets (score ≤ 0.6, descent within 10 %, drift within
+//! ×1.5, Ω within 15 % in every bin) are NOT met today; this test holds
+//! what is reached, so a change that makes it worse fails.
+
+use leafmagic::leaf::AeroSpec;
+use leafmagic::sim::real_falls::{self, Label};
+use std::path::Path;
+
+fn squares() -> Vec<real_falls::RealSegment> {
+    real_falls::read_squares(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares"),
+    )
+    .unwrap()
+}
+
+/// The real table: small squares tumble, large ones fall chaotically, all
+/// descend at 0.73–0.81 m/s and turn at 26 → 12.6 rad/s (Howison, Hughes
+/// & Iida 2020, as docs/real-falls.md summarises them).
+#[test]
+fn the_real_table_is_read_from_the_tracked_squares() {
+    let real = squares();
+    assert_eq!(real.len(), 127);
+    assert!(real.iter().any(|s| s.human == Label::Steady));
+    let table = real_falls::real_table(&real);
+    let counts: Vec<[usize; 3]> = table.iter().map(|b| b.counts).collect();
+    assert_eq!(
+        counts,
+        [[11, 3, 1], [9, 2, 5], [3, 10, 7], [4, 26, 13], [1, 23, 9]]
+    );
+    for (k, b) in table.iter().enumerate() {
+        println!(
+            "{:.1} cm: fT {:.2}, v {:.3} m/s, drift {:.2}, Ω {:.1} rad/s",
+            b.side * 100.0,
+            b.tumbling,
+            b.descent,
+            b.drift,
+            b.omega
+        );
+        assert!((0.73..0.82).contains(&b.descent));
+        assert!((0.25..0.72).contains(&b.drift));
+        if k < 2 {
+            assert!(b.tumbling > 0.75 && (20.0..27.0).contains(&b.omega));
+        } else {
+            assert!(b.tumbling < 0.25 && (12.0..16.0).contains(&b.omega));
+        }
+    }
+}
+
+/// The simulated experiment (4 releases per bin here, 12 in the example)
+/// runs in every bin without diverging; what it reaches is held: the score
+/// no worse than 2.6 (measured 2.44; the target 0.6 is missed: no
+/// simulated square tumbles), descent within 10 % in the two smallest bins.
+#[test]
+fn the_simulated_experiment_holds_what_it_reaches() {
+    let real = squares();
+    let cmp = real_falls::compare(&real, &AeroSpec::unsteady(), 4, 1).unwrap();
+    for (r, s) in cmp.real.iter().zip(&cmp.sim) {
+        println!(
+            "{:.1} cm: fT {:.2}/{:.2}, v {:.3}/{:.3}, drift {:.2}/{:.2}, Ω {:.1}/{:.1}",
+            r.side * 100.0,
+            r.tumbling,
+            s.tumbling,
+            r.descent,
+            s.descent,
+            r.drift,
+            s.drift,
+            r.omega,
+            s.omega
+        );
+        assert_eq!(s.drops, 4);
+        assert!(s.descent.is_finite() && s.descent > 0.0);
+    }
+    println!("score {:.2}", cmp.score());
+    assert!(cmp.score() <= 2.6, "score {}", cmp.score());
+    for k in 0..2 {
+        let ratio = cmp.sim[k].descent / cmp.real[k].descent;
+        assert!((ratio - 1.0).abs() < 0.10, "bin {k}: descent ratio {ratio}");
+    }
+}
