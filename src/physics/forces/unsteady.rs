@@ -562,8 +562,64 @@ pub fn free_particle_rate(
     let mut f_minus = vec![V3::zeros(); n];
     let mut added = vec![Matrix3::zeros(); n];
     let mut v = vec![V3::zeros(); n];
-    let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
     let mut worst: f64 = 0.0;
+    for (vel, spin) in sampled_motions(&axes, v_ref, q_ref, omega_ref) {
+        let base: Vec<V3> = (0..n).map(|i| vel + spin.cross(&(x[i] - centre))).collect();
+        // A deterministic start with every component.
+        let mut y: Vec<V3> = (0..n)
+            .map(|i| {
+                if free[i] {
+                    let k = i as f64;
+                    V3::new(1.0 + 0.37 * k, -0.6 + 0.11 * k, 0.8 - 0.23 * k)
+                } else {
+                    V3::zeros()
+                }
+            })
+            .collect();
+        let norm = |y: &[V3]| y.iter().map(|a| a.norm_squared()).sum::<f64>().sqrt();
+        let mut log_growth = Vec::with_capacity(POWER_ITERATIONS);
+        for _ in 0..POWER_ITERATIONS {
+            let size = norm(&y);
+            if size <= 0.0 || !size.is_finite() {
+                break;
+            }
+            let eps = 1e-6 * v_ref.max(1e-9) / size;
+            for (sign, out) in [(1.0, &mut f_plus), (-1.0, &mut f_minus)] {
+                for i in 0..n {
+                    v[i] = base[i] + y[i] * (sign * eps);
+                }
+                out.fill(V3::zeros());
+                unsteady_forces(law, model, x, &v, None, &[], out, &mut added);
+            }
+            for i in 0..n {
+                y[i] = if free[i] {
+                    inverse[i] * (f_plus[i] - f_minus[i]) / (2.0 * eps)
+                } else {
+                    V3::zeros()
+                };
+            }
+            log_growth.push((norm(&y) / size).ln());
+        }
+        // The mean growth over the second half: the spectral radius
+        // (a complex pair makes single ratios oscillate).
+        let tail = &log_growth[log_growth.len() / 2..];
+        if !tail.is_empty() {
+            let rate = (tail.iter().sum::<f64>() / tail.len() as f64).exp();
+            if rate.is_finite() {
+                worst = worst.max(rate);
+            }
+        }
+    }
+    worst
+}
+
+/// The relative motions at which the measured rates are taken: a velocity
+/// of speed q_ref or v_ref along each of [`RATE_DIRECTIONS`] (in the frame
+/// `axes`, its normal part along `axes[2]` capped at q_ref, as in a fall),
+/// each without rotation and with rate `omega_ref` about either in-plane axis.
+fn sampled_motions(axes: &[V3; 3], v_ref: f64, q_ref: f64, omega_ref: f64) -> Vec<(V3, V3)> {
+    let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
+    let mut motions = Vec::with_capacity(RATE_DIRECTIONS.len() * 6);
     for d in RATE_DIRECTIONS {
         let dir = to_world(d).normalize();
         for speed in [q_ref, v_ref] {
@@ -573,55 +629,11 @@ pub fn free_particle_rate(
                 vel -= axes[2] * (normal - q_ref * normal.signum());
             }
             for spin in [V3::zeros(), axes[0] * omega_ref, axes[1] * omega_ref] {
-                let base: Vec<V3> = (0..n).map(|i| vel + spin.cross(&(x[i] - centre))).collect();
-                // A deterministic start with every component.
-                let mut y: Vec<V3> = (0..n)
-                    .map(|i| {
-                        if free[i] {
-                            let k = i as f64;
-                            V3::new(1.0 + 0.37 * k, -0.6 + 0.11 * k, 0.8 - 0.23 * k)
-                        } else {
-                            V3::zeros()
-                        }
-                    })
-                    .collect();
-                let norm = |y: &[V3]| y.iter().map(|a| a.norm_squared()).sum::<f64>().sqrt();
-                let mut log_growth = Vec::with_capacity(POWER_ITERATIONS);
-                for _ in 0..POWER_ITERATIONS {
-                    let size = norm(&y);
-                    if size <= 0.0 || !size.is_finite() {
-                        break;
-                    }
-                    let eps = 1e-6 * v_ref.max(1e-9) / size;
-                    for (sign, out) in [(1.0, &mut f_plus), (-1.0, &mut f_minus)] {
-                        for i in 0..n {
-                            v[i] = base[i] + y[i] * (sign * eps);
-                        }
-                        out.fill(V3::zeros());
-                        unsteady_forces(law, model, x, &v, None, &[], out, &mut added);
-                    }
-                    for i in 0..n {
-                        y[i] = if free[i] {
-                            inverse[i] * (f_plus[i] - f_minus[i]) / (2.0 * eps)
-                        } else {
-                            V3::zeros()
-                        };
-                    }
-                    log_growth.push((norm(&y) / size).ln());
-                }
-                // The mean growth over the second half: the spectral radius
-                // (a complex pair makes single ratios oscillate).
-                let tail = &log_growth[log_growth.len() / 2..];
-                if !tail.is_empty() {
-                    let rate = (tail.iter().sum::<f64>() / tail.len() as f64).exp();
-                    if rate.is_finite() {
-                        worst = worst.max(rate);
-                    }
-                }
+                motions.push((vel, spin));
             }
         }
     }
-    worst
+    motions
 }
 
 /// Directions of the relative velocity, in the body frame of the rest
@@ -705,42 +717,30 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
     let Some(inverse) = mass.try_inverse() else {
         return f64::INFINITY;
     };
-    let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
     let mut worst: f64 = 0.0;
-    for d in RATE_DIRECTIONS {
-        let dir = to_world(d).normalize();
-        for speed in [q_ref, v_ref] {
-            // The normal part (along axes[2]) no larger than q_ref.
-            let mut vel = dir * speed;
-            let normal = vel.dot(&axes[2]);
-            if normal.abs() > q_ref {
-                vel -= axes[2] * (normal - q_ref * normal.signum());
-            }
-            for spin in [V3::zeros(), axes[0] * omega_ref, axes[1] * omega_ref] {
-                let mut jac = nalgebra::Matrix6::<f64>::zeros();
-                let hv = 1e-6 * v_ref.max(1e-9);
-                let hw = 1e-6 * omega_ref.max(1e-9);
-                for col in 0..6 {
-                    let mut e = nalgebra::Vector6::<f64>::zeros();
-                    e[col] = if col < 3 { hv } else { hw };
-                    let dv = V3::new(e[0], e[1], e[2]);
-                    let dw = V3::new(e[3], e[4], e[5]);
-                    let (fp, tp) = load(vel + dv, spin + dw, &mut added);
-                    let (fm, tm) = load(vel - dv, spin - dw, &mut added);
-                    let step = 2.0 * e[col];
-                    for row in 0..3 {
-                        jac[(row, col)] = (fp[row] - fm[row]) / step;
-                        jac[(row + 3, col)] = (tp[row] - tm[row]) / step;
-                    }
-                }
-                let rate = (inverse * jac)
-                    .complex_eigenvalues()
-                    .iter()
-                    .map(|z| z.norm())
-                    .fold(0.0, f64::max);
-                worst = worst.max(rate);
+    for (vel, spin) in sampled_motions(&axes, v_ref, q_ref, omega_ref) {
+        let mut jac = nalgebra::Matrix6::<f64>::zeros();
+        let hv = 1e-6 * v_ref.max(1e-9);
+        let hw = 1e-6 * omega_ref.max(1e-9);
+        for col in 0..6 {
+            let mut e = nalgebra::Vector6::<f64>::zeros();
+            e[col] = if col < 3 { hv } else { hw };
+            let dv = V3::new(e[0], e[1], e[2]);
+            let dw = V3::new(e[3], e[4], e[5]);
+            let (fp, tp) = load(vel + dv, spin + dw, &mut added);
+            let (fm, tm) = load(vel - dv, spin - dw, &mut added);
+            let step = 2.0 * e[col];
+            for row in 0..3 {
+                jac[(row, col)] = (fp[row] - fm[row]) / step;
+                jac[(row + 3, col)] = (tp[row] - tm[row]) / step;
             }
         }
+        let rate = (inverse * jac)
+            .complex_eigenvalues()
+            .iter()
+            .map(|z| z.norm())
+            .fold(0.0, f64::max);
+        worst = worst.max(rate);
     }
     worst
 }
