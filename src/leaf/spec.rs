@@ -117,6 +117,10 @@ pub struct AeroSpec {
     /// μ₂ of the rotational damping beyond drag (unsteady law; default 0).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rotational_damping_quadratic: Option<f64>,
+    /// Share of the plate's rotation that drag and translational lift see
+    /// (unsteady law; default 0, APW's model; 1: strip theory).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation_drag: Option<f64>,
     /// Buoyancy on or off (unsteady law; default off).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub buoyancy: Option<bool>,
@@ -167,7 +171,7 @@ impl std::str::FromStr for AeroLawName {
 
 /// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
 /// `alpha_t` apart).
-const KEY_LAWS: [(&str, &[AeroLawName]); 14] = {
+const KEY_LAWS: [(&str, &[AeroLawName]); 15] = {
     use AeroLawName::{Quadratic as Q, Unsteady as U};
     [
         ("air_density", &[Q, U]),
@@ -182,6 +186,7 @@ const KEY_LAWS: [(&str, &[AeroLawName]); 14] = {
         ("translational_lift", &[U]),
         ("rotational_damping", &[U]),
         ("rotational_damping_quadratic", &[U]),
+        ("rotation_drag", &[U]),
         ("buoyancy", &[U]),
         ("solid_density", &[U]),
     ]
@@ -225,13 +230,14 @@ impl AeroSpec {
             translational_lift: None,
             rotational_damping: None,
             rotational_damping_quadratic: None,
+            rotation_drag: None,
             buoyancy: None,
             solid_density: None,
         }
     }
 
     /// Which optional keys are set.
-    fn set_keys(&self) -> [(&'static str, bool); 14] {
+    fn set_keys(&self) -> [(&'static str, bool); 15] {
         let set = [
             self.air_density.is_some(),
             self.cd_parallel.is_some(),
@@ -245,6 +251,7 @@ impl AeroSpec {
             self.translational_lift.is_some(),
             self.rotational_damping.is_some(),
             self.rotational_damping_quadratic.is_some(),
+            self.rotation_drag.is_some(),
             self.buoyancy.is_some(),
             self.solid_density.is_some(),
         ];
@@ -344,6 +351,7 @@ impl AeroSpec {
             rotational_damping_quadratic: self
                 .rotational_damping_quadratic
                 .unwrap_or(d.rotational_damping_quadratic),
+            rotation_drag: self.rotation_drag.unwrap_or(d.rotation_drag),
             buoyancy: self.buoyancy.unwrap_or(d.buoyancy),
             solid_density: self.solid_density.unwrap_or(d.solid_density),
         };

@@ -50,9 +50,13 @@ fn the_real_table_is_read_from_the_tracked_squares() {
 }
 
 /// The simulated experiment (4 releases per bin here, 12 in the example)
-/// runs in every bin without diverging; what it reaches is held: the score
-/// no worse than 2.6 (measured 2.44; the target 0.6 is missed: no
-/// simulated square tumbles), descent within 10 % in the two smallest bins.
+/// runs in every bin without diverging; what it reaches is held (measured
+/// at 4 releases, seed 1): the score no worse than 1.8 (1.48; 2.44 before
+/// drag stopped seeing the plate's rotation; the target 0.6 is missed),
+/// small squares let go flat tumble as real ones do (3.2 cm: 1.00 of the
+/// simulated drops, real 0.79) and the largest do not (9 cm: 0.00, real
+/// 0.04), the tumbling rate within 30 % of the real one in every bin
+/// (0.76–1.10) and descent within 30 % (0.73–0.93 of real).
 #[test]
 fn the_simulated_experiment_holds_what_it_reaches() {
     let real = squares();
@@ -72,11 +76,26 @@ fn the_simulated_experiment_holds_what_it_reaches() {
         );
         assert_eq!(s.drops, 4);
         assert!(s.descent.is_finite() && s.descent > 0.0);
+        let omega = s.omega / r.omega;
+        assert!((omega - 1.0).abs() < 0.30, "{} m: Ω ratio {omega}", r.side);
+        let descent = s.descent / r.descent;
+        assert!(
+            (descent - 1.0).abs() < 0.30,
+            "{} m: descent ratio {descent}",
+            r.side
+        );
     }
     println!("score {:.2}", cmp.score());
-    assert!(cmp.score() <= 2.6, "score {}", cmp.score());
-    for k in 0..2 {
-        let ratio = cmp.sim[k].descent / cmp.real[k].descent;
-        assert!((ratio - 1.0).abs() < 0.10, "bin {k}: descent ratio {ratio}");
-    }
+    assert!(cmp.score() <= 1.8, "score {}", cmp.score());
+    assert!(
+        cmp.sim[0].tumbling >= 0.5,
+        "3.2 cm: {}",
+        cmp.sim[0].tumbling
+    );
+    let last = cmp.sim.len() - 1;
+    assert!(
+        cmp.sim[last].tumbling <= 0.25,
+        "9 cm: {}",
+        cmp.sim[last].tumbling
+    );
 }

@@ -53,8 +53,19 @@
 //! # Circulation, drag, damping
 //!
 //! With u the air's velocity relative to the triangle (means over its
-//! corners), A its area, q = u·n and α its angle of attack (sin α = |q|/|u|):
+//! corners) less its plate's rotation, A its area, q = u·n and α its angle
+//! of attack (sin α = |q|/|u|):
 //!
+//! - u = −w̄ + (1 − κ) Ω × (c − C), w̄ the corners' mean velocity against
+//!   the air, c the triangle's centroid, C and Ω the area-weighted centre
+//!   and in-plane angular velocity (n × ṅ) of its plate, κ =
+//!   `rotation_drag` (default 0). APW's drag and circulation act on the
+//!   plate's centre velocity and their μ₁ is fitted as the whole damping of
+//!   the rotation; drag on each triangle's own velocity (κ = 1, strip
+//!   theory) adds ρ C_D⊥ U ω ∫r² dA on top, 2.5 times APW's μ₁ term for a
+//!   plate falling face-on, and keeps a flat-released square from ever
+//!   tumbling (docs/real-falls.md). A flexible leaf's deformation still
+//!   enters drag in full: only the plate's mean rotation is taken out;
 //! - drag and translational lift, APW's C_D(α) = C_D∥ cos²α + C_D⊥ sin²α
 //!   and translational circulation C_L = C_T sin 2α (APW 2005; Wang, Birch
 //!   & Dickinson 2004), F = ½ ρ A |u| [(C_D∥ + (C_D⊥ − C_D∥ − 2C_T) q²/|u|²) u
@@ -71,11 +82,13 @@
 //!   centroid, which does no work on a rigid plate;
 //! - rotational damping, APW's τ = (μ₁ + μ₂|ω̃|) ω̃ in their units, per area
 //!   τ = −(π/2) ρ A a² (μ₁ |u| + μ₂ a |ω|) ω with a = c/2, applied as a
-//!   couple. Drag on each triangle's own velocity already damps rotation
-//!   quadratically — for a 2-D plate of half-chord a, ρ C_D⊥ a⁴ ω|ω|/4 =
-//!   0.60 ρ a⁴ ω|ω| per span with C_D⊥ = 2.4, against APW's
-//!   π μ₂ ρ a⁴ ω|ω| = 0.63 ρ a⁴ ω|ω| — so μ₂ defaults to 0 and μ₁ to APW's
-//!   0.2;
+//!   couple. APW's μ₂ = 0.2 damps a plate turning in place; measured on
+//!   the real squares it stops the tumbling ones gliding (score 1.88 against
+//!   1.29 without, docs/real-falls.md), so μ₂ defaults to 0 and μ₁ to APW's
+//!   0.2 (with `rotation_drag = 1`, drag on each triangle's own velocity
+//!   damps rotation quadratically about as much as APW's μ₂: for a 2-D
+//!   plate of half-chord a, ρ C_D⊥ a⁴ ω|ω|/4 = 0.60 ρ a⁴ ω|ω| per span
+//!   against π μ₂ ρ a⁴ ω|ω| = 0.63 ρ a⁴ ω|ω|);
 //! - buoyancy (optional): ρ (m_i/ρ_s) g upward on every particle.
 //!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
@@ -131,6 +144,94 @@ pub fn unsteady_forces(
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
 ) {
+    PLATE_MOTION.with_borrow_mut(|plates| {
+        plate_motions(law, model, x, v, torn, plates);
+        per_triangle(law, model, x, v, wind, torn, plates, force, added);
+    });
+    if law.buoyancy {
+        let lift = -model.gravity * (law.air_density / law.solid_density);
+        for (fi, &m) in force.iter_mut().zip(&model.mass) {
+            *fi += lift * m;
+        }
+    }
+}
+
+/// What drag and translational lift remove from a triangle's velocity: its
+/// plate's rotation about the plate's centre (area-weighted means over the
+/// plate's intact triangles).
+#[derive(Clone, Copy, Debug, Default)]
+struct PlateMotion {
+    area: f64,
+    /// Σ A c, then the centre.
+    centre: V3,
+    /// Σ A ω, then the mean in-plane angular velocity n × ṅ.
+    omega: V3,
+}
+
+thread_local! {
+    /// Scratch for [`plate_motions`], kept per thread so that the step loop
+    /// does not allocate (tests/integration/alloc.rs) without widening the
+    /// force kernels' signatures.
+    static PLATE_MOTION: std::cell::RefCell<Vec<PlateMotion>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// Fills `plates` with each plate's [`PlateMotion`]; left empty when the law
+/// keeps the whole rotation in drag (`rotation_drag = 1`).
+fn plate_motions(
+    law: &UnsteadyAero,
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    torn: &[bool],
+    plates: &mut Vec<PlateMotion>,
+) {
+    plates.clear();
+    if law.rotation_drag >= 1.0 {
+        return;
+    }
+    let count = model
+        .surfaces
+        .iter()
+        .map(|g| g.plate + 1)
+        .max()
+        .unwrap_or(0);
+    plates.resize(count, PlateMotion::default());
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+            continue;
+        };
+        let [a, b, c] = tri.corners;
+        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
+        let doubled = n2.sqrt();
+        let n = big_n / doubled;
+        let n_dot_raw = (v[b] - v[a]).cross(&e2) + e1.cross(&(v[c] - v[a]));
+        let n_dot = (n_dot_raw - n * n.dot(&n_dot_raw)) / doubled;
+        let area = 0.5 * doubled;
+        let p = &mut plates[model.surfaces[t].plate];
+        p.area += area;
+        p.centre += (x[a] + x[b] + x[c]) * (area / 3.0);
+        p.omega += n.cross(&n_dot) * area;
+    }
+    for p in plates.iter_mut().filter(|p| p.area > 0.0) {
+        p.centre /= p.area;
+        p.omega /= p.area;
+    }
+}
+
+/// The per-triangle terms of [`unsteady_forces`].
+#[allow(clippy::too_many_arguments)]
+fn per_triangle(
+    law: &UnsteadyAero,
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    plates: &[PlateMotion],
+    force: &mut [V3],
+    added: &mut [Matrix3<f64>],
+) {
     let rho = law.air_density;
     let half_rho = 0.5 * rho;
     let rho_added = rho * law.added_mass;
@@ -177,7 +278,13 @@ pub fn unsteady_forces(
             couple_arm -= q - n * n.dot(&q);
         }
 
-        let u = -(w[0] + w[1] + w[2]) * third;
+        // The air's velocity relative to the triangle, less the share
+        // (1 − rotation_drag) of what the plate's rotation gives it.
+        let mut u = -(w[0] + w[1] + w[2]) * third;
+        if let Some(p) = plates.get(geom.plate).filter(|p| p.area > 0.0) {
+            let r = (x[a] + x[b] + x[c]) * third - p.centre;
+            u += p.omega.cross(&r) * (1.0 - law.rotation_drag);
+        }
         let u2 = u.norm_squared();
         let speed = u2.sqrt();
         if u2 > f64::MIN_POSITIVE {
@@ -233,12 +340,6 @@ pub fn unsteady_forces(
 
         for k in 0..3 {
             force[corners[k]] += f[k] + n * grads[k].dot(&couple_arm);
-        }
-    }
-    if law.buoyancy {
-        let lift = -model.gravity * (rho / law.solid_density);
-        for (fi, &m) in force.iter_mut().zip(&model.mass) {
-            *fi += lift * m;
         }
     }
 }

@@ -232,9 +232,15 @@ pub struct UnsteadyAero {
     /// μ₁ of the rotational damping torque (μ₁ |v| + μ₂ a |ω|) ω per unit
     /// (π/2) ρ a² A.
     pub rotational_damping: f64,
-    /// μ₂ of the rotational damping torque (on top of what drag on each
-    /// triangle's own velocity already damps).
+    /// μ₂ of the rotational damping torque.
     pub rotational_damping_quadratic: f64,
+    /// Share of the velocity a triangle gets from its plate's rotation that
+    /// drag and translational lift see: 0 (the default) evaluates them on
+    /// the plate's translation, as APW's model does, so rotation acts only
+    /// through the rotational lift and damping calibrated for it; 1 is strip
+    /// theory (each triangle's own velocity), which damps a turning plate
+    /// 2–3 times more than APW's μ₁ term (docs/real-falls.md).
+    pub rotation_drag: f64,
     /// Buoyancy: an upward force ρ (m/ρ_s) g on every particle.
     pub buoyancy: bool,
     /// Density of the leaf's material ρ_s for buoyancy, kg/m³.
@@ -254,9 +260,13 @@ pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 1.2;
 pub const UNSTEADY_ROTATIONAL_LIFT: f64 = std::f64::consts::PI;
 /// Default μ₁: APW 2005's 0.2.
 pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.2;
-/// Default μ₂ beyond drag on each triangle's own velocity: none (that drag
-/// already gives APW's μ₂ = 0.2; see [`crate::physics::forces::unsteady`]).
+/// Default μ₂: none (APW's 0.2 stops the real squares' tumbling glide; see
+/// [`crate::physics::forces::unsteady`] and docs/real-falls.md).
 pub const UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC: f64 = 0.0;
+/// Default share of the plate's rotation in drag and translational lift:
+/// none, as in APW 2005, whose drag and circulation act on the plate's
+/// centre velocity and whose μ₁ is the whole rotational damping.
+pub const UNSTEADY_ROTATION_DRAG: f64 = 0.0;
 /// Density of paper, kg/m³ (70 g/m² paper is 69 µm thick:
 /// docs/falling-plates.md, "Measured regimes").
 pub const PAPER_DENSITY: f64 = 1008.0;
@@ -274,6 +284,7 @@ impl Default for UnsteadyAero {
             rotational_lift: UNSTEADY_ROTATIONAL_LIFT,
             rotational_damping: UNSTEADY_ROTATIONAL_DAMPING,
             rotational_damping_quadratic: UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC,
+            rotation_drag: UNSTEADY_ROTATION_DRAG,
             buoyancy: false,
             solid_density: PAPER_DENSITY,
         }
@@ -282,7 +293,7 @@ impl Default for UnsteadyAero {
 
 impl UnsteadyAero {
     /// The coefficients by name, as leaf files spell them.
-    pub fn coefficients(&self) -> [(&'static str, f64); 11] {
+    pub fn coefficients(&self) -> [(&'static str, f64); 12] {
         [
             ("air_density", self.air_density),
             ("kinematic_viscosity", self.kinematic_viscosity),
@@ -297,6 +308,7 @@ impl UnsteadyAero {
                 "rotational_damping_quadratic",
                 self.rotational_damping_quadratic,
             ),
+            ("rotation_drag", self.rotation_drag),
             ("solid_density", self.solid_density),
         ]
     }
@@ -324,6 +336,15 @@ impl UnsteadyAero {
             if value <= 0.0 {
                 return Err(err(name, format!("must be > 0 {unit}, got {value}")));
             }
+        }
+        if self.rotation_drag > 1.0 {
+            return Err(err(
+                "rotation_drag",
+                format!(
+                    "must be in [0, 1] (0: drag on the plate's translation, 1: on each triangle's own velocity), got {}",
+                    self.rotation_drag
+                ),
+            ));
         }
         // In-plane drag C_D∥ + (C_D⊥ − C_D∥ − 2C_T) sin²α must stay ≥ 0 or
         // the air would push a sliding plate forwards.

@@ -78,6 +78,9 @@ pub struct SurfaceGeometry {
     /// The plate's chord through the centroid at the pseudo-angles of
     /// [`SurfaceGeometry::chord`], m; entry 0 and the last are the same direction.
     pub chords: [f64; CHORD_SAMPLES + 1],
+    /// Index of the plate (triangles connected through shared edges,
+    /// [`plates`]) this triangle belongs to.
+    pub plate: usize,
 }
 
 impl SurfaceGeometry {
@@ -189,10 +192,14 @@ pub fn surface_geometry(x: &[V3], corners: &[[usize; 3]]) -> Vec<SurfaceGeometry
             added_mass: [0.0; 3],
             rest_edges: [0.0; 3],
             chords: [0.0; CHORD_SAMPLES + 1],
+            plate: 0,
         };
         corners.len()
     ];
-    for plate in plates(corners) {
+    for (index, plate) in plates(corners).into_iter().enumerate() {
+        for &t in &plate {
+            out[t].plate = index;
+        }
         measure_plate(x, corners, &plate, &mut out);
     }
     out
