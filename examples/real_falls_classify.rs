@@ -230,9 +230,57 @@ fn consistency(title: &str, falls: &[Fall]) {
         );
         tables.push((label, corpus::confusion(&pairs)));
     }
+    // The same cut given to both: the full classifier with orientation
+    // (noise-free), the path without (98 Hz, 1 mm noise, areas or not).
+    for (label, areas) in [
+        (
+            "video, path only, against the full classifier on the same cut",
+            false,
+        ),
+        (
+            "video + areas, against the full classifier on the same cut",
+            true,
+        ),
+    ] {
+        let mut pairs = Vec::new();
+        for (i, f) in falls.iter().enumerate() {
+            let end = *f.trajectory.time.last().unwrap();
+            for (k, &t0) in [end - 1.5, 5.0].iter().enumerate() {
+                let n = (1.5 * 98.0 + 1e-9f64).floor() as usize + 1;
+                let times: Vec<f64> = (0..n).map(|j| t0 + j as f64 / 98.0).collect();
+                let reference = classify(&f.trajectory.sampled_at(&times), f.chord).class;
+                let video = corpus::video(
+                    &f.trajectory,
+                    t0,
+                    1.5,
+                    98.0,
+                    0.001,
+                    areas,
+                    (2 * i + k) as u64,
+                );
+                pairs.push((reference, classify(&video, f.chord).class));
+            }
+        }
+        let named: Vec<_> = pairs
+            .iter()
+            .filter(|p| p.0 != MotionClass::Undetermined)
+            .collect();
+        let named_agree = named.iter().filter(|p| p.0 == p.1).count();
+        let agree = pairs.iter().filter(|p| p.0 == p.1).count();
+        println!(
+            "| {label} | {} | {} | {} |",
+            pct(agree, pairs.len()),
+            pct(named_agree, named.len()),
+            pairs
+                .iter()
+                .filter(|p| p.1 == MotionClass::Undetermined)
+                .count()
+        );
+        tables.push((label, corpus::confusion(&pairs)));
+    }
     println!();
     for (label, t) in tables {
-        println!("Full classifier on the whole fall (rows) against {label} (columns):\n");
+        println!("Full classifier (rows) against {label} (columns):\n");
         print_confusion(&t, "full");
     }
 }
