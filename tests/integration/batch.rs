@@ -103,3 +103,35 @@ fn different_topologies_are_refused() {
     let err = Batch::<2>::new([&a, &b], [&sa, &sb], [1e-3; 2]).unwrap_err();
     assert!(matches!(err, BatchError::Topology { lane: 1, .. }), "{err}");
 }
+
+/// A breed's evaluations in lockstep groups are those of lone drops, to the
+/// bit (compared through their Debug text, which prints every f64 exactly),
+/// with a remainder that is evaluated alone (10 children: two batches and
+/// two alone).
+#[test]
+fn lockstep_evaluations_equal_lone_ones() {
+    use leafmagic::breed::evaluate::{evaluate, evaluate_lockstep};
+    use leafmagic::breed::settings::BreedSettings;
+    let spec = LeafSpec::load("a").unwrap();
+    let settings = BreedSettings {
+        seconds: 1.5,
+        ..BreedSettings::default_run()
+    };
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
+    let g = Genome::of_prototype(&spec);
+    let genomes: Vec<Genome> = (0..10)
+        .map(|_| mutate(&g, &spec.bounds, 1.5, &mut rng))
+        .collect();
+    let refs: Vec<&Genome> = genomes.iter().collect();
+    let count = std::sync::atomic::AtomicUsize::new(0);
+    let together = evaluate_lockstep(&spec, &refs, &settings, &|_| {
+        count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+    });
+    assert_eq!(count.into_inner(), 10);
+    for (g, e) in genomes.iter().zip(&together) {
+        assert_eq!(
+            format!("{e:?}"),
+            format!("{:?}", evaluate(&spec, g, &settings))
+        );
+    }
+}
