@@ -1,11 +1,14 @@
 //! `generation`: evaluating one generation of the default breed (100 variants
 //! of prototype A, 10 s drops, classified) on 1 and on 2 threads. The ratio
-//! of the two times is the parallel speed-up. `like_threads_2` evaluates the
+//! of the two times is the parallel speed-up; `lockstep_threads_N` is the
+//! same generation evaluated as the breed does it, four children at a time
+//! in lockstep batches. `like_threads_2` evaluates the
 //! same 100 genomes scored toward an example fall (`breed --like`, the
 //! tumbling fixture) instead of a class: the same drops, so the difference is
 //! the cost of describing each fall and measuring its distance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
+use leafmagic::breed::evaluate::evaluate_lockstep;
 use leafmagic::breed::selection::stream_seed;
 use leafmagic::breed::{BreedSettings, evaluate};
 use leafmagic::leaf::LeafSpec;
@@ -61,6 +64,14 @@ fn generation(c: &mut Criterion) {
                         .collect();
                     black_box(evals)
                 })
+            })
+        });
+        // The same children four at a time in lockstep batches (what the
+        // breed runs): the same evaluations to the bit.
+        let refs: Vec<&Genome> = genomes.iter().collect();
+        group.bench_function(format!("lockstep_threads_{threads}"), |b| {
+            b.iter(|| {
+                pool.install(|| black_box(evaluate_lockstep(&proto, &refs, &settings, &|_| {})))
             })
         });
     }

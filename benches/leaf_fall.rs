@@ -112,5 +112,95 @@ fn leaf_fall(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, leaf_fall);
+criterion_group!(benches, leaf_fall, lockstep);
 criterion_main!(benches);
+
+/// Lockstep batches (issue 20): four mutated leaves of prototype A, each
+/// on its own auto step for one simulated second, stepped one after
+/// another by `Simulator` (`scalar_4_leaves_1s`) and together in the lanes
+/// of a `Batch` (`batch_4_leaves_1s`, with AVX2 where the CPU has it; with
+/// the baseline's SSE2 only; and two batches of two). The lanes
+/// end bit for bit where the lone leaves end (tests/integration/batch.rs).
+fn lockstep(c: &mut Criterion) {
+    use leafmagic::leaf::genome::{Genome, mutate};
+    use leafmagic::physics::batch::Batch;
+    use rand::SeedableRng;
+    let spec = LeafSpec::load("a").unwrap();
+    let mut rng = rand::rngs::Xoshiro256PlusPlus::seed_from_u64(20);
+    let g = Genome::of_prototype(&spec);
+    let models: Vec<_> = (0..4)
+        .map(|_| {
+            mutate(&g, &spec.bounds, 1.0, &mut rng)
+                .model(&spec)
+                .unwrap()
+        })
+        .collect();
+    let dt: Vec<f64> = models
+        .iter()
+        .map(|m| {
+            run::resolve_step(
+                m,
+                Integrator::Verlet,
+                TimeStep::Auto,
+                1.0 / drop::FRAME_RATE,
+            )
+            .unwrap()
+        })
+        .collect();
+    let steps: Vec<u64> = dt.iter().map(|h| (1.0 / h).round() as u64).collect();
+    let states: Vec<State> = models
+        .iter()
+        .map(|m| State::released(m, drop::release_rotation([10.0, 2.0]), Default::default()))
+        .collect();
+    let mut group = c.benchmark_group("lockstep");
+    group.bench_function("scalar_4_leaves_1s", |b| {
+        b.iter(|| {
+            for k in 0..4 {
+                let mut state = states[k].clone();
+                let mut sim = Simulator::new(&models[k], Integrator::Verlet);
+                for _ in 0..steps[k] {
+                    sim.step(&models[k], &mut state, dt[k]).unwrap();
+                }
+                black_box(&state);
+            }
+        })
+    });
+    fn run_batch<const L: usize>(
+        models: &[leafmagic::physics::model::Model],
+        states: &[State],
+        dt: &[f64],
+        steps: &[u64],
+        baseline: bool,
+    ) {
+        let mut batch = Batch::<L>::new(
+            std::array::from_fn(|k| &models[k]),
+            std::array::from_fn(|k| &states[k]),
+            std::array::from_fn(|k| dt[k]),
+        )
+        .unwrap();
+        if baseline {
+            batch = batch.baseline_vectors();
+        }
+        loop {
+            let active: [bool; L] = std::array::from_fn(|k| batch.steps()[k] < steps[k]);
+            if !active.iter().any(|&a| a) {
+                break;
+            }
+            black_box(batch.step(active));
+        }
+        black_box(batch.lane(0));
+    }
+    group.bench_function("batch_4_leaves_1s", |b| {
+        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, false))
+    });
+    group.bench_function("batch_4_leaves_1s_baseline_vectors", |b| {
+        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, true))
+    });
+    group.bench_function("batch_2x2_leaves_1s", |b| {
+        b.iter(|| {
+            run_batch::<2>(&models[..2], &states[..2], &dt[..2], &steps[..2], false);
+            run_batch::<2>(&models[2..], &states[2..], &dt[2..], &steps[2..], false);
+        })
+    });
+    group.finish();
+}

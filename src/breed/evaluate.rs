@@ -6,8 +6,10 @@ use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
 use crate::motion::classify::{MotionClass, classify};
 use crate::motion::describe::Descriptors;
+use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
-use crate::sim::drop::{DropParams, drop_leaf};
+use crate::sim::drop::{DropError, DropParams, DropResult, drop_leaf, drop_leaves, drop_work};
+use rayon::prelude::*;
 
 /// Score of a fall bred toward motion descriptors: as [`score`] for the
 /// gate's class, but within it 1 + 1/(1 + d), so that the closest falls
@@ -36,24 +38,117 @@ pub fn score(class: Option<MotionClass>, margin: f64, target: MotionClass) -> f6
     }
 }
 
-/// Drops one variant and scores its fall.
-pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> Evaluation {
-    let diverged = |error: String| Evaluation {
-        outcome: Outcome::Diverged(error),
-        score: score(None, 0.0, settings.target),
-        distance: None,
-    };
-    let model = match genome.model(proto) {
-        Ok(m) => m,
-        Err(e) => return diverged(format!("invalid model: {e}")),
-    };
-    let params = DropParams {
+/// Children a breed drops side by side in the lanes of one lockstep batch
+/// ([`evaluate_lockstep`]): four, the f64 lanes of one AVX2 register.
+pub const LOCKSTEP: usize = 4;
+
+/// The drop settings of a breed's evaluations.
+fn drop_params(settings: &BreedSettings) -> DropParams {
+    DropParams {
         seconds: settings.seconds,
         dt: TimeStep::Auto,
         ..Default::default()
+    }
+}
+
+fn diverged(error: String, settings: &BreedSettings) -> Evaluation {
+    Evaluation {
+        outcome: Outcome::Diverged(error),
+        score: score(None, 0.0, settings.target),
+        distance: None,
+    }
+}
+
+/// Drops one variant and scores its fall.
+pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> Evaluation {
+    let model = match genome.model(proto) {
+        Ok(m) => m,
+        Err(e) => return diverged(format!("invalid model: {e}"), settings),
     };
-    match drop_leaf(&model, &params) {
-        Err(e) => diverged(e.to_string()),
+    let drop = drop_leaf(&model, &drop_params(settings));
+    scored(&model, drop, settings)
+}
+
+/// [`evaluate`] of each of `genomes` (in their order), on the current rayon
+/// pool, [`LOCKSTEP`] at a time in the lanes of one batch
+/// ([`drop_leaves`]), calling `done` after each. Lanes of a batch step
+/// together until the last is done, so children are grouped by their auto
+/// step (a batch of similar steps wastes few lane-steps); a remainder, or a
+/// child whose model is invalid, is evaluated alone. Every evaluation is the
+/// one [`evaluate`] gives, to the bit, however the children are grouped
+/// (a lane computes what a lone drop computes), so a breed's results
+/// depend neither on the grouping nor on the threads.
+pub fn evaluate_lockstep(
+    proto: &LeafSpec,
+    genomes: &[&Genome],
+    settings: &BreedSettings,
+    done: &(dyn Fn(&Evaluation) + Sync),
+) -> Vec<Evaluation> {
+    let params = drop_params(settings);
+    // (step, index) of every child that can share a batch.
+    let models: Vec<Option<(Model, f64)>> = genomes
+        .par_iter()
+        .map(|g| {
+            let model = g.model(proto).ok()?;
+            let dt = drop_work(&model, &params).ok()?.dt;
+            Some((model, dt))
+        })
+        .collect();
+    let mut order: Vec<(f64, usize)> = models
+        .iter()
+        .enumerate()
+        .filter_map(|(i, m)| m.as_ref().map(|(_, dt)| (*dt, i)))
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let groups: Vec<&[(f64, usize)]> = order.chunks(LOCKSTEP).collect();
+    let batched: Vec<(usize, Evaluation)> = groups
+        .par_iter()
+        .flat_map_iter(|group| {
+            let evals: Vec<Evaluation> = if group.len() == LOCKSTEP {
+                let model = |k: usize| &models[group[k].1].as_ref().expect("batchable").0;
+                let drops = drop_leaves::<LOCKSTEP>(std::array::from_fn(model), &params);
+                drops
+                    .into_iter()
+                    .enumerate()
+                    .map(|(k, d)| scored(model(k), d, settings))
+                    .collect()
+            } else {
+                group
+                    .iter()
+                    .map(|&(_, i)| evaluate(proto, genomes[i], settings))
+                    .collect()
+            };
+            evals.iter().for_each(done);
+            group.iter().map(|&(_, i)| i).zip(evals).collect::<Vec<_>>()
+        })
+        .collect();
+    let alone: Vec<(usize, Evaluation)> = models
+        .par_iter()
+        .enumerate()
+        .filter(|(_, m)| m.is_none())
+        .map(|(i, _)| {
+            let eval = evaluate(proto, genomes[i], settings);
+            done(&eval);
+            (i, eval)
+        })
+        .collect();
+    let mut out: Vec<Option<Evaluation>> = vec![None; genomes.len()];
+    for (i, eval) in batched.into_iter().chain(alone) {
+        out[i] = Some(eval);
+    }
+    out.into_iter()
+        .map(|e| e.expect("every child evaluated once"))
+        .collect()
+}
+
+/// The evaluation of `model`'s drop: its classification and score.
+fn scored(
+    model: &Model,
+    drop: Result<DropResult, DropError>,
+    settings: &BreedSettings,
+) -> Evaluation {
+    match drop {
+        Err(e) => diverged(e.to_string(), settings),
         Ok(result) => {
             let c = classify(&result.trajectory, model.chord());
             let f = &c.features;

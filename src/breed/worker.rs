@@ -1,12 +1,11 @@
 //! What `leafmagic shard` does: evaluate one shard of the next generation
 //! of a run directory, read-only but for its own shard file.
 
-use super::evaluate::evaluate;
+use super::evaluate::evaluate_lockstep;
 use super::population::{BreedError, Evaluation, io_err};
 use super::run::Run;
 use super::shard::{ShardFile, Split, encode, generation_dir, plan_hash, read_valid, shard_path};
 use crate::util::io::write_atomic;
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// What [`run_shard`] did.
@@ -62,10 +61,10 @@ pub fn run_shard(
     }
     let members = split.members(&plan.children);
     let settings = run.settings();
-    let rows: Vec<(u64, Evaluation)> = members
-        .par_iter()
-        .map(|c| (c.id, evaluate(&run.proto, &c.genome, settings)))
-        .collect();
+    // As the local executor: lockstep batches, the same bits.
+    let genomes: Vec<_> = members.iter().map(|c| &c.genome).collect();
+    let evals = evaluate_lockstep(&run.proto, &genomes, settings, &|_| {});
+    let rows: Vec<(u64, Evaluation)> = members.iter().map(|c| c.id).zip(evals).collect();
     let n = rows.len();
     let text = encode(&ShardFile {
         generation,

@@ -26,6 +26,7 @@
 //! [`forces::hinges`]; breaking: [`integrate::break_springs`]; rigid bodies
 //! (after Hahn 1988): [`rigid`]; ground contact: [`contact`].
 
+pub mod batch;
 pub mod contact;
 pub mod field;
 pub mod forces;

@@ -783,15 +783,16 @@ pub fn run_sampled_until(
     ))
 }
 
-/// Where time `t` falls in the step [begin, begin + dt], as s ∈ [0, 1].
+/// Where time `t` falls in the step [begin, begin + dt], as s ∈ [0, 1]
+/// (the sampling of [`run_sampled_until`], shared with lockstep drops).
 #[inline]
-fn within(t: f64, begin: f64, dt: f64) -> f64 {
+pub fn within(t: f64, begin: f64, dt: f64) -> f64 {
     ((t - begin) / dt).clamp(0.0, 1.0)
 }
 
 /// The cubic Hermite interpolant at s ∈ [0, 1] of a step of length `h`
 /// from (x0, v0) to (x1, v1).
-fn hermite(
+pub fn hermite(
     x0: &[Vector3<f64>],
     v0: &[Vector3<f64>],
     x1: &[Vector3<f64>],

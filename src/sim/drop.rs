@@ -2,16 +2,18 @@
 //! still air, its pose recorded at every frame.
 
 use crate::motion::trajectory::Trajectory;
+use crate::physics::batch::Batch;
 use crate::physics::integrate::SimError;
 use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::pose::PoseTracker;
 use crate::physics::run::{
-    Command, MAX_WORK, PoseFault, RunStats, StepError, Work, check_budget, resolve_step,
-    run_sampled_until,
+    Command, MAX_WORK, PoseFault, RunStats, StepError, Work, check_budget, hermite, resolve_step,
+    run_sampled_until, within,
 };
 use crate::physics::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
+use std::time::Instant;
 
 /// Output frames per simulated second of trajectory files.
 pub const FRAME_RATE: f64 = 240.0;
@@ -147,6 +149,169 @@ pub fn drop_leaf_within(
         particles,
         stats,
     })
+}
+
+/// [`drop_leaf`] of `L` leaves at once: where they share a topology and
+/// need only what a lockstep [`Batch`] steps (the default integrator in
+/// still air, as a breed's leaves do), in its lanes, each leaf on its own
+/// step and sampled at its own frames; else one after another. Each result
+/// is the one [`drop_leaf`] gives, to the bit: a lane's arithmetic is a lone
+/// drop's (tests/integration/batch.rs), and a lane that diverges or whose
+/// pose is not finite is dropped again alone for its diagnosis. Only the
+/// wall time of the stepping loop (`stats.wall_s`, shared by the lanes)
+/// differs.
+pub fn drop_leaves<const L: usize>(
+    models: [&Model; L],
+    params: &DropParams,
+) -> [Result<DropResult, DropError>; L] {
+    match drop_lockstep(models, params) {
+        Some(results) => results,
+        None => models.map(|m| drop_leaf(m, params)),
+    }
+}
+
+/// One lane of [`drop_lockstep`]: its pose, its frames, and the step ends
+/// it samples between.
+struct Lane {
+    tracker: PoseTracker,
+    trajectory: Trajectory,
+    /// The next frame to sample.
+    frame: u64,
+    x0: Vec<Vector3<f64>>,
+    v0: Vec<Vector3<f64>>,
+    x1: Vec<Vector3<f64>>,
+    v1: Vec<Vector3<f64>>,
+    sample: Vec<Vector3<f64>>,
+    /// Diverged, or a pose not finite: dropped again alone.
+    failed: bool,
+}
+
+/// The lockstep drops of [`drop_leaves`], with [`run_sampled_until`]'s
+/// frame sampling per lane; `None` if the leaves cannot share a batch or a
+/// drop would be refused (the lone drops then say why).
+fn drop_lockstep<const L: usize>(
+    models: [&Model; L],
+    params: &DropParams,
+) -> Option<[Result<DropResult, DropError>; L]> {
+    if params.integrator != Integrator::Verlet || params.record_particles {
+        return None;
+    }
+    let frame_dt = 1.0 / FRAME_RATE;
+    let mut dt = [0.0; L];
+    for (h, model) in dt.iter_mut().zip(models) {
+        let work = drop_work(model, params).ok()?;
+        work.check(model, frame_dt, MAX_WORK, Command::Drop).ok()?;
+        *h = work.dt;
+    }
+    let frames = (params.seconds * FRAME_RATE).round() as u64;
+    let release = release_rotation(params.tilt_deg);
+    let states = models.map(|m| State::released(m, release, Vector3::zeros()));
+    let mut batch = Batch::new(models, std::array::from_fn(|k| &states[k]), dt).ok()?;
+    let mut lanes: [Lane; L] = std::array::from_fn(|k| {
+        let n = models[k].len();
+        let mut tracker = PoseTracker::new(models[k], release);
+        let mut trajectory = Trajectory::with_capacity(frames as usize + 1);
+        let (c, q) = tracker.pose(models[k], &states[k].position);
+        let failed = !finite_pose(&c, &q);
+        trajectory.push(0.0, c, q);
+        Lane {
+            tracker,
+            trajectory,
+            frame: 1,
+            x0: states[k].position.clone(),
+            v0: states[k].velocity.clone(),
+            x1: vec![Vector3::zeros(); n],
+            v1: vec![Vector3::zeros(); n],
+            sample: vec![Vector3::zeros(); n],
+            failed,
+        }
+    });
+    let start = Instant::now();
+    loop {
+        let active: [bool; L] =
+            std::array::from_fn(|k| !lanes[k].failed && lanes[k].frame <= frames);
+        if !active.contains(&true) {
+            break;
+        }
+        let steps = batch.steps();
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            // The start of the step, if a frame falls inside it.
+            let begin = steps[k] as f64 * dt[k];
+            if active[k] && within(lane.frame as f64 * frame_dt, begin, dt[k]) < 1.0 - 1e-12 {
+                batch.lane_into(k, &mut lane.x0, &mut lane.v0);
+            }
+        }
+        let live = batch.step(active);
+        for (k, lane) in lanes.iter_mut().enumerate() {
+            if !active[k] {
+                continue;
+            }
+            if !live[k] {
+                lane.failed = true;
+                continue;
+            }
+            let (begin, end) = (steps[k] as f64 * dt[k], (steps[k] + 1) as f64 * dt[k]);
+            let due =
+                |frame: u64| frame <= frames && frame as f64 * frame_dt <= end * (1.0 + 1e-12);
+            if due(lane.frame) {
+                batch.lane_into(k, &mut lane.x1, &mut lane.v1);
+            }
+            while due(lane.frame) {
+                let s = within(lane.frame as f64 * frame_dt, begin, dt[k]);
+                let x = if s >= 1.0 - 1e-12 {
+                    &lane.x1
+                } else {
+                    hermite(
+                        &lane.x0,
+                        &lane.v0,
+                        &lane.x1,
+                        &lane.v1,
+                        dt[k],
+                        s,
+                        &mut lane.sample,
+                    );
+                    &lane.sample
+                };
+                let (c, q) = lane.tracker.pose(models[k], x);
+                if !finite_pose(&c, &q) {
+                    lane.failed = true;
+                    break;
+                }
+                lane.trajectory.push(lane.frame as f64 * frame_dt, c, q);
+                lane.frame += 1;
+            }
+        }
+    }
+    let wall_s = start.elapsed().as_secs_f64();
+    let steps = batch.steps();
+    let mut lanes = lanes.into_iter();
+    Some(std::array::from_fn(|k| {
+        let lane = lanes.next().expect("one lane per model");
+        if lane.failed {
+            return drop_leaf(models[k], params);
+        }
+        Ok(DropResult {
+            trajectory: lane.trajectory,
+            particles: None,
+            stats: RunStats {
+                integrator: Integrator::Verlet,
+                dt: dt[k],
+                steps: steps[k],
+                simulated_s: frames as f64 * frame_dt,
+                wall_s,
+                // Verlet: the first step's acceleration, then one per step.
+                force_evals: steps[k] + 1,
+                broken_springs: 0,
+                contacts_resolved: 0,
+            },
+        })
+    }))
+}
+
+/// Whether a pose fit is finite (what `drop_leaf_within` requires of every
+/// frame).
+fn finite_pose(c: &Vector3<f64>, q: &UnitQuaternion<f64>) -> bool {
+    c.iter().all(|v| v.is_finite()) && q.coords.iter().all(|v| v.is_finite())
 }
 
 /// Why a drop did not complete.

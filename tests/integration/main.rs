@@ -4,6 +4,7 @@
 mod accuracy;
 mod aero_law;
 mod alloc;
+mod batch;
 mod breeding;
 mod classes;
 mod common;
