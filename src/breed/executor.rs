@@ -45,7 +45,7 @@ impl Executor for Local {
             .children
             .par_iter()
             .map(|c| {
-                let eval = evaluate(job.proto, &c.genome, settings);
+                let eval = evaluate(job.proto, c.id, &c.genome, settings);
                 progress.individual_done(eval.class_name(), eval.score);
                 eval
             })

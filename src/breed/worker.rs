@@ -64,7 +64,7 @@ pub fn run_shard(
     let settings = run.settings();
     let rows: Vec<(u64, Evaluation)> = members
         .par_iter()
-        .map(|c| (c.id, evaluate(&run.proto, &c.genome, settings)))
+        .map(|c| (c.id, evaluate(&run.proto, c.id, &c.genome, settings)))
         .collect();
     let n = rows.len();
     let text = encode(&ShardFile {

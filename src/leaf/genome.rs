@@ -24,8 +24,11 @@ pub mod sigma {
     pub const LOG_TOTAL_MASS: f64 = 0.15;
     /// ln of each stiffness group's factor (log-normal).
     pub const LOG_STIFFNESS: f64 = 0.3;
-    /// ln of the size factor (log-normal).
-    pub const LOG_SIZE: f64 = 0.08;
+    /// ln of the size factor (log-normal): a quarter, so that the default
+    /// bounds (½–2×, ln 2 = 0.69 away) are under three steps from the
+    /// prototype (issue 19: at 0.08 they were 8.7 steps away, and
+    /// `--target-features descent=0.6,spin=20` needs them).
+    pub const LOG_SIZE: f64 = 0.25;
 }
 
 /// The name of the stiffness group that scales the bending hinges.
@@ -128,6 +131,123 @@ impl Genome {
         }
         out.push(("size".to_string(), self.size_factor));
         out
+    }
+}
+
+/// How one gene maps onto the unit interval the search strategies work in
+/// ([`Genome::coordinates`]): fold angles linearly over their bounds,
+/// positive factors by their logarithm (so a step doubles or halves them
+/// alike).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Axis {
+    Linear([f64; 2]),
+    Log([f64; 2]),
+}
+
+impl Axis {
+    fn to_unit(self, v: f64) -> f64 {
+        let (x, [lo, hi]) = match self {
+            Axis::Linear(r) => (v, r),
+            Axis::Log(r) => (v.ln(), [r[0].ln(), r[1].ln()]),
+        };
+        if hi > lo {
+            ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
+
+    fn at_unit(self, u: f64) -> f64 {
+        let u = u.clamp(0.0, 1.0);
+        match self {
+            Axis::Linear([lo, hi]) => (lo + u * (hi - lo)).clamp(lo, hi),
+            Axis::Log([lo, hi]) => (lo.ln() + u * (hi.ln() - lo.ln())).exp().clamp(lo, hi),
+        }
+    }
+
+    /// A mutation's standard deviation at scale 1 (`sd` in the gene's own
+    /// units, or of its logarithm) as a fraction of the unit interval.
+    fn unit_sd(self, sd: f64) -> f64 {
+        let width = match self {
+            Axis::Linear([lo, hi]) => hi - lo,
+            Axis::Log([lo, hi]) => hi.ln() - lo.ln(),
+        };
+        if width > 0.0 { sd / width } else { 0.0 }
+    }
+}
+
+impl Genome {
+    /// The axis and scale-1 standard deviation of every gene, in
+    /// [`Genome::values`] order.
+    fn axes(&self, b: &Bounds) -> Vec<(Axis, f64)> {
+        let mut out = Vec::new();
+        out.extend(
+            self.fold_deg
+                .iter()
+                .map(|_| (Axis::Linear(b.fold_deg), sigma::FOLD_DEG)),
+        );
+        out.extend(
+            self.mass_factor
+                .iter()
+                .map(|_| (Axis::Log(b.mass_factor), sigma::LOG_MASS)),
+        );
+        out.push((Axis::Log(b.total_mass_factor), sigma::LOG_TOTAL_MASS));
+        out.extend(
+            self.stiffness_factor
+                .iter()
+                .map(|_| (Axis::Log(b.stiffness_factor), sigma::LOG_STIFFNESS)),
+        );
+        out.push((Axis::Log(b.size_factor), sigma::LOG_SIZE));
+        out
+    }
+
+    /// The genes as coordinates in the unit box [0, 1]ⁿ spanned by the
+    /// prototype's bounds, in [`Genome::values`] order: what CMA-ES
+    /// searches. A gene whose bounds are one point is 0.
+    pub fn coordinates(&self, b: &Bounds) -> Vec<f64> {
+        self.axes(b)
+            .iter()
+            .zip(self.values())
+            .map(|((axis, _), (_, v))| axis.to_unit(v))
+            .collect()
+    }
+
+    /// The genome of the same prototype at coordinates `u` (each clamped to
+    /// [0, 1], so within the bounds).
+    ///
+    /// # Panics
+    /// If `u` has not one coordinate per gene.
+    pub fn with_coordinates(&self, b: &Bounds, u: &[f64]) -> Genome {
+        let axes = self.axes(b);
+        assert_eq!(axes.len(), u.len(), "one coordinate per gene");
+        let mut v = axes.iter().zip(u).map(|((axis, _), &x)| axis.at_unit(x));
+        let mut next = || v.next().expect("counted");
+        let fold_deg = self.fold_deg.iter().map(|_| next()).collect();
+        let mass_factor = self.mass_factor.iter().map(|_| next()).collect();
+        let total_mass_factor = next();
+        let stiffness_factor = self
+            .stiffness_factor
+            .iter()
+            .map(|(g, _)| (g.clone(), next()))
+            .collect();
+        let size_factor = next();
+        Genome {
+            fold_deg,
+            mass_factor,
+            total_mass_factor,
+            stiffness_factor,
+            size_factor,
+        }
+    }
+
+    /// The standard deviation of one scale-1 [`mutate`] step of every gene
+    /// as a fraction of its coordinate's unit interval: the per-gene step
+    /// sizes CMA-ES starts from.
+    pub fn coordinate_sds(&self, b: &Bounds) -> Vec<f64> {
+        self.axes(b)
+            .iter()
+            .map(|(axis, sd)| axis.unit_sd(*sd))
+            .collect()
     }
 }
 
@@ -341,6 +461,35 @@ mod tests {
             let mut bad = g.clone();
             bad.stiffness_factor[0].1 = f64::NAN;
             assert!(bad.check(&proto).is_err());
+        }
+    }
+
+    #[test]
+    fn coordinates_span_the_bounds_and_round_trip() {
+        for p in ["a", "b"] {
+            let proto = LeafSpec::load(p).unwrap();
+            let g = Genome::of_prototype(&proto);
+            let b = &proto.bounds;
+            for seed in 0..50 {
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+                let v = mutate(&g, b, 2.0, &mut rng);
+                let u = v.coordinates(b);
+                assert!(u.iter().all(|x| (0.0..=1.0).contains(x)), "{u:?}");
+                let back = g.with_coordinates(b, &u);
+                for ((_, x), (_, y)) in back.values().iter().zip(v.values()) {
+                    assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "{p}: {x} vs {y}");
+                }
+            }
+            // The corners of the box are the bounds.
+            let n = g.values().len();
+            let low = g.with_coordinates(b, &vec![0.0; n]);
+            let high = g.with_coordinates(b, &vec![1.0; n]);
+            assert_eq!(low.size_factor, b.size_factor[0]);
+            assert_eq!(high.size_factor, b.size_factor[1]);
+            assert_eq!(low.fold_deg[0], b.fold_deg[0]);
+            assert_eq!(low.check(&proto), Ok(()));
+            assert_eq!(high.check(&proto), Ok(()));
+            assert!(g.coordinate_sds(b).iter().all(|&s| s > 0.0 && s < 1.0));
         }
     }
 
