@@ -114,7 +114,8 @@ fn check_run_work(
     let frame_dt = 1.0 / FRAME_RATE;
     let integrator = DropParams::default().integrator;
     let mut work = Work::of(&model, integrator, dt, true, settings.seconds, frame_dt);
-    work.runs = (settings.population * settings.generations) as f64;
+    // Every leaf is dropped once per release attitude.
+    work.runs = (settings.population * settings.generations * settings.releases) as f64;
     work.check(&model, frame_dt, limit, RunCommand::Breed)
         .map_err(|e| BreedError::Refused(format!("--prototype {source}: {e}")))
 }

@@ -4,7 +4,7 @@
 
 use super::population::{Checkpoint, Child, GenerationSummary, Individual, Plan};
 use super::settings::{BreedSettings, Strategy};
-use super::strategy::cma_children;
+use super::strategy::{cma_children, search_bounds};
 use crate::leaf::Bounds;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::{Genome, mutate};
@@ -116,6 +116,7 @@ fn uniform<R: rand::Rng + ?Sized>(template: &Genome, bounds: &Bounds, rng: &mut 
 /// [`stream_seed`] streams, so any process that holds the run directory
 /// derives the same plan.
 pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>) -> Plan {
+    let bounds = search_bounds(s, proto);
     let (generation, scale, next_id, children) = match checkpoint {
         None => {
             // Generation 0: copies of the prototype with the first round's
@@ -127,9 +128,9 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                 .map(|id| {
                     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
                     let genome = if (id as usize) < copies {
-                        mutate(&g0, &proto.bounds, s.initial_scale, &mut rng)
+                        mutate(&g0, &bounds, s.initial_scale, &mut rng)
                     } else {
-                        uniform(&g0, &proto.bounds, &mut rng)
+                        uniform(&g0, &bounds, &mut rng)
                     };
                     Child {
                         id,
@@ -170,7 +171,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     generation as u64,
                     next_id,
                 ));
-                let genome = mutate(&parent.genome, &proto.bounds, cp.scale, &mut rng);
+                let genome = mutate(&parent.genome, &bounds, cp.scale, &mut rng);
                 children.push(Child {
                     id: next_id,
                     parent: Some(parent.id),
@@ -190,7 +191,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     children.push(Child {
                         id: next_id,
                         parent: None,
-                        genome: uniform(&template, &proto.bounds, &mut rng),
+                        genome: uniform(&template, &bounds, &mut rng),
                         parent_score: f64::NAN,
                     });
                     next_id += 1;
@@ -209,7 +210,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     children.push(Child {
                         id: next_id,
                         parent: None,
-                        genome: template.with_coordinates(&proto.bounds, &u),
+                        genome: template.with_coordinates(&bounds, &u),
                         parent_score: f64::NAN,
                     });
                     next_id += 1;

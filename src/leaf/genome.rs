@@ -24,6 +24,14 @@ pub mod sigma {
     pub const LOG_TOTAL_MASS: f64 = 0.15;
     /// ln of each stiffness group's factor (log-normal).
     pub const LOG_STIFFNESS: f64 = 0.3;
+    /// ln of the aspect-ratio factor (log-normal).
+    pub const LOG_ASPECT: f64 = 0.25;
+    /// ln of the drag-ratio factor (log-normal).
+    pub const LOG_DRAG_RATIO: f64 = 0.3;
+    /// Camber, fraction of the extent along y (additive normal).
+    pub const CAMBER: f64 = 0.05;
+    /// Petiole mass, fraction of the blade's mass (additive normal).
+    pub const PETIOLE_MASS: f64 = 0.1;
     /// ln of the size factor (log-normal): a quarter, so that the default
     /// bounds (½–2×, ln 2 = 0.69 away) are under three steps from the
     /// prototype (issue 19: at 0.08 they were 8.7 steps away, and
@@ -50,6 +58,26 @@ pub struct Genome {
     pub stiffness_factor: Vec<(String, f64)>,
     /// Linear size relative to the prototype (mass scales with area).
     pub size_factor: f64,
+    /// Aspect ratio of the outline relative to the prototype's: x stretched
+    /// by √a, y by 1/√a, area (and so mass) kept. 1 in a genome written
+    /// before it.
+    #[serde(default = "unit")]
+    pub aspect_ratio: f64,
+    /// Factor on the linear law's tangential/normal drag ratio αᵗ/αⁿ.
+    #[serde(default = "unit")]
+    pub drag_ratio: f64,
+    /// Camber: the flat layout bowed across y, arc height over the extent
+    /// along y ([`Bounds::camber`]). 0 in a genome written before it.
+    #[serde(default)]
+    pub camber: f64,
+    /// Petiole mass at the base over the blade's mass
+    /// ([`Bounds::petiole_mass`]).
+    #[serde(default)]
+    pub petiole_mass: f64,
+}
+
+fn unit() -> f64 {
+    1.0
 }
 
 impl Genome {
@@ -67,6 +95,10 @@ impl Genome {
             total_mass_factor: 1.0,
             stiffness_factor: groups.into_iter().map(|g| (g, 1.0)).collect(),
             size_factor: 1.0,
+            aspect_ratio: 1.0,
+            drag_ratio: 1.0,
+            camber: 0.0,
+            petiole_mass: 0.0,
         }
     }
 
@@ -88,14 +120,60 @@ impl Genome {
             .map(|(p, f)| p.mass * f)
             .sum();
         let norm = proto_total / weighted * self.total_mass_factor * s * s;
+        let stretch = [
+            s * self.aspect_ratio.sqrt(),
+            s / self.aspect_ratio.sqrt(),
+            s,
+        ];
         for (p, f) in leaf.particles.iter_mut().zip(&self.mass_factor) {
             p.mass *= f * norm;
-            p.position = p.position.map(|c| c * s);
+            for (c, k) in p.position.iter_mut().zip(stretch) {
+                *c *= k;
+            }
         }
         for spring in &mut leaf.springs {
             spring.stiffness *= self.stiffness(&spring.group);
             if let Some(l) = spring.rest_length.as_mut() {
-                *l *= s;
+                // An explicit rest length stretches as its ends do.
+                let [i, j] = spring.ends;
+                let length = |ps: &[crate::leaf::ParticleSpec]| {
+                    let (a, b) = (ps[i].position, ps[j].position);
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+                };
+                let before = length(&proto.particles);
+                *l *= if before > 0.0 {
+                    length(&leaf.particles) / before
+                } else {
+                    s
+                };
+            }
+        }
+        if let Some(t) = leaf.aero.alpha_t.as_mut() {
+            *t *= self.drag_ratio;
+        }
+        if self.camber != 0.0 || self.petiole_mass != 0.0 {
+            let ys: Vec<f64> = proto.particles.iter().map(|p| p.position[1]).collect();
+            let (lo, hi) = ys
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+                    (a.min(y), b.max(y))
+                });
+            let (mid, half) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
+            if half > 0.0 && self.camber != 0.0 {
+                // z = c · 2h · (1 − ((y − mid)/h)²): height c × extent at
+                // the middle, 0 at both ends, before the folds.
+                let extent = 2.0 * half * stretch[1];
+                for (p, &y) in leaf.particles.iter_mut().zip(&ys) {
+                    let u = (y - mid) / half;
+                    p.position[2] += self.camber * extent * (1.0 - u * u);
+                }
+            }
+            if self.petiole_mass > 0.0 {
+                let base = (0..ys.len())
+                    .min_by(|&a, &b| ys[a].total_cmp(&ys[b]).then(a.cmp(&b)))
+                    .expect("a leaf has particles");
+                let blade: f64 = leaf.particles.iter().map(|p| p.mass).sum();
+                leaf.particles[base].mass += self.petiole_mass * blade;
             }
         }
         if let Some(b) = leaf.bending.as_mut() {
@@ -130,6 +208,10 @@ impl Genome {
             out.push((format!("stiffness_{g}"), *k));
         }
         out.push(("size".to_string(), self.size_factor));
+        out.push(("aspect_ratio".to_string(), self.aspect_ratio));
+        out.push(("drag_ratio".to_string(), self.drag_ratio));
+        out.push(("camber".to_string(), self.camber));
+        out.push(("petiole_mass".to_string(), self.petiole_mass));
         out
     }
 }
@@ -198,6 +280,10 @@ impl Genome {
                 .map(|_| (Axis::Log(b.stiffness_factor), sigma::LOG_STIFFNESS)),
         );
         out.push((Axis::Log(b.size_factor), sigma::LOG_SIZE));
+        out.push((Axis::Log(b.aspect_ratio), sigma::LOG_ASPECT));
+        out.push((Axis::Log(b.drag_ratio), sigma::LOG_DRAG_RATIO));
+        out.push((Axis::Linear(b.camber), sigma::CAMBER));
+        out.push((Axis::Linear(b.petiole_mass), sigma::PETIOLE_MASS));
         out
     }
 
@@ -231,12 +317,20 @@ impl Genome {
             .map(|(g, _)| (g.clone(), next()))
             .collect();
         let size_factor = next();
+        let aspect_ratio = next();
+        let drag_ratio = next();
+        let camber = next();
+        let petiole_mass = next();
         Genome {
             fold_deg,
             mass_factor,
             total_mass_factor,
             stiffness_factor,
             size_factor,
+            aspect_ratio,
+            drag_ratio,
+            camber,
+            petiole_mass,
         }
     }
 
@@ -332,7 +426,19 @@ impl Genome {
         for (g, v) in &self.stiffness_factor {
             within(format!("stiffness_factor.{g}"), *v, b.stiffness_factor)?;
         }
-        within("size_factor".to_string(), self.size_factor, b.size_factor)
+        within("size_factor".to_string(), self.size_factor, b.size_factor)?;
+        within(
+            "aspect_ratio".to_string(),
+            self.aspect_ratio,
+            b.aspect_ratio,
+        )?;
+        within("drag_ratio".to_string(), self.drag_ratio, b.drag_ratio)?;
+        within("camber".to_string(), self.camber, b.camber)?;
+        within(
+            "petiole_mass".to_string(),
+            self.petiole_mass,
+            b.petiole_mass,
+        )
     }
 }
 
@@ -393,12 +499,40 @@ pub fn mutate<R: Rng + ?Sized>(
         genome.size_factor * normal(sigma::LOG_SIZE * scale).exp(),
         bounds.size_factor,
     );
+    // Drawn last, so the earlier genes' draws are what they were before
+    // these genes existed.
+    let mut factor = |v: f64, sd: f64, range: [f64; 2]| {
+        if range[0] == range[1] {
+            range[0]
+        } else {
+            clamp(v * normal(sd * scale).exp(), range)
+        }
+    };
+    let aspect_ratio = factor(genome.aspect_ratio, sigma::LOG_ASPECT, bounds.aspect_ratio);
+    let drag_ratio = factor(genome.drag_ratio, sigma::LOG_DRAG_RATIO, bounds.drag_ratio);
+    let mut shift = |v: f64, sd: f64, range: [f64; 2]| {
+        if range[0] == range[1] {
+            range[0]
+        } else {
+            clamp(v + normal(sd * scale), range)
+        }
+    };
+    let camber = shift(genome.camber, sigma::CAMBER, bounds.camber);
+    let petiole_mass = shift(
+        genome.petiole_mass,
+        sigma::PETIOLE_MASS,
+        bounds.petiole_mass,
+    );
     Genome {
         fold_deg,
         mass_factor,
         total_mass_factor,
         stiffness_factor,
         size_factor,
+        aspect_ratio,
+        drag_ratio,
+        camber,
+        petiole_mass,
     }
 }
 

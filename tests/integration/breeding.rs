@@ -156,7 +156,7 @@ fn bad_input_is_refused_and_nothing_is_overwritten() {
     let bad_leaf = dir.join("bad.toml");
     std::fs::write(
         &bad_leaf,
-        leafmagic::leaf::PROTOTYPE_A.replacen("mass = ", "mass = -", 1),
+        leafmagic::leaf::PROTOTYPE_A.replacen("\nmass = ", "\nmass = -", 1),
     )
     .unwrap();
     let r = breed(
