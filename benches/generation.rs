@@ -1,14 +1,16 @@
 //! `generation`: evaluating one generation of the default breed (100 variants
 //! of prototype A, 10 s drops, classified) on 1 and on 2 threads. The ratio
-//! of the two times is the parallel speed-up; `lockstep_threads_N` is the
-//! same generation evaluated as the breed does it, four children at a time
-//! in lockstep batches. `like_threads_2` evaluates the
+//! of the two times is the parallel speed-up (one drop per leaf).
+//! `releases4_threads_2` is the generation as the default breed evaluates
+//! it, four releases per leaf in one lockstep batch, and
+//! `releases4_alone_threads_2` the same four dropped one after another (the
+//! same evaluations to the bit). `like_threads_2` evaluates the
 //! same 100 genomes scored toward an example fall (`breed --like`, the
 //! tumbling fixture) instead of a class: the same drops, so the difference is
 //! the cost of describing each fall and measuring its distance.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::breed::evaluate::evaluate_lockstep;
+use leafmagic::breed::evaluate::evaluate_alone;
 use leafmagic::breed::selection::stream_seed;
 use leafmagic::breed::{BreedSettings, evaluate};
 use leafmagic::leaf::LeafSpec;
@@ -22,7 +24,12 @@ use rayon::prelude::*;
 use std::hint::black_box;
 
 fn generation(c: &mut Criterion) {
-    let settings = BreedSettings::default_run();
+    // One drop per leaf (`--releases 1`), as this benchmark has always
+    // timed: a default generation drops each leaf `releases` times.
+    let settings = BreedSettings {
+        releases: 1,
+        ..BreedSettings::default_run()
+    };
     let proto = LeafSpec::load(&settings.prototype).unwrap();
     let g0 = Genome::of_prototype(&proto);
     let genomes: Vec<Genome> = (0..settings.population as u64)
@@ -60,18 +67,11 @@ fn generation(c: &mut Criterion) {
                 pool.install(|| {
                     let evals: Vec<_> = genomes
                         .par_iter()
-                        .map(|g| evaluate(&proto, g, &settings))
+                        .enumerate()
+                        .map(|(id, g)| evaluate(&proto, id as u64, g, &settings))
                         .collect();
                     black_box(evals)
                 })
-            })
-        });
-        // The same children four at a time in lockstep batches (what the
-        // breed runs): the same evaluations to the bit.
-        let refs: Vec<&Genome> = genomes.iter().collect();
-        group.bench_function(format!("lockstep_threads_{threads}"), |b| {
-            b.iter(|| {
-                pool.install(|| black_box(evaluate_lockstep(&proto, &refs, &settings, &|_| {})))
             })
         });
     }
@@ -84,12 +84,37 @@ fn generation(c: &mut Criterion) {
             pool.install(|| {
                 let evals: Vec<_> = genomes
                     .par_iter()
-                    .map(|g| evaluate(&proto, g, &like))
+                    .enumerate()
+                    .map(|(id, g)| evaluate(&proto, id as u64, g, &like))
                     .collect();
                 black_box(evals)
             })
         })
     });
+    let four = BreedSettings {
+        releases: 4,
+        ..settings.clone()
+    };
+    type Eval =
+        fn(&LeafSpec, u64, &Genome, &BreedSettings) -> leafmagic::breed::population::Evaluation;
+    let ways: [(&str, Eval); 2] = [
+        ("releases4_threads_2", evaluate),
+        ("releases4_alone_threads_2", evaluate_alone),
+    ];
+    for (name, eval) in ways {
+        group.bench_function(name, |b| {
+            b.iter(|| {
+                pool.install(|| {
+                    let evals: Vec<_> = genomes
+                        .par_iter()
+                        .enumerate()
+                        .map(|(id, g)| eval(&proto, id as u64, g, &four))
+                        .collect();
+                    black_box(evals)
+                })
+            })
+        });
+    }
     group.finish();
 }
 

@@ -1,6 +1,9 @@
-//! One individual's evaluation: its drop, its classification and its score.
+//! One individual's evaluation: its drops (one per release attitude), their
+//! classification and scores, and the robust score of the lot.
 
+use super::boundary::class_distance;
 use super::population::{Evaluation, Fall, Outcome};
+use super::robust::{combine, release_attitudes};
 use super::settings::BreedSettings;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
@@ -8,147 +11,182 @@ use crate::motion::classify::{MotionClass, classify};
 use crate::motion::describe::Descriptors;
 use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
-use crate::sim::drop::{DropError, DropParams, DropResult, drop_leaf, drop_leaves, drop_work};
-use rayon::prelude::*;
+use crate::physics::run::resolve_step;
+use crate::sim::drop::{DropError, DropParams, DropResult, FRAME_RATE, drop_leaf, drop_leaves};
 
-/// Score of a fall bred toward motion descriptors: as [`score`] for the
-/// gate's class, but within it 1 + 1/(1 + d), so that the closest falls
-/// rank first and every fall that passes the class gate outranks every one
-/// that does not. `class` is `None` for a diverged drop.
-pub fn like_score(class: Option<MotionClass>, margin: f64, distance: Option<f64>) -> f64 {
+/// Releases of one individual dropped side by side in the lanes of one
+/// lockstep batch ([`drop_leaves`]): four, the f64 lanes of one AVX2
+/// register. The releases share the model and its step, so the lanes are
+/// full; each lane computes what a lone drop computes, to the bit.
+pub const LOCKSTEP: usize = 4;
+
+/// Score of a fall outside the class it is bred toward: 1 / (1 + D), with D
+/// the distance to that class's boundary in the classifier's scale units
+/// ([`super::boundary`]); 0 for a fall whose record the rules never judged.
+/// In (0, 1], rising to 1 at the boundary, so it grades a leaf by how
+/// close it came to the class and never by how deep it sits in another.
+pub fn outside_score(boundary: Option<f64>) -> f64 {
+    boundary.map_or(0.0, |d| 1.0 / (1.0 + d))
+}
+
+/// Score of a fall bred toward motion descriptors: within the target's
+/// class gate 1 + 1/(1 + d), so that the closest falls rank first and every
+/// fall that passes the gate outranks every one that does not; outside it
+/// [`outside_score`] of the distance to the gate's class; −1 for a diverged
+/// drop (`class` `None`).
+pub fn like_score(class: Option<MotionClass>, distance: Option<f64>, boundary: Option<f64>) -> f64 {
     match (distance, class) {
         (Some(d), _) if d.is_finite() => 1.0 + 1.0 / (1.0 + d),
         (_, None) => -1.0,
-        (_, Some(MotionClass::Undetermined)) => 0.0,
-        _ => 0.1 * margin,
+        _ => outside_score(boundary),
     }
 }
 
 /// Score of a fall for a target class: diverged (`class` `None`) −1, the
-/// worst; undetermined 0; another class 0.1 × its margin (a clear motion is
-/// a better parent than none, but never as good as the target); the target
-/// 1 + margin, so that among members of the target class those far from
-/// every class boundary (robust to small changes) rank first.
-pub fn score(class: Option<MotionClass>, margin: f64, target: MotionClass) -> f64 {
+/// worst; another class or undetermined [`outside_score`] of its distance
+/// `boundary` to the target class, in (0, 1]; the target 1 + margin, so
+/// that among members of the target class those far from every class
+/// boundary (robust to small changes) rank first. The score is continuous
+/// across the class boundary: 1 on both sides.
+pub fn score(
+    class: Option<MotionClass>,
+    margin: f64,
+    boundary: Option<f64>,
+    target: MotionClass,
+) -> f64 {
     match class {
         None => -1.0,
         Some(c) if c == target => 1.0 + margin,
-        Some(MotionClass::Undetermined) => 0.0,
-        Some(_) => 0.1 * margin,
+        Some(_) => outside_score(boundary),
     }
 }
 
-/// Children a breed drops side by side in the lanes of one lockstep batch
-/// ([`evaluate_lockstep`]): four, the f64 lanes of one AVX2 register.
-pub const LOCKSTEP: usize = 4;
+/// Drops individual `id` from each of its release attitudes
+/// ([`release_attitudes`]), [`LOCKSTEP`] at a time in the lanes of one batch,
+/// and scores it on the lower median of their scores ([`combine`]).
+pub fn evaluate(
+    proto: &LeafSpec,
+    id: u64,
+    genome: &Genome,
+    settings: &BreedSettings,
+) -> Evaluation {
+    evaluate_in(proto, id, genome, settings, true)
+}
 
-/// The drop settings of a breed's evaluations.
-fn drop_params(settings: &BreedSettings) -> DropParams {
+/// [`evaluate`] with every release dropped alone, one after another: the
+/// same evaluation to the bit (tests/integration/batch.rs), kept to measure
+/// what the batches gain (benches/generation.rs).
+pub fn evaluate_alone(
+    proto: &LeafSpec,
+    id: u64,
+    genome: &Genome,
+    settings: &BreedSettings,
+) -> Evaluation {
+    evaluate_in(proto, id, genome, settings, false)
+}
+
+fn evaluate_in(
+    proto: &LeafSpec,
+    id: u64,
+    genome: &Genome,
+    settings: &BreedSettings,
+    lockstep: bool,
+) -> Evaluation {
+    let attitudes = release_attitudes(settings.seed, id, settings.releases);
+    let model = match genome.model(proto) {
+        Ok(m) => m,
+        Err(e) => {
+            return Evaluation {
+                releases: attitudes.len(),
+                ..diverged(format!("invalid model: {e}"), attitudes[0])
+            };
+        }
+    };
+    let gate = match &settings.like {
+        Some(t) => t.class,
+        None => Some(settings.target),
+    };
+    // The step depends on the model alone, not on its attitude: estimated
+    // once (what TimeStep::Auto would choose for every drop), not K times.
+    let params = DropParams::default();
+    let dt = match resolve_step(&model, params.integrator, TimeStep::Auto, 1.0 / FRAME_RATE) {
+        Ok(dt) => TimeStep::Fixed(dt),
+        Err(_) => TimeStep::Auto,
+    };
+    let mut drops: Vec<Evaluation> = Vec::with_capacity(attitudes.len());
+    for group in attitudes.chunks(if lockstep { LOCKSTEP } else { 1 }) {
+        if group.len() == LOCKSTEP {
+            let params: [DropParams; LOCKSTEP] =
+                std::array::from_fn(|k| release_params(group[k], dt, settings));
+            let results = drop_leaves([&model; LOCKSTEP], std::array::from_fn(|k| &params[k]));
+            for (tilt, result) in group.iter().zip(results) {
+                drops.push(scored(&model, *tilt, result, settings));
+            }
+        } else {
+            drops.extend(
+                group
+                    .iter()
+                    .map(|&tilt| drop_once(&model, tilt, dt, settings)),
+            );
+        }
+    }
+    let kept: Vec<bool> = drops
+        .iter()
+        .map(|e| match (gate, e.fall()) {
+            (Some(c), Some(f)) => f.class == c,
+            (None, Some(_)) => e.distance.is_some(),
+            (_, None) => false,
+        })
+        .collect();
+    combine(drops, &kept)
+}
+
+fn diverged(error: String, tilt: [f64; 2]) -> Evaluation {
+    Evaluation {
+        outcome: Outcome::Diverged(error),
+        score: -1.0,
+        distance: None,
+        releases: 1,
+        kept: 0,
+        release_deg: tilt,
+    }
+}
+
+/// One drop of `model` released at `tilt` with step `dt`, classified and
+/// scored.
+pub fn drop_once(
+    model: &Model,
+    tilt: [f64; 2],
+    dt: TimeStep,
+    settings: &BreedSettings,
+) -> Evaluation {
+    scored(
+        model,
+        tilt,
+        drop_leaf(model, &release_params(tilt, dt, settings)),
+        settings,
+    )
+}
+
+/// The drop settings of one release.
+fn release_params(tilt: [f64; 2], dt: TimeStep, settings: &BreedSettings) -> DropParams {
     DropParams {
         seconds: settings.seconds,
-        dt: TimeStep::Auto,
+        dt,
+        tilt_deg: tilt,
         ..Default::default()
     }
 }
 
-fn diverged(error: String, settings: &BreedSettings) -> Evaluation {
-    Evaluation {
-        outcome: Outcome::Diverged(error),
-        score: score(None, 0.0, settings.target),
-        distance: None,
-    }
-}
-
-/// Drops one variant and scores its fall.
-pub fn evaluate(proto: &LeafSpec, genome: &Genome, settings: &BreedSettings) -> Evaluation {
-    let model = match genome.model(proto) {
-        Ok(m) => m,
-        Err(e) => return diverged(format!("invalid model: {e}"), settings),
-    };
-    let drop = drop_leaf(&model, &drop_params(settings));
-    scored(&model, drop, settings)
-}
-
-/// [`evaluate`] of each of `genomes` (in their order), on the current rayon
-/// pool, [`LOCKSTEP`] at a time in the lanes of one batch
-/// ([`drop_leaves`]), calling `done` after each. Lanes of a batch step
-/// together until the last is done, so children are grouped by their auto
-/// step (a batch of similar steps wastes few lane-steps); a remainder, or a
-/// child whose model is invalid, is evaluated alone. Every evaluation is the
-/// one [`evaluate`] gives, to the bit, however the children are grouped
-/// (a lane computes what a lone drop computes), so a breed's results
-/// depend neither on the grouping nor on the threads.
-pub fn evaluate_lockstep(
-    proto: &LeafSpec,
-    genomes: &[&Genome],
-    settings: &BreedSettings,
-    done: &(dyn Fn(&Evaluation) + Sync),
-) -> Vec<Evaluation> {
-    let params = drop_params(settings);
-    // (step, index) of every child that can share a batch.
-    let models: Vec<Option<(Model, f64)>> = genomes
-        .par_iter()
-        .map(|g| {
-            let model = g.model(proto).ok()?;
-            let dt = drop_work(&model, &params).ok()?.dt;
-            Some((model, dt))
-        })
-        .collect();
-    let mut order: Vec<(f64, usize)> = models
-        .iter()
-        .enumerate()
-        .filter_map(|(i, m)| m.as_ref().map(|(_, dt)| (*dt, i)))
-        .collect();
-    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let groups: Vec<&[(f64, usize)]> = order.chunks(LOCKSTEP).collect();
-    let batched: Vec<(usize, Evaluation)> = groups
-        .par_iter()
-        .flat_map_iter(|group| {
-            let evals: Vec<Evaluation> = if group.len() == LOCKSTEP {
-                let model = |k: usize| &models[group[k].1].as_ref().expect("batchable").0;
-                let drops = drop_leaves::<LOCKSTEP>(std::array::from_fn(model), &params);
-                drops
-                    .into_iter()
-                    .enumerate()
-                    .map(|(k, d)| scored(model(k), d, settings))
-                    .collect()
-            } else {
-                group
-                    .iter()
-                    .map(|&(_, i)| evaluate(proto, genomes[i], settings))
-                    .collect()
-            };
-            evals.iter().for_each(done);
-            group.iter().map(|&(_, i)| i).zip(evals).collect::<Vec<_>>()
-        })
-        .collect();
-    let alone: Vec<(usize, Evaluation)> = models
-        .par_iter()
-        .enumerate()
-        .filter(|(_, m)| m.is_none())
-        .map(|(i, _)| {
-            let eval = evaluate(proto, genomes[i], settings);
-            done(&eval);
-            (i, eval)
-        })
-        .collect();
-    let mut out: Vec<Option<Evaluation>> = vec![None; genomes.len()];
-    for (i, eval) in batched.into_iter().chain(alone) {
-        out[i] = Some(eval);
-    }
-    out.into_iter()
-        .map(|e| e.expect("every child evaluated once"))
-        .collect()
-}
-
-/// The evaluation of `model`'s drop: its classification and score.
+/// The evaluation of one release's drop: its classification and score.
 fn scored(
     model: &Model,
+    tilt: [f64; 2],
     drop: Result<DropResult, DropError>,
     settings: &BreedSettings,
 ) -> Evaluation {
     match drop {
-        Err(e) => diverged(e.to_string(), settings),
+        Err(e) => diverged(e.to_string(), tilt),
         Ok(result) => {
             let c = classify(&result.trajectory, model.chord());
             let f = &c.features;
@@ -157,8 +195,17 @@ fn scored(
                 d.is_finite().then_some(d)
             });
             let score = match &settings.like {
-                Some(_) => like_score(Some(c.class), f.margin, distance),
-                None => score(Some(c.class), f.margin, settings.target),
+                Some(t) => like_score(
+                    Some(c.class),
+                    distance,
+                    t.class.and_then(|g| class_distance(f, g)),
+                ),
+                None => score(
+                    Some(c.class),
+                    f.margin,
+                    class_distance(f, settings.target),
+                    settings.target,
+                ),
             };
             Evaluation {
                 outcome: Outcome::Fell(Fall {
@@ -178,6 +225,9 @@ fn scored(
                 }),
                 score,
                 distance,
+                releases: 1,
+                kept: 0,
+                release_deg: tilt,
             }
         }
     }
@@ -188,13 +238,30 @@ mod tests {
     use super::*;
 
     #[test]
-    fn score_orders_diverged_undetermined_other_target() {
+    fn score_orders_diverged_outside_target() {
         let t = MotionClass::Floater;
-        let s = |c: Option<MotionClass>, m: f64| score(c, m, t);
+        let s = |c: Option<MotionClass>, m: f64, d: Option<f64>| score(c, m, d, t);
         let (floater, spinner) = (Some(MotionClass::Floater), Some(MotionClass::Spinner));
-        assert!(s(None, 0.0) < s(Some(MotionClass::Undetermined), 0.0));
-        assert!(s(Some(MotionClass::Undetermined), 0.0) <= s(spinner, 0.0));
-        assert!(s(spinner, 1.0) < s(floater, 0.0));
-        assert!(s(floater, 0.2) < s(floater, 0.9));
+        let undetermined = Some(MotionClass::Undetermined);
+        assert!(s(None, 0.0, None) < s(undetermined, 0.0, None));
+        // Outside the class, nearer the boundary is better, whatever the
+        // margin inside the wrong class.
+        assert!(s(spinner, 1.0, Some(3.0)) < s(spinner, 0.0, Some(0.5)));
+        assert!(s(spinner, 0.0, Some(0.5)) < s(undetermined, 0.0, Some(0.2)));
+        assert_eq!(s(spinner, 0.7, Some(1.0)), 0.5);
+        // Continuous at the boundary, and the target outranks all else.
+        assert_eq!(s(spinner, 0.3, Some(0.0)), s(floater, 0.0, Some(0.0)));
+        assert!(s(spinner, 1.0, Some(1e-9)) < s(floater, 1e-6, Some(0.0)));
+        assert!(s(floater, 0.2, Some(0.0)) < s(floater, 0.9, Some(0.0)));
+    }
+
+    #[test]
+    fn like_score_gates_then_grades() {
+        let sp = Some(MotionClass::Spinner);
+        assert_eq!(like_score(None, None, None), -1.0);
+        assert_eq!(like_score(sp, Some(0.0), None), 2.0);
+        assert!(like_score(sp, Some(0.5), None) > like_score(sp, Some(0.6), None));
+        assert!(like_score(sp, None, Some(0.0)) < like_score(sp, Some(1e6), None));
+        assert!(like_score(sp, None, Some(2.0)) < like_score(sp, None, Some(1.0)));
     }
 }

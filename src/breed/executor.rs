@@ -8,9 +8,10 @@
 //! A driver killed mid-generation leaves the shard files already written;
 //! the resumed driver merges those and runs only the others.
 
-use super::evaluate::evaluate_lockstep;
+use super::evaluate::evaluate;
 use super::population::{BreedError, Evaluation, Job, Plan, Progress, io_err};
 use super::shard::{self, Problem, Split};
+use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fs::OpenOptions;
 use std::io::Write;
@@ -40,12 +41,15 @@ impl Executor for Local {
         progress: &dyn Progress,
     ) -> Result<Vec<Evaluation>, BreedError> {
         let settings = job.settings;
-        // Children share lockstep batches; the results depend neither on
-        // the grouping (`evaluate_lockstep`) nor on the threads.
-        let genomes: Vec<_> = plan.children.iter().map(|c| &c.genome).collect();
-        Ok(evaluate_lockstep(job.proto, &genomes, settings, &|eval| {
-            progress.individual_done(eval.class_name(), eval.score)
-        }))
+        Ok(plan
+            .children
+            .par_iter()
+            .map(|c| {
+                let eval = evaluate(job.proto, c.id, &c.genome, settings);
+                progress.individual_done(eval.class_name(), eval.score);
+                eval
+            })
+            .collect())
     }
 }
 

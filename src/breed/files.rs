@@ -11,13 +11,13 @@ use std::path::Path;
 /// generations.csv: one row per completed generation.
 pub fn generations_csv(history: &[GenerationSummary]) -> String {
     let mut out = String::from(
-        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance\n",
+        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance,best_kept,releases\n",
     );
     for h in history {
         let c = h.counts;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             h.generation,
             c[0],
             c[1],
@@ -29,7 +29,9 @@ pub fn generations_csv(history: &[GenerationSummary]) -> String {
             h.best_id,
             h.scale,
             h.success_rate,
-            h.best_distance.map_or(String::new(), |d| d.to_string())
+            h.best_distance.map_or(String::new(), |d| d.to_string()),
+            h.best_kept,
+            h.releases
         );
     }
     out
@@ -44,7 +46,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         }
     }
     out.push_str(
-        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,error\n",
+        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,releases,kept,release_x_deg,release_y_deg,error\n",
     );
     for i in population {
         let parent = i.parent.map_or(String::new(), |p| p.to_string());
@@ -61,7 +63,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         };
         let _ = writeln!(
             out,
-            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             e.class,
             e.regime,
             e.score,
@@ -75,6 +77,10 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
             e.tilt_deg,
             e.dt,
             e.distance.map_or(String::new(), |d| d.to_string()),
+            e.releases,
+            e.kept,
+            e.release_deg[0],
+            e.release_deg[1],
             error
         );
     }
@@ -87,7 +93,9 @@ pub fn export_leaves(
     chosen: &[&Individual],
     dir: &Path,
 ) -> Result<(), BreedError> {
-    let mut index = String::from("rank,id,file,class,regime,score,descent_m_s\n");
+    let mut index = String::from(
+        "rank,id,file,class,regime,score,descent_m_s,kept,releases,release_x_deg,release_y_deg\n",
+    );
     for (rank, ind) in chosen.iter().enumerate() {
         let e = ind.eval.record();
         // Never an invalid leaf file: the genome within its bounds, the
@@ -105,26 +113,36 @@ pub fn export_leaves(
         leaf.name = format!("{}-{}", proto.name, ind.id);
         let file = format!("leaf-{}.toml", ind.id);
         let text = format!(
-            "# Bred by leafmagic from {}: individual {} ({} / {}, score {}).\n{}",
+            "# Bred by leafmagic from {}: individual {} ({} / {}, score {}).\n\
+             # Robustness: {} of {} release attitudes kept the class; the class and score are \
+             those of the lower-median drop, released at ({}°, {}°).\n{}",
             proto.name,
             ind.id,
             e.class,
             e.regime,
             e.score,
+            e.kept,
+            e.releases,
+            e.release_deg[0],
+            e.release_deg[1],
             leaf.to_toml()
         );
         let path = dir.join(&file);
         write_atomic(&path, text.as_bytes()).map_err(|e| io_err(&path, e))?;
         let _ = writeln!(
             index,
-            "{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{}",
             rank + 1,
             ind.id,
             file,
             e.class,
             e.regime,
             e.score,
-            e.descent_m_s
+            e.descent_m_s,
+            e.kept,
+            e.releases,
+            e.release_deg[0],
+            e.release_deg[1]
         );
     }
     let path = dir.join("index.csv");

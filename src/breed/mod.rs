@@ -24,15 +24,20 @@
 //! [`crate::physics`], [`crate::util`].
 
 pub mod archive;
+pub mod auto;
+pub mod boundary;
+pub mod cmaes;
 pub mod evaluate;
 pub mod executor;
 pub mod files;
 pub mod plot;
 pub mod population;
+pub mod robust;
 pub mod run;
 pub mod selection;
 pub mod settings;
 pub mod shard;
+pub mod strategy;
 pub mod verify;
 pub mod worker;
 

@@ -4,6 +4,7 @@
 //! what an executor is handed ([`Job`]); the run's error and its progress
 //! observer.
 
+use super::cmaes::CmaState;
 use super::settings::{BreedSettings, SettingsError};
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
@@ -29,6 +30,16 @@ pub struct Evaluation {
     /// Distance to the run's motion target ([`crate::motion::describe`]),
     /// when it has one and the fall passes its class gate.
     pub distance: Option<f64>,
+    /// Release attitudes the individual was dropped from
+    /// ([`super::robust`]); the outcome, score and distance are those of
+    /// the lower-median drop.
+    pub releases: usize,
+    /// How many of the [`Evaluation::releases`] drops kept the target class
+    /// (for `--target-features` without a class: were described at all).
+    pub kept: usize,
+    /// The release attitude of the drop shown (tilt about the body x and y
+    /// axes, degrees, as [`crate::sim::drop::DropParams::tilt_deg`]).
+    pub release_deg: [f64; 2],
 }
 
 /// How one individual's drop ended.
@@ -134,6 +145,24 @@ pub struct EvaluationRecord {
     /// See [`Evaluation::distance`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub distance: Option<f64>,
+    /// See [`Evaluation::releases`] (1 in a run written before them).
+    #[serde(default = "one")]
+    pub releases: usize,
+    /// See [`Evaluation::kept`].
+    #[serde(default)]
+    pub kept: usize,
+    /// See [`Evaluation::release_deg`] (the drop's default, 10° and 2°, in
+    /// a run written before them).
+    #[serde(default = "default_release")]
+    pub release_deg: [f64; 2],
+}
+
+fn one() -> usize {
+    1
+}
+
+fn default_release() -> [f64; 2] {
+    crate::sim::drop::DropParams::default().tilt_deg
 }
 
 impl From<Evaluation> for EvaluationRecord {
@@ -173,6 +202,9 @@ impl From<Evaluation> for EvaluationRecord {
             dt: f.dt,
             error,
             distance: e.distance,
+            releases: e.releases,
+            kept: e.kept,
+            release_deg: e.release_deg,
         }
     }
 }
@@ -209,6 +241,9 @@ impl TryFrom<EvaluationRecord> for Evaluation {
             outcome,
             score: r.score,
             distance: r.distance,
+            releases: r.releases,
+            kept: r.kept,
+            release_deg: r.release_deg,
         })
     }
 }
@@ -257,6 +292,9 @@ pub struct Plan {
     pub children: Vec<Child>,
     /// The previous generation's best, copied unchanged (already evaluated).
     pub elites: Vec<Individual>,
+    /// How many of the children, the last ones, CMA-ES drew
+    /// ([`super::strategy`]); the rest were bred by the GA.
+    pub cma_children: usize,
 }
 
 /// Per-generation summary.
@@ -280,6 +318,13 @@ pub struct GenerationSummary {
     /// one and the best passes its class gate.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub best_distance: Option<f64>,
+    /// How many of its releases kept the target class, for the best
+    /// individual ([`Evaluation::kept`]; 0 in a run written before them).
+    #[serde(default)]
+    pub best_kept: usize,
+    /// Releases per individual ([`Evaluation::releases`]).
+    #[serde(default = "one")]
+    pub releases: usize,
 }
 
 /// The resumable state after a completed generation.
@@ -300,6 +345,10 @@ pub struct Checkpoint {
     /// The MAP-Elites archive (empty unless `settings.archive`).
     #[serde(default)]
     pub archive: Vec<ArchiveEntry>,
+    /// The CMA-ES state ([`super::cmaes`]) for the next generation, once
+    /// the strategy has started it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cmaes: Option<CmaState>,
     /// Content hashes (FNV-1a 64, 16 hex digits) of `run.toml` and of every
     /// `gen-NNN.csv` up to this generation, as written: what a resumed run
     /// checks the files against ([`super::verify`]). Empty in a checkpoint

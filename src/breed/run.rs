@@ -11,11 +11,13 @@ use super::population::{
 use super::selection::{self, next_scale, rank, summarise};
 use super::settings::BreedSettings;
 use super::shard;
+use super::strategy;
 use super::verify::{
     Damage, RUN_FILE, check_checkpoint, check_generation_file, content_hash, decode_checkpoint,
     encode_checkpoint,
 };
 use crate::leaf::LeafSpec;
+use crate::leaf::genome::Genome;
 use crate::motion::trajectory::Trajectory;
 use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
@@ -112,7 +114,8 @@ fn check_run_work(
     let frame_dt = 1.0 / FRAME_RATE;
     let integrator = DropParams::default().integrator;
     let mut work = Work::of(&model, integrator, dt, true, settings.seconds, frame_dt);
-    work.runs = (settings.population * settings.generations) as f64;
+    // Every leaf is dropped once per release attitude.
+    work.runs = (settings.population * settings.generations * settings.releases) as f64;
     work.check(&model, frame_dt, limit, RunCommand::Breed)
         .map_err(|e| BreedError::Refused(format!("--prototype {source}: {e}")))
 }
@@ -150,6 +153,16 @@ impl Run {
         settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
             .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
+        // Every variant lies within the bounds, and generation 0 and CMA-ES
+        // start from the prototype: bounds that exclude it define no search.
+        Genome::of_prototype(&proto).check(&proto).map_err(|e| {
+            BreedError::Refused(format!(
+                "--prototype {}: its [bounds] exclude the prototype itself: {e}; widen the \
+                 bounds to contain the prototype's own genes (fold angles as the file gives \
+                 them, factor 1 for masses, stiffness and size)",
+                settings.prototype
+            ))
+        })?;
         if dir.join(RUN_FILE).exists() {
             let existing = Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?;
             if existing.settings != settings {
@@ -542,7 +555,9 @@ impl Run {
             mut next_id,
             children,
             elites,
+            cma_children,
         } = plan;
+        let bred = children.len() - cma_children;
         let evaluated: Vec<(Individual, f64)> = children
             .into_iter()
             .zip(evals)
@@ -559,11 +574,14 @@ impl Run {
                 )
             })
             .collect();
-        let successes = evaluated
+        // The 1/5 rule steers the GA's children only: CMA-ES has its own
+        // step size.
+        let ga_children = &evaluated[..bred];
+        let successes = ga_children
             .iter()
             .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
             .count();
-        let mut success_rate = successes as f64 / evaluated.len().max(1) as f64;
+        let mut success_rate = successes as f64 / ga_children.len().max(1) as f64;
         if s.like.is_some() {
             // Toward descriptors the step size should follow local progress:
             // only children of parents inside the class gate (score > 1)
@@ -571,14 +589,15 @@ impl Run {
             // parent. Children crossing into the class would otherwise keep
             // the rate high and the variation coarse for ever.
             let inside: Vec<&(Individual, f64)> =
-                evaluated.iter().filter(|(_, ps)| *ps > 1.0).collect();
+                ga_children.iter().filter(|(_, ps)| *ps > 1.0).collect();
             if !inside.is_empty() {
                 let closer = inside.iter().filter(|(i, ps)| i.eval.score > *ps).count();
                 success_rate = closer as f64 / inside.len() as f64;
             }
         }
+        let sampled: Vec<&Individual> = evaluated[bred..].iter().map(|(i, _)| i).collect();
         let mut population: Vec<Individual> = elites;
-        population.extend(evaluated.into_iter().map(|(i, _)| i));
+        population.extend(evaluated.iter().map(|(i, _)| i.clone()));
         population.sort_by_key(|i| i.id);
         let summary = summarise(generation, &population, scale, success_rate);
         let mut history = match &self.checkpoint {
@@ -596,20 +615,31 @@ impl Run {
         if s.archive {
             update_archive(&mut archive, generation, &population);
         }
+        // Generation 0 is the prototype's copies: its successes say nothing
+        // about parents, so the scale rule starts from gen 1; a generation
+        // without GA children leaves it as it was.
+        let next = if generation == 0 || bred == 0 {
+            scale
+        } else {
+            next_scale(scale, success_rate)
+        };
+        let cmaes = strategy::advance(
+            s,
+            &self.proto,
+            self.checkpoint.as_ref().and_then(|c| c.cmaes.as_ref()),
+            &sampled,
+            &population,
+            next,
+        );
         let mut checkpoint = Checkpoint {
             settings: s.clone(),
             generation,
             population,
-            // Generation 0 is the prototype's copies: its successes say
-            // nothing about parents, so the scale rule starts from gen 1.
-            scale: if generation == 0 {
-                scale
-            } else {
-                next_scale(scale, success_rate)
-            },
+            scale: next,
             next_id,
             history,
             archive,
+            cmaes,
             // The hashes of the earlier generations' files, to which
             // write_generation adds this one's and run.toml's.
             fnv1a64: self
@@ -777,7 +807,8 @@ impl Run {
         Ok(())
     }
 
-    /// The fall of a member, dropped again exactly as it was evaluated.
+    /// The fall of a member, dropped again exactly as it was evaluated (its
+    /// lower-median release).
     pub fn best_fall(&self, member: &Individual) -> Result<Trajectory, BreedError> {
         if let Some((id, fall)) = &self.best_fall
             && *id == member.id
@@ -791,9 +822,11 @@ impl Run {
                 id: member.id,
                 message: e.to_string(),
             })?;
+        // The drop its score is that of: the lower median of its releases.
         let params = DropParams {
             seconds: self.settings.seconds,
             dt: TimeStep::Auto,
+            tilt_deg: member.eval.release_deg,
             ..Default::default()
         };
         drop_leaf(&model, &params)

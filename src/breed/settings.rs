@@ -4,6 +4,12 @@ use crate::motion::classify::MotionClass;
 use crate::motion::describe::MotionTarget;
 use serde::{Deserialize, Serialize};
 
+/// Release attitudes per individual by default: the issue's 4, enough for a
+/// median to ignore one lucky (or unlucky) drop.
+pub const DEFAULT_RELEASES: usize = 4;
+/// Most release attitudes per individual (each is a drop).
+pub const MAX_RELEASES: usize = 64;
+
 /// Everything that defines a breeding run (written to `run.toml`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -35,6 +41,30 @@ pub struct BreedSettings {
     /// instead of toward the class alone; see [`crate::motion::describe`].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub like: Option<MotionTarget>,
+    /// Release attitudes each individual is dropped from (`--releases`):
+    /// its score is the lower median of their scores
+    /// ([`super::robust`]). A run written before robust fitness has 1.
+    #[serde(default = "one_release")]
+    pub releases: usize,
+    /// Who breeds the children ([`super::strategy`]); a run written before
+    /// strategies is the GA.
+    #[serde(default = "ga")]
+    pub strategy: Strategy,
+    /// Generation 0 is half uniform draws over the bounds
+    /// ([`super::selection::INITIAL_COPY_SHARE`]); false in a run written
+    /// before them, whose generation 0 is all copies of the prototype.
+    #[serde(default)]
+    pub uniform_start: bool,
+}
+
+/// The strategy of a run whose run.toml predates `--strategy`.
+fn ga() -> Strategy {
+    Strategy::Ga
+}
+
+/// The releases of a run whose run.toml predates `--releases`.
+fn one_release() -> usize {
+    1
 }
 
 impl BreedSettings {
@@ -53,6 +83,9 @@ impl BreedSettings {
             tournament: 3,
             archive: false,
             like: None,
+            releases: DEFAULT_RELEASES,
+            strategy: Strategy::Hybrid,
+            uniform_start: true,
         }
     }
 
@@ -82,7 +115,7 @@ impl BreedSettings {
         }
         if !(self.initial_scale > 0.0 && self.initial_scale.is_finite()) {
             return Err(SettingsError(format!(
-                "the initial scale must be positive, got {}",
+                "--initial-scale must be a positive number, got {}",
                 self.initial_scale
             )));
         }
@@ -92,12 +125,80 @@ impl BreedSettings {
                 self.elites, self.population
             )));
         }
+        if self.releases == 0 {
+            return Err(SettingsError(
+                "--releases must be at least 1 (each leaf is dropped from that many release \
+                 attitudes and scored on their median; the default is 4)"
+                    .to_string(),
+            ));
+        }
+        if self.releases > MAX_RELEASES {
+            return Err(SettingsError(format!(
+                "--releases must be at most {MAX_RELEASES}, got {} (every release is one more \
+                 drop of every leaf)",
+                self.releases
+            )));
+        }
         if self.tournament == 0 {
             return Err(SettingsError(
                 "the tournament size must be at least 1".to_string(),
             ));
         }
         Ok(())
+    }
+}
+
+/// How a run breeds its children ([`super::strategy`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Strategy {
+    /// The genetic algorithm alone (what runs before issue 19 did).
+    Ga,
+    /// CMA-ES alone from generation 1, started at generation 0's best.
+    Cmaes,
+    /// The GA until the target class is found, then mostly CMA-ES.
+    Hybrid,
+    /// Random search, the baseline of the benchmark: every child a uniform
+    /// draw over the bounds.
+    Random,
+}
+
+impl Strategy {
+    /// The names, as `--strategy` takes them.
+    pub const NAMES: [&'static str; 4] = ["ga", "cmaes", "hybrid", "random"];
+
+    /// The name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Strategy::Ga => "ga",
+            Strategy::Cmaes => "cmaes",
+            Strategy::Hybrid => "hybrid",
+            Strategy::Random => "random",
+        }
+    }
+}
+
+impl std::fmt::Display for Strategy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A `--strategy` that names none.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("--strategy: unknown strategy '{0}'; known: ga, cmaes, hybrid, random")]
+pub struct UnknownStrategy(pub String);
+
+impl std::str::FromStr for Strategy {
+    type Err = UnknownStrategy;
+    fn from_str(s: &str) -> Result<Strategy, UnknownStrategy> {
+        match s {
+            "ga" => Ok(Strategy::Ga),
+            "cmaes" => Ok(Strategy::Cmaes),
+            "hybrid" => Ok(Strategy::Hybrid),
+            "random" => Ok(Strategy::Random),
+            other => Err(UnknownStrategy(other.to_string())),
+        }
     }
 }
 

@@ -588,6 +588,9 @@ mod tests {
             }),
             score,
             distance: Some(0.1 + 0.7),
+            releases: 4,
+            kept: 3,
+            release_deg: [-17.25, 0.1 + 0.2],
         }
     }
 
@@ -597,6 +600,9 @@ mod tests {
             outcome: Outcome::Diverged("diverged at step 3, \"quoted\"\nnewline".into()),
             score: -1.0,
             distance: None,
+            releases: 4,
+            kept: 0,
+            release_deg: [2.0, -29.9],
         }
     }
 

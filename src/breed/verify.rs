@@ -226,6 +226,33 @@ pub(crate) fn check_checkpoint(
             ),
         );
     }
+    // The strategy's state: only where the strategy keeps one, and one
+    // that can go on (its dimension the genome's, its numbers sane).
+    if let Some(state) = &cp.cmaes {
+        if matches!(
+            settings.strategy,
+            super::settings::Strategy::Ga | super::settings::Strategy::Random
+        ) {
+            return bad(
+                "cmaes".into(),
+                format!(
+                    "a CMA-ES state in a run whose strategy is {}",
+                    settings.strategy
+                ),
+            );
+        }
+        let n = crate::leaf::genome::Genome::of_prototype(proto)
+            .values()
+            .len();
+        state
+            .check(n)
+            .map_err(|e| Damage::new(file, format!("cmaes.{}", e.field), e.reason))?;
+    } else if settings.strategy == super::settings::Strategy::Cmaes {
+        return bad(
+            "cmaes".into(),
+            "missing: a cmaes run holds its CMA-ES state from generation 0 on".to_string(),
+        );
+    }
     let cells = super::archive::ARCHIVE_DESCENT_EDGES.len();
     for (k, e) in cp.archive.iter().enumerate() {
         if e.descent_bin >= cells || e.spin_bin >= super::archive::ARCHIVE_SPIN_EDGES.len() {
@@ -270,7 +297,19 @@ fn check_member(i: &Individual, proto: &LeafSpec, at: &str, file: &Path) -> Resu
         ("tilt_deg", r.tilt_deg),
         ("dt", r.dt),
         ("distance", r.distance.unwrap_or(0.0)),
+        ("release_deg[0]", r.release_deg[0]),
+        ("release_deg[1]", r.release_deg[1]),
     ];
+    if r.releases == 0 || r.kept > r.releases {
+        return Err(Damage::new(
+            file,
+            format!("{at}.eval.kept"),
+            format!(
+                "{} of {} releases kept the class: at least one release, and no more kept than dropped",
+                r.kept, r.releases
+            ),
+        ));
+    }
     for (name, v) in numbers {
         if !v.is_finite() {
             return Err(Damage::new(
@@ -319,6 +358,7 @@ mod tests {
             next_id: plan.next_id,
             history: Vec::new(),
             archive: Vec::new(),
+            cmaes: None,
             fnv1a64: Default::default(),
         };
         let text = encode_checkpoint(&cp).unwrap();

@@ -1,11 +1,12 @@
 //! What `leafmagic shard` does: evaluate one shard of the next generation
 //! of a run directory, read-only but for its own shard file.
 
-use super::evaluate::evaluate_lockstep;
+use super::evaluate::evaluate;
 use super::population::{BreedError, Evaluation, io_err};
 use super::run::Run;
 use super::shard::{ShardFile, Split, encode, generation_dir, plan_hash, read_valid, shard_path};
 use crate::util::io::write_atomic;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// What [`run_shard`] did.
@@ -61,10 +62,10 @@ pub fn run_shard(
     }
     let members = split.members(&plan.children);
     let settings = run.settings();
-    // As the local executor: lockstep batches, the same bits.
-    let genomes: Vec<_> = members.iter().map(|c| &c.genome).collect();
-    let evals = evaluate_lockstep(&run.proto, &genomes, settings, &|_| {});
-    let rows: Vec<(u64, Evaluation)> = members.iter().map(|c| c.id).zip(evals).collect();
+    let rows: Vec<(u64, Evaluation)> = members
+        .par_iter()
+        .map(|c| (c.id, evaluate(&run.proto, c.id, &c.genome, settings)))
+        .collect();
     let n = rows.len();
     let text = encode(&ShardFile {
         generation,

@@ -12,9 +12,15 @@ use std::path::PathBuf;
 /// Arguments of `breed`.
 #[derive(clap::Args, Debug)]
 pub struct BreedArgs {
-    /// Prototype: `a`, `b` (embedded) or a leaf file.
-    #[arg(long, default_value = "a")]
+    /// Prototype: `a`, `b` (embedded), a leaf file, or `auto`: the embedded one whose
+    /// variants most often fall in the target class (A for floaters and autorotating
+    /// spinners, B for lilters and tumblers); the choice and its reason are printed.
+    #[arg(long, default_value = "auto")]
     pub prototype: String,
+    /// Variation scale of generation 0's copies of the prototype (1 = the paper's first
+    /// round); the other half of generation 0 is drawn uniformly over the prototype's bounds.
+    #[arg(long, default_value_t = 1.0)]
+    pub initial_scale: f64,
     /// Motion class to breed toward: floater, spinner or lilter [default: floater; with
     /// --target-features, none: any class may come close].
     #[arg(long)]
@@ -51,6 +57,16 @@ pub struct BreedArgs {
     /// unset ones are free), within the class of --target if given (else any class).
     #[arg(long, value_name = "NAME=VALUE,...")]
     pub target_features: Option<String>,
+    /// Release attitudes each leaf is dropped from (tilts of 2–30° about directions drawn
+    /// from the leaf's own seed); its score is the lower median of theirs, and how many of
+    /// them keep the target class is its robustness (the `kept` column).
+    #[arg(long, default_value_t = leafmagic::breed::settings::DEFAULT_RELEASES)]
+    pub releases: usize,
+    /// Who breeds the children: the genetic algorithm, CMA-ES (per-gene step sizes and
+    /// correlations) from generation 1, or the GA until the target class is found and then
+    /// mostly CMA-ES, the GA's share keeping other classes reachable.
+    #[arg(long, value_enum, default_value_t = StrategyKind::Hybrid)]
+    pub strategy: StrategyKind,
     /// Who evaluates each generation (the run's files are the same bytes with any).
     #[arg(long, value_enum, default_value_t = ExecutorKind::Local)]
     pub executor: ExecutorKind,
@@ -66,8 +82,33 @@ pub struct BreedArgs {
     #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
     pub max_work: f64,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
-    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features"])]
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features", "releases", "strategy", "initial_scale"])]
     pub resume: Option<PathBuf>,
+}
+
+/// Who breeds the children of `breed` ([`leafmagic::breed::settings::Strategy`]).
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StrategyKind {
+    /// The genetic algorithm: tournaments and mutation with the 1/5 success rule.
+    Ga,
+    /// CMA-ES alone from generation 1, started at generation 0's best.
+    Cmaes,
+    /// The GA until the target class is found, then two thirds CMA-ES.
+    Hybrid,
+    /// Random search (a baseline): every leaf a uniform draw over the prototype's bounds.
+    Random,
+}
+
+impl From<StrategyKind> for leafmagic::breed::settings::Strategy {
+    fn from(k: StrategyKind) -> Self {
+        use leafmagic::breed::settings::Strategy;
+        match k {
+            StrategyKind::Ga => Strategy::Ga,
+            StrategyKind::Cmaes => Strategy::Cmaes,
+            StrategyKind::Hybrid => Strategy::Hybrid,
+            StrategyKind::Random => Strategy::Random,
+        }
+    }
 }
 
 /// Who evaluates each generation of `breed`.

@@ -21,18 +21,21 @@ pub fn breed(args: BreedArgs) -> Result<()> {
     let mut run = match &args.resume {
         Some(dir) => Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?,
         None => {
+            let (prototype, like) = choose_prototype(&args)?;
             let settings = BreedSettings {
-                prototype: args.prototype.clone(),
+                prototype,
+                initial_scale: args.initial_scale,
                 target: args.target.unwrap_or(MotionClass::Floater),
                 population: args.population,
                 generations: args.generations,
                 seed: args.seed,
                 seconds: args.seconds,
                 archive: args.archive,
+                releases: args.releases,
+                strategy: args.strategy.into(),
                 ..BreedSettings::default_run()
             };
             // Keep elites at a tenth of the population (at least one).
-            let like = motion_target(&args)?;
             let settings = BreedSettings {
                 elites: (settings.population / 10).max(1),
                 target: like
@@ -275,11 +278,37 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
 
 /// The motion target of `breed --like` / `--target-features`, checked
 /// before anything is bred or written.
-fn motion_target(args: &BreedArgs) -> Result<Option<MotionTarget>> {
+/// The prototype to breed from and the motion target: `--prototype auto`
+/// chooses from the target's class ([`breed::auto::choose`]) and says which
+/// and why on stderr. An example without `--size` is described at the
+/// chosen prototype's chord (at A's to choose, then again if B is chosen).
+fn choose_prototype(args: &BreedArgs) -> Result<(String, Option<MotionTarget>)> {
+    if args.prototype != breed::auto::AUTO {
+        return Ok((
+            args.prototype.clone(),
+            motion_target(args, &args.prototype)?,
+        ));
+    }
+    let first = motion_target(args, "a")?;
+    let (class, regime) = match &first {
+        Some(t) => (t.class, t.regime),
+        None => (Some(args.target.unwrap_or(MotionClass::Floater)), None),
+    };
+    let (name, why) = breed::auto::choose(class, regime);
+    eprintln!("leafmagic: --prototype auto: {name} ({why})");
+    let like = if name == "a" || args.size.is_some() {
+        first
+    } else {
+        motion_target(args, name)?
+    };
+    Ok((name.to_string(), like))
+}
+
+fn motion_target(args: &BreedArgs, prototype: &str) -> Result<Option<MotionTarget>> {
     if let Some(path) = &args.like {
         let size = match args.size {
             Some(s) => s,
-            None => LeafSpec::load(&args.prototype)?.model()?.chord(),
+            None => LeafSpec::load(prototype)?.model()?.chord(),
         };
         let example = input::describe_file(path, size, UpAxis::Z)?;
         return Ok(Some(MotionTarget::like(

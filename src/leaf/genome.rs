@@ -24,8 +24,19 @@ pub mod sigma {
     pub const LOG_TOTAL_MASS: f64 = 0.15;
     /// ln of each stiffness group's factor (log-normal).
     pub const LOG_STIFFNESS: f64 = 0.3;
-    /// ln of the size factor (log-normal).
-    pub const LOG_SIZE: f64 = 0.08;
+    /// ln of the aspect-ratio factor (log-normal).
+    pub const LOG_ASPECT: f64 = 0.25;
+    /// ln of the drag-ratio factor (log-normal).
+    pub const LOG_DRAG_RATIO: f64 = 0.3;
+    /// Camber, fraction of the extent along y (additive normal).
+    pub const CAMBER: f64 = 0.05;
+    /// Petiole mass, fraction of the blade's mass (additive normal).
+    pub const PETIOLE_MASS: f64 = 0.1;
+    /// ln of the size factor (log-normal): a quarter, so that the default
+    /// bounds (½–2×, ln 2 = 0.69 away) are under three steps from the
+    /// prototype (issue 19: at 0.08 they were 8.7 steps away, and
+    /// `--target-features descent=0.6,spin=20` needs them).
+    pub const LOG_SIZE: f64 = 0.25;
 }
 
 /// The name of the stiffness group that scales the bending hinges.
@@ -47,6 +58,26 @@ pub struct Genome {
     pub stiffness_factor: Vec<(String, f64)>,
     /// Linear size relative to the prototype (mass scales with area).
     pub size_factor: f64,
+    /// Aspect ratio of the outline relative to the prototype's: x stretched
+    /// by √a, y by 1/√a, area (and so mass) kept. 1 in a genome written
+    /// before it.
+    #[serde(default = "unit")]
+    pub aspect_ratio: f64,
+    /// Factor on the linear law's tangential/normal drag ratio αᵗ/αⁿ.
+    #[serde(default = "unit")]
+    pub drag_ratio: f64,
+    /// Camber: the flat layout bowed across y, arc height over the extent
+    /// along y ([`Bounds::camber`]). 0 in a genome written before it.
+    #[serde(default)]
+    pub camber: f64,
+    /// Petiole mass at the base over the blade's mass
+    /// ([`Bounds::petiole_mass`]).
+    #[serde(default)]
+    pub petiole_mass: f64,
+}
+
+fn unit() -> f64 {
+    1.0
 }
 
 impl Genome {
@@ -64,6 +95,10 @@ impl Genome {
             total_mass_factor: 1.0,
             stiffness_factor: groups.into_iter().map(|g| (g, 1.0)).collect(),
             size_factor: 1.0,
+            aspect_ratio: 1.0,
+            drag_ratio: 1.0,
+            camber: 0.0,
+            petiole_mass: 0.0,
         }
     }
 
@@ -85,14 +120,60 @@ impl Genome {
             .map(|(p, f)| p.mass * f)
             .sum();
         let norm = proto_total / weighted * self.total_mass_factor * s * s;
+        let stretch = [
+            s * self.aspect_ratio.sqrt(),
+            s / self.aspect_ratio.sqrt(),
+            s,
+        ];
         for (p, f) in leaf.particles.iter_mut().zip(&self.mass_factor) {
             p.mass *= f * norm;
-            p.position = p.position.map(|c| c * s);
+            for (c, k) in p.position.iter_mut().zip(stretch) {
+                *c *= k;
+            }
         }
         for spring in &mut leaf.springs {
             spring.stiffness *= self.stiffness(&spring.group);
             if let Some(l) = spring.rest_length.as_mut() {
-                *l *= s;
+                // An explicit rest length stretches as its ends do.
+                let [i, j] = spring.ends;
+                let length = |ps: &[crate::leaf::ParticleSpec]| {
+                    let (a, b) = (ps[i].position, ps[j].position);
+                    ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+                };
+                let before = length(&proto.particles);
+                *l *= if before > 0.0 {
+                    length(&leaf.particles) / before
+                } else {
+                    s
+                };
+            }
+        }
+        if let Some(t) = leaf.aero.alpha_t.as_mut() {
+            *t *= self.drag_ratio;
+        }
+        if self.camber != 0.0 || self.petiole_mass != 0.0 {
+            let ys: Vec<f64> = proto.particles.iter().map(|p| p.position[1]).collect();
+            let (lo, hi) = ys
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &y| {
+                    (a.min(y), b.max(y))
+                });
+            let (mid, half) = ((lo + hi) / 2.0, (hi - lo) / 2.0);
+            if half > 0.0 && self.camber != 0.0 {
+                // z = c · 2h · (1 − ((y − mid)/h)²): height c × extent at
+                // the middle, 0 at both ends, before the folds.
+                let extent = 2.0 * half * stretch[1];
+                for (p, &y) in leaf.particles.iter_mut().zip(&ys) {
+                    let u = (y - mid) / half;
+                    p.position[2] += self.camber * extent * (1.0 - u * u);
+                }
+            }
+            if self.petiole_mass > 0.0 {
+                let base = (0..ys.len())
+                    .min_by(|&a, &b| ys[a].total_cmp(&ys[b]).then(a.cmp(&b)))
+                    .expect("a leaf has particles");
+                let blade: f64 = leaf.particles.iter().map(|p| p.mass).sum();
+                leaf.particles[base].mass += self.petiole_mass * blade;
             }
         }
         if let Some(b) = leaf.bending.as_mut() {
@@ -127,7 +208,140 @@ impl Genome {
             out.push((format!("stiffness_{g}"), *k));
         }
         out.push(("size".to_string(), self.size_factor));
+        out.push(("aspect_ratio".to_string(), self.aspect_ratio));
+        out.push(("drag_ratio".to_string(), self.drag_ratio));
+        out.push(("camber".to_string(), self.camber));
+        out.push(("petiole_mass".to_string(), self.petiole_mass));
         out
+    }
+}
+
+/// How one gene maps onto the unit interval the search strategies work in
+/// ([`Genome::coordinates`]): fold angles linearly over their bounds,
+/// positive factors by their logarithm (so a step doubles or halves them
+/// alike).
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Axis {
+    Linear([f64; 2]),
+    Log([f64; 2]),
+}
+
+impl Axis {
+    fn to_unit(self, v: f64) -> f64 {
+        let (x, [lo, hi]) = match self {
+            Axis::Linear(r) => (v, r),
+            Axis::Log(r) => (v.ln(), [r[0].ln(), r[1].ln()]),
+        };
+        if hi > lo {
+            ((x - lo) / (hi - lo)).clamp(0.0, 1.0)
+        } else {
+            0.0
+        }
+    }
+
+    fn at_unit(self, u: f64) -> f64 {
+        let u = u.clamp(0.0, 1.0);
+        match self {
+            Axis::Linear([lo, hi]) => (lo + u * (hi - lo)).clamp(lo, hi),
+            Axis::Log([lo, hi]) => (lo.ln() + u * (hi.ln() - lo.ln())).exp().clamp(lo, hi),
+        }
+    }
+
+    /// A mutation's standard deviation at scale 1 (`sd` in the gene's own
+    /// units, or of its logarithm) as a fraction of the unit interval.
+    fn unit_sd(self, sd: f64) -> f64 {
+        let width = match self {
+            Axis::Linear([lo, hi]) => hi - lo,
+            Axis::Log([lo, hi]) => hi.ln() - lo.ln(),
+        };
+        if width > 0.0 { sd / width } else { 0.0 }
+    }
+}
+
+impl Genome {
+    /// The axis and scale-1 standard deviation of every gene, in
+    /// [`Genome::values`] order.
+    fn axes(&self, b: &Bounds) -> Vec<(Axis, f64)> {
+        let mut out = Vec::new();
+        out.extend(
+            self.fold_deg
+                .iter()
+                .map(|_| (Axis::Linear(b.fold_deg), sigma::FOLD_DEG)),
+        );
+        out.extend(
+            self.mass_factor
+                .iter()
+                .map(|_| (Axis::Log(b.mass_factor), sigma::LOG_MASS)),
+        );
+        out.push((Axis::Log(b.total_mass_factor), sigma::LOG_TOTAL_MASS));
+        out.extend(
+            self.stiffness_factor
+                .iter()
+                .map(|_| (Axis::Log(b.stiffness_factor), sigma::LOG_STIFFNESS)),
+        );
+        out.push((Axis::Log(b.size_factor), sigma::LOG_SIZE));
+        out.push((Axis::Log(b.aspect_ratio), sigma::LOG_ASPECT));
+        out.push((Axis::Log(b.drag_ratio), sigma::LOG_DRAG_RATIO));
+        out.push((Axis::Linear(b.camber), sigma::CAMBER));
+        out.push((Axis::Linear(b.petiole_mass), sigma::PETIOLE_MASS));
+        out
+    }
+
+    /// The genes as coordinates in the unit box [0, 1]ⁿ spanned by the
+    /// prototype's bounds, in [`Genome::values`] order: what CMA-ES
+    /// searches. A gene whose bounds are one point is 0.
+    pub fn coordinates(&self, b: &Bounds) -> Vec<f64> {
+        self.axes(b)
+            .iter()
+            .zip(self.values())
+            .map(|((axis, _), (_, v))| axis.to_unit(v))
+            .collect()
+    }
+
+    /// The genome of the same prototype at coordinates `u` (each clamped to
+    /// [0, 1], so within the bounds).
+    ///
+    /// # Panics
+    /// If `u` has not one coordinate per gene.
+    pub fn with_coordinates(&self, b: &Bounds, u: &[f64]) -> Genome {
+        let axes = self.axes(b);
+        assert_eq!(axes.len(), u.len(), "one coordinate per gene");
+        let mut v = axes.iter().zip(u).map(|((axis, _), &x)| axis.at_unit(x));
+        let mut next = || v.next().expect("counted");
+        let fold_deg = self.fold_deg.iter().map(|_| next()).collect();
+        let mass_factor = self.mass_factor.iter().map(|_| next()).collect();
+        let total_mass_factor = next();
+        let stiffness_factor = self
+            .stiffness_factor
+            .iter()
+            .map(|(g, _)| (g.clone(), next()))
+            .collect();
+        let size_factor = next();
+        let aspect_ratio = next();
+        let drag_ratio = next();
+        let camber = next();
+        let petiole_mass = next();
+        Genome {
+            fold_deg,
+            mass_factor,
+            total_mass_factor,
+            stiffness_factor,
+            size_factor,
+            aspect_ratio,
+            drag_ratio,
+            camber,
+            petiole_mass,
+        }
+    }
+
+    /// The standard deviation of one scale-1 [`mutate`] step of every gene
+    /// as a fraction of its coordinate's unit interval: the per-gene step
+    /// sizes CMA-ES starts from.
+    pub fn coordinate_sds(&self, b: &Bounds) -> Vec<f64> {
+        self.axes(b)
+            .iter()
+            .map(|(axis, sd)| axis.unit_sd(*sd))
+            .collect()
     }
 }
 
@@ -212,7 +426,19 @@ impl Genome {
         for (g, v) in &self.stiffness_factor {
             within(format!("stiffness_factor.{g}"), *v, b.stiffness_factor)?;
         }
-        within("size_factor".to_string(), self.size_factor, b.size_factor)
+        within("size_factor".to_string(), self.size_factor, b.size_factor)?;
+        within(
+            "aspect_ratio".to_string(),
+            self.aspect_ratio,
+            b.aspect_ratio,
+        )?;
+        within("drag_ratio".to_string(), self.drag_ratio, b.drag_ratio)?;
+        within("camber".to_string(), self.camber, b.camber)?;
+        within(
+            "petiole_mass".to_string(),
+            self.petiole_mass,
+            b.petiole_mass,
+        )
     }
 }
 
@@ -273,12 +499,40 @@ pub fn mutate<R: Rng + ?Sized>(
         genome.size_factor * normal(sigma::LOG_SIZE * scale).exp(),
         bounds.size_factor,
     );
+    // Drawn last, so the earlier genes' draws are what they were before
+    // these genes existed.
+    let mut factor = |v: f64, sd: f64, range: [f64; 2]| {
+        if range[0] == range[1] {
+            range[0]
+        } else {
+            clamp(v * normal(sd * scale).exp(), range)
+        }
+    };
+    let aspect_ratio = factor(genome.aspect_ratio, sigma::LOG_ASPECT, bounds.aspect_ratio);
+    let drag_ratio = factor(genome.drag_ratio, sigma::LOG_DRAG_RATIO, bounds.drag_ratio);
+    let mut shift = |v: f64, sd: f64, range: [f64; 2]| {
+        if range[0] == range[1] {
+            range[0]
+        } else {
+            clamp(v + normal(sd * scale), range)
+        }
+    };
+    let camber = shift(genome.camber, sigma::CAMBER, bounds.camber);
+    let petiole_mass = shift(
+        genome.petiole_mass,
+        sigma::PETIOLE_MASS,
+        bounds.petiole_mass,
+    );
     Genome {
         fold_deg,
         mass_factor,
         total_mass_factor,
         stiffness_factor,
         size_factor,
+        aspect_ratio,
+        drag_ratio,
+        camber,
+        petiole_mass,
     }
 }
 
@@ -341,6 +595,35 @@ mod tests {
             let mut bad = g.clone();
             bad.stiffness_factor[0].1 = f64::NAN;
             assert!(bad.check(&proto).is_err());
+        }
+    }
+
+    #[test]
+    fn coordinates_span_the_bounds_and_round_trip() {
+        for p in ["a", "b"] {
+            let proto = LeafSpec::load(p).unwrap();
+            let g = Genome::of_prototype(&proto);
+            let b = &proto.bounds;
+            for seed in 0..50 {
+                let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+                let v = mutate(&g, b, 2.0, &mut rng);
+                let u = v.coordinates(b);
+                assert!(u.iter().all(|x| (0.0..=1.0).contains(x)), "{u:?}");
+                let back = g.with_coordinates(b, &u);
+                for ((_, x), (_, y)) in back.values().iter().zip(v.values()) {
+                    assert!((x - y).abs() <= 1e-12 * y.abs().max(1.0), "{p}: {x} vs {y}");
+                }
+            }
+            // The corners of the box are the bounds.
+            let n = g.values().len();
+            let low = g.with_coordinates(b, &vec![0.0; n]);
+            let high = g.with_coordinates(b, &vec![1.0; n]);
+            assert_eq!(low.size_factor, b.size_factor[0]);
+            assert_eq!(high.size_factor, b.size_factor[1]);
+            assert_eq!(low.fold_deg[0], b.fold_deg[0]);
+            assert_eq!(low.check(&proto), Ok(()));
+            assert_eq!(high.check(&proto), Ok(()));
+            assert!(g.coordinate_sds(b).iter().all(|&s| s > 0.0 && s < 1.0));
         }
     }
 

@@ -466,6 +466,22 @@ pub struct Bounds {
     pub stiffness_factor: [f64; 2],
     /// Range of the overall size relative to the prototype.
     pub size_factor: [f64; 2],
+    /// Range of the outline's aspect ratio relative to the prototype's: the
+    /// flat layout stretched by √a along x and 1/√a along y (area kept).
+    /// Default [1, 1]: not varied unless the file asks.
+    pub aspect_ratio: [f64; 2],
+    /// Range of the factor on the linear law's tangential/normal drag ratio
+    /// αᵗ/αⁿ (αᵗ scaled, αⁿ kept; eq. 9–10). Default [1, 1]; inert under
+    /// the other laws.
+    pub drag_ratio: [f64; 2],
+    /// Range of the camber: the flat layout bowed across y into a parabolic
+    /// arc whose height is this fraction of the layout's extent along y (+
+    /// up, 0 flat). Default [0, 0].
+    pub camber: [f64; 2],
+    /// Range of the petiole (stem) mass added at the leaf's base, the
+    /// particle farthest along −y in the flat layout, as a fraction of the
+    /// blade's mass. Default [0, 0].
+    pub petiole_mass: [f64; 2],
 }
 
 impl Default for Bounds {
@@ -476,6 +492,10 @@ impl Default for Bounds {
             total_mass_factor: [0.5, 2.0],
             stiffness_factor: [0.5, 4.0],
             size_factor: [0.5, 2.0],
+            aspect_ratio: [1.0, 1.0],
+            drag_ratio: [1.0, 1.0],
+            camber: [0.0, 0.0],
+            petiole_mass: [0.0, 0.0],
         }
     }
 }
@@ -489,6 +509,10 @@ impl Bounds {
             ("total_mass_factor", self.total_mass_factor, true),
             ("stiffness_factor", self.stiffness_factor, true),
             ("size_factor", self.size_factor, true),
+            ("aspect_ratio", self.aspect_ratio, true),
+            ("drag_ratio", self.drag_ratio, true),
+            ("camber", self.camber, false),
+            ("petiole_mass", self.petiole_mass, false),
         ];
         for (name, [lo, hi], positive) in ranges {
             let reason = if !(lo.is_finite() && hi.is_finite()) {

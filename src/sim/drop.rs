@@ -160,13 +160,17 @@ pub fn drop_leaf_within(
 /// pose is not finite is dropped again alone for its diagnosis. Only the
 /// wall time of the stepping loop (`stats.wall_s`, shared by the lanes)
 /// differs.
+///
+/// Each leaf has its own [`DropParams`]; they may differ in the release
+/// tilt and the step, and must agree on the rest (else the drops run one
+/// after another).
 pub fn drop_leaves<const L: usize>(
     models: [&Model; L],
-    params: &DropParams,
+    params: [&DropParams; L],
 ) -> [Result<DropResult, DropError>; L] {
     match drop_lockstep(models, params) {
         Some(results) => results,
-        None => models.map(|m| drop_leaf(m, params)),
+        None => std::array::from_fn(|k| drop_leaf(models[k], params[k])),
     }
 }
 
@@ -191,25 +195,34 @@ struct Lane {
 /// drop would be refused (the lone drops then say why).
 fn drop_lockstep<const L: usize>(
     models: [&Model; L],
-    params: &DropParams,
+    params: [&DropParams; L],
 ) -> Option<[Result<DropResult, DropError>; L]> {
-    if params.integrator != Integrator::Verlet || params.record_particles {
+    let first = params[0];
+    let shared = |p: &DropParams| {
+        p.integrator == Integrator::Verlet
+            && !p.record_particles
+            && p.seconds == first.seconds
+            && p.integrator == first.integrator
+    };
+    if !params.iter().all(|p| shared(p)) {
         return None;
     }
     let frame_dt = 1.0 / FRAME_RATE;
     let mut dt = [0.0; L];
-    for (h, model) in dt.iter_mut().zip(models) {
-        let work = drop_work(model, params).ok()?;
-        work.check(model, frame_dt, MAX_WORK, Command::Drop).ok()?;
-        *h = work.dt;
+    for k in 0..L {
+        let work = drop_work(models[k], params[k]).ok()?;
+        work.check(models[k], frame_dt, MAX_WORK, Command::Drop)
+            .ok()?;
+        dt[k] = work.dt;
     }
-    let frames = (params.seconds * FRAME_RATE).round() as u64;
-    let release = release_rotation(params.tilt_deg);
-    let states = models.map(|m| State::released(m, release, Vector3::zeros()));
+    let frames = (first.seconds * FRAME_RATE).round() as u64;
+    let release: [_; L] = std::array::from_fn(|k| release_rotation(params[k].tilt_deg));
+    let states: [State; L] =
+        std::array::from_fn(|k| State::released(models[k], release[k], Vector3::zeros()));
     let mut batch = Batch::new(models, std::array::from_fn(|k| &states[k]), dt).ok()?;
     let mut lanes: [Lane; L] = std::array::from_fn(|k| {
         let n = models[k].len();
-        let mut tracker = PoseTracker::new(models[k], release);
+        let mut tracker = PoseTracker::new(models[k], release[k]);
         let mut trajectory = Trajectory::with_capacity(frames as usize + 1);
         let (c, q) = tracker.pose(models[k], &states[k].position);
         let failed = !finite_pose(&c, &q);
@@ -288,7 +301,7 @@ fn drop_lockstep<const L: usize>(
     Some(std::array::from_fn(|k| {
         let lane = lanes.next().expect("one lane per model");
         if lane.failed {
-            return drop_leaf(models[k], params);
+            return drop_leaf(models[k], params[k]);
         }
         Ok(DropResult {
             trajectory: lane.trajectory,

@@ -104,34 +104,29 @@ fn different_topologies_are_refused() {
     assert!(matches!(err, BatchError::Topology { lane: 1, .. }), "{err}");
 }
 
-/// A breed's evaluations in lockstep groups are those of lone drops, to the
-/// bit (compared through their Debug text, which prints every f64 exactly),
-/// with a remainder that is evaluated alone (10 children: two batches and
-/// two alone).
+/// A breed's evaluation drops an individual's four releases (four tilts,
+/// one model, one step) in the lanes of one lockstep batch; it is the
+/// evaluation of the four dropped alone, to the bit (compared through the
+/// Debug text, which prints every f64 exactly), for 10 mutated children.
 #[test]
 fn lockstep_evaluations_equal_lone_ones() {
-    use leafmagic::breed::evaluate::{evaluate, evaluate_lockstep};
+    use leafmagic::breed::evaluate::{LOCKSTEP, evaluate, evaluate_alone};
     use leafmagic::breed::settings::BreedSettings;
     let spec = LeafSpec::load("a").unwrap();
     let settings = BreedSettings {
         seconds: 1.5,
+        releases: LOCKSTEP,
         ..BreedSettings::default_run()
     };
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(7);
     let g = Genome::of_prototype(&spec);
-    let genomes: Vec<Genome> = (0..10)
-        .map(|_| mutate(&g, &spec.bounds, 1.5, &mut rng))
-        .collect();
-    let refs: Vec<&Genome> = genomes.iter().collect();
-    let count = std::sync::atomic::AtomicUsize::new(0);
-    let together = evaluate_lockstep(&spec, &refs, &settings, &|_| {
-        count.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
-    });
-    assert_eq!(count.into_inner(), 10);
-    for (g, e) in genomes.iter().zip(&together) {
+    for id in 0..10u64 {
+        let child = mutate(&g, &spec.bounds, 1.5, &mut rng);
+        let together = evaluate(&spec, id, &child, &settings);
+        assert_eq!(together.releases, LOCKSTEP);
         assert_eq!(
-            format!("{e:?}"),
-            format!("{:?}", evaluate(&spec, g, &settings))
+            format!("{together:?}"),
+            format!("{:?}", evaluate_alone(&spec, id, &child, &settings))
         );
     }
 }

@@ -134,7 +134,11 @@ fn killed_run_resumes_to_the_same_bytes() {
 #[test]
 fn bad_input_is_refused_and_nothing_is_overwritten() {
     let dir = scratch("bad");
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 8] = [
+        (&["--releases", "0"], "--releases must be at least 1"),
+        (&["--strategy", "simplex"], "--strategy"),
+        (&["--initial-scale", "0"], "--initial-scale"),
+        (&["--initial-scale", "nan"], "--initial-scale"),
         (&["--population", "1"], "--population"),
         (&["--generations", "0"], "--generations"),
         (&["--prototype", "no-such-leaf.toml"], "no-such-leaf.toml"),
@@ -152,7 +156,7 @@ fn bad_input_is_refused_and_nothing_is_overwritten() {
     let bad_leaf = dir.join("bad.toml");
     std::fs::write(
         &bad_leaf,
-        leafmagic::leaf::PROTOTYPE_A.replacen("mass = ", "mass = -", 1),
+        leafmagic::leaf::PROTOTYPE_A.replacen("\nmass = ", "\nmass = -", 1),
     )
     .unwrap();
     let r = breed(
@@ -161,6 +165,27 @@ fn bad_input_is_refused_and_nothing_is_overwritten() {
     );
     assert!(!r.status.success());
     assert!(String::from_utf8_lossy(&r.stderr).contains("particle[0].mass"));
+    // Bounds that exclude the prototype itself: the file, the gene, why.
+    std::fs::write(
+        &bad_leaf,
+        leafmagic::leaf::PROTOTYPE_A.replacen(
+            "size_factor = [0.5, 2.0]",
+            "size_factor = [1.2, 2.0]",
+            1,
+        ),
+    )
+    .unwrap();
+    let r = breed(
+        &["--prototype", bad_leaf.to_str().unwrap()],
+        &dir.join("never"),
+    );
+    let err = String::from_utf8_lossy(&r.stderr);
+    assert!(!r.status.success());
+    assert!(
+        err.contains("bad.toml") && err.contains("size_factor") && err.contains("exclude"),
+        "{err}"
+    );
+    assert!(!dir.join("never").exists());
     // Prototypes whose numbers are valid but extreme are refused before
     // anything is written: hinges so stiff that each drop would take 8e10
     // steps (this once ran for ever), a damping whose rate overflows.
@@ -233,12 +258,19 @@ fn exported_leaves_drop_with_their_bred_class() {
     for row in rows {
         let cols: Vec<&str> = row.split(',').collect();
         let (file, class) = (cols[2], cols[3]);
+        // Robustness: how many of its releases kept the class, and the
+        // release of the drop whose class is recorded.
+        let (kept, releases): (usize, usize) = (cols[7].parse().unwrap(), cols[8].parse().unwrap());
+        assert_eq!(releases, 4);
+        assert!(kept <= releases);
+        let tilt = format!("--tilt={},{}", cols[9], cols[10]);
         let drop = leafmagic()
             .args([
                 "drop",
                 out.join(file).to_str().unwrap(),
                 "--seconds",
                 "2",
+                &tilt,
                 "--json",
             ])
             .output()

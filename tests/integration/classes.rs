@@ -113,12 +113,13 @@ fn paper_lilters_topology_b_flap_1_up_2_and_3_down() {
 /// One round of variation of prototype A's genome (genome::mutate at scale
 /// 2.5, seeds 0, 1, 2, …, default release) finds all three classes. Under
 /// the paper's law; measured: first spinner at seed 0, floater at seed 2,
-/// lilter at seed 29.
+/// lilter at seed 70 (29 before the size step was widened to a quarter, issue
+/// 19: the draws of later genes moved).
 #[test]
 fn varying_prototype_a_finds_every_class() {
     let proto = LeafSpec::load("a").unwrap();
     let start = Genome::of_prototype(&proto);
-    let classes: Vec<(u64, MotionClass)> = (0..40u64)
+    let classes: Vec<(u64, MotionClass)> = (0..120u64)
         .into_par_iter()
         .map(|seed| {
             let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);

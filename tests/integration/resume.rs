@@ -53,6 +53,9 @@ fn damaged_runs_are_recomputed_to_the_bytes_of_an_uninterrupted_run() {
             .unwrap();
     assert!(cp["digest"].as_str().is_some_and(|d| d.len() == 16), "{cp}");
     assert_eq!(cp["fnv1a64"].as_object().unwrap().len(), 4, "{cp}");
+    // The default strategy (hybrid) found its class and keeps CMA-ES's
+    // state in the checkpoint.
+    assert!(cp["cmaes"]["covariance"].is_array(), "{cp}");
 
     type Damage = (&'static str, &'static str, Box<dyn Fn(&Path)>);
     let damages: Vec<Damage> = vec![
@@ -98,6 +101,21 @@ fn damaged_runs_are_recomputed_to_the_bytes_of_an_uninterrupted_run() {
             "generation 9, no digest",
             "generation",
             Box::new(|d| edit_checkpoint(d, false, |v| v["generation"] = 9.into())),
+        ),
+        (
+            "cmaes sigma 0, no digest",
+            "cmaes.sigma",
+            Box::new(|d| edit_checkpoint(d, false, |v| v["cmaes"]["sigma"] = 0.0.into())),
+        ),
+        (
+            "cmaes covariance asymmetric, no digest",
+            "cmaes.covariance",
+            Box::new(|d| {
+                edit_checkpoint(d, false, |v| {
+                    let c = &mut v["cmaes"]["covariance"][1];
+                    *c = (c.as_f64().unwrap() + 0.25).into();
+                })
+            }),
         ),
         (
             "checkpoint truncated",

@@ -9,23 +9,43 @@ use leafmagic::motion::describe::{self, Descriptors};
 use std::fmt::Write as _;
 use std::path::Path;
 
-/// A line per generation: the count of each class, best and mean score and
-/// the mutation scale; with `like`, the best individual's distance to the
+/// A line per generation: the count of each class, best and mean score,
+/// the best's robustness (how many of its releases kept the class) and the
+/// mutation scale; with `like`, the best individual's distance to the
 /// target too.
 pub fn generations(history: &[GenerationSummary], like: bool) -> String {
     text(|out| {
         write!(
             out,
-            "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10} {:>10} {:>6}",
-            "gen", "floater", "spinner", "lilter", "undet.", "diverg", "best", "mean", "scale"
+            "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10} {:>5} {:>10} {:>6}",
+            "gen",
+            "floater",
+            "spinner",
+            "lilter",
+            "undet.",
+            "diverg",
+            "best",
+            "kept",
+            "mean",
+            "scale"
         )?;
         writeln!(out, "{}", if like { "  best dist." } else { "" })?;
         for h in history {
             let c = h.counts;
+            let kept = format!("{}/{}", h.best_kept, h.releases);
             write!(
                 out,
-                "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10.4} {:>10.4} {:>6.3}",
-                h.generation, c[0], c[1], c[2], c[3], c[4], h.best_score, h.mean_score, h.scale
+                "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10.4} {:>5} {:>10.4} {:>6.3}",
+                h.generation,
+                c[0],
+                c[1],
+                c[2],
+                c[3],
+                c[4],
+                h.best_score,
+                kept,
+                h.mean_score,
+                h.scale
             )?;
             if like {
                 write!(
