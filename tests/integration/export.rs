@@ -975,11 +975,25 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
     let model = best.genome.model(&opened.proto).unwrap();
     let params = leafmagic::sim::drop::DropParams {
         seconds: 3.0,
+        tilt_deg: best.eval.release_deg,
         ..Default::default()
     };
     let fall = leafmagic::sim::drop::drop_leaf(&model, &params).unwrap();
     let c = leafmagic::motion::classify::classify(&fall.trajectory, model.chord());
     assert_eq!(c.class.as_str(), best.eval.class_name());
+    // …released as that drop was (its release attitude, drawn per
+    // individual), not at the drop's default 10°, 2°.
+    let exported = export::drop_individuals(&opened, &[best], 30.0).unwrap();
+    let frames = |o: &export::ClipObject| match &o.motion {
+        export::Motion::Deforming { frames } => frames.clone(),
+        _ => panic!("a leaf deforms"),
+    };
+    let released =
+        export::drop_clip_released("b", "", &model, 3.0, 30.0, best.eval.release_deg).unwrap();
+    assert_eq!(frames(&exported[0]), frames(&released));
+    assert_ne!(best.eval.release_deg, [10.0, 2.0]);
+    let default = export::drop_clip("b", "", &model, 3.0, 30.0).unwrap();
+    assert_ne!(frames(&exported[0]), frames(&default));
 }
 
 #[test]

@@ -587,9 +587,31 @@ pub fn drop_clip(
     seconds: f64,
     fps: f64,
 ) -> Result<ClipObject, ExportError> {
+    drop_clip_released(
+        name,
+        label,
+        model,
+        seconds,
+        fps,
+        DropParams::default().tilt_deg,
+    )
+}
+
+/// [`drop_clip`] released at `tilt_deg` (about the leaf's x and y axes, as
+/// `drop --tilt`): a bred leaf's fall is the one of the release its score
+/// is that of ([`crate::breed::Evaluation::release_deg`]).
+pub fn drop_clip_released(
+    name: &str,
+    label: &str,
+    model: &Model,
+    seconds: f64,
+    fps: f64,
+    tilt_deg: [f64; 2],
+) -> Result<ClipObject, ExportError> {
     let params = DropParams {
         seconds,
         record_particles: true,
+        tilt_deg,
         ..DropParams::default()
     };
     let result = drop_leaf(model, &params)
@@ -652,7 +674,8 @@ pub fn side_by_side(
 }
 
 /// Re-drops chosen individuals of a breeding run exactly as breeding
-/// dropped them (the run's duration, [`DropParams`] defaults, so the same
+/// dropped them (the run's duration, the release attitude whose score the
+/// individual's is, [`crate::breed::Evaluation::release_deg`], so the same
 /// fall that earned the recorded class) and returns each fall as an object
 /// named `leaf-<id>` and labelled with its recorded class, in parallel.
 /// The run keeps no trajectories, and a leaf file alone has no motion: this
@@ -672,7 +695,14 @@ pub fn drop_individuals(
                 .genome
                 .model(&run.proto)
                 .map_err(|e| ExportError::Data(format!("{name}: invalid leaf: {e}")))?;
-            let mut o = drop_clip(&name, ind.eval.class_name(), &model, seconds, fps)?;
+            let mut o = drop_clip_released(
+                &name,
+                ind.eval.class_name(),
+                &model,
+                seconds,
+                fps,
+                ind.eval.release_deg,
+            )?;
             o.features = vec![("score".to_string(), ind.eval.score)];
             if let Some(f) = ind.eval.fall() {
                 o.regime = f.regime.to_string();
