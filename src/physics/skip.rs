@@ -11,6 +11,10 @@
 //! ([`WindField::velocity_of`](crate::physics::field::WindField::velocity_of)).
 //! The box is taken from the positions being evaluated, so no speed bound is
 //! needed; a group with a non-finite coordinate skips nothing.
+//!
+//! A group that feels no wind (none of its particles is a triangle corner or
+//! has particle drag, such as a rigid bin whose surfaces the compiler
+//! dropped) skips every primitive: the wind at its particles is never read.
 
 use crate::physics::model::Model;
 use nalgebra::Vector3;
@@ -66,6 +70,16 @@ pub fn groups(model: &Model) -> Vec<Vec<usize>> {
     out
 }
 
+/// Whether any of `members` reads the wind: a corner of a triangle of the
+/// model, or a particle with drag (the only readers of the sampled wind).
+pub fn feels_wind(model: &Model, members: &[usize]) -> bool {
+    members.iter().any(|&i| model.particle_drag[i] != 0.0)
+        || model
+            .triangles
+            .iter()
+            .any(|t| t.corners.iter().any(|c| members.binary_search(c).is_ok()))
+}
+
 /// The bounding box [lo, hi] of `x[i]` over `members`, or `None` when a
 /// coordinate is not finite (then nothing may be skipped).
 #[inline]
@@ -99,8 +113,14 @@ pub struct SkipCounts {
 pub struct WindSkip {
     /// The groups, or empty when no primitive can ever be skipped.
     groups: Vec<Vec<usize>>,
+    /// Per group, whether it reads the wind ([`feels_wind`]).
+    feels: Vec<bool>,
     /// Which primitives reach the group being sampled.
     active: Vec<bool>,
+    /// Which primitives' keys are nonzero at the time being sampled.
+    keyed_on: Vec<bool>,
+    /// Per group, evaluations left before its box is tested again.
+    hold: Vec<u8>,
     /// Per group, how many primitive evaluations it skipped.
     skipped: Vec<u64>,
     counts: SkipCounts,
@@ -108,17 +128,25 @@ pub struct WindSkip {
 
 impl WindSkip {
     /// Skipping for `model`: on only where some primitive has bounds, a
-    /// front or keys (an unlimited primitive reaches everything).
+    /// front or keys (an unlimited primitive reaches everything), or some
+    /// group feels no wind.
     pub fn new(model: &Model, on: bool) -> WindSkip {
-        let limited = model.wind.primitives().iter().any(|p| p.is_limited());
-        if !(on && limited) {
+        if !on || model.wind.is_still() {
             return WindSkip::default();
         }
+        let limited = model.wind.primitives().iter().any(|p| p.is_limited());
         let groups = groups(model);
+        let feels: Vec<bool> = groups.iter().map(|g| feels_wind(model, g)).collect();
+        if !limited && feels.iter().all(|&f| f) {
+            return WindSkip::default();
+        }
         WindSkip {
             skipped: vec![0; groups.len()],
+            hold: vec![0; groups.len()],
+            feels,
             groups,
             active: vec![true; model.wind.primitives().len()],
+            keyed_on: vec![true; model.wind.primitives().len()],
             counts: SkipCounts::default(),
         }
     }
@@ -138,26 +166,80 @@ impl WindSkip {
         &self.skipped
     }
 
-    /// Writes G(x_i, t) into `wind[i]` for every particle, summing for each
-    /// group only the primitives that can reach its bounding box.
+    /// Writes G(x_i, t) into `wind[i]` for every particle that reads it,
+    /// summing for each group only the primitives that can reach it. Keys
+    /// are looked at once per evaluation. The box tests (only for
+    /// primitives with bounds or a front) decide each skip afresh; a group
+    /// whose test skipped nothing evaluates every keyed primitive for the
+    /// next [`HOLD`] evaluations without testing (evaluating more is always
+    /// exact), so that groups inside the fields pay the test rarely.
     pub fn sample(&mut self, model: &Model, x: &[V3], t: f64, wind: &mut [V3]) {
         let prims = model.wind.primitives();
+        let n = prims.len() as u64;
+        let mut keyed_off = 0;
+        let mut bounded = false;
+        // A bounded primitive keyed to 0 gives 0 · w(x) = NaN at a
+        // non-finite x: skipping it needs the positions checked.
+        let mut off_bounded = false;
+        for (k, p) in self.keyed_on.iter_mut().zip(prims) {
+            *k = !p.zero_at(t);
+            keyed_off += u64::from(!*k);
+            bounded |= *k && p.is_bounded();
+            off_bounded |= !*k && p.is_bounded();
+        }
         for (g, members) in self.groups.iter().enumerate() {
-            let bbox = bounding_box(x, members);
-            let mut off = 0;
-            for (a, p) in self.active.iter_mut().zip(prims) {
-                *a = match &bbox {
-                    Some((lo, hi)) => p.reaches_box(lo, hi, t),
-                    None => true,
-                };
-                off += u64::from(!*a);
+            if !self.feels[g] {
+                // Never read: left as it was.
+                self.skipped[g] += n;
+                self.counts.wind_skipped += n;
+                continue;
+            }
+            let test = bounded && self.hold[g] == 0;
+            self.hold[g] = self.hold[g].saturating_sub(1);
+            let bbox = if test || off_bounded {
+                match bounding_box(x, members) {
+                    Some(b) => Some(b),
+                    None => {
+                        // Not finite: skip nothing.
+                        self.counts.wind_evaluated += n;
+                        for &i in members {
+                            wind[i] = model.wind.velocity(&x[i], t);
+                        }
+                        continue;
+                    }
+                }
+            } else {
+                None
+            };
+            let mut off = keyed_off;
+            self.active.copy_from_slice(&self.keyed_on);
+            if let (true, Some((lo, hi))) = (test, &bbox) {
+                for (a, p) in self.active.iter_mut().zip(prims) {
+                    if *a && p.is_bounded() && p.zero_on_box(lo, hi, t) {
+                        *a = false;
+                        off += 1;
+                    }
+                }
+                if off == keyed_off {
+                    self.hold[g] = HOLD;
+                }
             }
             self.skipped[g] += off;
             self.counts.wind_skipped += off;
-            self.counts.wind_evaluated += prims.len() as u64 - off;
-            for &i in members {
-                wind[i] = model.wind.velocity_of(&x[i], t, &self.active);
+            self.counts.wind_evaluated += n - off;
+            if off == 0 {
+                for &i in members {
+                    wind[i] = model.wind.velocity(&x[i], t);
+                }
+            } else {
+                for &i in members {
+                    wind[i] = model.wind.velocity_of(&x[i], t, &self.active);
+                }
             }
         }
     }
 }
+
+/// Evaluations a group that the box tests found inside every keyed field
+/// goes untested (evaluating every keyed primitive meanwhile).
+pub const HOLD: u8 = 7;

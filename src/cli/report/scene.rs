@@ -41,7 +41,7 @@ pub fn explain(scene: &Scene, dt: &Result<f64, StepError>, decisions: &[Decision
         if !skips.is_empty() {
             writeln!(
                 out,
-                "{:<11} {:<29} per object and force evaluation, a primitive whose keys are 0, or whose bounds' or front's falloff band the object's bounding box lies beyond, is not evaluated at its particles (it would add exact zeros); at t = 0:",
+                "{:<11} {:<29} per object and force evaluation, a primitive whose keys are 0, or whose bounds' or front's falloff band the object's bounding box lies beyond, is not evaluated at its particles (it would add exact zeros), nor any for an object that reads no wind; at t = 0:",
                 "skipping", "wind primitives"
             )?;
             for g in &skips {

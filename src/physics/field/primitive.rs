@@ -145,6 +145,35 @@ impl Primitive {
         None
     }
 
+    /// Whether the keys are 0 at `t` (then, at finite points, the
+    /// primitive gives exact zeros everywhere).
+    #[inline]
+    pub fn zero_at(&self, t: f64) -> bool {
+        self.keys.as_ref().is_some_and(|k| k.value(t) == 0.0)
+    }
+
+    /// Whether the box [lo, hi] lies wholly beyond the bounds' falloff band
+    /// or ahead of the front's band at `t` (then the primitive gives exact
+    /// zeros on it), whatever the keys.
+    #[inline]
+    pub fn zero_on_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>, t: f64) -> bool {
+        self.compiled
+            .region
+            .as_ref()
+            .is_some_and(|r| r.zero_on_box(lo, hi))
+            || self
+                .compiled
+                .front
+                .as_ref()
+                .is_some_and(|f| f.zero_on_box(lo, hi, t))
+    }
+
+    /// Whether the primitive has bounds or a front.
+    #[inline]
+    pub fn is_bounded(&self) -> bool {
+        self.bounds.is_some() || self.front.is_some()
+    }
+
     /// Whether [`Primitive::reaches_box`] can ever be false: the primitive
     /// has bounds, a front or keys.
     pub fn is_limited(&self) -> bool {

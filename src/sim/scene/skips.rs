@@ -2,7 +2,7 @@
 //! of a scene at a given time, for `scene --explain`.
 
 use super::Scene;
-use crate::physics::skip::{bounding_box, groups};
+use crate::physics::skip::{WindSkip, bounding_box, feels_wind, groups};
 use crate::physics::terms::Terms;
 
 /// One object (a connected group of particles: a leaf, or a rope with what
@@ -19,12 +19,13 @@ pub struct GroupSkips {
 
 impl Scene {
     /// Per object, which wind primitives the force path evaluates and which
-    /// it skips at the initial positions and time `t` (empty when the scene
-    /// samples no wind or no primitive is limited by bounds, a front or keys).
+    /// it skips at the initial positions and time `t` (empty when skipping
+    /// cannot apply: no wind sampled, or no primitive limited by bounds, a
+    /// front or keys and every object feeling the wind).
     pub fn wind_skips(&self, t: f64) -> Vec<GroupSkips> {
         let model = &self.model;
         let prims = model.wind.primitives();
-        if !Terms::needed(model).wind || !prims.iter().any(|p| p.is_limited()) {
+        if !WindSkip::new(model, Terms::needed(model).wind).is_on() {
             return Vec::new();
         }
         let x = &self.initial.position;
@@ -39,9 +40,14 @@ impl Scene {
                     .collect();
                 let mut reached = Vec::new();
                 let mut skipped = Vec::new();
+                let feels = feels_wind(model, members);
                 for (i, p) in prims.iter().enumerate() {
-                    match bounding_box(x, members).and_then(|(lo, hi)| p.unreached_box(&lo, &hi, t))
-                    {
+                    let why = if feels {
+                        bounding_box(x, members).and_then(|(lo, hi)| p.unreached_box(&lo, &hi, t))
+                    } else {
+                        Some("the object feels no wind: no triangles, no drag")
+                    };
+                    match why {
                         Some(why) => skipped.push((i, why)),
                         None => reached.push(i),
                     }
