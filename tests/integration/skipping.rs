@@ -94,3 +94,29 @@ fn an_unlimited_breeze_skips_nothing() {
     let c = same_with_and_without("benches/hundred-leaves.toml", 1.0);
     assert_eq!(c.wind_skipped, 0, "{c:?}");
 }
+
+/// (1) An object that reads no wind (the inhale scene's rigid bin: the
+/// compiler dropped its zero-coefficient surfaces) skips every primitive at
+/// every force evaluation, and the run is still bit-identical (above).
+#[test]
+fn the_inhale_bin_reads_no_wind_and_skips_every_primitive() {
+    let scene = load("scenes/inhale.toml");
+    let model = &scene.model;
+    let bin = scene.object("bin").expect("the inhale scene has a bin");
+    let groups = leafmagic::physics::skip::groups(model);
+    let g = groups
+        .iter()
+        .position(|m| m.contains(&bin.particles[0]))
+        .unwrap();
+    let dt = run::resolve_dt(model, scene.integrator, scene.dt, 1.0 / scene.frame_rate).unwrap();
+    let mut sim = Simulator::new(model, scene.integrator);
+    let mut state = scene.initial.clone();
+    for _ in 0..100 {
+        sim.step(model, &mut state, dt).unwrap();
+    }
+    let per_evaluation = model.wind.primitives().len() as u64;
+    assert_eq!(
+        sim.skipped_per_group()[g],
+        per_evaluation * sim.force_evaluations()
+    );
+}
