@@ -15,7 +15,12 @@
 //! - `+ <term>`: the compiled terms plus one left-out term alone, to show
 //!   what each costs;
 //! - `scene <name>`: each shipped scene's first 240 steps with every term on
-//!   against compiled: what the compiler saves in real scenes.
+//!   against compiled: what the compiler saves in real scenes;
+//! - `skipping <name>`: the 100-leaf scene and the inhale, shockwave and
+//!   ground-blow scenes run whole, compiled, with exact per-object skipping
+//!   of wind primitives ([`leafmagic::physics::skip`]) against the same run
+//!   with skipping off (checked bit-identical first): the ratios of each
+//!   round's pair (run side by side), their median and spread.
 //!
 //! Before timing, the runs are checked bit-identical, so the difference is
 //! pure overhead. The ratio of the times is the compiler's gain. On a shared
@@ -129,6 +134,7 @@ fn scene_compile(c: &mut Criterion) {
     }
 
     shipped_scenes();
+    skipping();
 
     let mut group = c.benchmark_group("scene_compile");
     group.bench_function("compiled", |bench| {
@@ -198,6 +204,72 @@ fn shipped_scenes() {
             } else {
                 left_out.join(", ")
             }
+        );
+    }
+}
+
+/// Exact skipping on against off, per scene: each scene run whole (frames
+/// every 1/frame_rate, as `scene` does), checked bit-identical, then
+/// timed in interleaved pairs.
+fn skipping() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    for rel in [
+        "benches/hundred-leaves.toml",
+        "scenes/inhale.toml",
+        "scenes/shockwave.toml",
+        "scenes/ground-blow.toml",
+    ] {
+        let scene = leafmagic::sim::scene::Scene::load(&root.join(rel)).unwrap();
+        let model = &scene.model;
+        let dt =
+            run::resolve_dt(model, scene.integrator, scene.dt, 1.0 / scene.frame_rate).unwrap();
+        let steps = (scene.duration / dt).round() as usize;
+        let run = |skip: bool| {
+            let mut state = scene.initial.clone();
+            let mut simulator = Simulator::new(model, scene.integrator);
+            simulator.set_skipping(model, skip);
+            for _ in 0..steps {
+                simulator.step(model, &mut state, dt).unwrap();
+            }
+            (state, simulator.skip_counts())
+        };
+        let ((on, counts), (off, _)) = (run(true), run(false));
+        assert_eq!(on, off, "{rel}: skipping must not change a bit");
+        let rounds = 9;
+        let mut ratios = Vec::new();
+        let mut times = [Vec::new(), Vec::new()];
+        for r in 0..rounds {
+            let mut pair = [0.0; 2];
+            let order = if r % 2 == 0 {
+                [true, false]
+            } else {
+                [false, true]
+            };
+            for skip in order {
+                let start = std::time::Instant::now();
+                black_box(run(skip));
+                pair[usize::from(!skip)] = start.elapsed().as_secs_f64();
+            }
+            ratios.push(pair[0] / pair[1]);
+            times[0].push(pair[0]);
+            times[1].push(pair[1]);
+        }
+        let median = |v: &mut Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        let spread = |v: &[f64]| (v[0], v[v.len() - 1]);
+        let (m_on, m_off, m_r) = (
+            median(&mut times[0]),
+            median(&mut times[1]),
+            median(&mut ratios),
+        );
+        let (lo, hi) = spread(&ratios);
+        let share = counts.wind_skipped as f64
+            / (counts.wind_skipped + counts.wind_evaluated).max(1) as f64;
+        eprintln!(
+            "scene_compile: skipping {rel:<28} on {m_on:.4} s, off {m_off:.4} s (medians of {rounds}); on/off {m_r:.3} ({lo:.3}–{hi:.3}); {:.1} % of wind primitive evaluations skipped",
+            share * 100.0
         );
     }
 }

@@ -32,6 +32,11 @@ pub fn scene(args: SceneArgs) -> Result<()> {
                 "kept": decisions.iter().filter(|d| d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
                 "left_out": decisions.iter().filter(|d| !d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
                 "pruned": scene.pruned,
+                "wind_skips_at_start": scene.wind_skips(0.0).iter().map(|g| json!({
+                    "objects": g.objects,
+                    "evaluated": g.reached,
+                    "skipped": g.skipped.iter().map(|(i, why)| json!({"primitive": i, "why": why})).collect::<Vec<_>>(),
+                })).collect::<Vec<_>>(),
             });
             println!("{}", serde_json::to_string_pretty(&out)?);
             return Ok(());

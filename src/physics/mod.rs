@@ -36,6 +36,7 @@ pub mod params;
 pub mod pose;
 pub mod rigid;
 pub mod run;
+pub mod skip;
 pub mod stability;
 pub mod state;
 pub mod terms;

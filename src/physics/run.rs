@@ -6,6 +6,7 @@
 use crate::physics::integrate::{SimError, Simulator};
 use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
+use crate::physics::skip::SkipCounts;
 use crate::physics::stability;
 use crate::physics::state::State;
 use nalgebra::Vector3;
@@ -31,6 +32,10 @@ pub struct RunStats {
     pub broken_springs: usize,
     /// Point contacts with the ground resolved during the run.
     pub contacts_resolved: u64,
+    /// What exact skipping left out (not serialised: outputs stay as
+    /// they were without it).
+    #[serde(skip)]
+    pub skips: SkipCounts,
 }
 
 impl RunStats {
@@ -46,6 +51,7 @@ impl RunStats {
             force_evals: sim.force_evaluations(),
             broken_springs: broken,
             contacts_resolved: sim.contacts_resolved(),
+            skips: sim.skip_counts(),
         }
     }
 }

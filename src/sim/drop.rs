@@ -316,6 +316,8 @@ fn drop_lockstep<const L: usize>(
                 force_evals: steps[k] + 1,
                 broken_springs: 0,
                 contacts_resolved: 0,
+                // Lockstep batches sample no wind: nothing to skip.
+                skips: Default::default(),
             },
         })
     }))

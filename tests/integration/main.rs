@@ -29,6 +29,7 @@ mod rigid;
 mod scene_files;
 mod scenes;
 mod shards;
+mod skipping;
 mod stability;
 mod tearing;
 mod unsteady;

@@ -37,6 +37,38 @@ pub fn explain(scene: &Scene, dt: &Result<f64, StepError>, decisions: &[Decision
         for p in &scene.pruned {
             writeln!(out, "{:<11} {p}", "pruned")?;
         }
+        let skips = scene.wind_skips(0.0);
+        if !skips.is_empty() {
+            writeln!(
+                out,
+                "{:<11} {:<29} per object and force evaluation, a primitive whose keys are 0, or whose bounds' or front's falloff band the object's bounding box lies beyond, is not evaluated at its particles (it would add exact zeros), nor any for an object that reads no wind; at t = 0:",
+                "skipping", "wind primitives"
+            )?;
+            for g in &skips {
+                let why: Vec<String> = g
+                    .skipped
+                    .iter()
+                    .map(|(i, why)| format!("wind[{i}] ({why})"))
+                    .collect();
+                let reached: Vec<String> = g.reached.iter().map(|i| format!("wind[{i}]")).collect();
+                writeln!(
+                    out,
+                    "{:<11} {:<29} skips {}; evaluates {}",
+                    "",
+                    g.objects,
+                    if why.is_empty() {
+                        "none".to_string()
+                    } else {
+                        why.join(", ")
+                    },
+                    if reached.is_empty() {
+                        "none".to_string()
+                    } else {
+                        reached.join(", ")
+                    }
+                )?;
+            }
+        }
         Ok(())
     })
 }
@@ -93,6 +125,15 @@ pub fn summary(
             "events          {} ground contacts resolved, {} springs broken",
             s.contacts_resolved, s.broken_springs
         )?;
+        let k = s.skips;
+        if k.wind_skipped + k.wind_evaluated > 0 {
+            writeln!(
+                out,
+                "skipped         {} of {} wind primitive evaluations (object × primitive × force evaluation): the primitive could not reach the object",
+                k.wind_skipped,
+                k.wind_skipped + k.wind_evaluated
+            )?;
+        }
         writeln!(out, "output          {} ({files} files)", dir.display())?;
         if let Some(note) = export_note {
             writeln!(out, "export          {note}")?;

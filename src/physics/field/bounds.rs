@@ -138,6 +138,35 @@ impl RegionEval {
     pub(super) fn weight(&self, x: &Vector3<f64>) -> f64 {
         falloff_weight(self.distance(x), self.falloff)
     }
+
+    /// True when the weight is exactly 0 at every point of the box
+    /// [lo, hi]: a lower bound of `distance` over the box is ≥ `falloff`.
+    /// For spheres and boxes the bound is the distance of the box's nearest
+    /// point, computed with the same operations as `distance`: rounding is
+    /// monotone, so no particle in the box computes a smaller distance. For
+    /// cylinders (a cross product, not monotone) it is the distance of the
+    /// box's centre less its half-diagonal, less a margin 1e-9 × the scale
+    /// that exceeds the rounding error by many orders.
+    pub(super) fn zero_on_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>) -> bool {
+        let zero = Vector3::zeros();
+        let lower = match &self.region {
+            Region::Sphere { center, radius } => {
+                (lo - center).sup(&(center - hi)).sup(&zero).norm() - radius
+            }
+            Region::Box { min, max } => (min - hi).sup(&(lo - max)).sup(&zero).norm(),
+            Region::Cylinder {
+                point,
+                axis,
+                radius,
+            } => {
+                let mid = (lo + hi) * 0.5;
+                let half = ((hi - lo) * 0.5).norm();
+                let scale = (mid - point).norm() + half + radius + 1.0;
+                axis.cross(&(mid - point)).norm() - radius - half - 1e-9 * scale
+            }
+        };
+        lower >= self.falloff
+    }
 }
 
 // ---------------------------------------------------------------------------

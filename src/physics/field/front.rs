@@ -67,6 +67,22 @@ impl FrontEval {
         let ahead = self.normal.dot(x) - (self.offset + self.speed * t);
         falloff_weight(ahead, self.falloff)
     }
+
+    /// True when the weight is exactly 0 at time `t` at every point of the
+    /// box [lo, hi]: the least n̂·x over the box (each term at the corner
+    /// that minimises it) less the offset is ≥ the falloff, by a margin
+    /// 1e-9 × the scale that exceeds the rounding error of `weight`.
+    pub(super) fn zero_on_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>, t: f64) -> bool {
+        let (mut least, mut scale) = (0.0, 1.0);
+        for i in 0..3 {
+            let n = self.normal[i];
+            least += n * if n >= 0.0 { lo[i] } else { hi[i] };
+            scale += n.abs() * lo[i].abs().max(hi[i].abs());
+        }
+        let offset = self.offset + self.speed * t;
+        scale += offset.abs();
+        least - offset - 1e-9 * scale >= self.falloff
+    }
 }
 
 /// The `front` table of a `[[wind]]` primitive.

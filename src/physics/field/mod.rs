@@ -118,6 +118,21 @@ impl WindField {
         g
     }
 
+    /// [`WindField::velocity`] summing only the primitives with
+    /// `active[i]` true. Bit for bit the full sum when every left-out
+    /// primitive would give exact zeros: the sum starts at +0 and an IEEE
+    /// sum is −0 only if both terms are, so it is never −0, and g + 0 = g.
+    #[inline]
+    pub fn velocity_of(&self, x: &Vector3<f64>, t: f64, active: &[bool]) -> Vector3<f64> {
+        let mut g = Vector3::zeros();
+        for (p, &on) in self.primitives.iter().zip(active) {
+            if on {
+                g += p.velocity(x, t);
+            }
+        }
+        g
+    }
+
     /// Checks every number of every primitive.
     ///
     /// # Errors

@@ -103,6 +103,83 @@ impl Primitive {
         self.compiled.flow.velocity(x) * gain
     }
 
+    /// Whether this primitive can be nonzero somewhere in the box [lo, hi]
+    /// at time `t` (corners finite). False only when [`Primitive::velocity`]
+    /// returns exact zeros at every point of the box: its keys are 0 at `t`,
+    /// or the box lies wholly beyond its bounds' falloff band or ahead of its
+    /// front's band, so the gain k · w_bounds · w_front is 0 (every factor is
+    /// finite at finite points).
+    #[inline]
+    pub fn reaches_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>, t: f64) -> bool {
+        self.unreached_box(lo, hi, t).is_none()
+    }
+
+    /// Why this primitive cannot reach the box [lo, hi] at time `t` (as
+    /// [`Primitive::reaches_box`]), or `None` when it may.
+    #[inline]
+    pub fn unreached_box(
+        &self,
+        lo: &Vector3<f64>,
+        hi: &Vector3<f64>,
+        t: f64,
+    ) -> Option<&'static str> {
+        if self.keys.as_ref().is_some_and(|k| k.value(t) == 0.0) {
+            return Some("its keys are 0");
+        }
+        if self
+            .compiled
+            .region
+            .as_ref()
+            .is_some_and(|r| r.zero_on_box(lo, hi))
+        {
+            return Some("beyond its bounds' falloff band");
+        }
+        if self
+            .compiled
+            .front
+            .as_ref()
+            .is_some_and(|f| f.zero_on_box(lo, hi, t))
+        {
+            return Some("ahead of its front's falloff band");
+        }
+        None
+    }
+
+    /// Whether the keys are 0 at `t` (then, at finite points, the
+    /// primitive gives exact zeros everywhere).
+    #[inline]
+    pub fn zero_at(&self, t: f64) -> bool {
+        self.keys.as_ref().is_some_and(|k| k.value(t) == 0.0)
+    }
+
+    /// Whether the box [lo, hi] lies wholly beyond the bounds' falloff band
+    /// or ahead of the front's band at `t` (then the primitive gives exact
+    /// zeros on it), whatever the keys.
+    #[inline]
+    pub fn zero_on_box(&self, lo: &Vector3<f64>, hi: &Vector3<f64>, t: f64) -> bool {
+        self.compiled
+            .region
+            .as_ref()
+            .is_some_and(|r| r.zero_on_box(lo, hi))
+            || self
+                .compiled
+                .front
+                .as_ref()
+                .is_some_and(|f| f.zero_on_box(lo, hi, t))
+    }
+
+    /// Whether the primitive has bounds or a front.
+    #[inline]
+    pub fn is_bounded(&self) -> bool {
+        self.bounds.is_some() || self.front.is_some()
+    }
+
+    /// Whether [`Primitive::reaches_box`] can ever be false: the primitive
+    /// has bounds, a front or keys.
+    pub fn is_limited(&self) -> bool {
+        self.keys.is_some() || self.bounds.is_some() || self.front.is_some()
+    }
+
     /// Peak |G_i| over space and time, m/s (weights are ≤ 1, so ignored).
     pub fn speed_bound(&self) -> f64 {
         let peak = self.flow.speed_bound();

@@ -22,6 +22,7 @@ pub use tears::{Tears, edge_springs, hinge_springs};
 
 use crate::physics::model::{AeroLaw, Model};
 use crate::physics::rigid;
+use crate::physics::skip::{SkipCounts, WindSkip};
 use crate::physics::terms::Terms;
 use nalgebra::{Matrix3, Vector3};
 use tears::tear_mask;
@@ -78,6 +79,8 @@ pub struct Forces {
     /// Each particle's added-mass tensor M_i of the last evaluation, under
     /// the unsteady law (empty otherwise).
     added: Vec<Matrix3<f64>>,
+    /// Per object, the wind primitives that cannot reach it are skipped.
+    skip: WindSkip,
 }
 
 impl Forces {
@@ -115,7 +118,27 @@ impl Forces {
             } else {
                 Vec::new()
             },
+            skip: WindSkip::new(model, terms.wind),
         }
+    }
+
+    /// Turns the exact per-object skipping of wind primitives on (the
+    /// default) or off; off evaluates every primitive at every particle,
+    /// the baseline the skipping is checked bit-identical against.
+    pub fn set_skipping(&mut self, model: &Model, on: bool) {
+        self.skip = WindSkip::new(model, on && self.terms.wind);
+    }
+
+    /// What the skipping has saved so far.
+    pub fn skip_counts(&self) -> SkipCounts {
+        self.skip.counts()
+    }
+
+    /// Per object ([`crate::physics::skip::groups`]), the wind primitive
+    /// evaluations skipped so far (empty when skipping is off or cannot
+    /// apply).
+    pub fn skipped_per_group(&self) -> &[u64] {
+        self.skip.skipped_per_group()
     }
 
     /// Each particle's added-mass tensor M_i at the last force evaluation
@@ -153,8 +176,12 @@ impl Forces {
         if !self.terms.wind {
             return None;
         }
-        for (g, p) in self.wind.iter_mut().zip(x) {
-            *g = model.wind.velocity(p, t);
+        if self.skip.is_on() {
+            self.skip.sample(model, x, t, &mut self.wind);
+        } else {
+            for (g, p) in self.wind.iter_mut().zip(x) {
+                *g = model.wind.velocity(p, t);
+            }
         }
         Some(&self.wind)
     }

@@ -14,6 +14,7 @@ use crate::physics::forces::{ForceTerms, Forces};
 use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::rigid::RigidProjector;
+use crate::physics::skip::SkipCounts;
 use crate::physics::stability;
 use crate::physics::state::State;
 use crate::physics::terms::Terms;
@@ -104,6 +105,23 @@ impl Simulator {
     /// Point contacts with the ground resolved so far.
     pub fn contacts_resolved(&self) -> u64 {
         self.contact.as_ref().map_or(0, ContactSolver::resolved)
+    }
+
+    /// Turns exact skipping ([`crate::physics::skip`]) on (the default) or
+    /// off; off is the baseline it is checked bit-identical against.
+    pub fn set_skipping(&mut self, model: &Model, on: bool) {
+        self.forces.set_skipping(model, on);
+    }
+
+    /// What exact skipping has saved so far.
+    pub fn skip_counts(&self) -> SkipCounts {
+        self.forces.skip_counts()
+    }
+
+    /// Per object ([`crate::physics::skip::groups`]), the wind primitive
+    /// evaluations skipped so far.
+    pub fn skipped_per_group(&self) -> &[u64] {
+        self.forces.skipped_per_group()
     }
 
     /// The integrator in use.

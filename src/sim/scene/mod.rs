@@ -17,9 +17,11 @@
 mod locate;
 mod run;
 mod shapes;
+mod skips;
 mod spec;
 
 pub use run::{OutputError, RunError, RunStats, SceneRun, Staged};
+pub use skips::GroupSkips;
 pub use spec::{
     DtSpec, FixedPoint, LeafObject, Pin, RigidObject, RopeObject, SceneSpec, Shape, SheetObject,
 };

@@ -8,6 +8,7 @@ use crate::physics::params::Integrator;
 use crate::physics::params::TimeStep;
 use crate::physics::pose::PoseTracker;
 use crate::physics::run::{Command, PoseFault, StepError, Work, check_budget, resolve_dt};
+use crate::physics::skip::SkipCounts;
 use crate::physics::state::State;
 use crate::util::io::particle_csv;
 use nalgebra::Vector3;
@@ -64,6 +65,10 @@ pub struct RunStats {
     pub contacts_resolved: u64,
     /// Springs broken during the run.
     pub broken_springs: usize,
+    /// What exact skipping left out (not in the summary file, which stays
+    /// as it was without it).
+    #[serde(skip)]
+    pub skips: SkipCounts,
     /// Wall-clock time of the stepping loop, s (not in the summary file).
     #[serde(skip)]
     pub wall_s: f64,
@@ -140,6 +145,7 @@ impl Scene {
             force_evaluations: run.force_evals,
             contacts_resolved: run.contacts_resolved,
             broken_springs: state.broken_springs(),
+            skips: run.skips,
             wall_s: run.wall_s,
         };
         Ok((stats, state))
