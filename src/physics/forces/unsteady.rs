@@ -144,9 +144,11 @@ pub fn unsteady_forces(
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
 ) {
-    PLATE_MOTION.with_borrow_mut(|plates| {
-        plate_motions(law, model, x, v, torn, plates);
-        per_triangle(law, model, x, v, wind, torn, plates, force, added);
+    SCRATCH.with_borrow_mut(|scratch| {
+        let Scratch { triangles, plates } = scratch;
+        triangle_motions(model, x, v, torn, triangles);
+        plate_motions(law, model, triangles, plates);
+        per_triangle(law, model, x, v, wind, triangles, plates, force, added);
     });
     if law.buoyancy {
         let lift = -model.gravity * (law.air_density / law.solid_density);
@@ -168,12 +170,62 @@ struct PlateMotion {
     omega: V3,
 }
 
+/// One intact triangle's shape and turning, measured once per evaluation
+/// and read by both passes ([`plate_motions`], [`per_triangle`]).
+#[derive(Clone, Copy, Debug)]
+struct TriangleMotion {
+    /// N = e₁ × e₂ and |N|².
+    big_n: V3,
+    n2: f64,
+    /// n = N/|N| and the area |N|/2.
+    n: V3,
+    area: f64,
+    /// ṅ = (Ṅ − n (n·Ṅ))/|N|.
+    n_dot: V3,
+    /// x_a + x_b + x_c (three times the centroid).
+    corner_sum: V3,
+}
+
+/// Per-thread scratch of [`unsteady_forces`], kept so that the step loop
+/// does not allocate (tests/integration/alloc.rs) without widening the
+/// force kernels' signatures.
+#[derive(Default)]
+struct Scratch {
+    /// One per triangle; `None` for a torn or degenerate one.
+    triangles: Vec<Option<TriangleMotion>>,
+    plates: Vec<PlateMotion>,
+}
+
 thread_local! {
-    /// Scratch for [`plate_motions`], kept per thread so that the step loop
-    /// does not allocate (tests/integration/alloc.rs) without widening the
-    /// force kernels' signatures.
-    static PLATE_MOTION: std::cell::RefCell<Vec<PlateMotion>> =
-        const { std::cell::RefCell::new(Vec::new()) };
+    static SCRATCH: std::cell::RefCell<Scratch> = std::cell::RefCell::new(Scratch::default());
+}
+
+/// Fills `out` with every triangle's [`TriangleMotion`] (`None` where
+/// [`surface`] finds it torn or degenerate).
+fn triangle_motions(
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    torn: &[bool],
+    out: &mut Vec<Option<TriangleMotion>>,
+) {
+    out.clear();
+    out.extend(model.triangles.iter().enumerate().map(|(t, tri)| {
+        let (big_n, n2) = surface(t, tri, x, torn)?;
+        let [a, b, c] = tri.corners;
+        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
+        let doubled = n2.sqrt();
+        let n = big_n / doubled;
+        let n_dot_raw = (v[b] - v[a]).cross(&e2) + e1.cross(&(v[c] - v[a]));
+        Some(TriangleMotion {
+            big_n,
+            n2,
+            n,
+            area: 0.5 * doubled,
+            n_dot: (n_dot_raw - n * n.dot(&n_dot_raw)) / doubled,
+            corner_sum: x[a] + x[b] + x[c],
+        })
+    }));
 }
 
 /// Fills `plates` with each plate's [`PlateMotion`]; left empty when the law
@@ -181,9 +233,7 @@ thread_local! {
 fn plate_motions(
     law: &UnsteadyAero,
     model: &Model,
-    x: &[V3],
-    v: &[V3],
-    torn: &[bool],
+    triangles: &[Option<TriangleMotion>],
     plates: &mut Vec<PlateMotion>,
 ) {
     plates.clear();
@@ -197,21 +247,14 @@ fn plate_motions(
         .max()
         .unwrap_or(0);
     plates.resize(count, PlateMotion::default());
-    for (t, tri) in model.triangles.iter().enumerate() {
-        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+    for (tm, geom) in triangles.iter().zip(&model.surfaces) {
+        let Some(tm) = tm else {
             continue;
         };
-        let [a, b, c] = tri.corners;
-        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
-        let doubled = n2.sqrt();
-        let n = big_n / doubled;
-        let n_dot_raw = (v[b] - v[a]).cross(&e2) + e1.cross(&(v[c] - v[a]));
-        let n_dot = (n_dot_raw - n * n.dot(&n_dot_raw)) / doubled;
-        let area = 0.5 * doubled;
-        let p = &mut plates[model.surfaces[t].plate];
-        p.area += area;
-        p.centre += (x[a] + x[b] + x[c]) * (area / 3.0);
-        p.omega += n.cross(&n_dot) * area;
+        let p = &mut plates[geom.plate];
+        p.area += tm.area;
+        p.centre += tm.corner_sum * (tm.area / 3.0);
+        p.omega += tm.n.cross(&tm.n_dot) * tm.area;
     }
     for p in plates.iter_mut().filter(|p| p.area > 0.0) {
         p.centre /= p.area;
@@ -227,7 +270,7 @@ fn per_triangle(
     x: &[V3],
     v: &[V3],
     wind: Option<&[V3]>,
-    torn: &[bool],
+    triangles: &[Option<TriangleMotion>],
     plates: &[PlateMotion],
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
@@ -238,24 +281,27 @@ fn per_triangle(
     let third = 1.0 / 3.0;
     let half_pi_rho = std::f64::consts::FRAC_PI_2 * rho;
     let damped = law.rotational_damping != 0.0 || law.rotational_damping_quadratic != 0.0;
-    for (t, tri) in model.triangles.iter().enumerate() {
-        let Some((big_n, n2)) = surface(t, tri, x, torn) else {
+    for ((tri, tm), geom) in model.triangles.iter().zip(triangles).zip(&model.surfaces) {
+        let Some(tm) = tm else {
             continue;
         };
-        let geom: &SurfaceGeometry = &model.surfaces[t];
+        let geom: &SurfaceGeometry = geom;
+        let TriangleMotion {
+            big_n,
+            n2,
+            n,
+            area,
+            n_dot,
+            corner_sum,
+        } = *tm;
         let corners = tri.corners;
         let [a, b, c] = corners;
         let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
-        let doubled = n2.sqrt();
-        let n = big_n / doubled;
-        let area = 0.5 * doubled;
         let w = match wind {
             Some(g) => [v[a] - g[a], v[b] - g[b], v[c] - g[c]],
             None => [v[a], v[b], v[c]],
         };
-        // ṅ = (Ṅ − n (n·Ṅ))/|N|; the dual basis ∇β of the corners.
-        let n_dot_raw = (v[b] - v[a]).cross(&e2) + e1.cross(&(v[c] - v[a]));
-        let n_dot = (n_dot_raw - n * n.dot(&n_dot_raw)) / doubled;
+        // The dual basis ∇β of the corners.
         let grad_b = e2.cross(&big_n) / n2;
         let grad_c = big_n.cross(&e1) / n2;
         let grads = [-(grad_b + grad_c), grad_b, grad_c];
@@ -282,7 +328,7 @@ fn per_triangle(
         // (1 − rotation_drag) of what the plate's rotation gives it.
         let mut u = -(w[0] + w[1] + w[2]) * third;
         if let Some(p) = plates.get(geom.plate).filter(|p| p.area > 0.0) {
-            let r = (x[a] + x[b] + x[c]) * third - p.centre;
+            let r = corner_sum * third - p.centre;
             u += p.omega.cross(&r) * (1.0 - law.rotation_drag);
         }
         let u2 = u.norm_squared();
