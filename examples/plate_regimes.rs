@@ -57,17 +57,11 @@ fn fall(
 }
 
 fn main() {
-    let mut aero = AeroSpec::named(AeroLawName::Unsteady);
+    let aero = AeroSpec::named(AeroLawName::Unsteady);
     let extra: Vec<String> = std::env::args().skip(1).filter(|a| a != "--").collect();
-    if !extra.is_empty() {
-        // Through the leaf-file parser, checked as a leaf's [aero] table is.
-        let mut table = toml::to_string(&aero).expect("serialises");
-        for kv in &extra {
-            table.push_str(kv);
-            table.push('\n');
-        }
-        aero = toml::from_str(&table).unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
-    }
+    let aero = aero
+        .with_lines(&extra)
+        .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
 
     println!("## Disks: regime against I*_disk (Field et al. 1997)\n");
     println!(

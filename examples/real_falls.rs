@@ -35,16 +35,9 @@ fn main() {
             kv => extra.push(kv.to_string()),
         }
     }
-    if !extra.is_empty() {
-        // KEY=VALUE pairs go through the leaf-file parser, so they are
-        // checked exactly as a leaf file's [aero] table is.
-        let mut table = toml::to_string(&aero).expect("serialises");
-        for kv in &extra {
-            table.push_str(kv);
-            table.push('\n');
-        }
-        aero = toml::from_str(&table).unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
-    }
+    let aero = aero
+        .with_lines(&extra)
+        .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
     let real = real_falls::read_squares(&dir).expect("the real falls");
     let t0 = std::time::Instant::now();

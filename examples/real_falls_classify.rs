@@ -13,6 +13,7 @@ mod corpus;
 use corpus::{CLASSES, Fall, Square};
 use leafmagic::motion::classify::{ClassifyOptions, MotionClass, classify, classify_with};
 use leafmagic::motion::path::{Calibration, Inputs, PathFeatures, verdict};
+use leafmagic::motion::trajectory::Trajectory;
 use std::time::Instant;
 
 const PATH_ONLY: ClassifyOptions = ClassifyOptions {
@@ -176,7 +177,7 @@ fn consistency(title: &str, falls: &[Fall]) {
         "{} falls ({named} named by the full classifier, the rest undetermined).\n",
         falls.len()
     );
-    type Degrade = fn(&Fall, usize) -> Vec<leafmagic::motion::trajectory::Trajectory>;
+    type Degrade = fn(&Fall, usize) -> Vec<Trajectory>;
     let ways: [(&str, Degrade); 4] = [
         ("quaternions stripped (10 s, 240 Hz)", |f, _| {
             vec![f.trajectory.without_orientation()]
@@ -188,17 +189,7 @@ fn consistency(title: &str, falls: &[Fall]) {
         ("video + two cameras' areas", |f, i| cuts(f, i, true)),
         (
             "full classifier on the same 1.5 s cuts, with orientation",
-            |f, _| {
-                let end = *f.trajectory.time.last().unwrap();
-                [end - 1.5, 5.0]
-                    .iter()
-                    .map(|&t0| {
-                        let n = (1.5 * 98.0 + 1e-9f64).floor() as usize + 1;
-                        let times: Vec<f64> = (0..n).map(|k| t0 + k as f64 / 98.0).collect();
-                        f.trajectory.sampled_at(&times)
-                    })
-                    .collect()
-            },
+            |f, _| clean_cuts(f),
         ),
     ];
     println!(
@@ -206,13 +197,7 @@ fn consistency(title: &str, falls: &[Fall]) {
     );
     println!("|---|---|---|---|");
     let mut tables = Vec::new();
-    for (label, degrade) in ways {
-        let mut pairs = Vec::new();
-        for (i, f) in falls.iter().enumerate() {
-            for tr in degrade(f, i) {
-                pairs.push((full[i], classify(&tr, f.chord).class));
-            }
-        }
+    let mut row = |label: &'static str, pairs: Vec<(MotionClass, MotionClass)>| {
         let agree = pairs.iter().filter(|p| p.0 == p.1).count();
         let named: Vec<_> = pairs
             .iter()
@@ -229,6 +214,15 @@ fn consistency(title: &str, falls: &[Fall]) {
             pct(named_agree, named.len())
         );
         tables.push((label, corpus::confusion(&pairs)));
+    };
+    for (label, degrade) in ways {
+        let mut pairs = Vec::new();
+        for (i, f) in falls.iter().enumerate() {
+            for tr in degrade(f, i) {
+                pairs.push((full[i], classify(&tr, f.chord).class));
+            }
+        }
+        row(label, pairs);
     }
     // The same cut given to both: the full classifier with orientation
     // (noise-free), the path without (98 Hz, 1 mm noise, areas or not).
@@ -244,39 +238,12 @@ fn consistency(title: &str, falls: &[Fall]) {
     ] {
         let mut pairs = Vec::new();
         for (i, f) in falls.iter().enumerate() {
-            let end = *f.trajectory.time.last().unwrap();
-            for (k, &t0) in [end - 1.5, 5.0].iter().enumerate() {
-                let n = (1.5 * 98.0 + 1e-9f64).floor() as usize + 1;
-                let times: Vec<f64> = (0..n).map(|j| t0 + j as f64 / 98.0).collect();
-                let reference = classify(&f.trajectory.sampled_at(&times), f.chord).class;
-                let video = corpus::video(
-                    &f.trajectory,
-                    t0,
-                    1.5,
-                    98.0,
-                    0.001,
-                    areas,
-                    (2 * i + k) as u64,
-                );
+            for (clean, video) in clean_cuts(f).iter().zip(cuts(f, i, areas)) {
+                let reference = classify(clean, f.chord).class;
                 pairs.push((reference, classify(&video, f.chord).class));
             }
         }
-        let named: Vec<_> = pairs
-            .iter()
-            .filter(|p| p.0 != MotionClass::Undetermined)
-            .collect();
-        let named_agree = named.iter().filter(|p| p.0 == p.1).count();
-        let agree = pairs.iter().filter(|p| p.0 == p.1).count();
-        println!(
-            "| {label} | {} | {} | {} |",
-            pct(agree, pairs.len()),
-            pct(named_agree, named.len()),
-            pairs
-                .iter()
-                .filter(|p| p.1 == MotionClass::Undetermined)
-                .count()
-        );
-        tables.push((label, corpus::confusion(&pairs)));
+        row(label, pairs);
     }
     println!();
     for (label, t) in tables {
@@ -285,9 +252,22 @@ fn consistency(title: &str, falls: &[Fall]) {
     }
 }
 
+/// The two 1.5 s cuts of [`cuts`], noise-free, with orientation, at 98 Hz.
+fn clean_cuts(f: &Fall) -> Vec<Trajectory> {
+    let end = *f.trajectory.time.last().unwrap();
+    [end - 1.5, 5.0]
+        .iter()
+        .map(|&t0| {
+            let n = (1.5 * 98.0 + 1e-9f64).floor() as usize + 1;
+            let times: Vec<f64> = (0..n).map(|k| t0 + k as f64 / 98.0).collect();
+            f.trajectory.sampled_at(&times)
+        })
+        .collect()
+}
+
 /// The two video cuts of a fall (the last 1.5 s, and 5.0–6.5 s), as
 /// [`corpus::video`] gives them.
-fn cuts(f: &Fall, i: usize, areas: bool) -> Vec<leafmagic::motion::trajectory::Trajectory> {
+fn cuts(f: &Fall, i: usize, areas: bool) -> Vec<Trajectory> {
     let end = *f.trajectory.time.last().unwrap();
     [end - 1.5, 5.0]
         .iter()

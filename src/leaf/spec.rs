@@ -193,6 +193,18 @@ const KEY_LAWS: [(&str, &[AeroLawName]); 15] = {
 };
 
 impl AeroSpec {
+    /// This table with `KEY = VALUE` lines added (as a leaf file's `[aero]`
+    /// table spells them), read by the leaf-file parser, so they are checked
+    /// as a leaf file's are; the error is the parser's.
+    pub fn with_lines(&self, lines: &[String]) -> Result<AeroSpec, String> {
+        let mut table = toml::to_string(self).map_err(|e| e.to_string())?;
+        for line in lines {
+            table.push_str(line);
+            table.push('\n');
+        }
+        toml::from_str(&table).map_err(|e| e.to_string())
+    }
+
     /// The paper's linear law with these coefficients.
     pub fn linear(alpha_n: f64, alpha_t: f64) -> AeroSpec {
         AeroSpec {
