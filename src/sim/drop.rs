@@ -199,10 +199,7 @@ fn drop_lockstep<const L: usize>(
 ) -> Option<[Result<DropResult, DropError>; L]> {
     let first = params[0];
     let shared = |p: &DropParams| {
-        p.integrator == Integrator::Verlet
-            && !p.record_particles
-            && p.seconds == first.seconds
-            && p.integrator == first.integrator
+        p.integrator == Integrator::Verlet && !p.record_particles && p.seconds == first.seconds
     };
     if !params.iter().all(|p| shared(p)) {
         return None;
