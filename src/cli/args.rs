@@ -46,13 +46,18 @@ pub struct BreedArgs {
     /// Keep a MAP-Elites archive: the best leaf per cell of descent speed × rotation rate.
     #[arg(long)]
     pub archive: bool,
-    /// Breed toward the motion of this fall (pose CSV t,x,y,z,qw,qx,qy,qz): its class and
-    /// descriptors (descent, spin, tumble, flips, reversals, drift, period, spreads).
+    /// Breed toward the motion of this fall (CSV by header names: t,x,y,z, optional
+    /// qw,qx,qy,qz and area columns): its class and the descriptors its record measures
+    /// (with orientation: descent, spin, tumble, flips, reversals, drift, period, spreads;
+    /// positions only: descent, drift, and tumble from the areas).
     #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
     pub like: Option<PathBuf>,
     /// The example's chord, metres, for --like [default: the prototype's chord].
     #[arg(long, requires = "like")]
     pub size: Option<f64>,
+    /// The --like file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
+    #[arg(long, default_value = "z", requires = "like")]
+    pub up: leafmagic::motion::trajectory::UpAxis,
     /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
     /// unset ones are free), within the class of --target if given (else any class).
     #[arg(long, value_name = "NAME=VALUE,...")]

@@ -11,7 +11,6 @@ use leafmagic::breed::{self, BreedSettings, Run};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, MotionClass};
 use leafmagic::motion::describe::{self, Descriptors, MotionTarget};
-use leafmagic::motion::trajectory::UpAxis;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -310,7 +309,7 @@ fn motion_target(args: &BreedArgs, prototype: &str) -> Result<Option<MotionTarge
             Some(s) => s,
             None => LeafSpec::load(prototype)?.model()?.chord(),
         };
-        let example = input::describe_file(path, size, UpAxis::Z)?;
+        let example = input::describe_file(path, size, args.up)?;
         return Ok(Some(MotionTarget::like(
             &path.to_string_lossy(),
             size,
