@@ -46,6 +46,7 @@
 //! | 4 | spinner / autorotation | steady, drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`STEADY_MAX_FROUDE`]: straight down, fast (or an edge-on dive: the path cannot tell) |
 //! | 5 | floater / glide | steady, drift ≥ [`GLIDE_MIN_DRIFT`] |
 //! | 6 | spinner / tumble | straightness ≥ [`TUMBLE_MIN_STRAIGHTNESS`], drift ≥ [`GLIDE_MIN_DRIFT`] (modulated); with areas, ≥ [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] area maxima per second |
+//! | 6b | spinner / tumble | with areas only: as 6 but turning regularly instead of fast: area periodicity ≥ [`TUMBLE_MIN_AREA_PERIODICITY`] and ≥ [`TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S`] maxima per second |
 //! | 7 | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`PLUNGE_MIN_FROUDE`] (modulated: not caught by 4) |
 //! | 8 | lilter / chaotic | otherwise: swings, reverses and wanders |
 
@@ -178,6 +179,21 @@ pub const TUMBLE_MIN_STRAIGHTNESS: f64 = 0.65;
 /// two maxima per turn, so a turn rate of at least 11 rad/s. Calibrated on
 /// the real squares (docs/classification.md).
 pub const TUMBLE_MIN_AREA_MAXIMA_PER_S: f64 = 3.5;
+
+/// Least periodicity of the area signals of a regular tumble, the second
+/// way a record with areas is named a tumble: a plate turning steadily
+/// about a horizontal axis shows the same area curve turn after turn,
+/// chaotic paper does not (the criterion of periodic against chaotic
+/// motion of [`FLUTTER_MIN_PERIODICITY`], the same value). This is what
+/// names the slow tumbles the rate threshold misses: a larger, heavier
+/// plate tumbles at well under [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] (leafmagic's
+/// 10 cm cards at 2.7–3.3 maxima/s, periodicity 0.8–1.0), while no chaotic
+/// real square on a straight path reaches 0.8 (docs/classification.md).
+pub const TUMBLE_MIN_AREA_PERIODICITY: f64 = FLUTTER_MIN_PERIODICITY;
+
+/// Least area maxima per second of a regular tumble: one turn a second, so
+/// that a record of 1–1.5 s holds the turns its periodicity is measured on.
+pub const TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S: f64 = 2.0;
 
 /// Fewest reversals of the horizontal velocity of a flutter: two periods
 /// (the full classifier asks for three,
@@ -842,6 +858,7 @@ enum RuleId {
     Plunge,
     Glide,
     Tumble,
+    RegularTumble,
     FastPlunge,
     Chaotic,
 }
@@ -860,17 +877,39 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
     let steady_max = STEADY_MAX_MODULATION.max(f.modulation_noise);
     let steady = || Cond::lt(f.descent_speed_cv, steady_max, STEADY_MAX_MODULATION);
     let vertical = || Cond::lt(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT);
-    let mut tumble = vec![
-        Cond::ge(f.straightness, cal.tumble_min_straightness, 0.2),
-        Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT),
-    ];
+    let on_a_slanted_line = || {
+        vec![
+            Cond::ge(f.straightness, cal.tumble_min_straightness, 0.2),
+            Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT),
+        ]
+    };
+    let mut tumble = on_a_slanted_line();
+    let area_maxima = f.area_maxima_per_s.unwrap_or(0.0);
     if inputs == Inputs::Areas {
         tumble.push(Cond::ge(
-            f.area_maxima_per_s.unwrap_or(0.0),
+            area_maxima,
             cal.tumble_min_area_maxima_per_s,
             0.5 * TUMBLE_MIN_AREA_MAXIMA_PER_S,
         ));
     }
+    // A slow tumble: turning regularly, if not fast (areas only; without
+    // them the rule above already asks no rate).
+    let regular_tumble = if inputs == Inputs::Areas {
+        let mut c = on_a_slanted_line();
+        c.push(Cond::ge(
+            f.area_periodicity.unwrap_or(0.0),
+            TUMBLE_MIN_AREA_PERIODICITY,
+            0.2,
+        ));
+        c.push(Cond::ge(
+            area_maxima,
+            TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S,
+            0.5 * TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S,
+        ));
+        Some(rule(RuleId::RegularTumble, C::Spinner, Regime::Tumble, c))
+    } else {
+        None
+    };
     vec![
         rule(
             RuleId::Helix,
@@ -940,6 +979,10 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
             ],
         ),
         rule(RuleId::Tumble, C::Spinner, Regime::Tumble, tumble),
+    ]
+    .into_iter()
+    .chain(regular_tumble)
+    .chain([
         rule(
             RuleId::FastPlunge,
             C::Spinner,
@@ -950,7 +993,8 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
             ],
         ),
         rule(RuleId::Chaotic, C::Lilter, Regime::Chaotic, vec![]),
-    ]
+    ])
+    .collect()
 }
 
 /// Applies the rules and fills in margins and the reason.
@@ -1010,6 +1054,12 @@ fn reason(id: RuleId, f: &PathFeatures) -> String {
         RuleId::Tumble => format!(
             "tumble: glides off on a straight line (straightness {:.2}) {:.0}° from the vertical, its descent modulated ({:.2}){areas}",
             f.straightness, f.glide_angle_deg, f.descent_speed_cv
+        ),
+        RuleId::RegularTumble => format!(
+            "tumble: glides off on a straight line (straightness {:.2}) {:.0}° from the vertical, turning regularly (area periodicity {:.2}){areas}",
+            f.straightness,
+            f.glide_angle_deg,
+            f.area_periodicity.unwrap_or(0.0)
         ),
         RuleId::Flutter => format!(
             "flutter: swings regularly from side to side ({} reversals in {:.2} s, periodicity {:.2}) about a vertical path (drift ratio {:.2})",
