@@ -46,5 +46,5 @@ pub use population::{
     ArchiveEntry, BreedError, Checkpoint, Child, Evaluation, GenerationSummary, Individual, Job,
     Plan, Progress, Quiet,
 };
-pub use run::{ERROR_ESTIMATE_SECONDS, Run};
+pub use run::{ERROR_ESTIMATE_SECONDS, Run, StartLeaves, start_leaves};
 pub use settings::BreedSettings;

@@ -76,6 +76,65 @@ struct RunFile {
     prototype_leaf: LeafSpec,
 }
 
+/// The leaves an earlier run offers a new one to start from
+/// (`breed --start-from`), and where in that run they come from.
+#[derive(Clone, Debug)]
+pub struct StartLeaves {
+    /// The genomes, clamped into the new prototype's bounds: the archive's
+    /// in cell order, or the last generation's from best to worst.
+    pub genomes: Vec<Genome>,
+    /// "its archive (N cells)" or "its last generation (N leaves)".
+    pub source: String,
+}
+
+/// Reads the run in `dir` (checked, nothing changed) for the leaves a new
+/// run of `proto` can start from: the cells of its MAP-Elites archive when
+/// it kept one, else its last generation ranked, diverged leaves left
+/// out. Refused, naming `--start-from` and the
+/// directory, when the run has no completed generation or its leaves are
+/// not variants of a prototype shaped as `proto` (folds, particles,
+/// stiffness groups).
+pub fn start_leaves(dir: &Path, proto: &LeafSpec) -> Result<StartLeaves, BreedError> {
+    let refuse =
+        |why: String| BreedError::Refused(format!("--start-from {}: {why}", dir.display()));
+    let run = Run::load(dir).map_err(|e| refuse(e.to_string()))?;
+    let cp = run
+        .checkpoint
+        .as_ref()
+        .ok_or_else(|| refuse("the run has no completed generation yet".to_string()))?;
+    let (members, source): (Vec<&Individual>, String) = if cp.archive.is_empty() {
+        let ranked: Vec<&Individual> = rank(&cp.population)
+            .into_iter()
+            .filter(|i| i.eval.fall().is_some())
+            .collect();
+        let n = ranked.len();
+        (ranked, format!("its last generation ({n} leaves)"))
+    } else {
+        let cells: Vec<&Individual> = cp.archive.iter().map(|e| &e.individual).collect();
+        let n = cells.len();
+        (cells, format!("its archive ({n} cells)"))
+    };
+    let genomes = members
+        .iter()
+        .map(|i| {
+            let g = i.genome.clamped(&proto.bounds);
+            g.check(proto).map(|()| g).map_err(|e| {
+                refuse(format!(
+                    "its leaves are variants of prototype {} and do not fit this run's \
+                     prototype: {e}",
+                    run.settings.prototype
+                ))
+            })
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    if genomes.is_empty() {
+        return Err(refuse(
+            "the run has no leaf that did not diverge".to_string(),
+        ));
+    }
+    Ok(StartLeaves { genomes, source })
+}
+
 /// Simulated seconds over which the prototype's integration error is
 /// estimated for run.toml: long enough to include the fall's transient,
 /// short enough to stay inside the horizon where pointwise error means

@@ -93,11 +93,24 @@ pub const INITIAL_COPY_SHARE: f64 = 0.5;
 /// first ones): [`INITIAL_COPY_SHARE`] of them, none for random search, all
 /// for the GA of a run written before uniform draws (see
 /// [`BreedSettings::uniform_start`]).
-fn initial_copies(s: &BreedSettings) -> usize {
+pub fn initial_copies(s: &BreedSettings) -> usize {
     match s.strategy {
         Strategy::Random => 0,
         _ if !s.uniform_start => s.population,
         _ => (s.population as f64 * INITIAL_COPY_SHARE).round() as usize,
+    }
+}
+
+/// Which of `available` start leaves ([`BreedSettings::start`]) take the
+/// first places of generation 0's `slots` uniform places: all of them in
+/// order when they fit, else `slots` of them spread evenly over the list
+/// (an archive is in cell order, so every region of descent × spin keeps
+/// a representative).
+fn start_places(available: usize, slots: usize) -> Vec<usize> {
+    if available <= slots {
+        (0..available).collect()
+    } else {
+        (0..slots).map(|k| k * available / slots).collect()
     }
 }
 
@@ -124,11 +137,18 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
             // over the bounds.
             let g0 = Genome::of_prototype(proto);
             let copies = initial_copies(s);
+            let start = start_places(s.start.len(), s.population - copies);
             let children: Vec<Child> = (0..s.population as u64)
                 .map(|id| {
                     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
-                    let genome = if (id as usize) < copies {
+                    let place = (id as usize).checked_sub(copies);
+                    let genome = if place.is_none() {
                         mutate(&g0, &bounds, s.initial_scale, &mut rng)
+                    } else if let Some(k) = place.and_then(|p| start.get(p)) {
+                        // An earlier run's leaf, as it was, moved into
+                        // this run's bounds where they are narrower
+                        // (a --like run holds stiffness at 1).
+                        s.start[*k].clamped(&bounds)
                     } else {
                         uniform(&g0, &bounds, &mut rng)
                     };

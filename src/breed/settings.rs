@@ -1,5 +1,6 @@
 //! The settings that define a breeding run, as written to `run.toml`.
 
+use crate::leaf::genome::Genome;
 use crate::motion::classify::MotionClass;
 use crate::motion::describe::MotionTarget;
 use serde::{Deserialize, Serialize};
@@ -55,6 +56,12 @@ pub struct BreedSettings {
     /// before them, whose generation 0 is all copies of the prototype.
     #[serde(default)]
     pub uniform_start: bool,
+    /// Leaves of an earlier run of the same prototype (`--start-from`: its
+    /// archive, or its last generation ranked) that take the first places
+    /// of generation 0's uniform half ([`super::selection::plan`]). Empty
+    /// for a run started from the prototype alone.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub start: Vec<Genome>,
 }
 
 /// The strategy of a run whose run.toml predates `--strategy`.
@@ -86,6 +93,7 @@ impl BreedSettings {
             releases: DEFAULT_RELEASES,
             strategy: Strategy::Hybrid,
             uniform_start: true,
+            start: Vec::new(),
         }
     }
 
@@ -142,6 +150,12 @@ impl BreedSettings {
         if self.tournament == 0 {
             return Err(SettingsError(
                 "the tournament size must be at least 1".to_string(),
+            ));
+        }
+        if !self.start.is_empty() && self.strategy == Strategy::Random {
+            return Err(SettingsError(
+                "--start-from cannot be used with --strategy random: random search draws every                  leaf uniformly over the bounds, it starts from nothing"
+                    .to_string(),
             ));
         }
         Ok(())

@@ -21,6 +21,11 @@ pub struct BreedArgs {
     /// round); the other half of generation 0 is drawn uniformly over the prototype's bounds.
     #[arg(long, default_value_t = 1.0)]
     pub initial_scale: f64,
+    /// Start from an earlier run of the same prototype: its archive's leaves (or, without
+    /// an archive, its last generation's, best first) take the first places of generation
+    /// 0's uniform half. With `--prototype auto`, that run's prototype is used.
+    #[arg(long, value_name = "RUN_DIR")]
+    pub start_from: Option<PathBuf>,
     /// Motion class to breed toward: floater, spinner or lilter [default: floater; with
     /// --target-features, none: any class may come close].
     #[arg(long)]
@@ -87,7 +92,7 @@ pub struct BreedArgs {
     #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
     pub max_work: f64,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
-    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features", "releases", "strategy", "initial_scale"])]
+    #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features", "releases", "strategy", "initial_scale", "start_from"])]
     pub resume: Option<PathBuf>,
 }
 

@@ -44,6 +44,26 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 like,
                 ..settings
             };
+            let settings = match &args.start_from {
+                None => settings,
+                Some(from) => {
+                    let proto = LeafSpec::load(&settings.prototype)?;
+                    let start = breed::start_leaves(from, &proto)?;
+                    let settings = BreedSettings {
+                        start: start.genomes,
+                        ..settings
+                    };
+                    let places = settings.population - breed::selection::initial_copies(&settings);
+                    eprintln!(
+                        "leafmagic: --start-from {}: {} of generation 0's {} leaves from {}",
+                        from.display(),
+                        settings.start.len().min(places),
+                        settings.population,
+                        start.source
+                    );
+                    settings
+                }
+            };
             settings.validate()?;
             let dir = args
                 .out
@@ -282,6 +302,18 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
 /// and why on stderr. An example without `--size` is described at the
 /// chosen prototype's chord (at A's to choose, then again if B is chosen).
 fn choose_prototype(args: &BreedArgs) -> Result<(String, Option<MotionTarget>)> {
+    if let (Some(dir), true) = (&args.start_from, args.prototype == breed::auto::AUTO) {
+        let name = Run::load(dir)
+            .with_context(|| format!("--start-from {}", dir.display()))?
+            .settings()
+            .prototype
+            .clone();
+        eprintln!(
+            "leafmagic: --prototype auto: {name} (the prototype of the run started from, {})",
+            dir.display()
+        );
+        return Ok((name.clone(), motion_target(args, &name)?));
+    }
     if args.prototype != breed::auto::AUTO {
         return Ok((
             args.prototype.clone(),

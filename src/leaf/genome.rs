@@ -239,6 +239,12 @@ impl Axis {
         }
     }
 
+    fn range(self) -> [f64; 2] {
+        match self {
+            Axis::Linear(r) | Axis::Log(r) => r,
+        }
+    }
+
     fn at_unit(self, u: f64) -> f64 {
         let u = u.clamp(0.0, 1.0);
         match self {
@@ -306,7 +312,23 @@ impl Genome {
     pub fn with_coordinates(&self, b: &Bounds, u: &[f64]) -> Genome {
         let axes = self.axes(b);
         assert_eq!(axes.len(), u.len(), "one coordinate per gene");
-        let mut v = axes.iter().zip(u).map(|((axis, _), &x)| axis.at_unit(x));
+        self.with_values(axes.iter().zip(u).map(|((axis, _), &x)| axis.at_unit(x)))
+    }
+
+    /// The same genome with every gene clamped into `b`: a gene inside its
+    /// range keeps its value to the bit (an earlier run's leaf reused in a
+    /// run whose bounds are narrower, `breed --start-from`).
+    pub fn clamped(&self, b: &Bounds) -> Genome {
+        let axes = self.axes(b);
+        self.with_values(axes.iter().zip(self.values()).map(|((axis, _), (_, v))| {
+            let [lo, hi] = axis.range();
+            v.clamp(lo, hi)
+        }))
+    }
+
+    /// The genome of the same prototype with its genes taken, in
+    /// [`Genome::values`] order, from `v`.
+    fn with_values(&self, mut v: impl Iterator<Item = f64>) -> Genome {
         let mut next = || v.next().expect("counted");
         let fold_deg = self.fold_deg.iter().map(|_| next()).collect();
         let mass_factor = self.mass_factor.iter().map(|_| next()).collect();
@@ -625,6 +647,37 @@ mod tests {
             assert_eq!(high.check(&proto), Ok(()));
             assert!(g.coordinate_sds(b).iter().all(|&s| s > 0.0 && s < 1.0));
         }
+    }
+
+    /// Clamping keeps a gene inside its range to the bit and moves one
+    /// outside onto the nearer bound: drawn within wide bounds, then
+    /// clamped into the prototype's.
+    #[test]
+    fn clamped_keeps_what_is_inside_and_moves_what_is_not() {
+        let proto = LeafSpec::load("a").unwrap();
+        let g = Genome::of_prototype(&proto);
+        let b = &proto.bounds;
+        let wide = Bounds {
+            size_factor: [0.1, 10.0],
+            fold_deg: [-90.0, 90.0],
+            ..b.clone()
+        };
+        let mut moved = 0;
+        for seed in 0..40 {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed);
+            let v = mutate(&g, &wide, 4.0, &mut rng);
+            let c = v.clamped(b);
+            assert_eq!(c.check(&proto), Ok(()));
+            assert_eq!(v.clamped(&wide), v, "inside its bounds: unchanged");
+            let inside = (b.size_factor[0]..=b.size_factor[1]).contains(&v.size_factor);
+            if inside {
+                assert_eq!(c.size_factor.to_bits(), v.size_factor.to_bits());
+            } else {
+                moved += 1;
+                assert!(c.size_factor == b.size_factor[0] || c.size_factor == b.size_factor[1]);
+            }
+        }
+        assert!(moved > 0, "the draw never left the prototype's bounds");
     }
 
     #[test]

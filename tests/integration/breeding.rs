@@ -338,3 +338,107 @@ fn archive_keeps_one_leaf_per_cell() {
         assert!(run.join(c[11]).exists(), "{row}");
     }
 }
+
+/// `--start-from`: generation 0's uniform half begins with the earlier
+/// run's archive, leaf for leaf (the genes to the bit), and a run that
+/// cannot be started from is refused naming the flag and the directory.
+#[test]
+fn a_run_started_from_another_begins_with_its_archive() {
+    let dir = scratch("start-from");
+    let first = dir.join("first");
+    let small = ["--population", "12", "--generations", "2", "--seconds", "2"];
+    let out = breed(
+        &[&small[..], &["--archive", "--releases", "1"]].concat(),
+        &first,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let json = |run: &Path| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(run.join("checkpoint.json")).unwrap())
+            .unwrap()
+    };
+    let archive: Vec<serde_json::Value> = json(&first)["archive"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|e| e["individual"]["genome"].clone())
+        .collect();
+    assert!(!archive.is_empty());
+
+    let second = dir.join("second");
+    let out = breed(
+        &[
+            "--start-from",
+            first.to_str().unwrap(),
+            "--target",
+            "spinner",
+            "--population",
+            "12",
+            "--generations",
+            "1",
+            "--seconds",
+            "2",
+            "--releases",
+            "1",
+        ],
+        &second,
+    );
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(err.contains("from its archive"), "{err}");
+    // Generation 0: 6 copies of the prototype, then the archive's cells
+    // (all of them, or 6 spread over them), then uniform draws.
+    let population = json(&second)["population"].as_array().unwrap().clone();
+    let places = 6.min(archive.len());
+    for k in 0..places {
+        let from = if archive.len() <= 6 {
+            k
+        } else {
+            k * archive.len() / 6
+        };
+        assert_eq!(population[6 + k]["genome"], archive[from], "place {k}");
+    }
+
+    // Refused: no such run, random search, a run with nothing completed.
+    let refused = |args: &[&str], name: &str, want: &str| {
+        let out = breed(args, &dir.join(name));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{name}: {err}");
+        assert!(
+            err.contains("--start-from") && err.contains(want),
+            "{name}: {err}"
+        );
+        assert!(!dir.join(name).exists(), "{name}: nothing left behind");
+    };
+    let missing = dir.join("missing");
+    refused(
+        &["--start-from", missing.to_str().unwrap()],
+        "r1",
+        "missing",
+    );
+    refused(
+        &[
+            "--start-from",
+            first.to_str().unwrap(),
+            "--strategy",
+            "random",
+        ],
+        "r2",
+        "random",
+    );
+    let empty = dir.join("empty");
+    let out = leafmagic()
+        .args(["breed", "--create-only", "--out"])
+        .arg(&empty)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    refused(
+        &["--start-from", empty.to_str().unwrap()],
+        "r3",
+        "no completed generation",
+    );
+}
