@@ -102,7 +102,9 @@ pub fn initial_copies(s: &BreedSettings) -> usize {
 }
 
 /// Which of `available` start leaves ([`BreedSettings::start`]) take the
-/// first places of generation 0's `slots` uniform places: all of them in
+/// first of generation 0's `slots` places of prototype copies (the uniform
+/// half is kept whole: measured, benches/start-from.sh, a floater run's
+/// archive in place of uniform draws found lilters later, not sooner): all of them in
 /// order when they fit, else `slots` of them spread evenly over the list
 /// (an archive is in cell order, so every region of descent × spin keeps
 /// a representative).
@@ -137,18 +139,17 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
             // over the bounds.
             let g0 = Genome::of_prototype(proto);
             let copies = initial_copies(s);
-            let start = start_places(s.start.len(), s.population - copies);
+            let start = start_places(s.start.len(), copies);
             let children: Vec<Child> = (0..s.population as u64)
                 .map(|id| {
                     let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
-                    let place = (id as usize).checked_sub(copies);
-                    let genome = if place.is_none() {
-                        mutate(&g0, &bounds, s.initial_scale, &mut rng)
-                    } else if let Some(k) = place.and_then(|p| start.get(p)) {
+                    let genome = if let Some(k) = start.get(id as usize) {
                         // An earlier run's leaf, as it was, moved into
                         // this run's bounds where they are narrower
                         // (a --like run holds stiffness at 1).
                         s.start[*k].clamped(&bounds)
+                    } else if (id as usize) < copies {
+                        mutate(&g0, &bounds, s.initial_scale, &mut rng)
                     } else {
                         uniform(&g0, &bounds, &mut rng)
                     };

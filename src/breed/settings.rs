@@ -58,7 +58,7 @@ pub struct BreedSettings {
     pub uniform_start: bool,
     /// Leaves of an earlier run of the same prototype (`--start-from`: its
     /// archive, or its last generation ranked) that take the first places
-    /// of generation 0's uniform half ([`super::selection::plan`]). Empty
+    /// of generation 0's copies of the prototype ([`super::selection::plan`]). Empty
     /// for a run started from the prototype alone.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub start: Vec<Genome>,

@@ -53,7 +53,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                         start: start.genomes,
                         ..settings
                     };
-                    let places = settings.population - breed::selection::initial_copies(&settings);
+                    let places = breed::selection::initial_copies(&settings);
                     eprintln!(
                         "leafmagic: --start-from {}: {} of generation 0's {} leaves from {}",
                         from.display(),

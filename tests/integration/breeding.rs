@@ -339,8 +339,9 @@ fn archive_keeps_one_leaf_per_cell() {
     }
 }
 
-/// `--start-from`: generation 0's uniform half begins with the earlier
-/// run's archive, leaf for leaf (the genes to the bit), and a run that
+/// `--start-from`: generation 0's copies of the prototype give their
+/// places to the earlier run's archive, leaf for leaf (the genes to the
+/// bit), the uniform half stays whole, and a run that
 /// cannot be started from is refused naming the flag and the directory.
 #[test]
 fn a_run_started_from_another_begins_with_its_archive() {
@@ -389,8 +390,9 @@ fn a_run_started_from_another_begins_with_its_archive() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(out.status.success(), "{err}");
     assert!(err.contains("from its archive"), "{err}");
-    // Generation 0: 6 copies of the prototype, then the archive's cells
-    // (all of them, or 6 spread over them), then uniform draws.
+    // Generation 0: the archive's cells (all of them, or 6 spread over
+    // them) in the places of the 6 copies of the prototype, then the 6
+    // uniform draws of a run started from the prototype alone.
     let population = json(&second)["population"].as_array().unwrap().clone();
     let places = 6.min(archive.len());
     for k in 0..places {
@@ -399,7 +401,28 @@ fn a_run_started_from_another_begins_with_its_archive() {
         } else {
             k * archive.len() / 6
         };
-        assert_eq!(population[6 + k]["genome"], archive[from], "place {k}");
+        assert_eq!(population[k]["genome"], archive[from], "place {k}");
+    }
+    let alone = dir.join("alone");
+    let out = breed(
+        &[
+            "--target",
+            "spinner",
+            "--population",
+            "12",
+            "--generations",
+            "1",
+            "--seconds",
+            "2",
+            "--releases",
+            "1",
+        ],
+        &alone,
+    );
+    assert!(out.status.success());
+    let alone = json(&alone)["population"].as_array().unwrap().clone();
+    for k in places..12 {
+        assert_eq!(population[k]["genome"], alone[k]["genome"], "place {k}");
     }
 
     // Refused: no such run, random search, a run with nothing completed.
