@@ -395,13 +395,13 @@ fn a_run_started_from_another_begins_with_its_archive() {
     // uniform draws of a run started from the prototype alone.
     let population = json(&second)["population"].as_array().unwrap().clone();
     let places = 6.min(archive.len());
-    for k in 0..places {
+    for (k, ind) in population.iter().enumerate().take(places) {
         let from = if archive.len() <= 6 {
             k
         } else {
             k * archive.len() / 6
         };
-        assert_eq!(population[k]["genome"], archive[from], "place {k}");
+        assert_eq!(ind["genome"], archive[from], "place {k}");
     }
     let alone = dir.join("alone");
     let out = breed(
@@ -421,8 +421,8 @@ fn a_run_started_from_another_begins_with_its_archive() {
     );
     assert!(out.status.success());
     let alone = json(&alone)["population"].as_array().unwrap().clone();
-    for k in places..12 {
-        assert_eq!(population[k]["genome"], alone[k]["genome"], "place {k}");
+    for (k, (ind, lone)) in population.iter().zip(&alone).enumerate().skip(places) {
+        assert_eq!(ind["genome"], lone["genome"], "place {k}");
     }
 
     // Refused: no such run, random search, a run with nothing completed.
