@@ -16,8 +16,8 @@ use crate::physics::integrate::RUNAWAY_DISTANCE;
 use core::arch::x86_64::{
     __m256d, _CMP_GT_OQ, _CMP_NEQ_UQ, _CMP_UNORD_Q, _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd,
     _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_max_pd,
-    _mm256_mul_pd, _mm256_set_epi64x, _mm256_set1_pd, _mm256_sqrt_pd, _mm256_storeu_pd,
-    _mm256_sub_pd, _mm256_xor_pd,
+    _mm256_movemask_pd, _mm256_mul_pd, _mm256_set_epi64x, _mm256_set1_pd, _mm256_sqrt_pd,
+    _mm256_storeu_pd, _mm256_sub_pd, _mm256_xor_pd,
 };
 
 /// Four lanes of f64.
@@ -106,6 +106,14 @@ fn max(a: W, b: W) -> W {
 #[inline]
 fn select(mask: W, a: W, b: W) -> W {
     _mm256_blendv_pd(b, a, mask)
+}
+
+/// Whether every lane of `mask` is set: then `select(mask, a, b)` is `a`,
+/// and the blend can be left out.
+#[target_feature(enable = "avx2")]
+#[inline]
+fn all(mask: W) -> bool {
+    _mm256_movemask_pd(mask) == 0b1111
 }
 
 /// The mask of lanes where `on`.
@@ -248,11 +256,20 @@ impl Law<4> {
                 mul(load(damping), stretch_rate),
             );
             let f = scale(n, s);
+            let every = all(acts);
             for c in 0..3 {
                 let fi = load(&force[i][c]);
-                store(&mut force[i][c], select(acts, add(fi, f[c]), fi));
+                let si = add(fi, f[c]);
+                store(
+                    &mut force[i][c],
+                    if every { si } else { select(acts, si, fi) },
+                );
                 let fj = load(&force[j][c]);
-                store(&mut force[j][c], select(acts, sub(fj, f[c]), fj));
+                let sj = sub(fj, f[c]);
+                store(
+                    &mut force[j][c],
+                    if every { sj } else { select(acts, sj, fj) },
+                );
             }
         }
     }
@@ -300,10 +317,15 @@ impl Law<4> {
                 mul(neg(load(stiffness)), sin_delta),
                 mul(load(damping), rate),
             );
+            let every = all(acts);
             for (&i, g) in ids.iter().zip(&[ga, gb, gp, gq]) {
                 for c in 0..3 {
                     let f = load(&force[i][c]);
-                    store(&mut force[i][c], select(acts, add(f, mul(g[c], torque)), f));
+                    let sum = add(f, mul(g[c], torque));
+                    store(
+                        &mut force[i][c],
+                        if every { sum } else { select(acts, sum, f) },
+                    );
                 }
             }
         }
@@ -324,13 +346,18 @@ impl Law<4> {
             let (alpha_n, alpha_t) = (load(alpha_n), load(alpha_t));
             let tangential = mul(alpha_t, area);
             let normal_excess = div(sub(alpha_n, alpha_t), mul(two, doubled_area));
+            let every = all(acts);
             for i in [a, b, c3] {
                 let vi = vec(&v[i]);
                 let along = mul(normal_excess, dot(big_n, vi));
                 for c in 0..3 {
                     let f = load(&force[i][c]);
                     let term = add(mul(tangential, vi[c]), mul(big_n[c], along));
-                    store(&mut force[i][c], select(acts, sub(f, term), f));
+                    let sum = sub(f, term);
+                    store(
+                        &mut force[i][c],
+                        if every { sum } else { select(acts, sum, f) },
+                    );
                 }
             }
         }
