@@ -170,7 +170,7 @@ fn lockstep(c: &mut Criterion) {
         states: &[State],
         dt: &[f64],
         steps: &[u64],
-        baseline: bool,
+        kernel: &str,
     ) {
         let mut batch = Batch::<L>::new(
             std::array::from_fn(|k| &models[k]),
@@ -178,9 +178,11 @@ fn lockstep(c: &mut Criterion) {
             std::array::from_fn(|k| dt[k]),
         )
         .unwrap();
-        if baseline {
-            batch = batch.baseline_vectors();
-        }
+        batch = match kernel {
+            "generic" => batch.generic_vectors(),
+            "baseline" => batch.baseline_vectors(),
+            _ => batch,
+        };
         loop {
             let active: [bool; L] = std::array::from_fn(|k| batch.steps()[k] < steps[k]);
             if !active.iter().any(|&a| a) {
@@ -191,15 +193,18 @@ fn lockstep(c: &mut Criterion) {
         black_box(batch.lane(0));
     }
     group.bench_function("batch_4_leaves_1s", |b| {
-        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, false))
+        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, "intrinsics"))
+    });
+    group.bench_function("batch_4_leaves_1s_generic_kernel", |b| {
+        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, "generic"))
     });
     group.bench_function("batch_4_leaves_1s_baseline_vectors", |b| {
-        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, true))
+        b.iter(|| run_batch::<4>(&models, &states, &dt, &steps, "baseline"))
     });
     group.bench_function("batch_2x2_leaves_1s", |b| {
         b.iter(|| {
-            run_batch::<2>(&models[..2], &states[..2], &dt[..2], &steps[..2], false);
-            run_batch::<2>(&models[2..], &states[2..], &dt[2..], &steps[2..], false);
+            run_batch::<2>(&models[..2], &states[..2], &dt[..2], &steps[..2], "");
+            run_batch::<2>(&models[2..], &states[2..], &dt[2..], &steps[2..], "");
         })
     });
     group.finish();

@@ -14,9 +14,10 @@
 # - one 10 s fall: MuJoCo's card (mj_step over 12,000 steps in C, no Python
 #   per step) against `leafmagic drop a --seconds 10` (its own stepping wall
 #   time, `wall_s` of --json, and the whole process);
-# - the default breed (100 leaves x 8 generations of 10 s falls; elites are
-#   not dropped again: 730 falls, 7,300 leaf-seconds) on all cores, against
-#   MuJoCo simulating the same 7,300 card-seconds on as many processes as
+# - the default breed (100 leaves x 8 generations of 10 s falls, each leaf
+#   from 4 release attitudes; elites are not dropped again: 730 leaves, 2,920
+#   falls, 29,200 leaf-seconds) on all cores, against MuJoCo simulating the
+#   same 29,200 card-seconds on as many processes as
 #   cores (each process times a 100 s slice; the total is extrapolated from
 #   the measured rate, which is constant per step).
 set -euo pipefail
@@ -106,7 +107,9 @@ def mujoco_parallel_rate(slice_s):
 model = card_model()
 mujoco_seconds(model, 1.0)  # warm-up
 drop_mj, drop_lm, drop_lm_whole, breed_lm, breed_mj = [], [], [], [], []
-LEAF_SECONDS = 7300.0
+# 730 leaves (elites are not dropped again), each from 4 release attitudes
+# (`--releases`, default 4 since issue 19), 10 s each.
+LEAF_SECONDS = 730 * 4 * 10.0
 for r in range(rounds):
     drop_mj.append(mujoco_seconds(model, 10.0))
     s, w = leafmagic_drop()
@@ -123,7 +126,7 @@ print(show("MuJoCo card, one 10 s fall (stepping)", drop_mj))
 print(show("leafmagic drop a, 10 s (stepping, wall_s)", drop_lm))
 print(show("leafmagic drop a, 10 s (whole process)", drop_lm_whole))
 print(show(f"MuJoCo card, {LEAF_SECONDS:.0f} card-s on {cores} processes", breed_mj))
-print(show("leafmagic default breed (730 falls)", breed_lm))
+print(show("leafmagic default breed (2,920 falls)", breed_lm))
 ratios = [m / l for m, l in zip(drop_mj, drop_lm)]
 print(f"one 10 s fall: leafmagic {med(ratios):.1f}x MuJoCo (stepping; rounds {min(ratios):.1f}–{max(ratios):.1f}); "
       f"{med([m / l for m, l in zip(drop_mj, drop_lm_whole)]):.1f}x counting leafmagic's whole process")

@@ -33,10 +33,24 @@ fn auto_dt(model: &Model) -> f64 {
 
 /// Lanes of different leaves, steps and tilts, each stepped for its own
 /// number of steps (the batch keeps a finished lane still), against each
-/// leaf dropped alone; with the CPU's widest vectors and with the baseline's.
+/// leaf dropped alone; with the CPU's widest vectors (the kernel written
+/// with intrinsics, and the generic one), and with the baseline's.
 #[test]
 fn every_lane_is_bit_identical_to_a_lone_drop() {
-    for (proto, baseline) in [("a", false), ("b", false), ("a", true)] {
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    enum Kernel {
+        Intrinsics,
+        Generic,
+        Baseline,
+    }
+    use Kernel::*;
+    for (proto, kernel) in [
+        ("a", Intrinsics),
+        ("b", Intrinsics),
+        ("a", Generic),
+        ("b", Generic),
+        ("a", Baseline),
+    ] {
         let models = variants(proto, 4, 20);
         let tilts = [[10.0, 2.0], [35.0, -5.0], [0.5, 0.0], [80.0, 30.0]];
         let states: Vec<State> = models
@@ -56,16 +70,21 @@ fn every_lane_is_bit_identical_to_a_lone_drop() {
             dt,
         )
         .unwrap();
-        if baseline {
-            batch = batch.baseline_vectors();
-        }
+        batch = match kernel {
+            Intrinsics => batch,
+            Generic => batch.generic_vectors(),
+            Baseline => batch.baseline_vectors(),
+        };
         loop {
             let active: [bool; 4] = std::array::from_fn(|k| batch.steps()[k] < steps[k]);
             if !active.iter().any(|&a| a) {
                 break;
             }
             let live = batch.step(active);
-            assert!(live.iter().all(|&l| l), "{proto}: a lane diverged");
+            assert!(
+                live.iter().all(|&l| l),
+                "{proto} {kernel:?}: a lane diverged"
+            );
         }
         for k in 0..4 {
             let mut state = states[k].clone();
@@ -82,12 +101,12 @@ fn every_lane_is_bit_identical_to_a_lone_drop() {
             assert_eq!(
                 bits(&x),
                 bits(&state.position),
-                "{proto} lane {k}: positions"
+                "{proto} {kernel:?} lane {k}: positions"
             );
             assert_eq!(
                 bits(&v),
                 bits(&state.velocity),
-                "{proto} lane {k}: velocities"
+                "{proto} {kernel:?} lane {k}: velocities"
             );
             assert_eq!(batch.steps()[k], steps[k]);
         }

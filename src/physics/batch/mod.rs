@@ -25,6 +25,9 @@ use crate::physics::state::State;
 use crate::physics::terms::Terms;
 use nalgebra::Vector3;
 
+#[cfg(target_arch = "x86_64")]
+mod avx2;
+
 type V3 = Vector3<f64>;
 
 /// One number per lane.
@@ -72,6 +75,10 @@ pub struct Batch<const L: usize> {
     /// Whether this CPU has AVX2 ([`Batch::step`] then uses it).
     #[cfg(target_arch = "x86_64")]
     avx2: bool,
+    /// Whether four lanes with AVX2 take the kernel written with
+    /// intrinsics (else the generic one, compiled for AVX2).
+    #[cfg(target_arch = "x86_64")]
+    intrinsics: bool,
 }
 
 /// What the lanes' forces are made of: the shared topology and each lane's
@@ -213,6 +220,8 @@ impl<const L: usize> Batch<L> {
             steps: [0; L],
             #[cfg(target_arch = "x86_64")]
             avx2: std::arch::is_x86_feature_detected!("avx2"),
+            #[cfg(target_arch = "x86_64")]
+            intrinsics: true,
         })
     }
 
@@ -223,6 +232,18 @@ impl<const L: usize> Batch<L> {
         #[cfg(target_arch = "x86_64")]
         {
             self.avx2 = false;
+        }
+        self
+    }
+
+    /// The same batch stepped by the generic kernel, compiled for AVX2
+    /// where the CPU has it, instead of the one written with intrinsics for
+    /// four lanes: for tests and benchmarks of the two, which give the same
+    /// bits.
+    pub fn generic_vectors(mut self) -> Self {
+        #[cfg(target_arch = "x86_64")]
+        {
+            self.intrinsics = false;
         }
         self
     }
@@ -266,6 +287,16 @@ impl<const L: usize> Batch<L> {
     pub fn step(&mut self, active: [bool; L]) -> [bool; L] {
         #[cfg(target_arch = "x86_64")]
         if self.avx2 {
+            // Four lanes, the breed's batches: the kernel written with AVX
+            // intrinsics (`avx2.rs`), the same operations in the same order.
+            if self.intrinsics
+                && let Some(four) = (self as &mut dyn std::any::Any).downcast_mut::<Batch<4>>()
+            {
+                // SAFETY: `step_avx2_4` needs AVX2, and `Batch::new` found
+                // it on this CPU (`is_x86_feature_detected!`).
+                let live = unsafe { four.step_avx2_4(std::array::from_fn(|k| active[k])) };
+                return std::array::from_fn(|k| live[k]);
+            }
             // SAFETY: `step_avx2` needs AVX2, and `Batch::new` found it on
             // this CPU (`is_x86_feature_detected!`). The code is the same;
             // only the vector width differs, and without FMA (not enabled)
