@@ -87,17 +87,15 @@ pub struct StartLeaves {
     pub source: String,
 }
 
-/// Reads the run in `dir` (checked, nothing changed) for the leaves a new
-/// run of `proto` can start from: the cells of its MAP-Elites archive when
+/// The leaves a new run of `proto` can start from in the earlier `run`
+/// (opened with [`Run::load`]): the cells of its MAP-Elites archive when
 /// it kept one, else its last generation ranked, diverged leaves left
-/// out. Refused, naming `--start-from` and the
-/// directory, when the run has no completed generation or its leaves are
-/// not variants of a prototype shaped as `proto` (folds, particles,
-/// stiffness groups).
-pub fn start_leaves(dir: &Path, proto: &LeafSpec) -> Result<StartLeaves, BreedError> {
+/// out. Refused, naming `--start-from` and the directory, when the run has
+/// no completed generation or its leaves are not variants of a prototype
+/// shaped as `proto` (folds, particles, stiffness groups).
+pub fn start_leaves(run: &Run, proto: &LeafSpec) -> Result<StartLeaves, BreedError> {
     let refuse =
-        |why: String| BreedError::Refused(format!("--start-from {}: {why}", dir.display()));
-    let run = Run::load(dir).map_err(|e| refuse(e.to_string()))?;
+        |why: String| BreedError::Refused(format!("--start-from {}: {why}", run.dir.display()));
     let cp = run
         .checkpoint
         .as_ref()

@@ -20,7 +20,14 @@ pub fn breed(args: BreedArgs) -> Result<()> {
     let mut run = match &args.resume {
         Some(dir) => Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?,
         None => {
-            let (prototype, like) = choose_prototype(&args)?;
+            // The run started from, read (and checked) once.
+            let from = match &args.start_from {
+                Some(dir) => Some(
+                    Run::load(dir).with_context(|| format!("--start-from {}", dir.display()))?,
+                ),
+                None => None,
+            };
+            let (prototype, like) = choose_prototype(&args, from.as_ref())?;
             let settings = BreedSettings {
                 prototype,
                 initial_scale: args.initial_scale,
@@ -44,7 +51,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 like,
                 ..settings
             };
-            let settings = match &args.start_from {
+            let settings = match &from {
                 None => settings,
                 Some(from) => {
                     let proto = LeafSpec::load(&settings.prototype)?;
@@ -56,7 +63,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                     let places = breed::selection::initial_copies(&settings);
                     eprintln!(
                         "leafmagic: --start-from {}: {} of generation 0's {} leaves from {}",
-                        from.display(),
+                        from.dir.display(),
                         settings.start.len().min(places),
                         settings.population,
                         start.source
@@ -301,16 +308,16 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
 /// chooses from the target's class ([`breed::auto::choose`]) and says which
 /// and why on stderr. An example without `--size` is described at the
 /// chosen prototype's chord (at A's to choose, then again if B is chosen).
-fn choose_prototype(args: &BreedArgs) -> Result<(String, Option<MotionTarget>)> {
-    if let (Some(dir), true) = (&args.start_from, args.prototype == breed::auto::AUTO) {
-        let name = Run::load(dir)
-            .with_context(|| format!("--start-from {}", dir.display()))?
-            .settings()
-            .prototype
-            .clone();
+/// Started `from` an earlier run, `auto` is that run's prototype.
+fn choose_prototype(
+    args: &BreedArgs,
+    from: Option<&Run>,
+) -> Result<(String, Option<MotionTarget>)> {
+    if let (Some(from), true) = (from, args.prototype == breed::auto::AUTO) {
+        let name = from.settings().prototype.clone();
         eprintln!(
             "leafmagic: --prototype auto: {name} (the prototype of the run started from, {})",
-            dir.display()
+            from.dir.display()
         );
         return Ok((name.clone(), motion_target(args, &name)?));
     }

@@ -185,10 +185,11 @@ pub const TUMBLE_MIN_AREA_MAXIMA_PER_S: f64 = 3.5;
 /// about a horizontal axis shows the same area curve turn after turn,
 /// chaotic paper does not (the criterion of periodic against chaotic
 /// motion of [`FLUTTER_MIN_PERIODICITY`], the same value). This is what
-/// names the slow tumbles the rate threshold misses: a larger, heavier
-/// plate tumbles at well under [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] (leafmagic's
-/// 10 cm cards at 2.7–3.3 maxima/s, periodicity 0.8–1.0), while no chaotic
-/// real square on a straight path reaches 0.8 (docs/classification.md).
+/// names the slow tumbles the rate threshold misses: leafmagic's 5 cm
+/// square cards of 100–500 g/m² tumble at 2.7–3.3 maxima/s, under
+/// [`TUMBLE_MIN_AREA_MAXIMA_PER_S`], most at a periodicity of 0.8–1.0,
+/// while no chaotic real square on a straight path reaches 0.8
+/// (docs/classification.md).
 pub const TUMBLE_MIN_AREA_PERIODICITY: f64 = FLUTTER_MIN_PERIODICITY;
 
 /// Least area maxima per second of a regular tumble: one turn a second, so

@@ -369,22 +369,23 @@ fn a_run_started_from_another_begins_with_its_archive() {
         .collect();
     assert!(!archive.is_empty());
 
+    // The run started from the first, and the same run from the prototype
+    // alone.
+    let next = [
+        "--target",
+        "spinner",
+        "--population",
+        "12",
+        "--generations",
+        "1",
+        "--seconds",
+        "2",
+        "--releases",
+        "1",
+    ];
     let second = dir.join("second");
     let out = breed(
-        &[
-            "--start-from",
-            first.to_str().unwrap(),
-            "--target",
-            "spinner",
-            "--population",
-            "12",
-            "--generations",
-            "1",
-            "--seconds",
-            "2",
-            "--releases",
-            "1",
-        ],
+        &[&["--start-from", first.to_str().unwrap()][..], &next].concat(),
         &second,
     );
     let err = String::from_utf8_lossy(&out.stderr);
@@ -404,21 +405,7 @@ fn a_run_started_from_another_begins_with_its_archive() {
         assert_eq!(ind["genome"], archive[from], "place {k}");
     }
     let alone = dir.join("alone");
-    let out = breed(
-        &[
-            "--target",
-            "spinner",
-            "--population",
-            "12",
-            "--generations",
-            "1",
-            "--seconds",
-            "2",
-            "--releases",
-            "1",
-        ],
-        &alone,
-    );
+    let out = breed(&next, &alone);
     assert!(out.status.success());
     let alone = json(&alone)["population"].as_array().unwrap().clone();
     for (k, (ind, lone)) in population.iter().zip(&alone).enumerate().skip(places) {
@@ -440,7 +427,7 @@ fn a_run_started_from_another_begins_with_its_archive() {
     refused(
         &["--start-from", missing.to_str().unwrap()],
         "r1",
-        "missing",
+        "no such directory",
     );
     refused(
         &[

@@ -169,12 +169,15 @@ fn a_slow_tumble_is_named_by_its_regular_turning() {
         },
     );
     let fast = c.path.unwrap();
-    let named = |maxima: f64, periodicity: f64, straightness: f64| {
+    let decided = |maxima: f64, periodicity: f64, straightness: f64| {
         let mut f = fast.clone();
         f.area_maxima_per_s = Some(maxima);
         f.area_periodicity = Some(periodicity);
         f.straightness = straightness;
-        let v = verdict(f, Inputs::Areas, &Calibration::default());
+        verdict(f, Inputs::Areas, &Calibration::default())
+    };
+    let named = |maxima, periodicity, straightness| {
+        let v = decided(maxima, periodicity, straightness);
         (v.class, v.regime)
     };
     let tumble = (MotionClass::Spinner, Regime::Tumble);
@@ -191,17 +194,7 @@ fn a_slow_tumble_is_named_by_its_regular_turning() {
         MotionClass::Lilter,
         "regular turning on a wandering path"
     );
-    let reason = verdict(
-        {
-            let mut f = fast.clone();
-            f.area_maxima_per_s = Some(2.7);
-            f.area_periodicity = Some(0.95);
-            f
-        },
-        Inputs::Areas,
-        &Calibration::default(),
-    )
-    .reason;
+    let reason = decided(2.7, 0.95, fast.straightness).reason;
     assert!(reason.contains("regularly"), "{reason}");
 }
 

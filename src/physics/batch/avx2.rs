@@ -12,7 +12,6 @@
 
 use super::{Batch, Lanes, Law, V3Lanes};
 use crate::physics::forces::MIN_HINGE_HEIGHT_RATIO;
-use crate::physics::integrate::RUNAWAY_DISTANCE;
 use core::arch::x86_64::{
     __m256d, _CMP_GT_OQ, _CMP_NEQ_UQ, _CMP_UNORD_Q, _mm256_add_pd, _mm256_and_pd, _mm256_blendv_pd,
     _mm256_castsi256_pd, _mm256_cmp_pd, _mm256_div_pd, _mm256_loadu_pd, _mm256_max_pd,
@@ -116,6 +115,41 @@ fn all(mask: W) -> bool {
     _mm256_movemask_pd(mask) == 0b1111
 }
 
+/// The lanes where one element's force acts (a spring of non-zero
+/// length, a hinge with both wings, a triangle with an area), and whether
+/// that is all four, when a blend would give the new sum itself and is
+/// left out (the same bits).
+#[derive(Clone, Copy)]
+struct Acting {
+    mask: W,
+    every: bool,
+}
+
+impl Acting {
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn new(mask: W) -> Acting {
+        Acting {
+            mask,
+            every: all(mask),
+        }
+    }
+
+    /// Writes `sum` into `p` where the element acts, keeps `old` elsewhere.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn store(self, p: &mut Lanes<4>, sum: W, old: W) {
+        store(
+            p,
+            if self.every {
+                sum
+            } else {
+                select(self.mask, sum, old)
+            },
+        );
+    }
+}
+
 /// The mask of lanes where `on`.
 #[target_feature(enable = "avx2")]
 #[inline]
@@ -192,7 +226,6 @@ impl Batch<4> {
             }
         }
         // The divergence check of `Simulator::check`: one pass of sums.
-        let limit_x2 = RUNAWAY_DISTANCE * RUNAWAY_DISTANCE;
         let (mut sum_x2, mut sum_v2) = (splat(0.0), splat(0.0));
         for (x, v) in self.x.iter().zip(&self.v) {
             let (x, v) = (vec(x), vec(v));
@@ -202,17 +235,7 @@ impl Batch<4> {
         let (mut sx, mut sv) = ([0.0; 4], [0.0; 4]);
         store(&mut sx, sum_x2);
         store(&mut sv, sum_v2);
-        for k in 0..4 {
-            if on[k] {
-                self.steps[k] += 1;
-                let within =
-                    |value: f64, limit: f64| value.partial_cmp(&limit).is_some_and(|o| o.is_le());
-                if !(within(sx[k], limit_x2) && within(sv[k], self.speed_limit2[k])) {
-                    self.live[k] = false;
-                }
-            }
-        }
-        self.live
+        self.judge(on, &sx, &sv)
     }
 }
 
@@ -246,7 +269,7 @@ impl Law<4> {
         for (&[i, j], [rest, stiffness, damping]) in self.springs.iter().zip(&self.spring_law) {
             let d = sub3(vec(&x[i]), vec(&x[j]));
             let l2 = dot(d, d);
-            let acts = _mm256_cmp_pd::<_CMP_NEQ_UQ>(l2, splat(0.0));
+            let acts = Acting::new(_mm256_cmp_pd::<_CMP_NEQ_UQ>(l2, splat(0.0)));
             let l = sqrt(l2);
             let inv = div(one, l);
             let n = scale(d, inv);
@@ -256,20 +279,11 @@ impl Law<4> {
                 mul(load(damping), stretch_rate),
             );
             let f = scale(n, s);
-            let every = all(acts);
             for c in 0..3 {
                 let fi = load(&force[i][c]);
-                let si = add(fi, f[c]);
-                store(
-                    &mut force[i][c],
-                    if every { si } else { select(acts, si, fi) },
-                );
+                acts.store(&mut force[i][c], add(fi, f[c]), fi);
                 let fj = load(&force[j][c]);
-                let sj = sub(fj, f[c]);
-                store(
-                    &mut force[j][c],
-                    if every { sj } else { select(acts, sj, fj) },
-                );
+                acts.store(&mut force[j][c], sub(fj, f[c]), fj);
             }
         }
     }
@@ -289,10 +303,10 @@ impl Law<4> {
             let (rp, rq) = (sub3(vec(&x[p]), xa), sub3(vec(&x[q]), xa));
             let (np, nq) = (cross(e, rp), cross(e, rq));
             let (np2, nq2, len2) = (dot(np, np), dot(nq, nq), dot(e, e));
-            let acts = _mm256_and_pd(
+            let acts = Acting::new(_mm256_and_pd(
                 _mm256_cmp_pd::<_CMP_GT_OQ>(np2, min_positive),
                 _mm256_cmp_pd::<_CMP_GT_OQ>(nq2, min_positive),
-            );
+            ));
             let len = sqrt(len2);
             let inv_norms = div(one, sqrt(mul(np2, nq2)));
             let sin = mul(dot(cross(np, nq), e), div(inv_norms, len));
@@ -317,15 +331,10 @@ impl Law<4> {
                 mul(neg(load(stiffness)), sin_delta),
                 mul(load(damping), rate),
             );
-            let every = all(acts);
             for (&i, g) in ids.iter().zip(&[ga, gb, gp, gq]) {
                 for c in 0..3 {
                     let f = load(&force[i][c]);
-                    let sum = add(f, mul(g[c], torque));
-                    store(
-                        &mut force[i][c],
-                        if every { sum } else { select(acts, sum, f) },
-                    );
+                    acts.store(&mut force[i][c], add(f, mul(g[c], torque)), f);
                 }
             }
         }
@@ -340,24 +349,19 @@ impl Law<4> {
             let xa = vec(&x[a]);
             let big_n = cross(sub3(vec(&x[b]), xa), sub3(vec(&x[c3]), xa));
             let n2 = dot(big_n, big_n);
-            let acts = _mm256_cmp_pd::<_CMP_GT_OQ>(n2, min_positive);
+            let acts = Acting::new(_mm256_cmp_pd::<_CMP_GT_OQ>(n2, min_positive));
             let doubled_area = sqrt(n2);
             let area = mul(half, doubled_area);
             let (alpha_n, alpha_t) = (load(alpha_n), load(alpha_t));
             let tangential = mul(alpha_t, area);
             let normal_excess = div(sub(alpha_n, alpha_t), mul(two, doubled_area));
-            let every = all(acts);
             for i in [a, b, c3] {
                 let vi = vec(&v[i]);
                 let along = mul(normal_excess, dot(big_n, vi));
                 for c in 0..3 {
                     let f = load(&force[i][c]);
                     let term = add(mul(tangential, vi[c]), mul(big_n[c], along));
-                    let sum = sub(f, term);
-                    store(
-                        &mut force[i][c],
-                        if every { sum } else { select(acts, sum, f) },
-                    );
+                    acts.store(&mut force[i][c], sub(f, term), f);
                 }
             }
         }

@@ -357,7 +357,6 @@ impl<const L: usize> Batch<L> {
             }
         }
         // The divergence check of `Simulator::check`: one pass of sums.
-        let limit_x2 = RUNAWAY_DISTANCE * RUNAWAY_DISTANCE;
         let (mut sum_x2, mut sum_v2) = ([0.0; L], [0.0; L]);
         for (x, v) in self.x.iter().zip(&self.v) {
             for k in 0..L {
@@ -365,11 +364,20 @@ impl<const L: usize> Batch<L> {
                 sum_v2[k] += 0.0 + ((v[0][k] * v[0][k] + v[1][k] * v[1][k]) + v[2][k] * v[2][k]);
             }
         }
+        self.judge(on, &sum_x2, &sum_v2)
+    }
+
+    /// The divergence check's verdict once a step is taken, from each lane's
+    /// sums of |x|² and |v|² over its particles (`Simulator::check`): a
+    /// stepped lane counts its step, and a lane beyond the runaway distance
+    /// or its speed limit, or whose sums are NaN, is live no more. Returns
+    /// which lanes are still live.
+    fn judge(&mut self, on: [bool; L], sum_x2: &Lanes<L>, sum_v2: &Lanes<L>) -> [bool; L] {
+        let limit_x2 = RUNAWAY_DISTANCE * RUNAWAY_DISTANCE;
+        let within = |value: f64, limit: f64| value.partial_cmp(&limit).is_some_and(|o| o.is_le());
         for k in 0..L {
             if on[k] {
                 self.steps[k] += 1;
-                let within =
-                    |value: f64, limit: f64| value.partial_cmp(&limit).is_some_and(|o| o.is_le());
                 if !(within(sum_x2[k], limit_x2) && within(sum_v2[k], self.speed_limit2[k])) {
                     self.live[k] = false;
                 }
