@@ -149,6 +149,7 @@ fn diverged(error: String, tilt: [f64; 2]) -> Evaluation {
         releases: 1,
         kept: 0,
         release_deg: tilt,
+        residuals: Vec::new(),
     }
 }
 
@@ -190,10 +191,20 @@ fn scored(
         Ok(result) => {
             let c = classify(&result.trajectory, model.chord());
             let f = &c.features;
-            let distance = settings.like.as_ref().and_then(|target| {
-                let d = target.distance(&Descriptors::of(&c).ok()?);
+            let described = settings
+                .like
+                .as_ref()
+                .and_then(|target| Some((target, Descriptors::of(&c).ok()?)));
+            let distance = described.as_ref().and_then(|(target, d)| {
+                let d = target.distance(d);
                 d.is_finite().then_some(d)
             });
+            // The residuals of a fall inside the gate, for the hybrid's
+            // Levenberg–Marquardt steps; none where there is no distance.
+            let residuals = match (&described, distance) {
+                (Some((target, d)), Some(_)) => target.residuals(d).unwrap_or_default(),
+                _ => Vec::new(),
+            };
             let score = match &settings.like {
                 Some(t) => like_score(
                     Some(c.class),
@@ -228,6 +239,7 @@ fn scored(
                 releases: 1,
                 kept: 0,
                 release_deg: tilt,
+                residuals,
             }
         }
     }

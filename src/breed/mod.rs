@@ -14,7 +14,8 @@
 
 //!
 //! Files: [`settings`] and [`population`] are the data; [`mod@evaluate`] drops
-//! and scores one individual; [`selection`] ranks, selects and varies;
+//! and scores one individual; [`selection`] ranks, selects and varies
+//! (with [`strategy`], [`cmaes`] and [`least_squares`]);
 //! [`archive`] is the MAP-Elites archive; [`run`] is the driver and the run
 //! directory ([`files`] its tables, [`plot`] its plots); [`shard`],
 //! [`worker`] and [`executor`] spread a generation over processes and
@@ -30,6 +31,7 @@ pub mod cmaes;
 pub mod evaluate;
 pub mod executor;
 pub mod files;
+pub mod least_squares;
 pub mod plot;
 pub mod population;
 pub mod robust;

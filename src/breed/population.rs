@@ -40,6 +40,11 @@ pub struct Evaluation {
     /// The release attitude of the drop shown (tilt about the body x and y
     /// axes, degrees, as [`crate::sim::drop::DropParams::tilt_deg`]).
     pub release_deg: [f64; 2],
+    /// The drop's scaled descriptor differences to the run's motion target
+    /// ([`crate::motion::describe::MotionTarget::residuals`]), when it has
+    /// a [`Evaluation::distance`]; empty otherwise. What the hybrid's
+    /// Levenberg–Marquardt steps fit ([`super::least_squares`]).
+    pub residuals: Vec<f64>,
 }
 
 /// How one individual's drop ended.
@@ -155,6 +160,9 @@ pub struct EvaluationRecord {
     /// a run written before them).
     #[serde(default = "default_release")]
     pub release_deg: [f64; 2],
+    /// See [`Evaluation::residuals`] (empty in a run written before them).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub residuals: Vec<f64>,
 }
 
 fn one() -> usize {
@@ -166,7 +174,8 @@ fn default_release() -> [f64; 2] {
 }
 
 impl From<Evaluation> for EvaluationRecord {
-    fn from(e: Evaluation) -> EvaluationRecord {
+    fn from(mut e: Evaluation) -> EvaluationRecord {
+        let residuals = std::mem::take(&mut e.residuals);
         let (class, regime, error) = match &e.outcome {
             Outcome::Fell(f) => (f.class.to_string(), f.regime.to_string(), String::new()),
             Outcome::Diverged(error) => (DIVERGED.to_string(), String::new(), error.clone()),
@@ -205,6 +214,7 @@ impl From<Evaluation> for EvaluationRecord {
             releases: e.releases,
             kept: e.kept,
             release_deg: e.release_deg,
+            residuals,
         }
     }
 }
@@ -244,6 +254,7 @@ impl TryFrom<EvaluationRecord> for Evaluation {
             releases: r.releases,
             kept: r.kept,
             release_deg: r.release_deg,
+            residuals: r.residuals,
         })
     }
 }
@@ -293,8 +304,12 @@ pub struct Plan {
     /// The previous generation's best, copied unchanged (already evaluated).
     pub elites: Vec<Individual>,
     /// How many of the children, the last ones, CMA-ES drew
-    /// ([`super::strategy`]); the rest were bred by the GA.
+    /// ([`super::strategy`]); the rest were bred by the GA and, just
+    /// before CMA-ES's, by Levenberg–Marquardt steps.
     pub cma_children: usize,
+    /// How many of the children, those just before CMA-ES's, are
+    /// Levenberg–Marquardt steps ([`super::least_squares`]).
+    pub model_children: usize,
 }
 
 /// Per-generation summary.

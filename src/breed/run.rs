@@ -613,8 +613,9 @@ impl Run {
             children,
             elites,
             cma_children,
+            model_children,
         } = plan;
-        let bred = children.len() - cma_children;
+        let bred = children.len() - cma_children - model_children;
         let evaluated: Vec<(Individual, f64)> = children
             .into_iter()
             .zip(evals)
@@ -652,7 +653,11 @@ impl Run {
                 success_rate = closer as f64 / inside.len() as f64;
             }
         }
-        let sampled: Vec<&Individual> = evaluated[bred..].iter().map(|(i, _)| i).collect();
+        let sampled: Vec<&Individual> = evaluated[bred + model_children..]
+            .iter()
+            .map(|(i, _)| i)
+            .collect();
+        let ga_ids: Vec<u64> = ga_children.iter().map(|(i, _)| i.id).collect();
         let mut population: Vec<Individual> = elites;
         population.extend(evaluated.iter().map(|(i, _)| i.clone()));
         population.sort_by_key(|i| i.id);
@@ -685,6 +690,7 @@ impl Run {
             &self.proto,
             self.checkpoint.as_ref().and_then(|c| c.cmaes.as_ref()),
             &sampled,
+            &ga_ids,
             &population,
             next,
         );

@@ -2,6 +2,7 @@
 //! the variation scale, and the seeded random streams that make every
 //! generation the same bytes whatever process derives it.
 
+use super::least_squares;
 use super::population::{Checkpoint, Child, GenerationSummary, Individual, Plan};
 use super::settings::{BreedSettings, Strategy};
 use super::strategy::{cma_children, search_bounds};
@@ -132,7 +133,7 @@ fn uniform<R: rand::Rng + ?Sized>(template: &Genome, bounds: &Bounds, rng: &mut 
 /// derives the same plan.
 pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>) -> Plan {
     let bounds = search_bounds(s, proto);
-    let (generation, scale, next_id, children) = match checkpoint {
+    let (generation, scale, next_id, children, model_children, cma_children) = match checkpoint {
         None => {
             // Generation 0: copies of the prototype with the first round's
             // variation, and (all of it for random search) uniform draws
@@ -161,7 +162,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     }
                 })
                 .collect();
-            (0, s.initial_scale, s.population as u64, children)
+            (0, s.initial_scale, s.population as u64, children, 0, 0)
         }
         Some(cp) => {
             let generation = cp.generation + 1;
@@ -175,10 +176,22 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
             let total = s.population - s.elites;
             let cma = cma_children(s, cp, total);
             let mut children = Vec::with_capacity(total);
+            // In a hybrid run toward descriptors, once CMA-ES has started,
+            // a few of its places go to Levenberg–Marquardt steps from the
+            // evaluated population (least_squares): both refine, while the
+            // GA's places stay whole to keep other regions reachable.
+            let (step_parent, steps) = if s.strategy == Strategy::Hybrid && s.like.is_some() {
+                least_squares::steps(&cp.population, &bounds, &Genome::of_prototype(proto))
+            } else {
+                (None, Vec::new())
+            };
+            let steps: Vec<Genome> = steps.into_iter().take(cma.saturating_sub(2)).collect();
+            let model_children = steps.len();
+            let cma = cma - model_children;
             let bred = if s.strategy == Strategy::Random {
                 0
             } else {
-                total - cma
+                total - cma - model_children
             };
             for _ in 0..bred {
                 // Tournament: the best of `tournament` uniformly drawn members.
@@ -198,6 +211,15 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     parent: Some(parent.id),
                     genome,
                     parent_score: parent.eval.score,
+                });
+                next_id += 1;
+            }
+            for genome in steps {
+                children.push(Child {
+                    id: next_id,
+                    parent: step_parent.map(|p: &Individual| p.id),
+                    genome,
+                    parent_score: step_parent.map_or(f64::NAN, |p| p.eval.score),
                 });
                 next_id += 1;
             }
@@ -237,7 +259,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
                     next_id += 1;
                 }
             }
-            (generation, cp.scale, next_id, children)
+            (generation, cp.scale, next_id, children, model_children, cma)
         }
     };
     let elites: Vec<Individual> = match checkpoint {
@@ -251,7 +273,6 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
             })
             .collect(),
     };
-    let cma_children = checkpoint.map_or(0, |cp| cma_children(s, cp, s.population - s.elites));
     Plan {
         generation,
         scale,
@@ -259,6 +280,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
         children,
         elites,
         cma_children,
+        model_children,
     }
 }
 

@@ -591,6 +591,7 @@ mod tests {
             releases: 4,
             kept: 3,
             release_deg: [-17.25, 0.1 + 0.2],
+            residuals: vec![0.1 + 0.2, -1e-300, 5e-324, -0.0],
         }
     }
 
@@ -603,6 +604,7 @@ mod tests {
             releases: 4,
             kept: 0,
             release_deg: [2.0, -29.9],
+            residuals: Vec::new(),
         }
     }
 

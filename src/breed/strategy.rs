@@ -10,7 +10,11 @@
 //! refines what was found, while the GA's tournaments over the whole
 //! population keep other classes and rare leaves reachable. (Measured in
 //! issue 19: CMA-ES gets 2–100× closer than the GA once in the class, but
-//! alone it misses rare classes the GA finds.)
+//! alone it misses rare classes the GA finds.) In runs toward descriptors
+//! ([`super::least_squares`]), [`super::least_squares::STEPS`] of CMA-ES's
+//! places go to Levenberg–Marquardt steps fitted to the evaluated
+//! population, which use the descriptor residuals CMA-ES's ranking throws
+//! away.
 
 use super::cmaes::CmaState;
 use super::population::{Checkpoint, Individual};
@@ -68,7 +72,8 @@ pub fn found(s: &BreedSettings, population: &[Individual]) -> bool {
 }
 
 /// The CMA-ES state after a generation: updated from the CMA children
-/// (`cma`, evaluated) of this generation, or started at the best of
+/// (`cma`, evaluated) of this generation (`ga`: the ids of its GA
+/// children), or started at the best of
 /// `population` when the strategy says it is time (`Cmaes`: after
 /// generation 0; `Hybrid`: once [`found`]), with per-gene step sizes the
 /// GA's at `scale`; else `previous`, unchanged (none for the GA).
@@ -77,6 +82,7 @@ pub fn advance(
     proto: &LeafSpec,
     previous: Option<&CmaState>,
     cma: &[&Individual],
+    ga: &[u64],
     population: &[Individual],
     scale: f64,
 ) -> Option<CmaState> {
@@ -103,10 +109,10 @@ pub fn advance(
     // every CMA-ES sample) moves CMA-ES to it: CMA-ES refines the best
     // region found, and the GA keeps finding new ones (a CMA-ES started on
     // a far leaf of the class otherwise stays near it, issue 19's benchmark).
-    let ga_found_better = s.strategy == Strategy::Hybrid
-        && best.parent.is_some()
-        && !best.elite
-        && previous.is_some();
+    // (A Levenberg–Marquardt step that does so leaves CMA-ES as it is: it
+    // refines the same region.)
+    let ga_found_better =
+        s.strategy == Strategy::Hybrid && ga.contains(&best.id) && previous.is_some();
     if ga_found_better {
         return Some(restart());
     }

@@ -310,7 +310,16 @@ fn check_member(i: &Individual, proto: &LeafSpec, at: &str, file: &Path) -> Resu
             ),
         ));
     }
-    for (name, v) in numbers {
+    let residuals = r
+        .residuals
+        .iter()
+        .enumerate()
+        .map(|(k, &v)| (format!("residuals[{k}]"), v));
+    for (name, v) in numbers
+        .into_iter()
+        .map(|(n, v)| (n.to_string(), v))
+        .chain(residuals)
+    {
         if !v.is_finite() {
             return Err(Damage::new(
                 file,

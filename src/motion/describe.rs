@@ -275,6 +275,36 @@ impl MotionTarget {
     }
 }
 
+impl MotionTarget {
+    /// The scaled differences (fall − target) / scale of every descriptor
+    /// the target sets, in the target's (name) order: the residuals whose
+    /// root mean square is [`MotionTarget::distance`]. A value only one side
+    /// has counts as +1, one that neither has as 0, as in the distance.
+    /// `None` across the class gate.
+    pub fn residuals(&self, fall: &Descriptors) -> Option<Vec<f64>> {
+        if self.class.is_some_and(|c| c != fall.class) {
+            return None;
+        }
+        Some(
+            self.descriptors
+                .iter()
+                .map(|(name, &target)| {
+                    let k = NAMES
+                        .iter()
+                        .position(|n| n == name)
+                        .expect("names checked when the target was made");
+                    let value = fall.values[k];
+                    match (target.is_finite(), value.is_finite()) {
+                        (true, true) => (value - target) / SCALES[k],
+                        (false, false) => 0.0,
+                        _ => 1.0,
+                    }
+                })
+                .collect(),
+        )
+    }
+}
+
 /// One descriptor's squared, scaled difference; a value only one side has
 /// (a period) counts as one scale apart.
 fn term(a: f64, b: f64, scale: f64) -> f64 {

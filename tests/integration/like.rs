@@ -247,3 +247,134 @@ fn compare_prints_both_vectors_and_gates_by_class() {
     assert_eq!(diff["b"]["descriptors"]["class"], "spinner");
     assert!(diff["b"]["descriptors"]["spin"].as_f64().unwrap() > 5.0);
 }
+
+/// The hybrid's Levenberg–Marquardt steps (breed::least_squares) on a real
+/// population: after three generations toward the spinner fixture's fall,
+/// the steps fitted to the evaluated members, each dropped from the best
+/// member's own release attitude, come closer to the example than that
+/// best member.
+#[test]
+fn model_steps_from_a_real_population_come_closer_than_its_best() {
+    use leafmagic::breed::{Checkpoint, evaluate, least_squares, strategy};
+    use leafmagic::leaf::LeafSpec;
+    use leafmagic::leaf::genome::Genome;
+    let dir = scratch("like-steps");
+    let example = dir.join("spinner.csv");
+    drop_to(&fixture("a-spinner.toml"), &example);
+    let run = dir.join("run");
+    let args = [
+        "--like",
+        example.to_str().unwrap(),
+        "--population",
+        "24",
+        "--generations",
+        "3",
+        "--releases",
+        "1",
+    ];
+    let out = breed(&args, &run);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cp: Checkpoint =
+        serde_json::from_str(&std::fs::read_to_string(run.join("checkpoint.json")).unwrap())
+            .unwrap();
+    let proto = LeafSpec::load("a").unwrap();
+    let bounds = strategy::search_bounds(&cp.settings, &proto);
+    let (best, children) =
+        least_squares::steps(&cp.population, &bounds, &Genome::of_prototype(&proto));
+    let best = best.expect("members inside the gate");
+    assert_eq!(children.len(), least_squares::STEPS);
+    let before = best.eval.distance.unwrap();
+    let after: Vec<f64> = children
+        .iter()
+        .map(|g| {
+            evaluate(&proto, best.id, g, &cp.settings)
+                .distance
+                .unwrap_or(f64::INFINITY)
+        })
+        .collect();
+    let closest = after.iter().copied().fold(f64::INFINITY, f64::min);
+    assert!(
+        closest < before,
+        "best member {before:.5}; its steps {after:?}"
+    );
+}
+
+/// A run toward an example, where the hybrid breeds Levenberg–Marquardt
+/// steps from the stored residuals, is the same bytes with 1 and 2 threads
+/// and after SIGKILL and --resume.
+#[test]
+fn a_like_run_with_model_steps_is_reproducible() {
+    use std::time::{Duration, Instant};
+    let dir = scratch("like-steps-bytes");
+    let example = dir.join("floater.csv");
+    drop_to(&fixture("a-floater.toml"), &example);
+    let args = [
+        "--like",
+        example.to_str().unwrap(),
+        "--population",
+        "16",
+        "--generations",
+        "6",
+        "--seconds",
+        "6",
+        "--releases",
+        "1",
+    ];
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    assert!(
+        breed(&[&args[..], &["--threads", "1"]].concat(), &one)
+            .status
+            .success()
+    );
+    assert!(
+        breed(&[&args[..], &["--threads", "2"]].concat(), &two)
+            .status
+            .success()
+    );
+    let (a, b) = (contents(&one), contents(&two));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (k, v) in &a {
+        assert!(v == &b[k], "{k} differs between 1 and 2 threads");
+    }
+    let checkpoint = String::from_utf8_lossy(&a["checkpoint.json"]).into_owned();
+    assert!(checkpoint.contains("\"residuals\""), "no residuals stored");
+
+    let killed = dir.join("killed");
+    let mut child = leafmagic()
+        .arg("breed")
+        .args(args)
+        .args(["--threads", "2", "--out"])
+        .arg(&killed)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !killed.join("gen-002.csv").exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let cp = std::fs::read_to_string(killed.join("checkpoint.json")).unwrap_or_default();
+    assert!(
+        !cp.contains("\"generation\":5"),
+        "the run finished before it could be killed"
+    );
+    let resumed = leafmagic()
+        .args(["breed", "--resume"])
+        .arg(&killed)
+        .output()
+        .unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+    let c = contents(&killed);
+    assert_eq!(a.keys().collect::<Vec<_>>(), c.keys().collect::<Vec<_>>());
+    for (k, v) in &a {
+        assert!(v == &c[k], "{k} differs after kill and resume");
+    }
+}
