@@ -49,6 +49,41 @@ pub fn breed(args: &[&str], out: &Path) -> std::process::Output {
         .unwrap()
 }
 
+/// Starts `breed ARGS --out OUT`, kills it (SIGKILL) as soon as `marker`
+/// exists in OUT, checks that it had not reached generation `last`, and
+/// finishes it with `--resume`.
+pub fn kill_then_resume(args: &[&str], out: &Path, marker: &str, last: usize) {
+    let mut child = leafmagic()
+        .arg("breed")
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while !out.join(marker).exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    child.kill().unwrap(); // SIGKILL on Unix
+    child.wait().unwrap();
+    let checkpoint = std::fs::read_to_string(out.join("checkpoint.json")).unwrap_or_default();
+    assert!(
+        !checkpoint.contains(&format!("\"generation\":{last}")),
+        "the run finished before it could be killed; the test did not test resuming"
+    );
+    let resumed = leafmagic()
+        .arg("breed")
+        .arg("--resume")
+        .arg(out)
+        .output()
+        .unwrap();
+    assert!(
+        resumed.status.success(),
+        "{}",
+        String::from_utf8_lossy(&resumed.stderr)
+    );
+}
+
 const SMALL: [&str; 6] = ["--population", "12", "--generations", "3", "--seconds", "2"];
 
 #[test]
@@ -95,35 +130,7 @@ fn killed_run_resumes_to_the_same_bytes() {
     assert!(breed(&args, &whole).status.success());
 
     let killed = dir.join("killed");
-    let mut child = leafmagic()
-        .arg("breed")
-        .args(args)
-        .arg("--out")
-        .arg(&killed)
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !killed.join("gen-001.csv").exists() && start.elapsed() < Duration::from_secs(60) {
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    child.kill().unwrap(); // SIGKILL on Unix
-    child.wait().unwrap();
-    let checkpoint = std::fs::read_to_string(killed.join("checkpoint.json")).unwrap_or_default();
-    assert!(
-        !checkpoint.contains("\"generation\":5"),
-        "the run finished before it could be killed; the test did not test resuming"
-    );
-    let resumed = leafmagic()
-        .arg("breed")
-        .arg("--resume")
-        .arg(&killed)
-        .output()
-        .unwrap();
-    assert!(
-        resumed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&resumed.stderr)
-    );
+    kill_then_resume(&args, &killed, "gen-001.csv", 5);
     let (a, b) = (contents(&whole), contents(&killed));
     assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
     for (k, v) in &a {

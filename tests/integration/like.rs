@@ -3,7 +3,7 @@
 //! make, falls from another engine as targets, and bad input refused before
 //! anything is bred.
 
-use crate::breeding::{breed, contents, leafmagic, scratch};
+use crate::breeding::{breed, contents, kill_then_resume, leafmagic, scratch};
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> String {
@@ -308,7 +308,6 @@ fn model_steps_from_a_real_population_come_closer_than_its_best() {
 /// and after SIGKILL and --resume.
 #[test]
 fn a_like_run_with_model_steps_is_reproducible() {
-    use std::time::{Duration, Instant};
     let dir = scratch("like-steps-bytes");
     let example = dir.join("floater.csv");
     drop_to(&fixture("a-floater.toml"), &example);
@@ -344,33 +343,11 @@ fn a_like_run_with_model_steps_is_reproducible() {
     assert!(checkpoint.contains("\"residuals\""), "no residuals stored");
 
     let killed = dir.join("killed");
-    let mut child = leafmagic()
-        .arg("breed")
-        .args(args)
-        .args(["--threads", "2", "--out"])
-        .arg(&killed)
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while !killed.join("gen-002.csv").exists() && start.elapsed() < Duration::from_secs(60) {
-        std::thread::sleep(Duration::from_millis(2));
-    }
-    child.kill().unwrap();
-    child.wait().unwrap();
-    let cp = std::fs::read_to_string(killed.join("checkpoint.json")).unwrap_or_default();
-    assert!(
-        !cp.contains("\"generation\":5"),
-        "the run finished before it could be killed"
-    );
-    let resumed = leafmagic()
-        .args(["breed", "--resume"])
-        .arg(&killed)
-        .output()
-        .unwrap();
-    assert!(
-        resumed.status.success(),
-        "{}",
-        String::from_utf8_lossy(&resumed.stderr)
+    kill_then_resume(
+        &[&args[..], &["--threads", "2"]].concat(),
+        &killed,
+        "gen-002.csv",
+        5,
     );
     let c = contents(&killed);
     assert_eq!(a.keys().collect::<Vec<_>>(), c.keys().collect::<Vec<_>>());
