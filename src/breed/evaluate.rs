@@ -8,7 +8,7 @@ use super::settings::BreedSettings;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
 use crate::motion::classify::{MotionClass, classify};
-use crate::motion::describe::Descriptors;
+use crate::motion::describe::{Descriptors, root_mean_square};
 use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
 use crate::physics::run::resolve_step;
@@ -191,20 +191,15 @@ fn scored(
         Ok(result) => {
             let c = classify(&result.trajectory, model.chord());
             let f = &c.features;
-            let described = settings
+            // Inside the target's gate: the residuals (kept for the hybrid's
+            // Levenberg–Marquardt steps) and the distance, their RMS.
+            let (distance, residuals) = settings
                 .like
                 .as_ref()
-                .and_then(|target| Some((target, Descriptors::of(&c).ok()?)));
-            let distance = described.as_ref().and_then(|(target, d)| {
-                let d = target.distance(d);
-                d.is_finite().then_some(d)
-            });
-            // The residuals of a fall inside the gate, for the hybrid's
-            // Levenberg–Marquardt steps; none where there is no distance.
-            let residuals = match (&described, distance) {
-                (Some((target, d)), Some(_)) => target.residuals(d).unwrap_or_default(),
-                _ => Vec::new(),
-            };
+                .and_then(|target| target.residuals(&Descriptors::of(&c).ok()?))
+                .map(|r| (root_mean_square(&r), r))
+                .filter(|(d, _)| d.is_finite())
+                .map_or((None, Vec::new()), |(d, r)| (Some(d), r));
             let score = match &settings.like {
                 Some(t) => like_score(
                     Some(c.class),

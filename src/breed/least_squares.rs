@@ -88,15 +88,6 @@ pub fn steps<'a>(
     else {
         return (None, Vec::new());
     };
-    (Some(best), steps_from(best, population, bounds, template))
-}
-
-fn steps_from(
-    best: &Individual,
-    population: &[Individual],
-    bounds: &Bounds,
-    template: &Genome,
-) -> Vec<Genome> {
     let varied: Vec<usize> = template
         .coordinate_sds(bounds)
         .iter()
@@ -107,46 +98,33 @@ fn steps_from(
     let x_best = best.genome.coordinates(bounds);
     let r_best = &best.eval.residuals;
     let (n, m) = (varied.len(), r_best.len());
-    if n == 0 || m == 0 {
-        return Vec::new();
-    }
-    // Differences from the best, varied genes only.
-    let mut dx: Vec<Vec<f64>> = Vec::new();
-    let mut dr: Vec<Vec<f64>> = Vec::new();
-    for i in population {
-        if i.id == best.id || i.eval.residuals.len() != m {
-            continue;
-        }
-        let x = i.genome.coordinates(bounds);
-        let d: Vec<f64> = varied.iter().map(|&k| x[k] - x_best[k]).collect();
-        if d.iter().all(|v| *v == 0.0) {
-            continue;
-        }
-        dx.push(d);
-        dr.push(
-            i.eval
-                .residuals
-                .iter()
-                .zip(r_best)
-                .map(|(a, b)| a - b)
-                .collect(),
-        );
-    }
-    if dx.len() < MIN_NEIGHBOURS {
-        return Vec::new();
+    // Differences from the best (varied genes only) of every other member
+    // with residuals, nearest first.
+    let norm = |d: &[f64]| d.iter().map(|v| v * v).sum::<f64>().sqrt();
+    let mut near: Vec<(f64, Vec<f64>, Vec<f64>)> = population
+        .iter()
+        .filter(|i| i.id != best.id && i.eval.residuals.len() == m)
+        .filter_map(|i| {
+            let x = i.genome.coordinates(bounds);
+            let d: Vec<f64> = varied.iter().map(|&k| x[k] - x_best[k]).collect();
+            let r = i.eval.residuals.iter().zip(r_best).map(|(a, b)| a - b);
+            let far = norm(&d);
+            (far > 0.0).then(|| (far, d, r.collect()))
+        })
+        .collect();
+    if n == 0 || near.len() < MIN_NEIGHBOURS {
+        return (Some(best), Vec::new());
     }
     // The nearest members only: the linear model is local, and members of
     // other regions (the GA's children of other parents) would bend it.
-    let norm = |d: &[f64]| d.iter().map(|v| v * v).sum::<f64>().sqrt();
-    let mut order: Vec<usize> = (0..dx.len()).collect();
-    order.sort_by(|&p, &q| norm(&dx[p]).total_cmp(&norm(&dx[q])).then(p.cmp(&q)));
-    order.truncate((NEIGHBOURS_PER_GENE * n).max(MIN_NEIGHBOURS));
-    let reach = order.iter().map(|&k| norm(&dx[k])).fold(0.0, f64::max);
-    let dx: Vec<Vec<f64>> = order.iter().map(|&k| dx[k].clone()).collect();
-    let dr: Vec<Vec<f64>> = order.iter().map(|&k| dr[k].clone()).collect();
+    // (A stable sort: ties keep population order.)
+    near.sort_by(|p, q| p.0.total_cmp(&q.0));
+    near.truncate((NEIGHBOURS_PER_GENE * n).max(MIN_NEIGHBOURS));
+    let reach = near.last().map_or(0.0, |p| p.0);
+    let (dx, dr): (Vec<Vec<f64>>, Vec<Vec<f64>>) = near.into_iter().map(|(_, d, r)| (d, r)).unzip();
     let max_step = reach.min(MAX_STEP);
     let Some(jacobian) = fit_jacobian(&dx, &dr, n, m) else {
-        return Vec::new();
+        return (Some(best), Vec::new());
     };
     // Normal equations of the linearised problem: A = JᵀJ, g = Jᵀ r_b.
     let mut a = vec![vec![0.0; n]; n];
@@ -159,7 +137,7 @@ fn steps_from(
     }
     let largest = (0..n).map(|p| a[p][p]).fold(0.0, f64::max);
     if largest <= 0.0 || !largest.is_finite() {
-        return Vec::new();
+        return (Some(best), Vec::new());
     }
     let mut children = Vec::with_capacity(STEPS);
     for lambda in DAMPING {
@@ -168,9 +146,9 @@ fn steps_from(
             row[p] += lambda * a[p][p] + 1e-12 * largest;
         }
         let Some(step) = cholesky_solve(damped, g.iter().map(|v| -v).collect()) else {
-            return Vec::new();
+            return (Some(best), Vec::new());
         };
-        let length = step.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let length = norm(&step);
         let shrink = if length > max_step {
             max_step / length
         } else {
@@ -182,7 +160,7 @@ fn steps_from(
         }
         children.push(best.genome.with_coordinates(bounds, &x));
     }
-    children
+    (Some(best), children)
 }
 
 /// J (m × n) = ΔR ΔXᵀ (ΔX ΔXᵀ + ε I)⁻¹ from the differences (one row of

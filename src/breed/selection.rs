@@ -185,6 +185,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
             } else {
                 (None, Vec::new())
             };
+            // CMA-ES keeps at least two samples to rank (as cma_children).
             let steps: Vec<Genome> = steps.into_iter().take(cma.saturating_sub(2)).collect();
             let model_children = steps.len();
             let cma = cma - model_children;

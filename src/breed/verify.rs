@@ -310,23 +310,22 @@ fn check_member(i: &Individual, proto: &LeafSpec, at: &str, file: &Path) -> Resu
             ),
         ));
     }
-    let residuals = r
-        .residuals
-        .iter()
-        .enumerate()
-        .map(|(k, &v)| (format!("residuals[{k}]"), v));
-    for (name, v) in numbers
-        .into_iter()
-        .map(|(n, v)| (n.to_string(), v))
-        .chain(residuals)
-    {
-        if !v.is_finite() {
-            return Err(Damage::new(
+    let finite = |name: &str, v: f64| {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(Damage::new(
                 file,
                 format!("{at}.eval.{name}"),
                 format!("{} is not finite", shown(v)),
-            ));
+            ))
         }
+    };
+    for (name, v) in numbers {
+        finite(name, v)?;
+    }
+    for (k, &v) in r.residuals.iter().enumerate() {
+        finite(&format!("residuals[{k}]"), v)?;
     }
     Ok(())
 }

@@ -257,30 +257,18 @@ impl MotionTarget {
         })
     }
 
-    /// Distance of a fall to the target (module docs): infinite across the
-    /// class gate.
+    /// Distance of a fall to the target (module docs): the root mean square
+    /// of its [`MotionTarget::residuals`]; infinite across the class gate.
     pub fn distance(&self, fall: &Descriptors) -> f64 {
-        if self.class.is_some_and(|c| c != fall.class) {
-            return f64::INFINITY;
-        }
-        let mut sum = 0.0;
-        for (name, &target) in &self.descriptors {
-            let k = NAMES
-                .iter()
-                .position(|n| n == name)
-                .expect("names checked when the target was made");
-            sum += term(target, fall.values[k], SCALES[k]);
-        }
-        (sum / self.descriptors.len().max(1) as f64).sqrt()
+        self.residuals(fall)
+            .map_or(f64::INFINITY, |r| root_mean_square(&r))
     }
-}
 
-impl MotionTarget {
     /// The scaled differences (fall − target) / scale of every descriptor
-    /// the target sets, in the target's (name) order: the residuals whose
-    /// root mean square is [`MotionTarget::distance`]. A value only one side
-    /// has counts as +1, one that neither has as 0, as in the distance.
-    /// `None` across the class gate.
+    /// the target sets, in the target's (name) order, whose root mean square
+    /// is the distance: a value only one side has counts as +1, one that
+    /// neither has as 0. What the hybrid's Levenberg–Marquardt steps fit
+    /// (`breed::least_squares`). `None` across the class gate.
     pub fn residuals(&self, fall: &Descriptors) -> Option<Vec<f64>> {
         if self.class.is_some_and(|c| c != fall.class) {
             return None;
@@ -293,23 +281,24 @@ impl MotionTarget {
                         .iter()
                         .position(|n| n == name)
                         .expect("names checked when the target was made");
-                    let value = fall.values[k];
-                    match (target.is_finite(), value.is_finite()) {
-                        (true, true) => (value - target) / SCALES[k],
-                        (false, false) => 0.0,
-                        _ => 1.0,
-                    }
+                    difference(target, fall.values[k], SCALES[k])
                 })
                 .collect(),
         )
     }
 }
 
-/// One descriptor's squared, scaled difference; a value only one side has
-/// (a period) counts as one scale apart.
-fn term(a: f64, b: f64, scale: f64) -> f64 {
+/// √(Σ rᵢ² / n) of residuals (0 for none): a distance from its residuals.
+pub fn root_mean_square(residuals: &[f64]) -> f64 {
+    let sum = residuals.iter().fold(0.0, |s, r| s + r * r);
+    (sum / residuals.len().max(1) as f64).sqrt()
+}
+
+/// One descriptor's scaled difference (b − a) / scale; a value only one
+/// side has (a period) counts as one scale apart, one neither has as none.
+fn difference(a: f64, b: f64, scale: f64) -> f64 {
     match (a.is_finite(), b.is_finite()) {
-        (true, true) => ((a - b) / scale).powi(2),
+        (true, true) => (b - a) / scale,
         (false, false) => 0.0,
         _ => 1.0,
     }
@@ -321,14 +310,11 @@ pub fn distance(a: &Descriptors, b: &Descriptors) -> f64 {
     if a.class != b.class {
         return f64::INFINITY;
     }
-    let both: Vec<usize> = (0..NAMES.len())
+    let residuals: Vec<f64> = (0..NAMES.len())
         .filter(|&k| a.measured[k] && b.measured[k])
+        .map(|k| difference(a.values[k], b.values[k], SCALES[k]))
         .collect();
-    let sum: f64 = both
-        .iter()
-        .map(|&k| term(a.values[k], b.values[k], SCALES[k]))
-        .sum();
-    (sum / both.len().max(1) as f64).sqrt()
+    root_mean_square(&residuals)
 }
 
 /// A side-by-side table of descriptor vectors (columns), for the terminal.
