@@ -21,8 +21,8 @@ mod scene;
 
 use anyhow::Result;
 use args::{
-    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, MergeArgs,
-    PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
+    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DescribeArgs, DropArgs,
+    ExportArgs, MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -49,8 +49,12 @@ pub enum Command {
     Plate(PlateArgs),
     /// Report the stable time step of a leaf for each integrator, with warnings.
     Check(CheckArgs),
-    /// Name the motion of a recorded fall (pose CSV t,x,y,z,qw,qx,qy,qz).
+    /// Name the motion of a recorded fall (CSV by header names: t,x,y,z; orientation
+    /// and projected areas optional).
     Classify(ClassifyArgs),
+    /// The motion descriptors of one recorded fall (what `breed --like` and
+    /// `compare` steer by), with which of them the record lets one measure.
+    Describe(DescribeArgs),
     /// Error against cost of every integrator over a sweep of time steps
     /// (work-precision), or with --long, classes and statistics across steps.
     Accuracy(AccuracyArgs),
@@ -78,6 +82,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Check(args) => drop::check(args),
         Command::Plate(args) => plate::plate(args),
         Command::Classify(args) => motion::classify(args),
+        Command::Describe(args) => motion::describe(args),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Scene(args) => scene::scene(args),
         Command::Compare(args) => motion::compare(args),

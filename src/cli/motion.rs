@@ -1,7 +1,7 @@
-//! `classify` and `compare`: what a recorded fall shows, and how far apart
-//! two falls are.
+//! `classify`, `describe` and `compare`: what a recorded fall shows, the
+//! numbers `breed --like` steers by, and how far apart two falls are.
 
-use super::args::{ClassifyArgs, CompareArgs};
+use super::args::{ClassifyArgs, CompareArgs, DescribeArgs};
 use super::{input, report};
 use anyhow::Result;
 use leafmagic::motion::describe::{self, Descriptors};
@@ -33,28 +33,72 @@ pub fn classify(args: ClassifyArgs) -> Result<()> {
     Ok(())
 }
 
+/// A fall's class, regime and measured descriptors as one JSON object (a
+/// value without meaning, a period the fall does not have, as null).
+fn descriptors_json(d: &Descriptors) -> serde_json::Value {
+    let mut m = serde_json::Map::new();
+    m.insert("class".into(), json!(d.class.as_str()));
+    m.insert("regime".into(), json!(d.regime.as_str()));
+    for (k, name) in describe::NAMES.iter().enumerate() {
+        if !d.measured[k] {
+            continue;
+        }
+        let v = d.values[k];
+        m.insert(
+            (*name).into(),
+            if v.is_finite() { json!(v) } else { json!(null) },
+        );
+    }
+    serde_json::Value::Object(m)
+}
+
+/// `describe`: one fall's descriptors, their units and scales, and which
+/// of them the record could not give. An undetermined fall has none; that
+/// is an answer (with its reason), not an error, as in `classify`.
+pub fn describe(args: DescribeArgs) -> Result<()> {
+    let (traj, notes, c) = input::classify_file(&args.fall, args.size, args.up)?;
+    let d = Descriptors::of(&c).ok();
+    if args.json {
+        let not_measured: Vec<serde_json::Value> = match &d {
+            Some(d) => (0..describe::NAMES.len())
+                .filter(|&k| !d.measured[k])
+                .map(|k| {
+                    json!({ "name": describe::NAMES[k], "reason": describe::unmeasured_because(k) })
+                })
+                .collect(),
+            None => Vec::new(),
+        };
+        let mut out = json!({
+            "file": args.fall.display().to_string(),
+            "samples": traj.len(),
+            "class": c.class.as_str(),
+            "regime": c.regime.as_str(),
+            "reason": c.reason,
+            "inputs": c.inputs,
+            "descriptors": d.as_ref().map(descriptors_json),
+            "not_measured": not_measured,
+            "scales": describe::NAMES.iter().zip(describe::SCALES).map(|(n, s)| ((*n).to_string(), json!(s))).collect::<serde_json::Map<_, _>>(),
+        });
+        if !notes.ignored_columns.is_empty() {
+            out["ignored_columns"] = json!(notes.ignored_columns);
+        }
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print!(
+            "{}",
+            report::motion::described(&args.fall, traj.len(), &c, d.as_ref())
+        );
+    }
+    Ok(())
+}
+
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
     let a = input::describe_file(&args.a, args.size, args.up)?;
     let b = input::describe_file(&args.b, args.size, args.up)?;
     let d = describe::distance(&a, &b);
     if args.json {
-        let side = |d: &Descriptors| {
-            let mut m = serde_json::Map::new();
-            m.insert("class".into(), json!(d.class.as_str()));
-            m.insert("regime".into(), json!(d.regime.as_str()));
-            for (k, name) in describe::NAMES.iter().enumerate() {
-                if !d.measured[k] {
-                    continue;
-                }
-                let v = d.values[k];
-                m.insert(
-                    (*name).into(),
-                    if v.is_finite() { json!(v) } else { json!(null) },
-                );
-            }
-            serde_json::Value::Object(m)
-        };
+        let side = descriptors_json;
         let out = json!({
             "a": { "file": args.a.display().to_string(), "descriptors": side(&a) },
             "b": { "file": args.b.display().to_string(), "descriptors": side(&b) },

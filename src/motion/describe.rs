@@ -55,6 +55,31 @@ pub const UNITS: [&str; 10] = [
     "m/s", "rad/s", "rad/s", "1/s", "1/s", "", "s", "", "deg", "deg",
 ];
 
+/// What each of [`NAMES`] measures, for tables (the module docs' table).
+pub const MEANINGS: [&str; 10] = [
+    "mean descent speed",
+    "|mean rotation rate about the vertical|",
+    "net rotation rate about the dominant horizontal axis",
+    "normal flips per second",
+    "pitch-rate reversals per second",
+    "horizontal travel / descent",
+    "oscillation period (none without 3 turning points)",
+    "spread of the descent speed (std / mean)",
+    "mean tilt of the plate from horizontal",
+    "spread of that tilt",
+];
+
+/// Why descriptor `k` of a record without orientation is not measured: the
+/// rotation rate about a horizontal axis also comes from projected areas
+/// (two maxima per turn); the rest need the attitude itself.
+pub fn unmeasured_because(k: usize) -> &'static str {
+    if NAMES[k] == "tumble" {
+        "needs orientation or projected areas"
+    } else {
+        "needs orientation"
+    }
+}
+
 /// Scale of each descriptor in the distance: its standard deviation across
 /// the reference population of the module docs (rounded to two figures).
 pub const SCALES: [f64; 10] = [0.93, 7.1, 3.1, 1.4, 1.6, 0.23, 0.54, 0.11, 26.0, 9.3];

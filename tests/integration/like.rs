@@ -248,6 +248,126 @@ fn compare_prints_both_vectors_and_gates_by_class() {
     assert!(diff["b"]["descriptors"]["spin"].as_f64().unwrap() > 5.0);
 }
 
+/// `describe`: one fall's descriptors are exactly what `compare` puts in
+/// its column, and the record decides which are measured: all ten from a
+/// pose record, descent, drift and (from the projected areas) tumble from
+/// a real square filmed without orientation, descent and drift from its
+/// positions alone. An undetermined record is an answer, not an error; a
+/// file without `t` is an error that names it.
+#[test]
+fn describe_says_what_the_record_measures_as_compare_uses_it() {
+    let dir = scratch("describe");
+    let square =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares/square_000.csv");
+    // The same fall without its area columns.
+    let text = std::fs::read_to_string(&square).unwrap();
+    let positions = dir.join("positions.csv");
+    let cut: Vec<String> = text
+        .lines()
+        .map(|l| l.split(',').take(4).collect::<Vec<_>>().join(","))
+        .collect();
+    std::fs::write(&positions, cut.join("\n") + "\n").unwrap();
+    let short = dir.join("short.csv");
+    std::fs::write(&short, cut[..4].join("\n") + "\n").unwrap();
+    let run = |args: &[&std::ffi::OsStr]| -> (bool, serde_json::Value, String) {
+        let out = leafmagic().args(args).output().unwrap();
+        let json = serde_json::from_slice(&out.stdout).unwrap_or(serde_json::Value::Null);
+        (
+            out.status.success(),
+            json,
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let describe = |file: &Path| {
+        let (ok, v, err) = run(&[
+            "describe".as_ref(),
+            file.as_os_str(),
+            "--size".as_ref(),
+            "0.042".as_ref(),
+            "--json".as_ref(),
+        ]);
+        assert!(ok, "{}: {err}", file.display());
+        v
+    };
+    let measured = |v: &serde_json::Value| -> Vec<String> {
+        let mut names: Vec<String> = v["descriptors"]
+            .as_object()
+            .unwrap()
+            .keys()
+            .filter(|k| *k != "class" && *k != "regime")
+            .cloned()
+            .collect();
+        names.sort();
+        names
+    };
+    let tumble_thick = mujoco("tumble_thick.csv");
+    for (file, inputs, names) in [
+        (
+            square.as_path(),
+            "areas",
+            vec!["descent", "drift", "tumble"],
+        ),
+        (positions.as_path(), "path", vec!["descent", "drift"]),
+        (
+            tumble_thick.as_path(),
+            "orientation",
+            vec![
+                "descent",
+                "descent_cv",
+                "drift",
+                "flips",
+                "period",
+                "reversals",
+                "spin",
+                "tilt",
+                "tilt_std",
+                "tumble",
+            ],
+        ),
+    ] {
+        let v = describe(file);
+        assert_eq!(v["inputs"], inputs, "{}", file.display());
+        assert_eq!(measured(&v), names, "{}", file.display());
+        assert_eq!(
+            v["not_measured"].as_array().unwrap().len(),
+            10 - names.len()
+        );
+        // Exactly compare's column for the same file.
+        let (ok, c, err) = run(&[
+            "compare".as_ref(),
+            file.as_os_str(),
+            file.as_os_str(),
+            "--size".as_ref(),
+            "0.042".as_ref(),
+            "--json".as_ref(),
+        ]);
+        assert!(ok, "{err}");
+        assert_eq!(v["descriptors"], c["a"]["descriptors"]);
+    }
+    // Without areas, the turn rate is missing for want of areas or attitude.
+    let v = describe(&positions);
+    let tumble = v["not_measured"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["name"] == "tumble")
+        .unwrap();
+    assert!(tumble["reason"].as_str().unwrap().contains("areas"));
+    // Too short: undetermined with its reason, no descriptors, exit 0.
+    let v = describe(&short);
+    assert_eq!(v["class"], "undetermined");
+    assert!(v["descriptors"].is_null());
+    assert!(v["reason"].as_str().unwrap().contains("too short"));
+    // A file that is not a fall.
+    let labels = square.with_file_name("labels.csv");
+    let (ok, _, err) = run(&["describe".as_ref(), labels.as_os_str()]);
+    assert!(!ok);
+    assert!(
+        err.contains("labels.csv") && err.contains("no column `t`"),
+        "{err}"
+    );
+}
+
 /// The hybrid's Levenberg–Marquardt steps (breed::least_squares) on a real
 /// population: after three generations toward the spinner fixture's fall,
 /// the steps fitted to the evaluated members, each dropped from the best

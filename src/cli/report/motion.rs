@@ -1,5 +1,6 @@
 //! The human reports of recorded falls: a classification (`classify`, and
-//! the end of `drop`) and two falls' descriptors side by side (`compare`).
+//! the end of `drop`), one fall's descriptors (`describe`) and two falls'
+//! descriptors side by side (`compare`).
 
 use super::text;
 use leafmagic::motion::classify::Classification;
@@ -91,6 +92,74 @@ pub fn classified(path: &Path, samples: usize, c: &Classification) -> String {
         )?;
         out.push_str(&class(c));
         Ok(())
+    })
+}
+
+/// `describe`: the file, its class (with the inputs and reason), and each
+/// descriptor with its unit, its scale in distances and what it measures,
+/// or why the record could not give it.
+pub fn described(
+    path: &Path,
+    samples: usize,
+    c: &Classification,
+    d: Option<&Descriptors>,
+) -> String {
+    text(|out| {
+        writeln!(
+            out,
+            "fall            {} ({samples} samples)",
+            path.display()
+        )?;
+        writeln!(out, "class           {} ({})", c.class, c.regime)?;
+        writeln!(out, "inputs          {}", c.inputs.describe())?;
+        let Some(d) = d else {
+            // Undetermined: its reason is all there is.
+            if let Some(reason) = &c.reason {
+                writeln!(out, "reason          {reason}")?;
+            }
+            return writeln!(out, "descriptors     none (an undetermined fall has none)");
+        };
+        writeln!(out)?;
+        writeln!(
+            out,
+            "{:<18} {:>12} {:>7}  what it measures",
+            "descriptor", "value", "scale"
+        )?;
+        for (k, name) in describe::NAMES.iter().enumerate() {
+            let label = if describe::UNITS[k].is_empty() {
+                name.to_string()
+            } else {
+                format!("{name} ({})", describe::UNITS[k])
+            };
+            let v = d.values[k];
+            let (cell, meaning) = if !d.measured[k] {
+                (
+                    "—".to_string(),
+                    format!("not measured: {}", describe::unmeasured_because(k)),
+                )
+            } else if c.path.is_some() && describe::NAMES[k] == "tumble" {
+                // Without orientation the turn rate comes from the areas.
+                (
+                    format!("{v:.3}"),
+                    "rotation rate about a horizontal axis, π × area maxima per second".to_string(),
+                )
+            } else if v.is_finite() {
+                (format!("{v:.3}"), describe::MEANINGS[k].to_string())
+            } else {
+                ("none".to_string(), describe::MEANINGS[k].to_string())
+            };
+            writeln!(
+                out,
+                "{label:<18} {cell:>12} {:>7}  {meaning}",
+                describe::SCALES[k]
+            )?;
+        }
+        let measured = d.measured.iter().filter(|&&m| m).count();
+        writeln!(
+            out,
+            "\nmeasured        {measured} of {}; a distance to this fall (`compare`, `breed --like`) uses those {measured}, each in units of its scale",
+            describe::NAMES.len()
+        )
     })
 }
 
