@@ -48,6 +48,7 @@
 //! | 6 | spinner / tumble | straightness ≥ [`TUMBLE_MIN_STRAIGHTNESS`], drift ≥ [`GLIDE_MIN_DRIFT`] (modulated); with areas, ≥ [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] area maxima per second |
 //! | 6b | spinner / tumble | with areas only: as 6 but turning regularly instead of fast: area periodicity ≥ [`TUMBLE_MIN_AREA_PERIODICITY`] and ≥ [`TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S`] maxima per second |
 //! | 7 | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`PLUNGE_MIN_FROUDE`] (modulated: not caught by 4) |
+//! | 7b | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`STEADY_MAX_FROUDE`], modulation < [`HELIX_MAX_MODULATION`], the horizontal velocity turned ≥ [`HELIX_MIN_TURNS`] net (a helix too irregular for 1) |
 //! | 8 | lilter / chaotic | otherwise: swings, reverses and wanders |
 
 use serde::{Deserialize, Serialize};
@@ -861,6 +862,7 @@ enum RuleId {
     Tumble,
     RegularTumble,
     FastPlunge,
+    TurningPlunge,
     Chaotic,
 }
 
@@ -993,6 +995,29 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
                 Cond::ge(f.froude_number, PLUNGE_MIN_FROUDE, 0.5 * STEADY_MAX_FROUDE),
             ],
         ),
+        // Autorotation whose centre circles irregularly: straight down and
+        // fast, nearly steady, and turning the same way on the whole
+        // (rule 1's turns and modulation without its consistency and
+        // radius). Empirical, as rule 7: on the consistency corpus it names
+        // one spinner (autorotating at 12 rad/s, its path turning 5 times
+        // at consistency 0.67) the rules above left chaotic, and changes
+        // no other verdict there or on the real squares; on the held-out
+        // falls it changes one, wrong either way (docs/classification.md).
+        rule(
+            RuleId::TurningPlunge,
+            C::Spinner,
+            Regime::Autorotation,
+            vec![
+                vertical(),
+                Cond::ge(f.froude_number, STEADY_MAX_FROUDE, 0.5 * STEADY_MAX_FROUDE),
+                Cond::lt(
+                    f.descent_speed_cv,
+                    HELIX_MAX_MODULATION,
+                    HELIX_MAX_MODULATION,
+                ),
+                Cond::ge(f.path_turns.abs(), HELIX_MIN_TURNS, 1.0),
+            ],
+        ),
         rule(RuleId::Chaotic, C::Lilter, Regime::Chaotic, vec![]),
     ])
     .collect()
@@ -1043,6 +1068,14 @@ fn reason(id: RuleId, f: &PathFeatures) -> String {
         RuleId::FastPlunge => format!(
             "falls straight down fast (Froude number {:.2} ≥ {PLUNGE_MIN_FROUDE}, drift ratio {:.2}), its descent modulated ({:.2}): a leaf spinning about the vertical, not a lilter rocking broadside",
             f.froude_number, f.drift_ratio, f.descent_speed_cv
+        ),
+        RuleId::TurningPlunge => format!(
+            "falls straight down fast (Froude number {:.2}, drift ratio {:.2}), nearly steadily (modulation {:.2}), its path turning {:.1} times on the whole (consistency {:.2}): a leaf spinning about the vertical whose centre circles irregularly",
+            f.froude_number,
+            f.drift_ratio,
+            f.descent_speed_cv,
+            f.path_turns.abs(),
+            f.path_turn_consistency
         ),
         RuleId::Plunge => format!(
             "falls straight down steadily and fast (Froude number {:.2} ≥ {STEADY_MAX_FROUDE}, modulation {:.2}): a leaf spinning about the vertical; an edge-on dive would look the same without orientation or areas",

@@ -104,9 +104,10 @@ fn people_agree_with_the_path_and_areas_on_held_out_squares() {
 /// Consistency with the full classifier on the falls the tests hold
 /// (leafmagic's and MuJoCo's, 163): quaternions stripped, and as video
 /// (98 Hz, 1 mm noise, two cuts of 1.5 s). Of the falls the full classifier
-/// names, measured: 150/158 (94.9 %) stripped, 272/316 (86.1 %) as video,
-/// 276/316 (87.3 %) as video with two cameras' areas — below the issue's
-/// 95 %, held here so that it does not slip further.
+/// names, measured: 151/158 (95.6 %) stripped, 272/316 (86.1 %) as video,
+/// 276/316 (87.3 %) as video with two cameras' areas. Stripped meets the
+/// issue's 95 %; video does not (docs/classification.md: what a 1.5 s cut
+/// can hold), and is held here so that it does not slip further.
 #[test]
 fn the_path_alone_mostly_agrees_with_the_full_classifier() {
     let falls = corpus::falls();
@@ -147,10 +148,58 @@ fn the_path_alone_mostly_agrees_with_the_full_classifier() {
     assert!(named >= 150, "{named}");
     let s = stripped as f64 / named as f64;
     let v = video as f64 / (2 * named) as f64;
-    assert!(s >= 0.94, "stripped: {stripped}/{named}");
+    assert!(s >= 0.95, "stripped: {stripped}/{named}");
     assert!(v >= 0.85, "video: {video}/{}", 2 * named);
     let a = with_areas as f64 / (2 * named) as f64;
     assert!(a >= 0.86, "video + areas: {with_areas}/{}", 2 * named);
+}
+
+/// Rule 7b: a leaf falling straight down fast, nearly steadily, whose path
+/// turns the same way on the whole is autorotating even when its centre
+/// circles too irregularly for a helix; modulated like a rocking leaf, or
+/// not turning, it is not named so.
+#[test]
+fn an_irregular_helix_straight_down_is_autorotation() {
+    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
+    let c = classify_with(
+        &tr,
+        0.042,
+        ClassifyOptions {
+            orientation: false,
+            areas: false,
+        },
+    );
+    let base = c.path.unwrap();
+    // The features of the corpus's autorotating leaf this rule was added
+    // for (a-varied-25: 12 rad/s about the vertical, tilted 70°).
+    let named = |cv: f64, turns: f64, froude: f64| {
+        let mut f = base.clone();
+        f.drift_ratio = 0.002;
+        f.straightness = 0.02;
+        f.froude_number = froude;
+        f.descent_speed_cv = cv;
+        f.path_turns = turns;
+        f.path_turn_consistency = 0.67;
+        f.helix_radius_chords = 0.73;
+        f.reversals = 1;
+        let v = verdict(f, Inputs::Path, &Calibration::default());
+        (v.class, v.regime, v.reason)
+    };
+    let (class, regime, reason) = named(0.054, 5.0, 3.56);
+    assert_eq!(
+        (class, regime),
+        (MotionClass::Spinner, Regime::Autorotation)
+    );
+    assert!(reason.contains("circles irregularly"), "{reason}");
+    // The same sign of turning either way round.
+    assert_eq!(named(0.054, -5.0, 3.56).0, MotionClass::Spinner);
+    assert_eq!(named(0.15, 5.0, 3.56).0, MotionClass::Lilter, "rocking");
+    assert_eq!(
+        named(0.054, 0.5, 3.56).0,
+        MotionClass::Lilter,
+        "not turning"
+    );
+    assert_eq!(named(0.054, 5.0, 1.5).0, MotionClass::Lilter, "slow");
 }
 
 /// With areas a tumble is named either fast (≥ 3.5 area maxima/s) or
