@@ -1,11 +1,16 @@
 //! The real-falls experiment (docs/real-falls.md): the real side of the
 //! table computed from tests/data/real-falls/squares, and the simulated
 //! side under the unsteady law with its one default set of coefficients.
-//! The targets (score ≤ 0.6, descent within 10 %, drift within
-//! ×1.5, Ω within 15 % in every bin) are NOT met today; this test holds
-//! what is reached, so a change that makes it worse fails.
+//! Of the targets (score ≤ 0.6, descent within 10 %, drift within
+//! ×1.5, Ω within 15 % in every bin) only the last is met today; these
+//! tests hold what is reached, so a change that makes it worse fails. Also
+//! the strips' scaling law, as far as it is reached.
 
-use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::plates::{PlateShape, plate};
+use leafmagic::leaf::{AeroLawName, AeroSpec};
+use leafmagic::motion::class::Regime;
+use leafmagic::motion::classify::classify;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 use leafmagic::sim::real_falls::{self, Label};
 use std::path::Path;
 
@@ -50,13 +55,15 @@ fn the_real_table_is_read_from_the_tracked_squares() {
 }
 
 /// The simulated experiment (4 releases per bin here, 12 in the example)
-/// runs in every bin without diverging; what it reaches is held (measured
-/// at 4 releases, seed 1): the score no worse than 1.8 (1.48; 2.44 before
+/// runs in every bin without diverging; what it reaches with the default
+/// coefficients is held (measured at 4 releases, seed 1): the score no
+/// worse than 1.2 (1.04; 1.48 under the earlier APW defaults, 2.44 before
 /// drag stopped seeing the plate's rotation; the target 0.6 is missed),
 /// small squares let go flat tumble as real ones do (3.2 cm: 1.00 of the
 /// simulated drops, real 0.79) and the largest do not (9 cm: 0.00, real
-/// 0.04), the tumbling rate within 30 % of the real one in every bin
-/// (0.76–1.10) and descent within 30 % (0.73–0.93 of real).
+/// 0.04), the tumbling rate within 15 % of the real one in every bin (the
+/// issue's per-bin target; 0.92–1.10) and descent within 35 % (1.05–1.30
+/// of real: the simulated squares fall too fast, most in the smallest bin).
 #[test]
 fn the_simulated_experiment_holds_what_it_reaches() {
     let real = squares();
@@ -77,16 +84,16 @@ fn the_simulated_experiment_holds_what_it_reaches() {
         assert_eq!(s.drops, 4);
         assert!(s.descent.is_finite() && s.descent > 0.0);
         let omega = s.omega / r.omega;
-        assert!((omega - 1.0).abs() < 0.30, "{} m: Ω ratio {omega}", r.side);
+        assert!((omega - 1.0).abs() < 0.15, "{} m: Ω ratio {omega}", r.side);
         let descent = s.descent / r.descent;
         assert!(
-            (descent - 1.0).abs() < 0.30,
+            (descent - 1.0).abs() < 0.35,
             "{} m: descent ratio {descent}",
             r.side
         );
     }
     println!("score {:.2}", cmp.score());
-    assert!(cmp.score() <= 1.8, "score {}", cmp.score());
+    assert!(cmp.score() <= 1.2, "score {}", cmp.score());
     assert!(
         cmp.sim[0].tumbling >= 0.5,
         "3.2 cm: {}",
@@ -98,4 +105,45 @@ fn the_simulated_experiment_holds_what_it_reaches() {
         "9 cm: {}",
         cmp.sim[last].tumbling
     );
+}
+
+/// Strips of aspect 5 let go at 60° about their long axis tumble, faster
+/// when heavier and slower when wider (Mahadevan, Ryu & Samuel 1999:
+/// Ω ∝ σ^(1/2) w^(−1)). The four corners of the sweep of
+/// `examples/plate_regimes.rs` (σ 35 and 280 g/m², w 1 and 4 cm): all four
+/// tumble, and the exponents of their fit have the law's signs and the
+/// sizes reached today (p = 0.34, q = −0.53 over the corners; 0.39 and
+/// −0.65 over all twelve strips; the 0.5 ± 0.1 and −1.0 ± 0.1 are
+/// missed, docs/real-falls.md).
+#[test]
+fn strips_tumble_faster_when_heavier_and_slower_when_wider() {
+    let aero = AeroSpec::named(AeroLawName::Unsteady);
+    let omega = |sigma: f64, w: f64| {
+        let model = plate(PlateShape::Rectangle, w, 5.0, sigma, aero.clone())
+            .unwrap()
+            .model()
+            .unwrap();
+        let params = DropParams {
+            seconds: 8.0,
+            tilt_deg: [60.0, 0.0],
+            ..Default::default()
+        };
+        let run = drop_leaf(&model, &params).unwrap();
+        let c = classify(&run.trajectory, model.chord());
+        assert_eq!(c.regime, Regime::Tumble, "σ {sigma}, w {w}: {:?}", c.reason);
+        let f = &c.features;
+        std::f64::consts::TAU * f.net_turns.abs() / (f.t_end_s - f.t_start_s)
+    };
+    let (light, heavy, narrow, wide) = (0.035, 0.28, 0.01, 0.04);
+    let o = [
+        [omega(light, narrow), omega(light, wide)],
+        [omega(heavy, narrow), omega(heavy, wide)],
+    ];
+    println!("Ω rad/s: σ {light}: {:?}; σ {heavy}: {:?}", o[0], o[1]);
+    // A 2 × 2 design: the least-squares exponents are the mean log ratios.
+    let p = ((o[1][0] / o[0][0]).ln() + (o[1][1] / o[0][1]).ln()) / 2.0 / (heavy / light).ln();
+    let q = ((o[0][1] / o[0][0]).ln() + (o[1][1] / o[1][0]).ln()) / 2.0 / (wide / narrow).ln();
+    println!("p = {p:.3}, q = {q:.3}");
+    assert!((0.2..0.6).contains(&p), "p = {p}");
+    assert!((-1.1..-0.3).contains(&q), "q = {q}");
 }

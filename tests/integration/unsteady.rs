@@ -233,22 +233,30 @@ fn drag_and_lift_follow_the_angle_of_attack() {
 }
 
 /// Sliding edge-on along a side, a square of side L feels laminar skin
-/// friction 2 × 1.328/√Re × ½ ρ L² U², Re = U L/ν (Blasius, both faces).
+/// friction 2 × 1.328/√Re × ½ ρ L² U², Re = U L/ν (Blasius, both faces),
+/// and on top of it the edge-on form drag `cd_parallel` × ½ ρ L² U².
 #[test]
 fn edge_on_sliding_feels_blasius_friction() {
     let model = model_of(PlateShape::Square, 0.05, 1);
-    let law = UnsteadyAero {
-        added_mass: 0.0,
-        ..law(&model)
-    };
     let (side, speed) = (0.05, 0.8);
     let v = vec![V3::new(speed, 0.0, 0.0); model.len()];
-    let (f, _) = forces(&law, &model, &model.rest_position, &v);
-    let total: V3 = f.iter().sum();
-    let re = speed * side / law.kinematic_viscosity;
-    let exact = 2.0 * BLASIUS / re.sqrt() * 0.5 * law.air_density * side * side * speed * speed;
-    println!("friction {:.6e} N, Blasius {exact:.6e} N", -total.x);
-    assert!((-total.x / exact - 1.0).abs() < 1e-9);
+    for cd_parallel in [0.0, law(&model).cd_parallel] {
+        let law = UnsteadyAero {
+            added_mass: 0.0,
+            cd_parallel,
+            ..law(&model)
+        };
+        let (f, _) = forces(&law, &model, &model.rest_position, &v);
+        let total: V3 = f.iter().sum();
+        let re = speed * side / law.kinematic_viscosity;
+        let dynamic = 0.5 * law.air_density * side * side * speed * speed;
+        let exact = (2.0 * BLASIUS / re.sqrt() + cd_parallel) * dynamic;
+        println!(
+            "C_D∥ {cd_parallel}: drag {:.6e} N, Blasius + form {exact:.6e} N",
+            -total.x
+        );
+        assert!((-total.x / exact - 1.0).abs() < 1e-9);
+    }
 }
 
 /// A plate carried by a uniform wind (moving with the air) feels nothing:
