@@ -243,9 +243,9 @@ pub struct PlateArgs {
     pub out: Option<PathBuf>,
 }
 
-/// Arguments of `classify`.
+/// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
-pub struct ClassifyArgs {
+pub struct FallArgs {
     /// Fall CSV, columns by header name in any order: t,x,y,z required; qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
     pub trajectory: PathBuf,
     /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
@@ -328,22 +328,6 @@ pub struct CompareArgs {
     #[arg(long, default_value_t = 0.05)]
     pub size: f64,
     /// The files' vertical axis: z (leafmagic's) or y (turned to z up on reading).
-    #[arg(long, default_value = "z")]
-    pub up: leafmagic::motion::trajectory::UpAxis,
-    /// Print one JSON object instead of a table.
-    #[arg(long)]
-    pub json: bool,
-}
-
-/// Arguments of `describe`.
-#[derive(clap::Args, Debug)]
-pub struct DescribeArgs {
-    /// Fall CSV, columns by header name in any order: t,x,y,z required; qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
-    pub fall: PathBuf,
-    /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
-    #[arg(long, default_value_t = 0.05)]
-    pub size: f64,
-    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
     #[arg(long, default_value = "z")]
     pub up: leafmagic::motion::trajectory::UpAxis,
     /// Print one JSON object instead of a table.

@@ -21,8 +21,8 @@ mod scene;
 
 use anyhow::Result;
 use args::{
-    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DescribeArgs, DropArgs,
-    ExportArgs, MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
+    AccuracyArgs, BreedArgs, CheckArgs, CompareArgs, DropArgs, ExportArgs, FallArgs, MergeArgs,
+    PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -51,10 +51,10 @@ pub enum Command {
     Check(CheckArgs),
     /// Name the motion of a recorded fall (CSV by header names: t,x,y,z; orientation
     /// and projected areas optional).
-    Classify(ClassifyArgs),
+    Classify(FallArgs),
     /// The motion descriptors of one recorded fall (what `breed --like` and
     /// `compare` steer by), with which of them the record lets one measure.
-    Describe(DescribeArgs),
+    Describe(FallArgs),
     /// Error against cost of every integrator over a sweep of time steps
     /// (work-precision), or with --long, classes and statistics across steps.
     Accuracy(AccuracyArgs),

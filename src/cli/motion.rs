@@ -1,14 +1,14 @@
 //! `classify`, `describe` and `compare`: what a recorded fall shows, the
 //! numbers `breed --like` steers by, and how far apart two falls are.
 
-use super::args::{ClassifyArgs, CompareArgs, DescribeArgs};
+use super::args::{CompareArgs, FallArgs};
 use super::{input, report};
 use anyhow::Result;
 use leafmagic::motion::describe::{self, Descriptors};
 use serde_json::json;
 
 /// `classify`: names the motion of a recorded fall.
-pub fn classify(args: ClassifyArgs) -> Result<()> {
+pub fn classify(args: FallArgs) -> Result<()> {
     let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
     if args.json {
         // The classification's own fields in their order, then the notes.
@@ -55,8 +55,8 @@ fn descriptors_json(d: &Descriptors) -> serde_json::Value {
 /// `describe`: one fall's descriptors, their units and scales, and which
 /// of them the record could not give. An undetermined fall has none; that
 /// is an answer (with its reason), not an error, as in `classify`.
-pub fn describe(args: DescribeArgs) -> Result<()> {
-    let (traj, notes, c) = input::classify_file(&args.fall, args.size, args.up)?;
+pub fn describe(args: FallArgs) -> Result<()> {
+    let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
     let d = Descriptors::of(&c).ok();
     if args.json {
         let not_measured: Vec<serde_json::Value> = match &d {
@@ -69,7 +69,7 @@ pub fn describe(args: DescribeArgs) -> Result<()> {
             None => Vec::new(),
         };
         let mut out = json!({
-            "file": args.fall.display().to_string(),
+            "file": args.trajectory.display().to_string(),
             "samples": traj.len(),
             "class": c.class.as_str(),
             "regime": c.regime.as_str(),
@@ -86,7 +86,7 @@ pub fn describe(args: DescribeArgs) -> Result<()> {
     } else {
         print!(
             "{}",
-            report::motion::described(&args.fall, traj.len(), &c, d.as_ref())
+            report::motion::described(&args.trajectory, traj.len(), &c, d.as_ref())
         );
     }
     Ok(())

@@ -154,22 +154,25 @@ fn the_path_alone_mostly_agrees_with_the_full_classifier() {
     assert!(a >= 0.86, "video + areas: {with_areas}/{}", 2 * named);
 }
 
+/// The path features of a real tumbling square (square_000, 4.2 cm
+/// diagonal), without orientation, with or without its area signals: the
+/// base the rule tests below vary.
+fn square_000_features(areas: bool) -> PathFeatures {
+    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
+    let options = ClassifyOptions {
+        orientation: false,
+        areas,
+    };
+    classify_with(&tr, 0.042, options).path.unwrap()
+}
+
 /// Rule 7b: a leaf falling straight down fast, nearly steadily, whose path
 /// turns the same way on the whole is autorotating even when its centre
 /// circles too irregularly for a helix; modulated like a rocking leaf, or
 /// not turning, it is not named so.
 #[test]
 fn an_irregular_helix_straight_down_is_autorotation() {
-    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
-    let c = classify_with(
-        &tr,
-        0.042,
-        ClassifyOptions {
-            orientation: false,
-            areas: false,
-        },
-    );
-    let base = c.path.unwrap();
+    let base = square_000_features(false);
     // The features of the corpus's autorotating leaf this rule was added
     // for (a-varied-25: 12 rad/s about the vertical, tilted 70°).
     let named = |cv: f64, turns: f64, froude: f64| {
@@ -208,16 +211,7 @@ fn an_irregular_helix_straight_down_is_autorotation() {
 /// periodic, and a regular but too slow or a wandering record is not one.
 #[test]
 fn a_slow_tumble_is_named_by_its_regular_turning() {
-    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
-    let c = classify_with(
-        &tr,
-        0.042,
-        ClassifyOptions {
-            orientation: false,
-            areas: true,
-        },
-    );
-    let fast = c.path.unwrap();
+    let fast = square_000_features(true);
     let decided = |maxima: f64, periodicity: f64, straightness: f64| {
         let mut f = fast.clone();
         f.area_maxima_per_s = Some(maxima);

@@ -9,7 +9,7 @@
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::class::Regime;
-use leafmagic::motion::classify::classify;
+use leafmagic::motion::classify::{Classification, classify};
 use leafmagic::physics::model::AIR_DENSITY_20C;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use leafmagic::sim::real_falls::{self, Label};
@@ -108,6 +108,30 @@ fn the_simulated_experiment_holds_what_it_reaches() {
     );
 }
 
+/// An 8 s fall of a plate (`size`, `aspect`, areal density `sigma`) under
+/// the unsteady law's defaults, let go at `tilt`, classified as
+/// examples/plate_regimes.rs does.
+fn plate_fall(
+    shape: PlateShape,
+    size: f64,
+    aspect: f64,
+    sigma: f64,
+    tilt: [f64; 2],
+) -> Classification {
+    let aero = AeroSpec::named(AeroLawName::Unsteady);
+    let model = plate(shape, size, aspect, sigma, aero)
+        .unwrap()
+        .model()
+        .unwrap();
+    let params = DropParams {
+        seconds: 8.0,
+        tilt_deg: tilt,
+        ..Default::default()
+    };
+    let run = drop_leaf(&model, &params).unwrap();
+    classify(&run.trajectory, model.chord())
+}
+
 /// Strips of aspect 5 let go at 60° about their long axis tumble, faster
 /// when heavier and slower when wider (Mahadevan, Ryu & Samuel 1999:
 /// Ω ∝ σ^(1/2) w^(−1)). The four corners of the sweep of
@@ -118,19 +142,8 @@ fn the_simulated_experiment_holds_what_it_reaches() {
 /// missed, docs/real-falls.md).
 #[test]
 fn strips_tumble_faster_when_heavier_and_slower_when_wider() {
-    let aero = AeroSpec::named(AeroLawName::Unsteady);
     let omega = |sigma: f64, w: f64| {
-        let model = plate(PlateShape::Rectangle, w, 5.0, sigma, aero.clone())
-            .unwrap()
-            .model()
-            .unwrap();
-        let params = DropParams {
-            seconds: 8.0,
-            tilt_deg: [60.0, 0.0],
-            ..Default::default()
-        };
-        let run = drop_leaf(&model, &params).unwrap();
-        let c = classify(&run.trajectory, model.chord());
+        let c = plate_fall(PlateShape::Rectangle, w, 5.0, sigma, [60.0, 0.0]);
         assert_eq!(c.regime, Regime::Tumble, "σ {sigma}, w {w}: {:?}", c.reason);
         let f = &c.features;
         std::f64::consts::TAU * f.net_turns.abs() / (f.t_end_s - f.t_start_s)
@@ -157,7 +170,6 @@ fn strips_tumble_faster_when_heavier_and_slower_when_wider() {
 /// rocked in place and never turned over; docs/real-falls.md).
 #[test]
 fn disks_flutter_then_fall_chaotically_then_tumble_as_they_get_heavier() {
-    let aero = AeroSpec::named(AeroLawName::Unsteady);
     let d = 0.03;
     for (istar, expected) in [
         (0.005, Regime::Flutter),
@@ -167,17 +179,7 @@ fn disks_flutter_then_fall_chaotically_then_tumble_as_they_get_heavier() {
     ] {
         // The law's default air, as examples/plate_regimes.rs.
         let sigma = istar * 64.0 * AIR_DENSITY_20C * d / std::f64::consts::PI;
-        let model = plate(PlateShape::Circle, d, 1.0, sigma, aero.clone())
-            .unwrap()
-            .model()
-            .unwrap();
-        let params = DropParams {
-            seconds: 8.0,
-            tilt_deg: [5.0, 2.0],
-            ..Default::default()
-        };
-        let run = drop_leaf(&model, &params).unwrap();
-        let c = classify(&run.trajectory, model.chord());
+        let c = plate_fall(PlateShape::Circle, d, 1.0, sigma, [5.0, 2.0]);
         assert_eq!(c.regime, expected, "I* {istar}: {:?}", c.reason);
     }
 }
