@@ -145,7 +145,8 @@ pub fn steps<'a>(
         for (p, row) in damped.iter_mut().enumerate() {
             row[p] += lambda * a[p][p] + 1e-12 * largest;
         }
-        let Some(step) = cholesky_solve(damped, g.iter().map(|v| -v).collect()) else {
+        let Some(step) = cholesky(damped).and_then(|l| solve(&l, g.iter().map(|v| -v).collect()))
+        else {
             return (Some(best), Vec::new());
         };
         let length = norm(&step);
@@ -182,21 +183,24 @@ fn fit_jacobian(dx: &[Vec<f64>], dr: &[Vec<f64>], n: usize, m: usize) -> Option<
     for (p, row) in gram.iter_mut().enumerate() {
         row[p] += ridge;
     }
-    // Each row of J solves gram · jᵀ = ΔX · (that residual's differences).
+    // Each row of J solves gram · jᵀ = ΔX · (that residual's differences):
+    // one factorisation for all of them.
+    let l = cholesky(gram)?;
     (0..m)
         .map(|row| {
             let rhs: Vec<f64> = (0..n)
                 .map(|p| dx.iter().zip(dr).map(|(d, r)| d[p] * r[row]).sum())
                 .collect();
-            cholesky_solve(gram.clone(), rhs)
+            solve(&l, rhs)
         })
         .collect()
 }
 
-/// Solves a x = b for symmetric positive definite `a` by Cholesky; `None`
-/// if it is not (numerically) positive definite or the result not finite.
-fn cholesky_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
-    let n = b.len();
+/// The Cholesky factor L (lower triangle, a = L Lᵀ) of symmetric positive
+/// definite `a`, in place; `None` if it is not (numerically) positive
+/// definite.
+fn cholesky(mut a: Vec<Vec<f64>>) -> Option<Vec<Vec<f64>>> {
+    let n = a.len();
     for j in 0..n {
         let d = a[j][j] - a[j][..j].iter().map(|v| v * v).sum::<f64>();
         if d <= 0.0 || !d.is_finite() {
@@ -209,18 +213,25 @@ fn cholesky_solve(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
             a[i][j] = (a[i][j] - dot) / d;
         }
     }
+    Some(a)
+}
+
+/// Solves L Lᵀ x = b with the factor of [`cholesky`]; `None` if the result
+/// is not finite.
+fn solve(l: &[Vec<f64>], mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
     // L y = b, then Lᵀ x = y.
     for i in 0..n {
         for k in 0..i {
-            b[i] -= a[i][k] * b[k];
+            b[i] -= l[i][k] * b[k];
         }
-        b[i] /= a[i][i];
+        b[i] /= l[i][i];
     }
     for i in (0..n).rev() {
         for k in i + 1..n {
-            b[i] -= a[k][i] * b[k];
+            b[i] -= l[k][i] * b[k];
         }
-        b[i] /= a[i][i];
+        b[i] /= l[i][i];
     }
     b.iter().all(|v| v.is_finite()).then_some(b)
 }
@@ -332,11 +343,11 @@ mod tests {
             .iter()
             .map(|row| row.iter().zip(&x).map(|(p, q)| p * q).sum())
             .collect();
-        let got = cholesky_solve(a, b).unwrap();
+        let got = cholesky(a).and_then(|l| solve(&l, b)).unwrap();
         for (g, e) in got.iter().zip(x) {
             assert!((g - e).abs() < 1e-12, "{got:?}");
         }
-        assert!(cholesky_solve(vec![vec![1.0, 2.0], vec![2.0, 1.0]], vec![1.0, 1.0]).is_none());
+        assert!(cholesky(vec![vec![1.0, 2.0], vec![2.0, 1.0]]).is_none());
     }
 
     /// On exactly linear residuals the regression recovers J, and the

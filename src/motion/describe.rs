@@ -80,6 +80,16 @@ pub fn unmeasured_because(k: usize) -> &'static str {
     }
 }
 
+/// Descriptor `k`'s name with its unit, as tables head its row
+/// (`descent (m/s)`, `drift`).
+pub fn label(k: usize) -> String {
+    if UNITS[k].is_empty() {
+        NAMES[k].to_string()
+    } else {
+        format!("{} ({})", NAMES[k], UNITS[k])
+    }
+}
+
 /// Scale of each descriptor in the distance: its standard deviation across
 /// the reference population of the module docs (rounded to two figures).
 pub const SCALES: [f64; 10] = [0.93, 7.1, 3.1, 1.4, 1.6, 0.23, 0.54, 0.11, 26.0, 9.3];
@@ -360,13 +370,8 @@ pub fn table(columns: &[(&str, &Descriptors)]) -> String {
         let _ = write!(out, " {:>14}", d.regime.as_str());
     }
     out.push('\n');
-    for (k, name) in NAMES.iter().enumerate() {
-        let label = if UNITS[k].is_empty() {
-            name.to_string()
-        } else {
-            format!("{name} ({})", UNITS[k])
-        };
-        let _ = write!(out, "{label:<16}");
+    for k in 0..NAMES.len() {
+        let _ = write!(out, "{:<16}", label(k));
         for (_, d) in columns {
             let v = d.values[k];
             let cell = if !d.measured[k] {

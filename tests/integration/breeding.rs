@@ -39,6 +39,37 @@ pub fn contents(dir: &Path) -> BTreeMap<String, Vec<u8>> {
     out
 }
 
+/// Asserts that two runs hold the same files with the same bytes (timing.csv
+/// aside, as [`contents`]); `what` says which runs in a failure. Returns
+/// the first's files.
+pub fn same_files(reference: &Path, other: &Path, what: &str) -> BTreeMap<String, Vec<u8>> {
+    let (a, b) = (contents(reference), contents(other));
+    assert_eq!(
+        a.keys().collect::<Vec<_>>(),
+        b.keys().collect::<Vec<_>>(),
+        "{what}: other files"
+    );
+    for (k, v) in &a {
+        assert!(v == &b[k], "{what}: {k} differs");
+    }
+    a
+}
+
+/// Breeds `args` with 1 and with 2 threads (into DIR/one and DIR/two),
+/// asserts both succeed with the same bytes, and returns the files.
+pub fn breed_on_one_and_two_threads(args: &[&str], dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let (one, two) = (dir.join("one"), dir.join("two"));
+    for (threads, out) in [("1", &one), ("2", &two)] {
+        let run = breed(&[args, &["--threads", threads]].concat(), out);
+        assert!(
+            run.status.success(),
+            "{threads} thread(s): {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    same_files(&one, &two, "1 and 2 threads")
+}
+
 pub fn breed(args: &[&str], out: &Path) -> std::process::Output {
     leafmagic()
         .arg("breed")
@@ -89,21 +120,12 @@ const SMALL: [&str; 6] = ["--population", "12", "--generations", "3", "--seconds
 #[test]
 fn same_seed_same_bytes_with_one_or_two_threads() {
     let dir = scratch("threads");
-    let (one, two) = (dir.join("one"), dir.join("two"));
-    let a = breed(&[&SMALL[..], &["--threads", "1"]].concat(), &one);
-    let b = breed(&[&SMALL[..], &["--threads", "2"]].concat(), &two);
-    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
-    assert!(b.status.success(), "{}", String::from_utf8_lossy(&b.stderr));
-    let (ca, cb) = (contents(&one), contents(&two));
+    let ca = breed_on_one_and_two_threads(&SMALL, &dir);
     assert!(
         ca.contains_key("gen-002.csv") && ca.contains_key("best/index.csv"),
         "{:?}",
         ca.keys()
     );
-    assert_eq!(ca.keys().collect::<Vec<_>>(), cb.keys().collect::<Vec<_>>());
-    for (k, v) in &ca {
-        assert!(v == &cb[k], "{k} differs between 1 and 2 threads");
-    }
     // A different seed gives a different run.
     let c = breed(&[&SMALL[..], &["--seed", "7"]].concat(), &dir.join("seven"));
     assert!(c.status.success());
@@ -131,11 +153,7 @@ fn killed_run_resumes_to_the_same_bytes() {
 
     let killed = dir.join("killed");
     kill_then_resume(&args, &killed, "gen-001.csv", 5);
-    let (a, b) = (contents(&whole), contents(&killed));
-    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
-    for (k, v) in &a {
-        assert!(v == &b[k], "{k} differs after kill and resume");
-    }
+    same_files(&whole, &killed, "after kill and resume");
 }
 
 #[test]

@@ -6,7 +6,7 @@
 //! against a stand-in kubectl, completes a run byte-identical to a local one
 //! and stops at once on a failed index, with that index's log.
 
-use super::breeding::{contents, leafmagic};
+use super::breeding::{leafmagic, same_files};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -336,11 +336,11 @@ fn breed_sh_completes_a_run_and_stops_on_a_failed_index_with_its_log() {
         .output()
         .unwrap();
     assert!(l.status.success());
-    let (a, b) = (contents(&dir.join("runs/demo")), contents(&local));
-    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
-    for (k, v) in &a {
-        assert!(v == &b[k], "{k} differs from the local run's");
-    }
+    same_files(
+        &dir.join("runs/demo"),
+        &local,
+        "the Kubernetes run against the local run",
+    );
 
     // Index 1 of generation 0 fails: the driver stops at once (not after a
     // 24 h wait), non-zero, with the index and its log.

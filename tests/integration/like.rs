@@ -3,7 +3,9 @@
 //! make, falls from another engine as targets, and bad input refused before
 //! anything is bred.
 
-use crate::breeding::{breed, contents, kill_then_resume, leafmagic, scratch};
+use crate::breeding::{
+    breed, breed_on_one_and_two_threads, kill_then_resume, leafmagic, same_files, scratch,
+};
 use std::path::{Path, PathBuf};
 
 fn fixture(name: &str) -> String {
@@ -167,14 +169,7 @@ fn target_features_are_reproducible() {
         "--seconds",
         "4",
     ];
-    let one = dir.join("one");
-    let two = dir.join("two");
-    let a = breed(&[&args[..], &["--threads", "1"]].concat(), &one);
-    let b = breed(&[&args[..], &["--threads", "2"]].concat(), &two);
-    assert!(a.status.success(), "{}", String::from_utf8_lossy(&a.stderr));
-    assert!(b.status.success());
-    let (ca, cb) = (contents(&one), contents(&two));
-    assert_eq!(ca, cb, "1 and 2 threads differ");
+    let ca = breed_on_one_and_two_threads(&args, &dir);
     let toml = String::from_utf8_lossy(&ca["run.toml"]).into_owned();
     assert!(
         toml.contains("source = \"features\"") && toml.contains("spin = 25"),
@@ -443,22 +438,7 @@ fn a_like_run_with_model_steps_is_reproducible() {
         "--releases",
         "1",
     ];
-    let (one, two) = (dir.join("one"), dir.join("two"));
-    assert!(
-        breed(&[&args[..], &["--threads", "1"]].concat(), &one)
-            .status
-            .success()
-    );
-    assert!(
-        breed(&[&args[..], &["--threads", "2"]].concat(), &two)
-            .status
-            .success()
-    );
-    let (a, b) = (contents(&one), contents(&two));
-    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
-    for (k, v) in &a {
-        assert!(v == &b[k], "{k} differs between 1 and 2 threads");
-    }
+    let a = breed_on_one_and_two_threads(&args, &dir);
     // The run is one the steps take part in: residuals are stored, and the
     // generation after its last would breed them.
     let cp: leafmagic::breed::Checkpoint = serde_json::from_slice(&a["checkpoint.json"]).unwrap();
@@ -474,9 +454,5 @@ fn a_like_run_with_model_steps_is_reproducible() {
         "gen-002.csv",
         5,
     );
-    let c = contents(&killed);
-    assert_eq!(a.keys().collect::<Vec<_>>(), c.keys().collect::<Vec<_>>());
-    for (k, v) in &a {
-        assert!(v == &c[k], "{k} differs after kill and resume");
-    }
+    same_files(&dir.join("one"), &killed, "after kill and resume");
 }

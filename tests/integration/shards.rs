@@ -2,7 +2,7 @@
 //! `processes` and `slurm` executors. The oracle is always a local run with
 //! the same seed: every file but timing.csv must be the same bytes.
 
-use crate::breeding::contents;
+use crate::breeding::{contents, same_files};
 use leafmagic::breed::shard::{self, Split};
 use leafmagic::breed::{BreedSettings, Run};
 use leafmagic::motion::classify::MotionClass;
@@ -41,16 +41,8 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 fn assert_same_run(reference: &Path, other: &Path, what: &str) {
-    let (a, b) = (contents(reference), contents(other));
+    let a = same_files(reference, other, &format!("{what} against the local run"));
     assert!(a.contains_key("checkpoint.json"), "{:?}", a.keys());
-    assert_eq!(
-        a.keys().collect::<Vec<_>>(),
-        b.keys().collect::<Vec<_>>(),
-        "{what}: other files"
-    );
-    for (k, v) in &a {
-        assert!(v == &b[k], "{what}: {k} differs from the local run");
-    }
 }
 
 fn ok(out: &Output, what: &str) -> String {

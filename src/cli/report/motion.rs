@@ -125,12 +125,8 @@ pub fn described(
             "{:<18} {:>12} {:>7}  what it measures",
             "descriptor", "value", "scale"
         )?;
-        for (k, name) in describe::NAMES.iter().enumerate() {
-            let label = if describe::UNITS[k].is_empty() {
-                name.to_string()
-            } else {
-                format!("{name} ({})", describe::UNITS[k])
-            };
+        for k in 0..describe::NAMES.len() {
+            let label = describe::label(k);
             let v = d.values[k];
             let (cell, meaning) = if !d.measured[k] {
                 (
