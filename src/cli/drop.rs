@@ -42,9 +42,10 @@ pub fn drop(args: DropArgs) -> Result<()> {
             b.set_position(k);
         }
     };
-    let result = drop::drop_leaf_within(
+    let result = drop::drop_leaf_with_work(
         &model,
         &params,
+        &work,
         args.max_work,
         bar.is_some()
             .then_some(&mut tick as &mut dyn FnMut(u64, u64)),

@@ -103,10 +103,28 @@ pub fn drop_leaf_within(
     model: &Model,
     params: &DropParams,
     max_work: f64,
+    progress: Option<&mut dyn FnMut(u64, u64)>,
+) -> Result<DropResult, DropError> {
+    let work = drop_work(model, params)?;
+    drop_leaf_with_work(model, params, &work, max_work, progress)
+}
+
+/// [`drop_leaf_within`] with its [`Work`] already found by [`drop_work`]
+/// for the same model and parameters: a caller that shows the work first
+/// (`drop`) chooses the step once. Under the unsteady law choosing it
+/// measures the air's rates by many force evaluations
+/// ([`crate::physics::forces::unsteady::drag_rate`]).
+///
+/// # Errors
+/// As [`drop_leaf_within`].
+pub fn drop_leaf_with_work(
+    model: &Model,
+    params: &DropParams,
+    work: &Work,
+    max_work: f64,
     mut progress: Option<&mut dyn FnMut(u64, u64)>,
 ) -> Result<DropResult, DropError> {
     let frame_dt = 1.0 / FRAME_RATE;
-    let work = drop_work(model, params)?;
     work.check(model, frame_dt, max_work, Command::Drop)?;
     let dt = work.dt;
     let frames = (params.seconds * FRAME_RATE).round() as u64;

@@ -90,7 +90,9 @@ impl SurfaceGeometry {
     /// shape by the triangle's own deformation, so a rigid motion of the
     /// plate reads the same chord. Linear in a pseudo-angle
     /// t = Dₓ/(|Dₓ| + D_y) ∈ [−1, 1] (D_y ≥ 0), which is monotonic in the
-    /// angle: one division instead of an arctangent.
+    /// angle: one division instead of an arctangent. Only d's direction
+    /// counts: any positive multiple of (s₁, s₂) reads the same chord, so
+    /// callers need not normalise it.
     #[inline]
     pub fn chord(&self, s1: f64, s2: f64) -> f64 {
         let [e1x, e2x, e2y] = self.rest_edges;
