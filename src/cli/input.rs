@@ -2,7 +2,7 @@
 //! prototype, a recorded fall), with the checks and error contexts that
 //! several commands share.
 
-use anyhow::{Context, Result, bail};
+use anyhow::{Result, bail};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, Classification};
 use leafmagic::motion::describe::Descriptors;
@@ -14,11 +14,7 @@ use std::path::Path;
 
 /// A leaf file, or `a` / `b` for the embedded prototypes, and its model.
 pub fn leaf(arg: &str) -> Result<(LeafSpec, Model)> {
-    let spec = LeafSpec::load(arg)?;
-    let model = spec
-        .model()
-        .with_context(|| format!("{arg}: invalid leaf"))?;
-    Ok((spec, model))
+    Ok(LeafSpec::load_with_model(arg)?)
 }
 
 /// What `accuracy` and `check --stress` run: a named model and its initial

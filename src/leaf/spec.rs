@@ -568,32 +568,49 @@ pub struct LeafError {
 impl LeafSpec {
     /// Parses and validates TOML text; `source` names it in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<LeafSpec, LeafError> {
+        LeafSpec::from_toml_with_model(text, source).map(|(spec, _)| spec)
+    }
+
+    /// [`LeafSpec::from_toml`] and the model that validated it: building a
+    /// model measures every plate's chords (O(triangles²), most of a fine
+    /// plate's load), so a caller that needs both builds it once.
+    pub fn from_toml_with_model(text: &str, source: &str) -> Result<(LeafSpec, Model), LeafError> {
         let spec: LeafSpec = toml::from_str(text).map_err(|e| LeafError {
             file: source.to_string(),
             message: e.to_string().trim_end().to_string(),
         })?;
-        spec.model().map_err(|e| LeafError {
+        let model = spec.model().map_err(|e| LeafError {
             file: source.to_string(),
             message: e.to_string(),
         })?;
-        Ok(spec)
+        Ok((spec, model))
     }
 
     /// Reads a leaf file.
     pub fn read(path: &Path) -> Result<LeafSpec, LeafError> {
+        LeafSpec::read_with_model(path).map(|(spec, _)| spec)
+    }
+
+    /// Reads a leaf file, with its model ([`LeafSpec::from_toml_with_model`]).
+    pub fn read_with_model(path: &Path) -> Result<(LeafSpec, Model), LeafError> {
         let text = std::fs::read_to_string(path).map_err(|e| LeafError {
             file: path.display().to_string(),
             message: format!("cannot read: {e}"),
         })?;
-        LeafSpec::from_toml(&text, &path.display().to_string())
+        LeafSpec::from_toml_with_model(&text, &path.display().to_string())
     }
 
     /// `a` or `b` for the embedded prototypes, otherwise a file path.
     pub fn load(name_or_path: &str) -> Result<LeafSpec, LeafError> {
+        LeafSpec::load_with_model(name_or_path).map(|(spec, _)| spec)
+    }
+
+    /// [`LeafSpec::load`] with the leaf's model.
+    pub fn load_with_model(name_or_path: &str) -> Result<(LeafSpec, Model), LeafError> {
         match name_or_path {
-            "a" | "A" => LeafSpec::from_toml(PROTOTYPE_A, "prototype a"),
-            "b" | "B" => LeafSpec::from_toml(PROTOTYPE_B, "prototype b"),
-            path => LeafSpec::read(Path::new(path)),
+            "a" | "A" => LeafSpec::from_toml_with_model(PROTOTYPE_A, "prototype a"),
+            "b" | "B" => LeafSpec::from_toml_with_model(PROTOTYPE_B, "prototype b"),
+            path => LeafSpec::read_with_model(Path::new(path)),
         }
     }
 

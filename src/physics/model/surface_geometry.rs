@@ -292,6 +292,7 @@ fn measure_plate(x: &[V3], corners: &[[usize; 3]], plate: &[usize], out: &mut [S
     }
 
     // Rest tangent bases and chords.
+    let mut spans = Vec::new();
     for (slot, &t) in plate.iter().enumerate() {
         let [a, b, c] = corners[t];
         let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
@@ -300,17 +301,19 @@ fn measure_plate(x: &[V3], corners: &[[usize; 3]], plate: &[usize], out: &mut [S
         let t2 = n.cross(&t1);
         out[t].rest_edges = [e1.norm(), e2.dot(&t1), e2.dot(&t2)];
         let centroid = (tri2[slot][0] + tri2[slot][1] + tri2[slot][2]) / 3.0;
-        for j in 0..=CHORD_SAMPLES {
-            let d = sample_direction(j % CHORD_SAMPLES);
+        for j in 0..CHORD_SAMPLES {
+            let d = sample_direction(j);
             let dir3 = t1 * d.x + t2 * d.y;
             let proj = V2::new(dir3.dot(&u1), dir3.dot(&u2));
             let len = proj.norm();
             out[t].chords[j] = if len < 1e-9 {
                 0.0
             } else {
-                chord_through(centroid, proj / len, &tri2) / len
+                chord_through(centroid, proj / len, &tri2, &mut spans) / len
             };
         }
+        // The last sample is the first direction again.
+        out[t].chords[CHORD_SAMPLES] = out[t].chords[0];
     }
 }
 
@@ -333,9 +336,11 @@ fn sub_centroids(s: usize) -> Vec<[f64; 3]> {
     out
 }
 
-/// Length of the stretch of the line p + s e (e unit) on the plate around s = 0.
-fn chord_through(p: V2, e: V2, tris: &[[V2; 3]]) -> f64 {
-    let mut spans: Vec<(f64, f64)> = tris.iter().filter_map(|&t| clip(p, e, t)).collect();
+/// Length of the stretch of the line p + s e (e unit) on the plate around
+/// s = 0 (`spans`: scratch, reused across calls).
+fn chord_through(p: V2, e: V2, tris: &[[V2; 3]], spans: &mut Vec<(f64, f64)>) -> f64 {
+    spans.clear();
+    spans.extend(tris.iter().filter_map(|&t| clip(p, e, t)));
     spans.sort_by(|a, b| a.0.total_cmp(&b.0));
     let scale = spans
         .iter()
@@ -350,7 +355,7 @@ fn chord_through(p: V2, e: V2, tris: &[[V2; 3]]) -> f64 {
             *best = span;
         }
     };
-    for s in spans {
+    for &s in spans.iter() {
         current = match current {
             Some((lo, hi)) if s.0 <= hi + tol => Some((lo, hi.max(s.1))),
             Some(done) => {
