@@ -134,6 +134,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
             "power_iteration_converged": est.power_converged,
             "zeta": est.zeta,
             "drag_rate": est.drag_rate,
+            "tumbling_rate": est.tumbling_rate,
             "drag_time_constant": est.drag_time_constant(),
             "stiffest_spring": est.stiffest_spring,
             "lightest_particle": est.lightest_particle,

@@ -16,6 +16,15 @@ type V3 = Vector3<f64>;
 /// is made at the rest shape and a deforming leaf measured 2–3 % stiffer.
 pub const AUTO_SAFETY: f64 = 0.7;
 
+/// Largest turn of a tumbling plate per step at the stable limit, rad: the
+/// step is at most this over [`StabilityEstimate::tumbling_rate`], so
+/// `--dt auto` turns a plate at most [`AUTO_SAFETY`] × 0.2 = 0.14 rad per
+/// step at that bound, and 0.03–0.06 rad at the rates real and simulated
+/// plates reach (docs/real-falls.md, "The step of a tumbling plate": at
+/// 0.18 rad per step a 3.2 cm square tumbled 12 % too fast, and a 5 mm
+/// strip of 280 g/m² card diverged at 0.23).
+pub const MAX_TURN_PER_STEP: f64 = 0.2;
+
 /// Mass ratios above this make a network ill-conditioned (docs/numerics.md,
 /// "Conditioning warnings").
 pub const WARN_MASS_RATIO: f64 = 1e4;
@@ -53,6 +62,14 @@ pub struct StabilityEstimate {
     /// law but for its added mass, which the implicit matrix holds), 1/s;
     /// 0 otherwise.
     pub explicit_drag_rate: f64,
+    /// Fastest rate at which a plate of the model can tumble under the
+    /// unsteady law, 1/s (0 under the other laws, which do not turn a
+    /// plate by its own rotation):
+    /// [`crate::physics::forces::unsteady::tumbling_rate`]. An explicit step
+    /// evaluates the rotational lift, the Munk moment and the damping at
+    /// the start of a turn of Ω h radians, so its error grows as (Ω h)²;
+    /// [`MAX_TURN_PER_STEP`] bounds it.
+    pub tumbling_rate: f64,
     /// The spring with the largest k (1/mᵢ + 1/mⱼ).
     pub stiffest_spring: Option<usize>,
     /// The lightest free particle.
@@ -73,6 +90,7 @@ impl StabilityEstimate {
             self.omega_upper,
             self.mode_damping_rate,
             self.drag_rate,
+            self.tumbling_rate,
         ]
         .iter()
         .all(|v| v.is_finite())
@@ -90,16 +108,21 @@ impl StabilityEstimate {
     /// so that law bounds it as it bounds forward Euler); `Some(0)`
     /// means unstable at any step (forward Euler on an undamped spring).
     pub fn dt_max(&self, integrator: Integrator) -> Option<f64> {
-        if integrator == Integrator::Implicit {
-            return largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate);
-        }
-        let spring =
-            largest_stable_step(integrator, self.omega_max.powi(2), self.mode_damping_rate);
-        let drag = largest_stable_step(integrator, 0.0, self.drag_rate);
-        match (spring, drag) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        let limit = if integrator == Integrator::Implicit {
+            largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate)
+        } else {
+            let spring =
+                largest_stable_step(integrator, self.omega_max.powi(2), self.mode_damping_rate);
+            let drag = largest_stable_step(integrator, 0.0, self.drag_rate);
+            min_step(spring, drag)
+        };
+        min_step(limit, self.tumbling_step())
+    }
+
+    /// The step [`MAX_TURN_PER_STEP`] allows at [`Self::tumbling_rate`], s
+    /// (`None` when nothing tumbles).
+    pub fn tumbling_step(&self) -> Option<f64> {
+        (self.tumbling_rate > 0.0).then(|| MAX_TURN_PER_STEP / self.tumbling_rate)
     }
 
     /// The step `--dt auto` takes: [`AUTO_SAFETY`] × dt_max, made an integer
@@ -131,6 +154,14 @@ impl StabilityEstimate {
                 Some(frame_dt / per_frame)
             }
         }
+    }
+}
+
+/// The smaller of two limits, `None` meaning unlimited.
+fn min_step(a: Option<f64>, b: Option<f64>) -> Option<f64> {
+    match (a, b) {
+        (Some(a), Some(b)) => Some(a.min(b)),
+        (a, b) => a.or(b),
     }
 }
 
@@ -343,6 +374,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         zeta,
         drag_rate: air.rate_max.max(quadratic_rate),
         explicit_drag_rate: quadratic_rate,
+        tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
         stiffest_spring: stiffest,
         lightest_particle: lightest,
         mass_ratio,

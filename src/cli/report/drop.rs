@@ -105,6 +105,14 @@ pub fn stability(leaf: &str, model: &Model, est: &StabilityEstimate, steps: &[St
             est.drag_time_constant(),
             est.drag_rate
         )?;
+        if let Some(step) = est.tumbling_step() {
+            writeln!(
+                out,
+                "tumbling           Ω ≤ {:.1} rad/s (2 U_face / narrowest plate): dt ≤ {step:.4e} s at {} rad per step",
+                est.tumbling_rate,
+                leafmagic::physics::stability::MAX_TURN_PER_STEP
+            )?;
+        }
         writeln!(out)?;
         // Drops interpolate their frames and take the auto step as it is;
         // scenes step onto every frame and take the largest divisor below it.

@@ -73,11 +73,11 @@
 //! - C_D∥ = `cd_parallel` + skin friction: laminar Blasius friction,
 //!   1.328/√Re on each face, Re = |u∥| c∥/ν on the plate's chord c∥ along
 //!   the in-plane flow (Schlichting, *Boundary-Layer Theory*, ch. 7), plus
-//!   `cd_parallel`, APW's edge-on C_D(0) = 0.4. For paper a thousandth as
+//!   `cd_parallel` (default 0.6; APW's edge-on C_D(0) is 0.4). For paper a thousandth as
 //!   thick as it is wide this is not edge thickness but what the 2-D law
 //!   leaves out of a finite plate's separated flow; without it the real
 //!   squares glide up to 6 times too far (docs/real-falls.md, "The defaults");
-//! - rotational circulation Γ = ½ C_R c² ω (APW: C_R = π; default 2.0,
+//! - rotational circulation Γ = ½ C_R c² ω (APW: C_R = π; default 1.5,
 //!   fitted with the other defaults to the real squares), c the plate's
 //!   chord through the triangle across the rotation axis and ω = n × ṅ the
 //!   triangle's in-plane angular velocity: F = ½ ρ C_R c A (u × ω) at the
@@ -95,12 +95,13 @@
 //!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
-//! leaf's own geometry. The defaults C_D⊥ = 1.6, C_D∥ = 0.4, C_T = 0.8,
-//! C_R = 2.0 and μ₁ = 0.1 were fitted as one set to the real paper squares
-//! (mean of two seeds over 108 candidate sets) and checked on what the fit
-//! did not see: ten other seeds of the squares, the regimes of disks
-//! against Field et al. 1997 and the strips' scaling law
-//! (docs/real-falls.md, "The defaults").
+//! leaf's own geometry. The defaults C_D⊥ = 2.4, C_D∥ = 0.6, C_T = 1.2,
+//! C_R = 1.5 and μ₁ = 0.1 were fitted as one set to the real paper squares
+//! (mean of two seeds over 144 candidate sets, every fall at a step that
+//! bounds a tumbling plate's turn) and checked on what the fit did not
+//! see: ten other seeds of the squares, the regimes of disks against Field
+//! et al. 1997 and the strips' scaling law (docs/real-falls.md, "The
+//! defaults").
 
 use super::surfaces::surface;
 use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
@@ -534,6 +535,48 @@ fn triangle_bounds(
     }
 }
 
+/// Fastest rate at which a plate of `model` can tumble, 1/s (0 under the
+/// other laws): Ω = 2 U / c with U the [`face_on_speed`] and c the
+/// narrowest plate's width (the largest, over its triangles, of the
+/// shortest chord through a triangle's centroid: a strip's width, a
+/// square's side, a disk's diameter). A tumbling plate's edges move at
+/// about its fall speed or slower (Ω c/2 ≲ U; Mahadevan, Ryu & Samuel
+/// 1999): measured, real and simulated squares turn at 0.4–0.5 of it and
+/// a narrow heavy strip at 0.1 (docs/real-falls.md), so this is a bound,
+/// not an estimate.
+pub fn tumbling_rate(model: &Model) -> f64 {
+    let AeroLaw::Unsteady(law) = &model.aero else {
+        return 0.0;
+    };
+    let plates = model
+        .surfaces
+        .iter()
+        .map(|g| g.plate + 1)
+        .max()
+        .unwrap_or(0);
+    let mut width = vec![0.0f64; plates];
+    for g in &model.surfaces {
+        let shortest = g
+            .chords
+            .iter()
+            .copied()
+            .filter(|&c| c > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        if shortest.is_finite() {
+            width[g.plate] = width[g.plate].max(shortest);
+        }
+    }
+    let narrowest = width
+        .into_iter()
+        .filter(|&w| w > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if narrowest.is_finite() {
+        2.0 * face_on_speed(law, model) / narrowest
+    } else {
+        0.0
+    }
+}
+
 /// Fastest face-on fall of `model` under `law`, M g = ½ ρ A C_D⊥ V², m/s:
 /// what bounds the normal part of the air's relative velocity.
 pub fn face_on_speed(law: &UnsteadyAero, model: &Model) -> f64 {
@@ -703,18 +746,16 @@ pub fn free_particle_rate(
     }
     let centre = members.iter().map(|&i| x[i]).sum::<V3>() / members.len() as f64;
     let mut cov = Matrix3::zeros();
-    let mut chord: f64 = 0.0;
     for &i in &members {
         let r = x[i] - centre;
         cov += r * r.transpose();
-        chord = chord.max(2.0 * r.norm());
     }
     let eig = cov.symmetric_eigen();
     let mut order = [0usize, 1, 2];
     // Largest spread first: the normal (least spread) is axes[2].
     order.sort_by(|&p, &q| eig.eigenvalues[q].total_cmp(&eig.eigenvalues[p]));
     let axes: [V3; 3] = order.map(|k| eig.eigenvectors.column(k).into());
-    let omega_ref = 2.0 * v_ref / chord.max(f64::MIN_POSITIVE);
+    let omega_ref = tumbling_rates(&axes, members.iter().map(|&i| x[i]), v_ref);
     let inverse: Vec<Matrix3<f64>> = (0..n)
         .map(|i| {
             (Matrix3::identity() * model.mass[i] + tensor[i])
@@ -777,11 +818,36 @@ pub fn free_particle_rate(
     worst
 }
 
+/// The rates 2 v_ref / c at which a plate tumbling about `axes[0]` and
+/// about `axes[1]` turns, c the extent of `points` across that axis (along
+/// the other in-plane axis): a tumbling plate's edges move at about its
+/// fall speed (Ω ≈ 2U/c; Mahadevan, Ryu & Samuel 1999), so a strip turns
+/// about its long axis at 2 v_ref over its width, not over its length.
+fn tumbling_rates(
+    axes: &[V3; 3],
+    points: impl Iterator<Item = V3> + Clone,
+    v_ref: f64,
+) -> [f64; 2] {
+    let extent = |a: &V3| {
+        let (lo, hi) = points
+            .clone()
+            .map(|p| p.dot(a))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), d| {
+                (lo.min(d), hi.max(d))
+            });
+        (hi - lo).max(f64::MIN_POSITIVE)
+    };
+    [
+        2.0 * v_ref / extent(&axes[1]),
+        2.0 * v_ref / extent(&axes[0]),
+    ]
+}
+
 /// The relative motions at which the measured rates are taken: a velocity
 /// of speed q_ref or v_ref along each of [`RATE_DIRECTIONS`] (in the frame
 /// `axes`, its normal part along `axes[2]` capped at q_ref, as in a fall),
 /// each without rotation and with rate `omega_ref` about either in-plane axis.
-fn sampled_motions(axes: &[V3; 3], v_ref: f64, q_ref: f64, omega_ref: f64) -> Vec<(V3, V3)> {
+fn sampled_motions(axes: &[V3; 3], v_ref: f64, q_ref: f64, omega_ref: [f64; 2]) -> Vec<(V3, V3)> {
     let to_world = |d: [f64; 3]| axes[0] * d[0] + axes[1] * d[1] + axes[2] * d[2];
     let mut motions = Vec::with_capacity(RATE_DIRECTIONS.len() * 6);
     for d in RATE_DIRECTIONS {
@@ -792,7 +858,7 @@ fn sampled_motions(axes: &[V3; 3], v_ref: f64, q_ref: f64, omega_ref: f64) -> Ve
             if normal.abs() > q_ref {
                 vel -= axes[2] * (normal - q_ref * normal.signum());
             }
-            for spin in [V3::zeros(), axes[0] * omega_ref, axes[1] * omega_ref] {
+            for spin in [V3::zeros(), axes[0] * omega_ref[0], axes[1] * omega_ref[1]] {
                 motions.push((vel, spin));
             }
         }
@@ -840,13 +906,7 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
     let mut order = [0usize, 1, 2];
     order.sort_by(|&p, &q| eig.eigenvalues[p].total_cmp(&eig.eigenvalues[q]));
     let axes: [V3; 3] = order.map(|k| eig.eigenvectors.column(k).into());
-    let mut chord: f64 = 0.0;
-    for &i in &body.members {
-        for &j in &body.members {
-            chord = chord.max((x[i] - x[j]).norm());
-        }
-    }
-    let omega_ref = 2.0 * v_ref / chord.max(f64::MIN_POSITIVE);
+    let omega_ref = tumbling_rates(&axes, body.members.iter().map(|&i| x[i]), v_ref);
     let n = model.len();
     let mut v = vec![V3::zeros(); n];
     let mut f = vec![V3::zeros(); n];
@@ -885,7 +945,7 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
     for (vel, spin) in sampled_motions(&axes, v_ref, q_ref, omega_ref) {
         let mut jac = nalgebra::Matrix6::<f64>::zeros();
         let hv = 1e-6 * v_ref.max(1e-9);
-        let hw = 1e-6 * omega_ref.max(1e-9);
+        let hw = 1e-6 * omega_ref[0].max(omega_ref[1]).max(1e-9);
         // Forward differences: 7 loads per state instead of central
         // differences' 12, for a relative error of about 1e-6.
         let (f0, t0) = load(vel, spin, &mut added);
