@@ -107,6 +107,8 @@ impl StabilityEstimate {
     /// stiff at all; the implicit step treats the quadratic law explicitly,
     /// so that law bounds it as it bounds forward Euler); `Some(0)`
     /// means unstable at any step (forward Euler on an undamped spring).
+    /// Under the unsteady law every integrator's limit is also at most
+    /// [`Self::tumbling_step`].
     pub fn dt_max(&self, integrator: Integrator) -> Option<f64> {
         let limit = if integrator == Integrator::Implicit {
             largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate)

@@ -415,6 +415,50 @@ fn unsteady_leaf_files_read_defaults_and_refuse_bad_values() {
     }
 }
 
+/// The tumbling-rate bound of the step is 2 U_face / c in closed form: a
+/// square's c is its side and a strip's its width, not its length or
+/// diagonal (U_face = √(2σg/(ρ C_D⊥)), the face-on terminal speed); the
+/// linear law has none.
+#[test]
+fn the_tumbling_bound_is_twice_the_face_on_speed_over_the_width() {
+    use leafmagic::physics::forces::unsteady::tumbling_rate;
+    use leafmagic::physics::stability;
+    for (shape, width, aspect) in [
+        (PlateShape::Square, 0.04, 1.0),
+        (PlateShape::Rectangle, 0.01, 5.0),
+    ] {
+        let model = plate(shape, width, aspect, 0.07, AeroSpec::unsteady())
+            .unwrap()
+            .model()
+            .unwrap();
+        let law = law(&model);
+        let u = (2.0 * 0.07 * model.gravity.norm() / (law.air_density * law.cd_normal)).sqrt();
+        let exact = 2.0 * u / width;
+        let rate = tumbling_rate(&model);
+        println!("{shape:?} {width} m x{aspect}: {rate:.3} 1/s, 2U/w {exact:.3}");
+        // c is the shortest of 16 sampled chord directions: at most a
+        // hair above the width (0.3 % on the strip, exact on the square).
+        assert!((rate / exact - 1.0).abs() < 0.01, "{rate} vs {exact}");
+        let est = stability::estimate(&model);
+        assert_eq!(est.tumbling_rate, rate);
+        let step = stability::MAX_TURN_PER_STEP / rate;
+        for integrator in leafmagic::physics::params::Integrator::ALL {
+            assert!(est.dt_max(integrator).unwrap() <= step);
+        }
+    }
+    let linear = plate(
+        PlateShape::Square,
+        0.04,
+        1.0,
+        0.07,
+        AeroSpec::linear(0.47, 0.047),
+    )
+    .unwrap()
+    .model()
+    .unwrap();
+    assert_eq!(tumbling_rate(&linear), 0.0);
+}
+
 /// Let go exactly flat, a plate falls flat and reaches the face-on terminal
 /// speed √(2σg/(ρ C_D⊥)) at `--dt auto` — also when it is several times
 /// lighter than its added mass (10 g/m²: m_a ≈ 2.6 M), where lagged added

@@ -73,11 +73,11 @@
 //! - C_D∥ = `cd_parallel` + skin friction: laminar Blasius friction,
 //!   1.328/√Re on each face, Re = |u∥| c∥/ν on the plate's chord c∥ along
 //!   the in-plane flow (Schlichting, *Boundary-Layer Theory*, ch. 7), plus
-//!   `cd_parallel` (default 0.6; APW's edge-on C_D(0) is 0.4). For paper a thousandth as
+//!   `cd_parallel` (default 0.7; APW's edge-on C_D(0) is 0.4). For paper a thousandth as
 //!   thick as it is wide this is not edge thickness but what the 2-D law
 //!   leaves out of a finite plate's separated flow; without it the real
 //!   squares glide up to 6 times too far (docs/real-falls.md, "The defaults");
-//! - rotational circulation Γ = ½ C_R c² ω (APW: C_R = π; default 1.5,
+//! - rotational circulation Γ = ½ C_R c² ω (APW: C_R = π; default 1.75,
 //!   fitted with the other defaults to the real squares), c the plate's
 //!   chord through the triangle across the rotation axis and ω = n × ṅ the
 //!   triangle's in-plane angular velocity: F = ½ ρ C_R c A (u × ω) at the
@@ -95,9 +95,9 @@
 //!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
-//! leaf's own geometry. The defaults C_D⊥ = 2.4, C_D∥ = 0.6, C_T = 1.2,
-//! C_R = 1.5 and μ₁ = 0.1 were fitted as one set to the real paper squares
-//! (mean of two seeds over 144 candidate sets, every fall at a step that
+//! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.7, C_T = 1.2,
+//! C_R = 1.75 and μ₁ = 0.1 were fitted as one set to the real paper squares
+//! (mean of two seeds over 144 candidate sets and 108 around the best, every fall at a step that
 //! bounds a tumbling plate's turn) and checked on what the fit did not
 //! see: ten other seeds of the squares, the regimes of disks against Field
 //! et al. 1997 and the strips' scaling law (docs/real-falls.md, "The

@@ -247,26 +247,26 @@ pub struct UnsteadyAero {
     pub solid_density: f64,
 }
 
-/// Default C_D face-on: APW 2005's 2-D A + B = 2.4. Fitted, with
+/// Default C_D face-on: 2.6, near APW 2005's 2-D A + B = 2.4. Fitted, with
 /// [`UNSTEADY_CD_PARALLEL`], [`UNSTEADY_TRANSLATIONAL_LIFT`],
 /// [`UNSTEADY_ROTATIONAL_LIFT`] and [`UNSTEADY_ROTATIONAL_DAMPING`], as one
 /// set to the real paper squares at steps that bound a tumbling plate's
 /// turn ([`crate::physics::stability::MAX_TURN_PER_STEP`]) and checked on
 /// ten seeds the fit did not see, the disks against Field et al. 1997 and
 /// the strips' scaling law: docs/real-falls.md, "The defaults".
-pub const UNSTEADY_CD_NORMAL: f64 = 2.4;
-/// Default form drag edge-on beyond skin friction: 0.6 (APW 2005's C_D(0)
+pub const UNSTEADY_CD_NORMAL: f64 = 2.6;
+/// Default form drag edge-on beyond skin friction: 0.7 (APW 2005's C_D(0)
 /// is 0.4). A paper sheet is far thinner than APW's plates, so this is not
 /// edge thickness: it stands for what the 2-D law leaves out at the
 /// Reynolds numbers of falling paper (10³–10⁴), the separated flow round
 /// the edges of a plate of finite span; set to 0 it lets squares glide up
 /// to 6 times too far (docs/real-falls.md).
-pub const UNSTEADY_CD_PARALLEL: f64 = 0.6;
-/// Default C_T: at the law's bound C_D⊥/2, APW 2005's 1.2.
-pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 0.5 * UNSTEADY_CD_NORMAL;
-/// Default C_R: 1.5, under APW 2005's π (thin-aerofoil theory), before
+pub const UNSTEADY_CD_PARALLEL: f64 = 0.7;
+/// Default C_T: APW 2005's 1.2, under the law's bound C_D⊥/2 = 1.3.
+pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 1.2;
+/// Default C_R: 1.75, under APW 2005's π (thin-aerofoil theory), before
 /// the finite span's lifting-line factor.
-pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.5;
+pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.75;
 /// Default μ₁: 0.1, half APW 2005's 0.2.
 pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.1;
 /// Default μ₂: none (APW's 0.2 stops the real squares' tumbling glide; see
