@@ -251,13 +251,7 @@ fn plate_motions(
     if law.rotation_drag >= 1.0 {
         return;
     }
-    let count = model
-        .surfaces
-        .iter()
-        .map(|g| g.plate + 1)
-        .max()
-        .unwrap_or(0);
-    plates.resize(count, PlateMotion::default());
+    plates.resize(plate_count(model), PlateMotion::default());
     for (tm, geom) in triangles.iter().zip(&model.surfaces) {
         let Some(tm) = tm else {
             continue;
@@ -271,6 +265,16 @@ fn plate_motions(
         p.centre /= p.area;
         p.omega /= p.area;
     }
+}
+
+/// How many plates (triangles joined through shared edges) `model` has.
+fn plate_count(model: &Model) -> usize {
+    model
+        .surfaces
+        .iter()
+        .map(|g| g.plate + 1)
+        .max()
+        .unwrap_or(0)
 }
 
 /// The per-triangle terms of [`unsteady_forces`].
@@ -548,13 +552,7 @@ pub fn tumbling_rate(model: &Model) -> f64 {
     let AeroLaw::Unsteady(law) = &model.aero else {
         return 0.0;
     };
-    let plates = model
-        .surfaces
-        .iter()
-        .map(|g| g.plate + 1)
-        .max()
-        .unwrap_or(0);
-    let mut width = vec![0.0f64; plates];
+    let mut width = vec![0.0f64; plate_count(model)];
     for g in &model.surfaces {
         let shortest = g
             .chords
