@@ -722,7 +722,8 @@ const POWER_ITERATIONS: usize = 24;
 /// step's, against a margin of 1.5; central differences cost twice), for the relative velocities of
 /// [`rigid_body_rate`] (speeds q_ref and v_ref along nine directions of the
 /// leaf's best-fit frame, with and without a rotation of rate
-/// 2 v_ref / chord about each in-plane axis). The corner-by-corner bound
+/// 2 v_ref / (its extent across that axis) about each in-plane axis,
+/// `tumbling_rates`). The corner-by-corner bound
 /// of [`drag_rate`] lets every corner move independently at v_ref and is
 /// far above what a leaf's motion reaches (60× on prototype A); this is a
 /// measurement, not a bound, which `--dt auto` keeps with
@@ -885,7 +886,8 @@ const RATE_DIRECTIONS: [[f64; 3]; 9] = [
 /// measured by forward differences at the rest shape for relative speeds
 /// |V| ∈ {q_ref, v_ref} along nine directions (the normal part of
 /// the larger capped at q_ref, as in a fall: see [`drag_rate`]), each with
-/// and without a rotation of rate 2 v_ref / chord about each in-plane axis.
+/// and without a rotation of rate 2 v_ref / (the body's extent across that
+/// axis) about each in-plane axis (`tumbling_rates`).
 /// A measurement at sampled states, not a bound; `--dt auto` keeps
 /// [`crate::physics::stability::AUTO_SAFETY`] below it and a test checks
 /// drops at the auto step against half of it.
