@@ -346,7 +346,7 @@ fn motion_target(args: &BreedArgs, prototype: &str) -> Result<Option<MotionTarge
     if let Some(path) = &args.like {
         let size = match args.size {
             Some(s) => s,
-            None => LeafSpec::load(prototype)?.model()?.chord(),
+            None => LeafSpec::load_with_model(prototype)?.1.chord(),
         };
         let example = input::describe_file(path, size, args.up)?;
         return Ok(Some(MotionTarget::like(

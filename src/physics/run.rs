@@ -357,8 +357,8 @@ pub enum StepReason {
     /// The output frame (nothing stiff bounds the step below it).
     Frame,
     /// The auto step, bounded by stability: the stiffest spring and the
-    /// lightest particle, and which of the spring mode and the drag rate
-    /// bounds it.
+    /// lightest particle, and which limit of
+    /// [`stability::StabilityEstimate::dt_max`] bounds it.
     Stability {
         /// The stiffest spring: index, its two particles, k (N/m).
         spring: Option<(usize, usize, usize, f64)>,
@@ -368,9 +368,23 @@ pub enum StepReason {
         lightest: (usize, f64),
         /// The fastest drag rate γ, 1/s.
         drag_rate: f64,
-        /// Whether the drag rate, not the spring mode, bounds the step.
-        drag_bound: bool,
+        /// The tumbling-rate bound Ω, 1/s (0 but under the unsteady law).
+        tumbling_rate: f64,
+        /// Which limit bounds the step.
+        bound: StepBound,
     },
+}
+
+/// Which limit of [`stability::StabilityEstimate::dt_max`] sets an auto step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepBound {
+    /// The stiffest spring mode.
+    Spring,
+    /// The fastest drag rate.
+    Drag,
+    /// The turn of a tumbling plate per step
+    /// ([`stability::MAX_TURN_PER_STEP`]).
+    Tumbling,
 }
 
 impl Work {
@@ -432,17 +446,23 @@ impl Work {
                 estimate.mode_damping_rate,
             );
             let by_drag = stability::largest_stable_step(integrator, 0.0, estimate.drag_rate);
-            let drag_bound = match (by_spring, by_drag) {
-                (Some(a), Some(b)) => b < a,
-                (None, Some(_)) => true,
-                _ => false,
-            };
+            // The smallest limit, the spring's on a tie (as before).
+            let bound = [
+                (StepBound::Spring, by_spring),
+                (StepBound::Drag, by_drag),
+                (StepBound::Tumbling, estimate.tumbling_step()),
+            ]
+            .into_iter()
+            .filter_map(|(b, h)| h.map(|h| (b, h)))
+            .reduce(|best, next| if next.1 < best.1 { next } else { best })
+            .map_or(StepBound::Spring, |(b, _)| b);
             self.reason = StepReason::Stability {
                 spring,
                 omega_max: estimate.omega_max,
                 lightest,
                 drag_rate: estimate.drag_rate,
-                drag_bound,
+                tumbling_rate: estimate.tumbling_rate,
+                bound,
             };
         }
         self.implicit_steps = estimate
@@ -492,7 +512,8 @@ impl Work {
                 omega_max,
                 lightest,
                 drag_rate,
-                drag_bound,
+                tumbling_rate,
+                bound,
             } => {
                 let spring = spring.map_or(String::new(), |(k, i, j, stiffness)| {
                     format!(
@@ -505,10 +526,16 @@ impl Work {
                     lightest.0,
                     quantity(lightest.1)
                 );
-                let bound = if *drag_bound {
-                    format!("the drag rate γ = {} 1/s", quantity(*drag_rate))
-                } else {
-                    format!("the stiffest mode ω_max = {} rad/s", quantity(*omega_max))
+                let bound = match bound {
+                    StepBound::Drag => format!("the drag rate γ = {} 1/s", quantity(*drag_rate)),
+                    StepBound::Spring => {
+                        format!("the stiffest mode ω_max = {} rad/s", quantity(*omega_max))
+                    }
+                    StepBound::Tumbling => format!(
+                        "the tumbling bound Ω = {} rad/s ({} rad per step)",
+                        quantity(*tumbling_rate),
+                        stability::MAX_TURN_PER_STEP
+                    ),
                 };
                 let parts: Vec<String> = [spring, light]
                     .into_iter()
@@ -937,6 +964,33 @@ mod tests {
         assert_eq!(quantity(2400.0), "2400");
         assert_eq!(quantity(1e8), "1.000e8");
         assert_eq!(quantity(7.217e-6), "7.217e-6");
+    }
+
+    /// A narrow heavy strip under the unsteady law steps at its tumbling
+    /// bound, and its work says so (not the drag rate or a spring).
+    #[test]
+    fn a_tumbling_strips_step_is_explained_by_the_tumbling_bound() {
+        use crate::leaf::AeroSpec;
+        use crate::leaf::plates::{PlateShape, plate};
+        let model = plate(
+            PlateShape::Rectangle,
+            0.005,
+            5.0,
+            0.28,
+            AeroSpec::unsteady(),
+        )
+        .unwrap()
+        .model()
+        .unwrap();
+        let frame_dt = 1.0 / 240.0;
+        let dt = resolve_step(&model, Integrator::Verlet, TimeStep::Auto, frame_dt).unwrap();
+        let work = Work::of(&model, Integrator::Verlet, dt, true, 10.0, frame_dt)
+            .explained(&model, frame_dt);
+        match &work.reason {
+            StepReason::Stability { bound, .. } => assert_eq!(*bound, StepBound::Tumbling),
+            other => panic!("{other:?}"),
+        }
+        assert!(work.why().contains("tumbling bound"), "{}", work.why());
     }
 
     /// The work of a stiff leaf is explained by its stiffest spring, and the

@@ -19,7 +19,7 @@ pub const AUTO_SAFETY: f64 = 0.7;
 /// Largest turn of a tumbling plate per step at the stable limit, rad: the
 /// step is at most this over [`StabilityEstimate::tumbling_rate`], so
 /// `--dt auto` turns a plate at most [`AUTO_SAFETY`] × 0.2 = 0.14 rad per
-/// step at that bound, and 0.03–0.06 rad at the rates real and simulated
+/// step at that bound, and 0.02–0.09 rad at the rates real and simulated
 /// plates reach (docs/real-falls.md, "The step of a tumbling plate": at
 /// 0.18 rad per step a 3.2 cm square tumbled 12 % too fast, and a 5 mm
 /// strip of 280 g/m² card diverged at 0.23).

@@ -65,7 +65,7 @@ fn the_real_table_is_read_from_the_tracked_squares() {
 /// (9 cm: 0.00, real 0.04), descent within 10 % of real in every bin (the
 /// issue's per-bin target; 0.92–1.06), the tumbling rate within 25 %
 /// (0.78–1.03: the large squares turn too slowly) and the drift within a
-/// factor 1.5 in every bin but the smallest (0.96–1.07; the 3.2 cm squares
+/// factor 1.5 in every bin but the smallest (0.89–1.07; the 3.2 cm squares
 /// glide 0.41 of the real drift).
 #[test]
 fn the_simulated_experiment_holds_what_it_reaches() {
