@@ -109,7 +109,9 @@ impl SurfaceGeometry {
         // pos ≥ 0 (|dx| ≤ norm), so truncation is its floor, to the bit,
         // without the call to libm's floor that the baseline x86-64 target
         // (no SSE4.1 `roundsd`) makes (3 % of an unsteady-law drop, perf).
-        let j = (pos as usize).min(CHORD_SAMPLES - 1);
+        // Through i32: a signed conversion is one instruction on x86-64
+        // (cvttsd2si), an unsigned one a dozen; pos ≤ CHORD_SAMPLES fits.
+        let j = (pos as i32 as usize).min(CHORD_SAMPLES - 1);
         let f = pos - j as f64;
         self.chords[j] * (1.0 - f) + self.chords[j + 1] * f
     }
