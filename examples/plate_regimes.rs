@@ -3,15 +3,18 @@
 //! I*_disk = π σ / (64 ρ d) (Field et al. 1997: flutter below about 0.01,
 //! chaos between, tumbling above about 0.04; docs/falling-plates.md), each
 //! let go flat (5°, 2°) and at 30°, 8 s; then strips of aspect 5 over
-//! areal density ×8 and width ×4, let go at 60° about the long axis, with
-//! the fit Ω ∝ σ^p w^q over those that tumble (Mahadevan, Ryu & Samuel
-//! 1999: p = 1/2, q = −1). Coefficients as in a leaf file, `KEY=VALUE`.
+//! areal density ×8 and width ×4, let go at 60° about the long axis, each
+//! falling 8 s and over two equal scaled durations, with the fit
+//! Ω ∝ σ^p w^q over those that tumble (Mahadevan, Ryu & Samuel 1999:
+//! p = 1/2, q = −1; docs/real-falls.md, "The strips' exponents and the
+//! protocol"). Coefficients as in a leaf file, `KEY=VALUE`.
 //!
 //! cargo run --release --example plate_regimes [-- KEY=VALUE ...]
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::classify::classify;
+use leafmagic::physics::model::STANDARD_GRAVITY as G;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rayon::prelude::*;
 
@@ -32,6 +35,7 @@ fn fall(
     aspect: f64,
     sigma: f64,
     tilt: [f64; 2],
+    seconds: f64,
     aero: &AeroSpec,
 ) -> Fall {
     let model = plate(shape, size, aspect, sigma, aero.clone())
@@ -39,7 +43,7 @@ fn fall(
         .model()
         .expect("a valid model");
     let params = DropParams {
-        seconds: 8.0,
+        seconds,
         tilt_deg: tilt,
         ..Default::default()
     };
@@ -80,7 +84,7 @@ fn main() {
         .par_iter()
         .map(|&(d, istar, tilt)| {
             let sigma = istar * 64.0 * RHO * d / std::f64::consts::PI;
-            fall(PlateShape::Circle, d, 1.0, sigma, tilt, &aero)
+            fall(PlateShape::Circle, d, 1.0, sigma, tilt, 8.0, &aero)
         })
         .collect();
     for (&(d, istar, tilt), f) in cases.iter().zip(&disks) {
@@ -98,60 +102,103 @@ fn main() {
         );
     }
 
+    // Strips: a fall depends on σ and w only through I* = σ/(ρ w) and
+    // the scaled time t U/w, U = √(σ g/ρ) (tests/integration/unsteady.rs,
+    // `a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall`), and
+    // the strips' tumbling changes over hundreds of scaled times. So each
+    // is measured over the same scaled duration τ as well as over 8 s.
     println!("\n## Strips (aspect 5, let go at 60° about the long axis): Ω ∝ σ^p w^q\n");
-    println!("| σ g/m² | w cm | regime | Ω rad/s | descent m/s | drift |");
-    println!("|---|---|---|---|---|---|");
+    println!(
+        "Each strip falls for 8 s, and for τ = {} and {} scaled times (t √(σ g/ρ) / w); \
+         the classifier's window is the last 60 % of the fall.\n",
+        SCALED_DURATIONS[0], SCALED_DURATIONS[1]
+    );
+    println!(
+        "| σ g/m² | w cm | I* | fall | regime | Ω rad/s | descent m/s | drift | Ω w/√(σg/ρ) |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
     let mut strips = Vec::new();
     for sigma in [0.035, 0.07, 0.14, 0.28] {
         for w in [0.01, 0.02, 0.04] {
-            strips.push((sigma, w));
+            for duration in [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])] {
+                strips.push((sigma, w, duration));
+            }
         }
     }
     let falls: Vec<Fall> = strips
         .par_iter()
-        .map(|&(sigma, w)| fall(PlateShape::Rectangle, w, 5.0, sigma, [60.0, 0.0], &aero))
+        .map(|&(sigma, w, duration)| {
+            let seconds = duration.map_or(8.0, |tau| strip_seconds(sigma, w, tau));
+            fall(
+                PlateShape::Rectangle,
+                w,
+                5.0,
+                sigma,
+                [60.0, 0.0],
+                seconds,
+                &aero,
+            )
+        })
         .collect();
-    let mut fit = Vec::new();
-    for (&(sigma, w), f) in strips.iter().zip(&falls) {
+    for (&(sigma, w, duration), f) in strips.iter().zip(&falls) {
         println!(
-            "| {:.0} | {:.0} | {} | {:.1} | {:.3} | {:.2} |",
+            "| {:.0} | {:.0} | {:.1} | {} | {} | {:.1} | {:.3} | {:.2} | {:.2} |",
             sigma * 1000.0,
             w * 100.0,
+            sigma / (RHO * w),
+            duration.map_or("8 s".to_string(), |tau| format!("τ {tau}")),
             f.regime,
             f.omega,
             f.descent,
-            f.drift
-        );
-        if f.regime == "tumble" && f.omega > 0.0 {
-            fit.push((sigma.ln(), w.ln(), f.omega.ln()));
-        }
-    }
-    // Least squares ln Ω = c + p ln σ + q ln w over the tumbling strips.
-    if fit.len() >= 4 {
-        let mut a = nalgebra::Matrix3::<f64>::zeros();
-        let mut b = nalgebra::Vector3::<f64>::zeros();
-        for &(s, w, o) in &fit {
-            let row = nalgebra::Vector3::new(1.0, s, w);
-            a += row * row.transpose();
-            b += row * o;
-        }
-        match a.try_inverse() {
-            Some(inv) => {
-                let x = inv * b;
-                println!(
-                    "\nfit over {} tumbling strips: p = {:.2}, q = {:.2} (target 0.5 ± 0.1, −1.0 ± 0.1)",
-                    fit.len(),
-                    x[1],
-                    x[2]
-                );
-            }
-            None => println!("\nthe tumbling strips do not span σ and w: no fit"),
-        }
-    } else {
-        println!(
-            "\nonly {} of {} strips tumble: too few to fit p and q",
-            fit.len(),
-            strips.len()
+            f.drift,
+            f.omega * w / (sigma * G / RHO).sqrt()
         );
     }
+    for duration in [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])] {
+        let fit: Vec<(f64, f64, f64)> = strips
+            .iter()
+            .zip(&falls)
+            .filter(|((_, _, d), f)| *d == duration && f.regime == "tumble" && f.omega > 0.0)
+            .map(|(&(sigma, w, _), f)| (sigma.ln(), w.ln(), f.omega.ln()))
+            .collect();
+        let label = duration.map_or("over 8 s".to_string(), |tau| format!("at τ = {tau}"));
+        match fit_exponents(&fit) {
+            Some((p, q)) => println!(
+                "\nfit {label} over {} tumbling strips: p = {p:.2}, q = {q:.2} (target 0.5 ± 0.1, −1.0 ± 0.1)",
+                fit.len()
+            ),
+            None => println!(
+                "\n{label}: only {} of 12 strips tumble, or they do not span σ and w: no fit",
+                fit.len()
+            ),
+        }
+    }
+}
+
+/// The scaled durations τ = t √(σ g/ρ) / w over which the strips are
+/// compared besides 8 s: 150 (most strips still glide as they tumble) and
+/// 300 (the lightest have stopped gliding; docs/real-falls.md).
+const SCALED_DURATIONS: [f64; 2] = [150.0, 300.0];
+
+/// Seconds for a strip of areal density `sigma` and width `w` to fall for
+/// `tau` scaled times.
+fn strip_seconds(sigma: f64, w: f64, tau: f64) -> f64 {
+    tau * w / (sigma * G / RHO).sqrt()
+}
+
+/// Least squares ln Ω = c + p ln σ + q ln w over (ln σ, ln w, ln Ω), or
+/// `None` with fewer than four points or ones that do not span σ and w.
+fn fit_exponents(fit: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
+    if fit.len() < 4 {
+        return None;
+    }
+    let mut a = nalgebra::Matrix3::<f64>::zeros();
+    let mut b = nalgebra::Vector3::<f64>::zeros();
+    for &(s, w, o) in fit {
+        let row = nalgebra::Vector3::new(1.0, s, w);
+        a += row * row.transpose();
+        b += row * o;
+    }
+    let x = a.try_inverse()? * b;
+    Some((x[1], x[2]))
 }

@@ -713,3 +713,79 @@ fn a_strip_let_go_end_on_turns_broadside_and_falls_slowly() {
     println!("strip end-on: descent {descent:.3} m/s over 1–2 s (face-on terminal {terminal:.3})");
     assert!(descent > 0.0 && descent < 2.0 * terminal, "{descent}");
 }
+
+/// Dimensional analysis as an exact oracle. A plate's fall in still air
+/// under the law depends on σ, w, ρ, g and ν only through I* = σ/(ρ w) and
+/// Re = U w/ν, U = √(σ g/ρ) (every coefficient is dimensionless, every length
+/// the plate's own). So a strip 4 × as wide and 4 × as heavy per area, in
+/// air 8 × as viscous, falls the same fall with lengths × 4 and times × 2
+/// (U × 2). Every scale is a power of two, which commutes with rounding, so
+/// the two falls agree to round-off (`pow` in the plate's added-mass
+/// density and the rigid body's rotation are the only inexact-scaling
+/// operations). This is why the strips' Ω ∝ σ^p w^q depends on when it is
+/// measured: strips compared at one duration in seconds are at different
+/// points of their scaled falls (docs/real-falls.md, "The strips' exponents
+/// and the protocol").
+#[test]
+fn a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall() {
+    use leafmagic::physics::integrate::Simulator;
+    use leafmagic::physics::params::Integrator;
+    use leafmagic::physics::state::State;
+    use nalgebra::UnitQuaternion;
+    let strip = |w: f64, sigma: f64, viscosity_factor: f64| {
+        let mut model = plate(PlateShape::Rectangle, w, 5.0, sigma, AeroSpec::unsteady())
+            .unwrap()
+            .model()
+            .unwrap();
+        let mut l = law(&model);
+        l.kinematic_viscosity *= viscosity_factor;
+        model.aero = AeroLaw::Unsteady(l);
+        model
+    };
+    let small = strip(0.01, 0.07, 1.0);
+    let big = strip(0.04, 0.28, 8.0);
+    assert_eq!(small.len(), big.len());
+    // Let go at 60° about the long axis, as the strips of plate_regimes.
+    let release = UnitQuaternion::from_euler_angles(60f64.to_radians(), 0.0, 0.0);
+    let (dt, steps) = (5e-4, 1600);
+    let fall = |model: &Model, dt: f64| {
+        let mut state = State::released(model, release, V3::zeros());
+        let mut sim = Simulator::new(model, Integrator::Verlet);
+        for _ in 0..steps {
+            sim.step(model, &mut state, dt).unwrap();
+        }
+        state
+    };
+    let (s, b) = (fall(&small, dt), fall(&big, 2.0 * dt));
+    let (mut dx, mut dv) = (0.0f64, 0.0f64);
+    for i in 0..small.len() {
+        dx = dx.max((b.position[i] - s.position[i] * 4.0).norm());
+        dv = dv.max((b.velocity[i] - s.velocity[i] * 2.0).norm());
+    }
+    let fallen = -s.position.iter().map(|p| p.z).sum::<f64>() / small.len() as f64;
+    let speed = s.velocity.iter().map(|v| v.norm()).fold(0.0, f64::max);
+    println!(
+        "after {:.2} s (small) the scaled falls differ by {:.1e} m in position (small fell {fallen:.3} m) \
+         and {:.1e} m/s in velocity (of {speed:.3})",
+        dt * steps as f64,
+        dx / 4.0,
+        dv / 2.0
+    );
+    // The small strip has fallen and turned: the oracle is not trivial.
+    let normal = |x: &[V3]| {
+        let [a, b, c] = small.triangles[0].corners;
+        (x[b] - x[a]).cross(&(x[c] - x[a])).normalize()
+    };
+    let turned = normal(&State::released(&small, release, V3::zeros()).position)
+        .dot(&normal(&s.position))
+        .clamp(-1.0, 1.0)
+        .acos()
+        .to_degrees();
+    println!("the small strip turned {turned:.0}° from its release");
+    assert!(fallen > 0.2, "fell {fallen} m");
+    assert!(turned > 20.0, "turned {turned}°");
+    // Bit for bit on the project's machines; a libm whose `pow` does not
+    // scale exactly would leave round-off, which these bounds allow.
+    assert!(dx / 4.0 <= 1e-12 * fallen, "positions differ by {dx}");
+    assert!(dv / 2.0 <= 1e-12 * speed, "velocities differ by {dv}");
+}
