@@ -3,6 +3,7 @@
 //! every frame for scenes), the choice of the step, and the budget that
 //! refuses a run which would never end.
 
+pub use super::stability::StepBound;
 use crate::physics::integrate::{SimError, Simulator};
 use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
@@ -375,18 +376,6 @@ pub enum StepReason {
     },
 }
 
-/// Which limit of [`stability::StabilityEstimate::dt_max`] sets an auto step.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum StepBound {
-    /// The stiffest spring mode.
-    Spring,
-    /// The fastest drag rate.
-    Drag,
-    /// The turn of a tumbling plate per step
-    /// ([`stability::MAX_TURN_PER_STEP`]).
-    Tumbling,
-}
-
 impl Work {
     /// The work of `seconds` of `model` at step `dt` (`auto`: chosen by
     /// stability) with output frames of `frame_dt`. Cheap: why the step is
@@ -420,9 +409,10 @@ impl Work {
     }
 
     /// The same estimate with the reason filled in: for an auto step below
-    /// the frame, the stiffest spring, the lightest particle and which of
-    /// the spring mode and the drag rate bounds the step (one stability
-    /// estimate of `model`); and the implicit integrator's step count.
+    /// the frame, the stiffest spring, the lightest particle and which limit
+    /// bounds the step ([`stability::StabilityEstimate::bound`]; one
+    /// stability estimate of `model`); and the implicit integrator's step
+    /// count.
     pub fn explained(mut self, model: &Model, frame_dt: f64) -> Work {
         let estimate = stability::estimate(model);
         let seconds = self.steps * self.dt;
@@ -440,22 +430,7 @@ impl Work {
                     .copied()
                     .unwrap_or(0.0),
             );
-            let by_spring = stability::largest_stable_step(
-                integrator,
-                estimate.omega_max.powi(2),
-                estimate.mode_damping_rate,
-            );
-            let by_drag = stability::largest_stable_step(integrator, 0.0, estimate.drag_rate);
-            // The smallest limit, the spring's on a tie (as before).
-            let bound = [
-                (StepBound::Spring, by_spring),
-                (StepBound::Drag, by_drag),
-                (StepBound::Tumbling, estimate.tumbling_step()),
-            ]
-            .into_iter()
-            .filter_map(|(b, h)| h.map(|h| (b, h)))
-            .reduce(|best, next| if next.1 < best.1 { next } else { best })
-            .map_or(StepBound::Spring, |(b, _)| b);
+            let bound = estimate.bound(integrator).unwrap_or(StepBound::Spring);
             self.reason = StepReason::Stability {
                 spring,
                 omega_max: estimate.omega_max,

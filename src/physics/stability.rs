@@ -110,15 +110,44 @@ impl StabilityEstimate {
     /// Under the unsteady law every integrator's limit is also at most
     /// [`Self::tumbling_step`].
     pub fn dt_max(&self, integrator: Integrator) -> Option<f64> {
-        let limit = if integrator == Integrator::Implicit {
-            largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate)
+        self.limits(integrator)
+            .into_iter()
+            .map(|(_, h)| h)
+            .reduce(min_step)
+            .flatten()
+    }
+
+    /// Each limit on the step of `integrator` that [`Self::dt_max`] takes
+    /// the smallest of, s (`None`: that one does not limit it). The implicit
+    /// step is limited by the quadratic law's drag, which it treats
+    /// explicitly, and not by the springs.
+    pub fn limits(&self, integrator: Integrator) -> [(StepBound, Option<f64>); 3] {
+        let (spring, drag) = if integrator == Integrator::Implicit {
+            (
+                None,
+                largest_stable_step(Integrator::Euler, 0.0, self.explicit_drag_rate),
+            )
         } else {
-            let spring =
-                largest_stable_step(integrator, self.omega_max.powi(2), self.mode_damping_rate);
-            let drag = largest_stable_step(integrator, 0.0, self.drag_rate);
-            min_step(spring, drag)
+            (
+                largest_stable_step(integrator, self.omega_max.powi(2), self.mode_damping_rate),
+                largest_stable_step(integrator, 0.0, self.drag_rate),
+            )
         };
-        min_step(limit, self.tumbling_step())
+        [
+            (StepBound::Spring, spring),
+            (StepBound::Drag, drag),
+            (StepBound::Tumbling, self.tumbling_step()),
+        ]
+    }
+
+    /// Which of [`Self::limits`] sets [`Self::dt_max`] (the spring's on a
+    /// tie), or `None` when nothing limits the step.
+    pub fn bound(&self, integrator: Integrator) -> Option<StepBound> {
+        self.limits(integrator)
+            .into_iter()
+            .filter_map(|(b, h)| h.map(|h| (b, h)))
+            .reduce(|best, next| if next.1 < best.1 { next } else { best })
+            .map(|(b, _)| b)
     }
 
     /// The step [`MAX_TURN_PER_STEP`] allows at [`Self::tumbling_rate`], s
@@ -157,6 +186,17 @@ impl StabilityEstimate {
             }
         }
     }
+}
+
+/// Which limit of [`StabilityEstimate::dt_max`] sets a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum StepBound {
+    /// The stiffest spring mode.
+    Spring,
+    /// The fastest drag rate.
+    Drag,
+    /// The turn of a tumbling plate per step ([`MAX_TURN_PER_STEP`]).
+    Tumbling,
 }
 
 /// The smaller of two limits, `None` meaning unlimited.

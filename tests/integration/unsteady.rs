@@ -720,9 +720,9 @@ fn a_strip_let_go_end_on_turns_broadside_and_falls_slowly() {
 /// the plate's own). So a strip 4 × as wide and 4 × as heavy per area, in
 /// air 8 × as viscous, falls the same fall with lengths × 4 and times × 2
 /// (U × 2). Every scale is a power of two, which commutes with rounding, so
-/// the two falls agree to round-off (`pow` in the plate's added-mass
-/// density and the rigid body's rotation are the only inexact-scaling
-/// operations). This is why the strips' Ω ∝ σ^p w^q depends on when it is
+/// the two falls agree to the bit here (a libm whose `pow`, in the plate's
+/// added-mass density, did not scale exactly would leave round-off). Any
+/// dimensional constant slipped into the law fails it. This is why the strips' Ω ∝ σ^p w^q depends on when it is
 /// measured: strips compared at one duration in seconds are at different
 /// points of their scaled falls (docs/real-falls.md, "The strips' exponents
 /// and the protocol").

@@ -398,7 +398,7 @@ fn per_triangle(
                 };
                 let rate =
                     half_pi_rho * area * half * half * (law.rotational_damping * speed + quadratic);
-                couple_arm -= n.cross(&omega) * rate;
+                couple_arm -= across * rate;
             }
         }
 
