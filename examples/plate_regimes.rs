@@ -74,7 +74,7 @@ fn main() {
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut cases = Vec::new();
     for d in [0.03, 0.05] {
-        for istar in [0.005, 0.01, 0.02, 0.04, 0.08, 0.16] {
+        for istar in [0.005, 0.01, 0.02, 0.025, 0.03, 0.04, 0.08, 0.16] {
             for tilt in [[5.0, 2.0], [30.0, 0.0]] {
                 cases.push((d, istar, tilt));
             }

@@ -225,8 +225,8 @@ fn strips_tumble_faster_when_heavier_and_slower_when_wider() {
 /// (Field et al. 1997: flutter below about 0.01, chaos between, tumbling
 /// above about 0.04): a 3 cm disk flutters at 0.005 and 0.01, does not yet
 /// tumble at 0.02, and tumbles at 0.04 and 0.16. Under the defaults the
-/// switch lies between 0.02 and 0.025, inside Field's chaotic band, and no
-/// disk of 0.02–0.035 falls chaotically (docs/real-falls.md).
+/// switch lies between 0.026 and 0.027, inside Field's chaotic band, and no
+/// disk of 0.02–0.04 falls chaotically (docs/real-falls.md).
 #[test]
 fn disks_flutter_when_light_and_tumble_when_heavy() {
     let d = 0.03;
