@@ -2,9 +2,14 @@
 //! paper squares of each size bin's median side, 70 g/m², released flat
 //! and on edge, filmed and labelled as the experiment did, side by side
 //! with the real falls in tests/data/real-falls/squares (docs/real-falls.md).
+//! With `--shape circle|hexagon` (or `rectangle`), plates of that shape at
+//! the squares' bin sizes: the simulated side only, a prediction for the
+//! study's held-out shapes (docs/real-falls.md, "Predictions for the
+//! held-out shapes").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME KEY=VALUE ...]
 
+use leafmagic::leaf::plates::PlateShape;
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::sim::real_falls::{self, BinStats};
 use std::path::Path;
@@ -12,6 +17,7 @@ use std::path::Path;
 fn main() {
     let mut releases = 12;
     let mut seed = 1;
+    let mut shape = PlateShape::Square;
     let mut aero = AeroSpec::unsteady();
     let mut args = std::env::args().skip(1);
     let mut extra = Vec::new();
@@ -24,6 +30,12 @@ fn main() {
                     .expect("--releases N")
             }
             "--seed" => seed = args.next().and_then(|v| v.parse().ok()).expect("--seed S"),
+            "--shape" => {
+                shape = args
+                    .next()
+                    .and_then(|v| v.parse().ok())
+                    .expect("--shape square|circle|hexagon|rectangle")
+            }
             "--law" => {
                 let law: AeroLawName = args.next().expect("--law NAME").parse().expect("a law");
                 aero = if law == AeroLawName::Linear {
@@ -40,6 +52,10 @@ fn main() {
         .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
     let real = real_falls::read_squares(&dir).expect("the real falls");
+    if shape != PlateShape::Square {
+        predict(shape, &real, &aero, releases, seed);
+        return;
+    }
     let t0 = std::time::Instant::now();
     let cmp = real_falls::compare(&real, &aero, releases, seed).expect("the experiment runs");
     let wall = t0.elapsed().as_secs_f64();
@@ -88,4 +104,39 @@ fn main() {
         cmp.parts.len(),
         wall
     );
+}
+
+/// The simulated side alone for plates of `shape` at the squares' bin sizes.
+fn predict(
+    shape: PlateShape,
+    real: &[real_falls::RealSegment],
+    aero: &AeroSpec,
+    releases: usize,
+    seed: u64,
+) {
+    let t0 = std::time::Instant::now();
+    let sim = real_falls::predict(shape, real, aero, releases, seed).expect("the experiment runs");
+    let wall = t0.elapsed().as_secs_f64();
+    println!(
+        "{} plates of 70 g/m² paper at the squares' bin sizes, simulated only ({releases} releases per bin, seed {seed}); the real falls of this shape are held back",
+        shape.as_str()
+    );
+    println!();
+    println!(
+        "{:<9} {:>12} {:>8} {:>8} {:>8} {:>9}",
+        "size cm", "sim T:C:S", "fT", "v m/s", "drift", "Ω rad/s"
+    );
+    for s in &sim {
+        println!(
+            "{:<9.1} {:>12} {:>8.2} {:>8.3} {:>8.2} {:>9.1}",
+            s.side * 100.0,
+            format!("{}:{}:{}", s.counts[0], s.counts[1], s.counts[2]),
+            s.tumbling,
+            s.descent,
+            s.drift,
+            s.omega
+        );
+    }
+    println!();
+    println!("{:.1} s wall", wall);
 }

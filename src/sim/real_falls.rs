@@ -765,9 +765,11 @@ pub fn simulate_drop(
     })
 }
 
-/// The simulated side of one bin: `releases` drops of a square plate of
-/// side `side` under `aero` (air and paper of the experiment).
+/// The simulated side of one bin: `releases` drops of a plate of `shape`
+/// and size `side` (twice the inradius, as `leafmagic plate` reads it)
+/// under `aero` (air and paper of the experiment).
 pub fn simulate_bin(
+    shape: PlateShape,
     side: f64,
     aero: &AeroSpec,
     bin: usize,
@@ -775,7 +777,7 @@ pub fn simulate_bin(
     seed: u64,
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
-    let spec = plate(PlateShape::Square, side, 1.0, PAPER, aero.clone())?;
+    let spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
     let model = spec.model()?;
     let dt = experiment_step(&model)?;
     let drops: Vec<SimulatedDrop> = (0..releases)
@@ -871,7 +873,15 @@ pub fn compare(
     let mut sim = Vec::new();
     let mut drops = Vec::new();
     for (bin, r) in real.iter().enumerate() {
-        let (s, d) = simulate_bin(r.side, &aero, bin, releases, seed, &centres)?;
+        let (s, d) = simulate_bin(
+            PlateShape::Square,
+            r.side,
+            &aero,
+            bin,
+            releases,
+            seed,
+            &centres,
+        )?;
         sim.push(s);
         drops.push(d);
     }
@@ -886,6 +896,31 @@ pub fn compare(
         parts,
         drops,
     })
+}
+
+/// The experiment simulated for plates of another `shape` at the squares'
+/// bin sizes (`real_segments` give the sizes and the labelling rule's
+/// centres): the simulated side of each bin, with no real side to score it
+/// against. The study's circles and hexagons are held back to check what
+/// was tuned on the squares, so this is a prediction for them, written
+/// down before they are seen (docs/real-falls.md, "Predictions for the
+/// held-out shapes").
+pub fn predict(
+    shape: PlateShape,
+    real_segments: &[RealSegment],
+    aero: &AeroSpec,
+    releases: usize,
+    seed: u64,
+) -> Result<Vec<BinStats>, ExperimentError> {
+    let real = real_table(real_segments);
+    let centres = centres(real_segments);
+    let aero = experiment_air(aero.clone());
+    real.iter()
+        .enumerate()
+        .map(|(bin, r)| {
+            simulate_bin(shape, r.side, &aero, bin, releases, seed, &centres).map(|(s, _)| s)
+        })
+        .collect()
 }
 
 /// Mahadevan, Ryu & Samuel's scaling of a tumbling card, Ω ∝ √(σ g/ρ)/w:
