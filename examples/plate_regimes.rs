@@ -120,7 +120,7 @@ fn main() {
     let mut strips = Vec::new();
     for sigma in [0.035, 0.07, 0.14, 0.28] {
         for w in [0.01, 0.02, 0.04] {
-            for duration in [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])] {
+            for duration in PROTOCOLS {
                 strips.push((sigma, w, duration));
             }
         }
@@ -154,7 +154,7 @@ fn main() {
             f.omega * w / (sigma * G / RHO).sqrt()
         );
     }
-    for duration in [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])] {
+    for duration in PROTOCOLS {
         let fit: Vec<(f64, f64, f64)> = strips
             .iter()
             .zip(&falls)
@@ -179,6 +179,10 @@ fn main() {
 /// compared besides 8 s: 150 (most strips still glide as they tumble) and
 /// 300 (the lightest have stopped gliding; docs/real-falls.md).
 const SCALED_DURATIONS: [f64; 2] = [150.0, 300.0];
+
+/// How long each strip falls: 8 s (`None`), then each of
+/// [`SCALED_DURATIONS`].
+const PROTOCOLS: [Option<f64>; 3] = [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])];
 
 /// Seconds for a strip of areal density `sigma` and width `w` to fall for
 /// `tau` scaled times.

@@ -2,7 +2,7 @@
 //! paper squares of each size bin's median side, 70 g/m², released flat
 //! and on edge, filmed and labelled as the experiment did, side by side
 //! with the real falls in tests/data/real-falls/squares (docs/real-falls.md).
-//! With `--shape circle|hexagon` (or `rectangle`), plates of that shape at
+//! With `--shape circle|hexagon`, plates of that shape at
 //! the squares' bin sizes: the simulated side only, a prediction for the
 //! study's held-out shapes (docs/real-falls.md, "Predictions for the
 //! held-out shapes").

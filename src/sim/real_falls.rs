@@ -868,23 +868,16 @@ pub fn compare(
     seed: u64,
 ) -> Result<Comparison, ExperimentError> {
     let real = real_table(real_segments);
-    let centres = centres(real_segments);
-    let aero = experiment_air(aero.clone());
-    let mut sim = Vec::new();
-    let mut drops = Vec::new();
-    for (bin, r) in real.iter().enumerate() {
-        let (s, d) = simulate_bin(
-            PlateShape::Square,
-            r.side,
-            &aero,
-            bin,
-            releases,
-            seed,
-            &centres,
-        )?;
-        sim.push(s);
-        drops.push(d);
-    }
+    let (sim, drops): (Vec<BinStats>, Vec<Vec<SimulatedDrop>>) = simulate_table(
+        PlateShape::Square,
+        &real,
+        real_segments,
+        aero,
+        releases,
+        seed,
+    )?
+    .into_iter()
+    .unzip();
     let parts = real
         .iter()
         .zip(&sim)
@@ -913,13 +906,25 @@ pub fn predict(
     seed: u64,
 ) -> Result<Vec<BinStats>, ExperimentError> {
     let real = real_table(real_segments);
+    let table = simulate_table(shape, &real, real_segments, aero, releases, seed)?;
+    Ok(table.into_iter().map(|(stats, _)| stats).collect())
+}
+
+/// Every bin of `real` simulated with plates of `shape` at the bin's size,
+/// in the experiment's air and labelled by the centres of `real_segments`.
+fn simulate_table(
+    shape: PlateShape,
+    real: &[BinStats],
+    real_segments: &[RealSegment],
+    aero: &AeroSpec,
+    releases: usize,
+    seed: u64,
+) -> Result<Vec<(BinStats, Vec<SimulatedDrop>)>, ExperimentError> {
     let centres = centres(real_segments);
     let aero = experiment_air(aero.clone());
     real.iter()
         .enumerate()
-        .map(|(bin, r)| {
-            simulate_bin(shape, r.side, &aero, bin, releases, seed, &centres).map(|(s, _)| s)
-        })
+        .map(|(bin, r)| simulate_bin(shape, r.side, &aero, bin, releases, seed, &centres))
         .collect()
 }
 

@@ -722,10 +722,10 @@ fn a_strip_let_go_end_on_turns_broadside_and_falls_slowly() {
 /// (U × 2). Every scale is a power of two, which commutes with rounding, so
 /// the two falls agree to the bit here (a libm whose `pow`, in the plate's
 /// added-mass density, did not scale exactly would leave round-off). Any
-/// dimensional constant slipped into the law fails it. This is why the strips' Ω ∝ σ^p w^q depends on when it is
-/// measured: strips compared at one duration in seconds are at different
-/// points of their scaled falls (docs/real-falls.md, "The strips' exponents
-/// and the protocol").
+/// dimensional constant slipped into the law fails it. This is why the
+/// strips' Ω ∝ σ^p w^q depends on when it is measured: strips compared at
+/// one duration in seconds are at different points of their scaled falls
+/// (docs/real-falls.md, "The strips' exponents and the protocol").
 #[test]
 fn a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall() {
     use leafmagic::physics::integrate::Simulator;
