@@ -1,7 +1,9 @@
 //! The real-falls experiment (Howison, Hughes & Iida 2020) in leafmagic:
 //! paper squares of each size bin's median side, 70 g/m², released flat
 //! and on edge, filmed and labelled as the experiment did, side by side
-//! with the real falls in tests/data/real-falls/squares (docs/real-falls.md).
+//! with the real falls in tests/data/real-falls/squares (docs/real-falls.md),
+//! then the real side's bootstrap intervals with the simulated values that
+//! lie outside them marked.
 //! With `--shape circle|hexagon`, plates of that shape at
 //! the squares' bin sizes: the simulated side only, a prediction for the
 //! study's held-out shapes (docs/real-falls.md, "Predictions for the
@@ -13,6 +15,10 @@ use leafmagic::leaf::plates::PlateShape;
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::sim::real_falls::{self, BinStats};
 use std::path::Path;
+
+/// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
+/// 2,000 move by less than the printed digits between seeds.
+const BOOTSTRAP_RESAMPLES: usize = 2000;
 
 fn main() {
     let mut releases = 12;
@@ -90,6 +96,31 @@ fn main() {
             cell(r.drift, s.drift, 2),
             cell(r.omega, s.omega, 1),
             p.iter().sum::<f64>()
+        );
+    }
+    println!();
+    println!(
+        "the real side's {:.0} % bootstrap intervals ({BOOTSTRAP_RESAMPLES} resamples of each bin's tumbling and chaotic drops); * the simulated value lies outside",
+        real_falls::BOOTSTRAP_LEVEL * 100.0
+    );
+    println!();
+    println!(
+        "{:<9} {:>13} {:>15} {:>13} {:>13}",
+        "side cm", "fT", "v m/s", "drift", "Ω rad/s"
+    );
+    let intervals = real_falls::real_intervals(&real, BOOTSTRAP_RESAMPLES, seed);
+    for ((r, s), i) in cmp.real.iter().zip(&cmp.sim).zip(&intervals) {
+        let inside = i.contains(s);
+        let span = |[lo, hi]: [f64; 2], d: usize, ok: bool| {
+            format!("{lo:.d$}–{hi:.d$}{}", if ok { " " } else { "*" })
+        };
+        println!(
+            "{:<9.1} {:>13} {:>15} {:>13} {:>13}",
+            r.side * 100.0,
+            span(i.tumbling, 2, inside[0]),
+            span(i.descent, 3, inside[1]),
+            span(i.drift, 2, inside[2]),
+            span(i.omega, 1, inside[3]),
         );
     }
     let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;

@@ -502,27 +502,149 @@ fn stats(segments: &[Measured], omegas: &[Option<f64>], drops: usize, side: f64)
 /// Each drop has one tumbling or chaotic segment; its tumbling rate is
 /// measured on that segment.
 pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
-    SQUARE_BINS
+    real_bins(real)
         .iter()
-        .map(|&(lo, hi)| {
-            let inside: Vec<&RealSegment> = real
-                .iter()
-                .filter(|s| (lo..hi).contains(&s.radius))
-                .collect();
-            let segments: Vec<Measured> = inside
-                .iter()
-                .filter_map(|s| {
-                    s.film.features().map(|features| Measured {
-                        label: s.human,
-                        features,
-                    })
+        .map(|bin| bin.stats(&(0..bin.len()).collect::<Vec<_>>()))
+        .collect()
+}
+
+/// Confidence level of [`real_intervals`]: the 5th to the 95th percentile.
+pub const BOOTSTRAP_LEVEL: f64 = 0.90;
+
+/// How far each real statistic of one bin can be trusted: the central
+/// [`BOOTSTRAP_LEVEL`] interval [lo, hi] of its percentile bootstrap
+/// (Efron & Tibshirani 1993, ch. 13).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BinIntervals {
+    /// Fraction tumbling among tumbling + chaotic.
+    pub tumbling: [f64; 2],
+    /// Median descent speed, m/s.
+    pub descent: [f64; 2],
+    /// Median drift.
+    pub drift: [f64; 2],
+    /// Median tumbling rate, rad/s.
+    pub omega: [f64; 2],
+}
+
+impl BinIntervals {
+    /// Whether each of `sim`'s four statistics (fraction tumbling, descent,
+    /// drift, Ω) lies inside its interval.
+    pub fn contains(&self, sim: &BinStats) -> [bool; 4] {
+        let inside = |[lo, hi]: [f64; 2], v: f64| (lo..=hi).contains(&v);
+        [
+            inside(self.tumbling, sim.tumbling),
+            inside(self.descent, sim.descent),
+            inside(self.drift, sim.drift),
+            inside(self.omega, sim.omega),
+        ]
+    }
+}
+
+/// The real table's sampling uncertainty: per bin of [`SQUARE_BINS`], the
+/// bin's tumbling and chaotic drops resampled with replacement
+/// `resamples` times (seeded by `seed`), each resample's [`BinStats`] computed as [`real_table`] does,
+/// and the [`BOOTSTRAP_LEVEL`] percentile interval of each statistic. A
+/// bin of 15 drops (the smallest squares) pins its medians far less than
+/// one of 43: a simulated value inside the interval is as close as the
+/// real data can tell (docs/real-falls.md, "How sure the real side is").
+pub fn real_intervals(real: &[RealSegment], resamples: usize, seed: u64) -> Vec<BinIntervals> {
+    real_bins(real)
+        .iter()
+        .enumerate()
+        .map(|(b, bin)| {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(seed ^ ((b as u64) << 32));
+            // Steady segments enter no statistic: resample the others.
+            let moving: Vec<usize> = (0..bin.len()).filter(|&k| bin.drops[k].moving).collect();
+            let n = moving.len();
+            let draws: Vec<BinStats> = (0..resamples)
+                .map(|_| {
+                    let pick: Vec<usize> = (0..n).map(|_| moving[rng.random_range(0..n)]).collect();
+                    bin.stats(&pick)
                 })
                 .collect();
-            let moving: Vec<&&RealSegment> =
-                inside.iter().filter(|s| s.human != Label::Steady).collect();
-            let omegas: Vec<Option<f64>> = moving.iter().map(|s| s.film.tumbling_rate()).collect();
-            let side = 2.0 * median(moving.iter().map(|s| s.radius));
-            stats(&segments, &omegas, moving.len(), side)
+            let interval = |value: fn(&BinStats) -> f64| {
+                let mut v: Vec<f64> = draws.iter().map(value).filter(|x| x.is_finite()).collect();
+                v.sort_by(f64::total_cmp);
+                let tail = 0.5 * (1.0 - BOOTSTRAP_LEVEL);
+                [quantile(&v, tail), quantile(&v, 1.0 - tail)]
+            };
+            BinIntervals {
+                tumbling: interval(|s| s.tumbling),
+                descent: interval(|s| s.descent),
+                drift: interval(|s| s.drift),
+                omega: interval(|s| s.omega),
+            }
+        })
+        .collect()
+}
+
+/// The `p`-quantile of sorted `v` by linear interpolation between order
+/// statistics (NaN if empty).
+fn quantile(v: &[f64], p: f64) -> f64 {
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    let pos = p * (v.len() - 1) as f64;
+    let lo = pos.floor() as usize;
+    let hi = (lo + 1).min(v.len() - 1);
+    v[lo] + (v[hi] - v[lo]) * (pos - lo as f64)
+}
+
+/// One real drop, measured once.
+struct RealDrop {
+    /// Its segment's label and features (`None` where the experiment drops
+    /// the segment).
+    measured: Option<Measured>,
+    /// Its tumbling rate (`None` for a steady one or without three maxima).
+    omega: Option<f64>,
+    /// Half the side, m.
+    radius: f64,
+    /// Labelled tumbling or chaotic.
+    moving: bool,
+}
+
+/// One bin's real drops: what [`real_table`] and [`real_intervals`] take
+/// their statistics from.
+struct RealBin {
+    drops: Vec<RealDrop>,
+}
+
+impl RealBin {
+    fn len(&self) -> usize {
+        self.drops.len()
+    }
+
+    /// The statistics of the drops `pick` (indices, repeats allowed).
+    fn stats(&self, pick: &[usize]) -> BinStats {
+        let chosen: Vec<&RealDrop> = pick.iter().map(|&k| &self.drops[k]).collect();
+        let segments: Vec<Measured> = chosen.iter().filter_map(|d| d.measured).collect();
+        let moving: Vec<&RealDrop> = chosen.iter().copied().filter(|d| d.moving).collect();
+        let omegas: Vec<Option<f64>> = moving.iter().map(|d| d.omega).collect();
+        let side = 2.0 * median(moving.iter().map(|d| d.radius));
+        stats(&segments, &omegas, moving.len(), side)
+    }
+}
+
+fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
+    SQUARE_BINS
+        .iter()
+        .map(|&(lo, hi)| RealBin {
+            drops: real
+                .iter()
+                .filter(|s| (lo..hi).contains(&s.radius))
+                .map(|s| {
+                    let moving = s.human != Label::Steady;
+                    RealDrop {
+                        measured: s.film.features().map(|features| Measured {
+                            label: s.human,
+                            features,
+                        }),
+                        omega: if moving { s.film.tumbling_rate() } else { None },
+                        radius: s.radius,
+                        moving,
+                    }
+                })
+                .collect(),
         })
         .collect()
 }

@@ -56,6 +56,51 @@ fn the_real_table_is_read_from_the_tracked_squares() {
     }
 }
 
+/// The real side's bootstrap: every interval brackets the real table's own
+/// value, a bin whose drops are all one drop has no spread at all (every
+/// resample is that drop), and the same seed gives the same intervals.
+#[test]
+fn the_real_sides_bootstrap_brackets_its_values_and_collapses_on_one_drop() {
+    let real = squares();
+    let table = real_falls::real_table(&real);
+    let intervals = real_falls::real_intervals(&real, 400, 7);
+    assert_eq!(intervals, real_falls::real_intervals(&real, 400, 7));
+    for (b, i) in table.iter().zip(&intervals) {
+        for (value, [lo, hi]) in [
+            (b.tumbling, i.tumbling),
+            (b.descent, i.descent),
+            (b.drift, i.drift),
+            (b.omega, i.omega),
+        ] {
+            assert!(lo <= value && value <= hi, "{value} outside [{lo}, {hi}]");
+            assert!(lo < hi, "a bin of 11–30 moving drops has spread");
+        }
+    }
+    // The smallest bin, its first tumbling drop copied over all of them.
+    let (lo, hi) = real_falls::SQUARE_BINS[0];
+    let one = real
+        .iter()
+        .find(|s| (lo..hi).contains(&s.radius) && s.human == Label::Tumbling)
+        .unwrap()
+        .clone();
+    let copied: Vec<_> = real
+        .iter()
+        .map(|s| {
+            if (lo..hi).contains(&s.radius) {
+                one.clone()
+            } else {
+                s.clone()
+            }
+        })
+        .collect();
+    let alone = real_falls::real_table(&copied)[0];
+    let i = real_falls::real_intervals(&copied, 50, 7)[0];
+    assert_eq!(i.tumbling, [1.0, 1.0]);
+    assert_eq!(i.descent, [alone.descent; 2]);
+    assert_eq!(i.drift, [alone.drift; 2]);
+    assert_eq!(i.omega, [alone.omega; 2]);
+}
+
 /// The simulated experiment (4 releases per bin here, 12 in the example)
 /// runs in every bin without diverging; what it reaches with the default
 /// coefficients is held (measured at 4 releases, seed 1): the score no
