@@ -153,10 +153,16 @@ pub fn unsteady_forces(
     added: &mut [Matrix3<f64>],
 ) {
     SCRATCH.with_borrow_mut(|scratch| {
-        let Scratch { triangles, plates } = scratch;
+        let Scratch {
+            triangles,
+            plates,
+            flows,
+        } = scratch;
         triangle_motions(model, x, v, torn, triangles);
         plate_motions(law, model, triangles, plates);
-        per_triangle(law, model, x, v, wind, triangles, plates, force, added);
+        relative_flows(law, model, x, v, wind, triangles, plates, flows);
+        flow_coefficients(law, model, flows);
+        per_triangle(law, model, v, wind, triangles, flows, force, added);
     });
     if law.buoyancy {
         let lift = -model.gravity * (law.air_density / law.solid_density);
@@ -202,6 +208,8 @@ struct Scratch {
     /// One per triangle; `None` for a torn or degenerate one.
     triangles: Vec<Option<TriangleMotion>>,
     plates: Vec<PlateMotion>,
+    /// One per triangle, as `triangles`; read only where that is `Some`.
+    flows: Vec<Flow>,
 }
 
 thread_local! {
@@ -277,9 +285,59 @@ fn plate_count(model: &Model) -> usize {
         .unwrap_or(0)
 }
 
-/// The per-triangle terms of [`unsteady_forces`].
+/// The air's flow over one intact triangle, in the two passes that precede
+/// [`per_triangle`]: [`relative_flows`] fills the vectors and the
+/// projections the chord look-ups read, [`flow_coefficients`] the square
+/// roots, chords and quotients. They are apart so that the look-ups and
+/// their chains of divisions and square roots, a third of the law's time
+/// when each waited for its own triangle's (perf), run back to back over
+/// all triangles and overlap. Every value is the expression the single
+/// pass computed, in the same order, so the forces keep their bits.
+#[derive(Clone, Copy, Debug, Default)]
+struct Flow {
+    /// The dual basis ∇β_b, ∇β_c of the corners.
+    grad_b: V3,
+    grad_c: V3,
+    /// The air's velocity relative to the triangle (module docs), |u|² and
+    /// its normal part u·n.
+    u: V3,
+    u2: f64,
+    qn: f64,
+    /// |u∥|² and u∥ on ∇β_b, ∇β_c (the chord along the flow).
+    along2: f64,
+    along_on: [f64; 2],
+    /// ω = n × ṅ, |ω|², n × ω, and both on ∇β_b, ∇β_c (the chord across
+    /// the rotation axis and the span along it).
+    omega: V3,
+    w2: f64,
+    across: V3,
+    across_on: [f64; 2],
+    omega_on: [f64; 2],
+    /// Then: |u|, C_D∥ (with skin friction), the chord across the axis and
+    /// the finite-span factor.
+    speed: f64,
+    cd_par: f64,
+    chord: f64,
+    finite: f64,
+}
+
+/// Whether the law's rotational terms act on a triangle turning at |ω|² =
+/// `w2`.
+#[inline]
+fn turning(law: &UnsteadyAero, w2: f64) -> bool {
+    w2 > f64::MIN_POSITIVE && (law.rotational_lift != 0.0 || damped(law))
+}
+
+/// Whether the law damps rotation at all.
+#[inline]
+fn damped(law: &UnsteadyAero) -> bool {
+    law.rotational_damping != 0.0 || law.rotational_damping_quadratic != 0.0
+}
+
+/// First pass of the per-triangle terms: each intact triangle's [`Flow`]
+/// vectors and projections.
 #[allow(clippy::too_many_arguments)]
-fn per_triangle(
+fn relative_flows(
     law: &UnsteadyAero,
     model: &Model,
     x: &[V3],
@@ -287,6 +345,115 @@ fn per_triangle(
     wind: Option<&[V3]>,
     triangles: &[Option<TriangleMotion>],
     plates: &[PlateMotion],
+    flows: &mut Vec<Flow>,
+) {
+    let third = 1.0 / 3.0;
+    flows.resize(triangles.len(), Flow::default());
+    for (((tri, tm), geom), flow) in model
+        .triangles
+        .iter()
+        .zip(triangles)
+        .zip(&model.surfaces)
+        .zip(flows.iter_mut())
+    {
+        let Some(tm) = tm else {
+            continue;
+        };
+        let TriangleMotion {
+            big_n,
+            n2,
+            n,
+            n_dot,
+            corner_sum,
+            ..
+        } = *tm;
+        let [a, b, c] = tri.corners;
+        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
+        let w = corner_velocities(tri.corners, v, wind);
+        let inv_n2 = 1.0 / n2;
+        let grad_b = e2.cross(&big_n) * inv_n2;
+        let grad_c = big_n.cross(&e1) * inv_n2;
+        // Less the share (1 − rotation_drag) of what the plate's rotation
+        // gives the triangle.
+        let mut u = -(w[0] + w[1] + w[2]) * third;
+        if let Some(p) = plates.get(geom.plate).filter(|p| p.area > 0.0) {
+            let r = corner_sum * third - p.centre;
+            u += p.omega.cross(&r) * (1.0 - law.rotation_drag);
+        }
+        let u2 = u.norm_squared();
+        let qn = u.dot(&n);
+        let u_plane = u - n * qn;
+        let omega = n.cross(&n_dot);
+        // Directions for `chord` unnormalised: it reads only their direction.
+        let across = n.cross(&omega);
+        *flow = Flow {
+            grad_b,
+            grad_c,
+            u,
+            u2,
+            qn,
+            along2: u_plane.norm_squared(),
+            along_on: [u_plane.dot(&grad_b), u_plane.dot(&grad_c)],
+            omega,
+            w2: omega.norm_squared(),
+            across,
+            across_on: [across.dot(&grad_b), across.dot(&grad_c)],
+            omega_on: [omega.dot(&grad_b), omega.dot(&grad_c)],
+            ..Flow::default()
+        };
+    }
+}
+
+/// Second pass: each intact triangle's square roots, chord look-ups and
+/// the coefficients they give ([`Flow`]).
+fn flow_coefficients(law: &UnsteadyAero, model: &Model, flows: &mut [Flow]) {
+    let surfaces = &model.surfaces[..flows.len()];
+    for (flow, geom) in flows.iter_mut().zip(surfaces) {
+        flow.speed = flow.u2.sqrt();
+        let along = flow.along2.sqrt();
+        // `chord` reads a direction, whatever its length: no division.
+        flow.cd_par = if along > 0.0 {
+            let chord = geom.chord(flow.along_on[0], flow.along_on[1]);
+            cd_parallel(law, along, chord)
+        } else {
+            law.cd_parallel
+        };
+    }
+    for (flow, geom) in flows.iter_mut().zip(surfaces) {
+        if turning(law, flow.w2) {
+            flow.chord = geom.chord(flow.across_on[0], flow.across_on[1]);
+            if law.rotational_lift != 0.0 {
+                // A plate of finite span s along the axis sheds tip
+                // vortices: Prandtl's lifting line scales a wing's
+                // circulation by AR/(AR + 2), AR = s/c (→ 1 in 2-D).
+                let span = geom.chord(flow.omega_on[0], flow.omega_on[1]);
+                flow.finite = span / (span + 2.0 * flow.chord);
+            }
+        }
+    }
+}
+
+/// Each corner's velocity relative to the air (`wind` at the particles, or
+/// still air).
+#[inline(always)]
+fn corner_velocities(corners: [usize; 3], v: &[V3], wind: Option<&[V3]>) -> [V3; 3] {
+    let [a, b, c] = corners;
+    match wind {
+        Some(g) => [v[a] - g[a], v[b] - g[b], v[c] - g[c]],
+        None => [v[a], v[b], v[c]],
+    }
+}
+
+/// The per-triangle terms of [`unsteady_forces`], from each intact
+/// triangle's [`Flow`].
+#[allow(clippy::too_many_arguments)]
+fn per_triangle(
+    law: &UnsteadyAero,
+    model: &Model,
+    v: &[V3],
+    wind: Option<&[V3]>,
+    triangles: &[Option<TriangleMotion>],
+    flows: &[Flow],
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
 ) {
@@ -295,31 +462,36 @@ fn per_triangle(
     let rho_added = rho * law.added_mass;
     let third = 1.0 / 3.0;
     let half_pi_rho = std::f64::consts::FRAC_PI_2 * rho;
-    let damped = law.rotational_damping != 0.0 || law.rotational_damping_quadratic != 0.0;
-    for ((tri, tm), geom) in model.triangles.iter().zip(triangles).zip(&model.surfaces) {
+    let damped = damped(law);
+    for (((tri, tm), geom), flow) in model
+        .triangles
+        .iter()
+        .zip(triangles)
+        .zip(&model.surfaces)
+        .zip(flows)
+    {
         let Some(tm) = tm else {
             continue;
         };
         let geom: &SurfaceGeometry = geom;
-        let TriangleMotion {
-            big_n,
-            n2,
-            n,
-            area,
-            n_dot,
-            corner_sum,
-        } = *tm;
+        let TriangleMotion { n, area, n_dot, .. } = *tm;
+        let Flow {
+            grad_b,
+            grad_c,
+            u,
+            u2,
+            qn,
+            omega,
+            w2,
+            across,
+            speed,
+            cd_par,
+            chord,
+            finite,
+            ..
+        } = *flow;
         let corners = tri.corners;
-        let [a, b, c] = corners;
-        let (e1, e2) = (x[b] - x[a], x[c] - x[a]);
-        let w = match wind {
-            Some(g) => [v[a] - g[a], v[b] - g[b], v[c] - g[c]],
-            None => [v[a], v[b], v[c]],
-        };
-        // The dual basis ∇β of the corners.
-        let inv_n2 = 1.0 / n2;
-        let grad_b = e2.cross(&big_n) * inv_n2;
-        let grad_c = big_n.cross(&e1) * inv_n2;
+        let w = corner_velocities(corners, v, wind);
         let grads = [-(grad_b + grad_c), grad_b, grad_c];
         let mut f = [V3::zeros(); 3];
         // In-plane vector whose projection on the corner gradients gives
@@ -328,38 +500,17 @@ fn per_triangle(
 
         if rho_added > 0.0 {
             let mut q = V3::zeros();
-            let nn = n * n.transpose();
             for k in 0..3 {
                 let m = rho_added * geom.added_mass[k];
                 let wn = n.dot(&w[k]);
                 f[k] -= (n * n_dot.dot(&w[k]) + n_dot * wn) * m;
                 q += w[k] * (m * wn);
-                added[corners[k]] += nn * m;
             }
             // Munk couple C = −Q × n: n × C = −Q∥.
             couple_arm -= q - n * n.dot(&q);
         }
 
-        // The air's velocity relative to the triangle, less the share
-        // (1 − rotation_drag) of what the plate's rotation gives it.
-        let mut u = -(w[0] + w[1] + w[2]) * third;
-        if let Some(p) = plates.get(geom.plate).filter(|p| p.area > 0.0) {
-            let r = corner_sum * third - p.centre;
-            u += p.omega.cross(&r) * (1.0 - law.rotation_drag);
-        }
-        let u2 = u.norm_squared();
-        let speed = u2.sqrt();
         if u2 > f64::MIN_POSITIVE {
-            let qn = u.dot(&n);
-            let u_plane = u - n * qn;
-            let along = u_plane.norm();
-            // `chord` reads a direction, whatever its length: no division.
-            let cd_par = if along > 0.0 {
-                let chord = geom.chord(u_plane.dot(&grad_b), u_plane.dot(&grad_c));
-                cd_parallel(law, along, chord)
-            } else {
-                law.cd_parallel
-            };
             let k_normal = law.cd_normal - cd_par - 2.0 * law.translational_lift;
             let drag = (u * (cd_par + k_normal * qn * qn / u2)
                 + n * (2.0 * law.translational_lift * qn))
@@ -369,19 +520,8 @@ fn per_triangle(
             }
         }
 
-        let omega = n.cross(&n_dot);
-        let w2 = omega.norm_squared();
-        if w2 > f64::MIN_POSITIVE && (law.rotational_lift != 0.0 || damped) {
-            // Directions for `chord` unnormalised (it reads only their
-            // direction); |ω| only where μ₂ needs it.
-            let across = n.cross(&omega);
-            let chord = geom.chord(across.dot(&grad_b), across.dot(&grad_c));
+        if turning(law, w2) {
             if law.rotational_lift != 0.0 {
-                // A plate of finite span s along the axis sheds tip
-                // vortices: Prandtl's lifting line scales a wing's
-                // circulation by AR/(AR + 2), AR = s/c (→ 1 in 2-D).
-                let span = geom.chord(omega.dot(&grad_b), omega.dot(&grad_c));
-                let finite = span / (span + 2.0 * chord);
                 let lift = u.cross(&omega)
                     * (half_rho * law.rotational_lift * finite * chord * area * third);
                 for fk in &mut f {
@@ -404,6 +544,31 @@ fn per_triangle(
 
         for k in 0..3 {
             force[corners[k]] += f[k] + n * grads[k].dot(&couple_arm);
+        }
+    }
+    // The added-mass tensors in a pass of their own (the same sums in the
+    // same order): interleaved with the forces, the read-modify-write of
+    // each corner's 3 × 3 tensor stalled the loop (perf).
+    if rho_added > 0.0 {
+        added_mass_tensors(rho_added, model, triangles, added);
+    }
+}
+
+/// Adds each intact triangle's m_k n nᵀ to its corners' tensors in `added`
+/// (m_k its corner's share of the plate's added mass times `rho_added`).
+fn added_mass_tensors(
+    rho_added: f64,
+    model: &Model,
+    triangles: &[Option<TriangleMotion>],
+    added: &mut [Matrix3<f64>],
+) {
+    for ((tri, tm), geom) in model.triangles.iter().zip(triangles).zip(&model.surfaces) {
+        let Some(tm) = tm else {
+            continue;
+        };
+        let nn = tm.n * tm.n.transpose();
+        for (&i, &share) in tri.corners.iter().zip(&geom.added_mass) {
+            added[i] += nn * (rho_added * share);
         }
     }
 }
