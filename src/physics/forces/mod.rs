@@ -321,8 +321,10 @@ pub fn solve_mass(m: f64, added: &Matrix3<f64>, f: &V3) -> V3 {
     let c22 = a * b - d * d;
     let det = a * c00 + d * c01 + e * c02;
     if det == 0.0 {
-        // Only a non-finite M gets here (a NaN determinant goes on and the
-        // divergence check reports it).
+        // K is positive definite, so det > 0 unless m³ underflows (masses
+        // below about 1e-100 kg): then the particle's own mass answers. A
+        // NaN determinant (a non-finite M) goes on, and the divergence check
+        // reports it.
         return f / m;
     }
     let inv = 1.0 / det;
