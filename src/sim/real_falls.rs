@@ -541,12 +541,13 @@ impl BinIntervals {
 }
 
 /// The real table's sampling uncertainty: per bin of [`SQUARE_BINS`], the
-/// bin's tumbling and chaotic drops resampled with replacement
-/// `resamples` times (seeded by `seed`), each resample's [`BinStats`] computed as [`real_table`] does,
-/// and the [`BOOTSTRAP_LEVEL`] percentile interval of each statistic. A
-/// bin of 15 drops (the smallest squares) pins its medians far less than
-/// one of 43: a simulated value inside the interval is as close as the
-/// real data can tell (docs/real-falls.md, "How sure the real side is").
+/// bin's tumbling and chaotic drops resampled with replacement `resamples`
+/// times (seeded by `seed`), each resample's [`BinStats`] computed as
+/// [`real_table`] does, and the [`BOOTSTRAP_LEVEL`] percentile interval of
+/// each statistic. A bin of 14 moving drops (the smallest squares) pins its
+/// medians far less than one of 30: a simulated value inside the interval
+/// is as close as the real data can tell (docs/real-falls.md, "How sure the
+/// real side is").
 pub fn real_intervals(real: &[RealSegment], resamples: usize, seed: u64) -> Vec<BinIntervals> {
     real_bins(real)
         .iter()
@@ -625,6 +626,7 @@ impl RealBin {
     }
 }
 
+/// The real segments of each bin of [`SQUARE_BINS`], each measured once.
 fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
     SQUARE_BINS
         .iter()
