@@ -407,8 +407,7 @@ fn relative_flows(
 /// Second pass: each intact triangle's square roots, chord look-ups and
 /// the coefficients they give ([`Flow`]).
 fn flow_coefficients(law: &UnsteadyAero, model: &Model, flows: &mut [Flow]) {
-    let surfaces = &model.surfaces[..flows.len()];
-    for (flow, geom) in flows.iter_mut().zip(surfaces) {
+    for (flow, geom) in flows.iter_mut().zip(&model.surfaces) {
         flow.speed = flow.u2.sqrt();
         let along = flow.along2.sqrt();
         // `chord` reads a direction, whatever its length: no division.
@@ -419,7 +418,7 @@ fn flow_coefficients(law: &UnsteadyAero, model: &Model, flows: &mut [Flow]) {
             law.cd_parallel
         };
     }
-    for (flow, geom) in flows.iter_mut().zip(surfaces) {
+    for (flow, geom) in flows.iter_mut().zip(&model.surfaces) {
         if turning(law, flow.w2) {
             flow.chord = geom.chord(flow.across_on[0], flow.across_on[1]);
             if law.rotational_lift != 0.0 {
