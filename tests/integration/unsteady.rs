@@ -375,7 +375,17 @@ fn unsteady_leaf_files_read_defaults_and_refuse_bad_values() {
     );
     for (line, field, reason) in [
         ("air_density = 0.0", "aero.air_density", "must be > 0"),
-        ("air_density = -1.2", "aero.air_density", "must be ≥ 0"),
+        (
+            "air_density = -1.2",
+            "aero.air_density",
+            "must be > 0 kg/m³",
+        ),
+        (
+            "solid_density = -800",
+            "aero.solid_density",
+            "must be > 0 kg/m³",
+        ),
+        ("cd_normal = 0", "aero.cd_normal", "must be > 0, got 0"),
         (
             "kinematic_viscosity = -1e-5",
             "aero.kinematic_viscosity",

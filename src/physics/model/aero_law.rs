@@ -333,17 +333,21 @@ impl UnsteadyAero {
             if !value.is_finite() {
                 return Err(err(name, format!("must be a finite number, got {value}")));
             }
-            if value < 0.0 {
-                return Err(err(name, format!("must be ≥ 0, got {value}")));
-            }
         }
+        // The strictly positive ones first, so that a negative density is
+        // told the rule it must meet (> 0), not the looser one (≥ 0).
         for (name, value, unit) in [
-            ("air_density", self.air_density, "kg/m³"),
-            ("solid_density", self.solid_density, "kg/m³"),
+            ("air_density", self.air_density, " kg/m³"),
+            ("solid_density", self.solid_density, " kg/m³"),
             ("cd_normal", self.cd_normal, ""),
         ] {
             if value <= 0.0 {
-                return Err(err(name, format!("must be > 0 {unit}, got {value}")));
+                return Err(err(name, format!("must be > 0{unit}, got {value}")));
+            }
+        }
+        for (name, value) in self.coefficients() {
+            if value < 0.0 {
+                return Err(err(name, format!("must be ≥ 0, got {value}")));
             }
         }
         if self.rotation_drag > 1.0 {
