@@ -213,18 +213,79 @@ pub fn snap_to_frame(dt: f64, frame_dt: f64) -> f64 {
     frame_dt / n
 }
 
+/// (m_i I + M_i)^(-1/2) for every particle, M_i its rest added-mass tensor
+/// under the unsteady law (zero for a fixed particle, m_i^(-1/2) I for a
+/// member of a rigid body), or `None` where the spring modes see the
+/// particles' own masses only: under the other laws, without added mass,
+/// and where a spring can break (a torn triangle takes its added mass
+/// with it, and its corners are then as light as their own mass).
+///
+/// Why: an explicit step solves (m_i I + M_i) a_i = f_i
+/// ([`crate::physics::forces::Forces::acceleration`]), so its spring
+/// limit is set by λ_max((M + M_a)⁻¹ K), at most λ_max(M⁻¹ K): the air a
+/// leaf's flaps move along their normals slows their bending and
+/// stretching modes (prototype A: ω_max 636 against 743 rad/s). At rest
+/// as the springs' stiffness is: a leaf turning as a whole turns its
+/// tensors with its springs and keeps the spectrum.
+fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>>> {
+    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
+        return None;
+    };
+    if law.air_density * law.added_mass <= 0.0
+        || model.springs.iter().any(|s| s.break_strain.is_some())
+    {
+        return None;
+    }
+    let tensors = crate::physics::forces::unsteady::rest_added_mass_tensors(law, model);
+    let mut in_body = vec![false; model.len()];
+    for body in &model.rigid {
+        for &i in &body.members {
+            in_body[i] = true;
+        }
+    }
+    let roots = (0..model.len())
+        .map(|i| {
+            let m = model.mass[i];
+            if !free[i] {
+                Matrix3::zeros()
+            } else if in_body[i] {
+                Matrix3::identity() * m.powf(-0.5)
+            } else {
+                let eig = (Matrix3::identity() * m + tensors[i]).symmetric_eigen();
+                let scale = Matrix3::from_diagonal(&eig.eigenvalues.map(|l| l.powf(-0.5)));
+                eig.eigenvectors * scale * eig.eigenvectors.transpose()
+            }
+        })
+        .collect();
+    Some(roots)
+}
+
 /// Computes the estimate at the rest shape.
 pub fn estimate(model: &Model) -> StabilityEstimate {
     let n = model.len();
     let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();
     let mut warnings = Vec::new();
+    let roots = effective_mass_roots(model, &free);
+    // |(m_i I + M_i)^(-1/2) v|² = vᵀ (m_i I + M_i)⁻¹ v: particle i's inverse
+    // mass along v, times |v|².
+    let inverse_mass_along = |r: &[Matrix3<f64>], i: usize, v: &V3| (r[i] * v).norm_squared();
 
-    // Bounds and the stiffest spring.
+    // Bounds and the stiffest spring. A spring's k bᵀ M⁻¹ b (b its unit
+    // direction on its two particles) bounds λ_max(M⁻¹K) from below, the
+    // effective masses' M included.
     let mut omega2_lower: f64 = 0.0;
     let mut stiffest = None;
     let mut row_sum = vec![0.0; n];
     for (k, s) in model.springs.iter().enumerate() {
-        let rate = s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]);
+        let rate = match &roots {
+            Some(r) => {
+                let d = model.rest_position[s.i] - model.rest_position[s.j];
+                let l = d.norm();
+                let dir = if l > 0.0 { d / l } else { V3::zeros() };
+                s.stiffness * (inverse_mass_along(r, s.i, &dir) + inverse_mass_along(r, s.j, &dir))
+            }
+            None => s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]),
+        };
         if rate > omega2_lower {
             omega2_lower = rate;
             stiffest = Some(k);
@@ -252,12 +313,16 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
             row_sum[i] += 0.5 * k * gi.norm() * total;
         }
         for (&i, gi) in ids.iter().zip(g) {
-            let rate = k * gi.norm_squared() * model.inv_mass[i];
+            let rate = match &roots {
+                Some(r) => k * inverse_mass_along(r, i, gi),
+                None => k * gi.norm_squared() * model.inv_mass[i],
+            };
             if rate > omega2_lower {
                 omega2_lower = rate;
             }
         }
     }
+    // With added mass (m_i I + M_i ≥ m_i I) this stays an upper bound.
     let omega2_upper = (0..n)
         .filter(|&i| free[i])
         .map(|i| 2.0 * row_sum[i] / model.mass[i])
@@ -284,22 +349,36 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
             }
         })
         .collect();
+    // M^(-1/2) v at particle i: the effective mass's root where the law
+    // adds mass, else v/√m_i (in the order the scalar products always had).
+    let root = |i: usize, v: V3| match &roots {
+        Some(r) => r[i] * v,
+        None => v * inv_sqrt_m[i],
+    };
+    // g · M^(-1/2) y at particle i (M^(-1/2) is symmetric).
+    let root_dot = |i: usize, g: &V3, y: &V3| match &roots {
+        Some(r) => (r[i] * g).dot(y),
+        None => g.dot(y) * inv_sqrt_m[i],
+    };
     let apply = |y: &[V3], out: &mut [V3]| {
         out.fill(V3::zeros());
         for &(i, j, dir, k) in &dirs {
-            let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];
+            let u = root(i, y[i]) - root(j, y[j]);
             let f = dir * (k * dir.dot(&u));
-            out[i] += f * inv_sqrt_m[i];
-            out[j] -= f * inv_sqrt_m[j];
+            out[i] += root(i, f);
+            out[j] -= root(j, f);
         }
         for (ids, g, k, _) in &hinge_grads {
             let gy: f64 = ids
                 .iter()
                 .zip(g)
-                .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+                .map(|(&i, gi)| root_dot(i, gi, &y[i]))
                 .sum();
             for (&i, gi) in ids.iter().zip(g) {
-                out[i] += gi * (k * gy * inv_sqrt_m[i]);
+                out[i] += match &roots {
+                    Some(r) => r[i] * gi * (k * gy),
+                    None => gi * (k * gy * inv_sqrt_m[i]),
+                };
             }
         }
     };
@@ -359,20 +438,20 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         + crate::physics::forces::unsteady::drag_rate(model);
     let mut c_eff = 0.0;
     for (s, &(i, j, dir, _)) in model.springs.iter().zip(&dirs) {
-        let u = y[i] * inv_sqrt_m[i] - y[j] * inv_sqrt_m[j];
+        let u = root(i, y[i]) - root(j, y[j]);
         c_eff += s.damping * dir.dot(&u).powi(2);
     }
     for (ids, g, _, c) in &hinge_grads {
         let gq: f64 = ids
             .iter()
             .zip(g)
-            .map(|(&i, gi)| gi.dot(&y[i]) * inv_sqrt_m[i])
+            .map(|(&i, gi)| root_dot(i, gi, &y[i]))
             .sum();
         c_eff += c * gq * gq;
     }
-    for i in 0..n {
-        let q = y[i] * inv_sqrt_m[i];
-        c_eff += q.dot(&(air.blocks[i] * q));
+    for (i, block) in air.blocks.iter().enumerate() {
+        let q = root(i, y[i]);
+        c_eff += q.dot(&(block * q));
     }
     // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
     // an unbounded mode, not a zero one: `max` would make it 0 and hide it.

@@ -775,6 +775,25 @@ pub fn drag_rate(model: &Model) -> f64 {
     particles.max(bodies)
 }
 
+/// Each particle's added-mass tensor M_i = Σ m_k n nᵀ at the rest shape
+/// (the sum over the triangles at it, m_k its corner's share times ρ and
+/// the law's factor), kg: what [`super::Forces::acceleration`] solves with
+/// at a shape where every triangle lies as at rest.
+pub fn rest_added_mass_tensors(law: &UnsteadyAero, model: &Model) -> Vec<Matrix3<f64>> {
+    let x = &model.rest_position;
+    let mut tensor = vec![Matrix3::<f64>::zeros(); model.len()];
+    for (t, tri) in model.triangles.iter().enumerate() {
+        let [a, b, c] = tri.corners;
+        let nrm = (x[b] - x[a]).cross(&(x[c] - x[a])).normalize();
+        for (k, &i) in tri.corners.iter().enumerate() {
+            tensor[i] += nrm
+                * nrm.transpose()
+                * (law.air_density * law.added_mass * model.surfaces[t].added_mass[k]);
+        }
+    }
+    tensor
+}
+
 /// [`drag_rate`] split: (free particles, rigid bodies).
 pub fn drag_rate_parts(model: &Model) -> (f64, f64) {
     let AeroLaw::Unsteady(law) = &model.aero else {
@@ -791,16 +810,7 @@ pub fn drag_rate_parts(model: &Model) -> (f64, f64) {
             body_of[i] = Some(b);
         }
     }
-    let mut tensor = vec![Matrix3::<f64>::zeros(); n];
-    for (t, tri) in model.triangles.iter().enumerate() {
-        let [a, b, c] = tri.corners;
-        let nrm = (x[b] - x[a]).cross(&(x[c] - x[a])).normalize();
-        for (k, &i) in tri.corners.iter().enumerate() {
-            tensor[i] += nrm
-                * nrm.transpose()
-                * (law.air_density * law.added_mass * model.surfaces[t].added_mass[k]);
-        }
-    }
+    let tensor = rest_added_mass_tensors(law, model);
     let mut normal_rate = vec![0.0; n];
     let mut plane_rate = vec![0.0; n];
     for (t, tri) in model.triangles.iter().enumerate() {
