@@ -3,12 +3,12 @@
 # every round), so that a neighbour's load or a slow spell of the machine falls
 # on every binary alike, and reports per benchmark the median over rounds of
 # criterion's own median, the spread (min–max) and the ratio to the first
-# binary. With --ratio NUM DEN it also reports, per binary, the ratio of two
-# benchmarks taken round by round (for aero_laws: the unsteady law's drop over
+# binary. With --ratio NUM DEN (repeatable) it also reports, per binary, the
+# ratio of two benchmarks taken round by round (for aero_laws: the unsteady law's drop over
 # the linear law's, the figure issue 17 bounds). Machines of one kind differ
 # by 2x and are noisy: only ratios measured in one run mean anything.
 #
-#   bash benches/ab-criterion.sh [--rounds N] [--filter F] [--ratio NUM DEN] BENCH_BINARY...
+#   bash benches/ab-criterion.sh [--rounds N] [--filter F] [--ratio NUM DEN]... BENCH_BINARY...
 #
 # A bench binary is what `cargo bench --bench NAME --no-run` builds (it prints
 # its path); copy it aside before building the other revision, e.g.
@@ -25,13 +25,12 @@
 set -euo pipefail
 rounds=7
 filter=""
-num=""
-den=""
+ratios=""
 while [ $# -gt 0 ]; do
   case "$1" in
     --rounds) rounds=$2; shift 2 ;;
     --filter) filter=$2; shift 2 ;;
-    --ratio) num=$2; den=$3; shift 3 ;;
+    --ratio) ratios="$ratios $2 $3"; shift 3 ;;
     -*) echo "unknown option $1" >&2; exit 2 ;;
     *) break ;;
   esac
@@ -48,10 +47,10 @@ for b in "$@"; do
   fi
   bins+=("$(realpath "$b")")
 done
-python3 - "$rounds" "$filter" "$num" "$den" "${bins[@]}" <<'EOF'
+python3 - "$rounds" "$filter" "$ratios" "${bins[@]}" <<'EOF'
 import re, statistics, subprocess, sys
-rounds, flt, num, den = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
-bins = sys.argv[5:]
+rounds, flt, pairs = int(sys.argv[1]), sys.argv[2], sys.argv[3].split()
+bins = sys.argv[4:]
 unit = {"ns": 1e-9, "µs": 1e-6, "us": 1e-6, "ms": 1e-3, "s": 1.0}
 # times[bin][bench] = [seconds per round]
 times = {b: {} for b in bins}
@@ -85,7 +84,7 @@ for n in names:
             print(f"  {b}: not run")
             continue
         print(f"  {b}: {fmt(v)}  ×{statistics.median(v) / base:.3f} of the first")
-if num and den:
+for num, den in zip(pairs[0::2], pairs[1::2]):
     print(f"{num} / {den}, round by round: median (min–max)")
     for b in bins:
         a, d = times[b].get(num), times[b].get(den)

@@ -139,7 +139,8 @@ pub fn cd_parallel(law: &UnsteadyAero, speed: f64, chord: f64) -> f64 {
 /// Adds the unsteady law's velocity-dependent forces on every triangle of
 /// `model` that is not torn (`torn[t]`; an empty mask tears none), and
 /// each corner's added-mass tensor m_k n nᵀ into `added` (which the caller
-/// zeroes). `wind` holds G at every particle, or is `None` in still air.
+/// zeroes; an empty slice skips them, for callers that read only the
+/// forces). `wind` holds G at every particle, or is `None` in still air.
 /// See the module docs for the equations.
 #[allow(clippy::too_many_arguments)]
 pub fn unsteady_forces(
@@ -548,7 +549,7 @@ fn per_triangle(
     // The added-mass tensors in a pass of their own (the same sums in the
     // same order): interleaved with the forces, the read-modify-write of
     // each corner's 3 × 3 tensor stalled the loop (perf).
-    if rho_added > 0.0 {
+    if rho_added > 0.0 && !added.is_empty() {
         added_mass_tensors(rho_added, model, triangles, added);
     }
 }
@@ -938,13 +939,12 @@ pub fn free_particle_rate(
         .collect();
     let mut f_plus = vec![V3::zeros(); n];
     let mut f_base = vec![V3::zeros(); n];
-    let mut added = vec![Matrix3::zeros(); n];
     let mut v = vec![V3::zeros(); n];
     let mut worst: f64 = 0.0;
     for (vel, spin) in sampled_motions(&axes, v_ref, q_ref, omega_ref) {
         let base: Vec<V3> = (0..n).map(|i| vel + spin.cross(&(x[i] - centre))).collect();
         f_base.fill(V3::zeros());
-        unsteady_forces(law, model, x, &base, None, &[], &mut f_base, &mut added);
+        unsteady_forces(law, model, x, &base, None, &[], &mut f_base, &mut []);
         // A deterministic start with every component.
         let mut y: Vec<V3> = (0..n)
             .map(|i| {
@@ -968,7 +968,7 @@ pub fn free_particle_rate(
                 v[i] = base[i] + y[i] * eps;
             }
             f_plus.fill(V3::zeros());
-            unsteady_forces(law, model, x, &v, None, &[], &mut f_plus, &mut added);
+            unsteady_forces(law, model, x, &v, None, &[], &mut f_plus, &mut []);
             for i in 0..n {
                 y[i] = if free[i] {
                     inverse[i] * (f_plus[i] - f_base[i]) / eps
