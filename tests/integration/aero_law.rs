@@ -15,13 +15,7 @@ use leafmagic::sim::drop::{DropParams, drop_leaf};
 
 /// Prototype A with its `[aero]` table replaced by `aero` (TOML lines).
 fn with_aero(aero: &str) -> String {
-    let start = PROTOTYPE_A.find("[aero]").unwrap();
-    let end = start + PROTOTYPE_A[start..].find("\n[bounds]").unwrap();
-    format!(
-        "{}[aero]\n{aero}\n{}",
-        &PROTOTYPE_A[..start],
-        &PROTOTYPE_A[end..]
-    )
+    crate::common::with_aero(PROTOTYPE_A, aero)
 }
 
 fn error(text: &str) -> String {

@@ -66,3 +66,11 @@ pub fn flat_triangle(mass_each: f64, alpha_n: f64, alpha_t: f64) -> Model {
     }];
     Model::new(p).unwrap()
 }
+
+/// A leaf file's text (`leaf`, e.g. an embedded prototype) with its
+/// `[aero]` table replaced by `aero` (TOML lines).
+pub fn with_aero(leaf: &str, aero: &str) -> String {
+    let start = leaf.find("[aero]").unwrap();
+    let end = start + leaf[start..].find("\n[bounds]").unwrap();
+    format!("{}[aero]\n{aero}\n{}", &leaf[..start], &leaf[end..])
+}

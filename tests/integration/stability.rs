@@ -111,13 +111,7 @@ fn unsteady_prototype(p: &str, extra: &str) -> Model {
         "a" => leafmagic::leaf::PROTOTYPE_A,
         _ => leafmagic::leaf::PROTOTYPE_B,
     };
-    let start = text.find("[aero]").unwrap();
-    let end = start + text[start..].find("\n[bounds]").unwrap();
-    let text = format!(
-        "{}[aero]\nlaw = \"unsteady\"\n{extra}\n{}",
-        &text[..start],
-        &text[end..]
-    );
+    let text = crate::common::with_aero(text, &format!("law = \"unsteady\"\n{extra}"));
     LeafSpec::from_toml(&text, "leaf.toml")
         .unwrap()
         .model()

@@ -334,14 +334,7 @@ fn a_plate_let_go_flat_accelerates_at_g_m_over_m_plus_m_a() {
 
 /// Prototype A with its `[aero]` table replaced by `aero` (TOML lines).
 fn with_aero(aero: &str) -> String {
-    use leafmagic::leaf::PROTOTYPE_A;
-    let start = PROTOTYPE_A.find("[aero]").unwrap();
-    let end = start + PROTOTYPE_A[start..].find("\n[bounds]").unwrap();
-    format!(
-        "{}[aero]\n{aero}\n{}",
-        &PROTOTYPE_A[..start],
-        &PROTOTYPE_A[end..]
-    )
+    crate::common::with_aero(leafmagic::leaf::PROTOTYPE_A, aero)
 }
 
 /// `law = "unsteady"` reads with air at 20 °C and overrides; bad values and
