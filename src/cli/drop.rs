@@ -132,6 +132,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
             "omega_max": est.omega_max,
             "omega_bounds": [est.omega_lower, est.omega_upper],
             "power_iteration_converged": est.power_converged,
+            "omega_with_added_mass": est.with_added_mass,
             "zeta": est.zeta,
             "drag_rate": est.drag_rate,
             "tumbling_rate": est.tumbling_rate,

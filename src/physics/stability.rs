@@ -42,12 +42,16 @@ const UNCONVERGED_MARGIN: f64 = 1.1;
 pub struct StabilityEstimate {
     /// Best estimate of the highest spring-network frequency ω_max, rad/s.
     pub omega_max: f64,
-    /// Lower bound √max_s k_s (1/mᵢ + 1/mⱼ), rad/s.
+    /// Lower bound √max_s k_s (1/mᵢ + 1/mⱼ), rad/s (with the added mass,
+    /// √max_s k_s bᵀ(M + M_a)⁻¹b).
     pub omega_lower: f64,
     /// Upper bound from block Gershgorin, √(2 maxᵢ Σ k / mᵢ), rad/s.
     pub omega_upper: f64,
     /// Whether the power iteration converged (else ω_max leans on the bounds).
     pub power_converged: bool,
+    /// Whether the spring modes count the unsteady law's added mass, those
+    /// of (M + M_a)⁻¹K (docs/numerics.md, "Added mass").
+    pub with_added_mass: bool,
     /// Damping rate 2ζω of the top mode (dashpots plus air), 1/s.
     pub mode_damping_rate: f64,
     /// Damping ratio ζ of the top mode.
@@ -266,6 +270,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();
     let mut warnings = Vec::new();
     let roots = effective_mass_roots(model, &free);
+    let with_added_mass = roots.is_some();
     // |(m_i I + M_i)^(-1/2) v|² = vᵀ (m_i I + M_i)⁻¹ v: particle i's inverse
     // mass along v, times |v|².
     let inverse_mass_along = |r: &[Matrix3<f64>], i: usize, v: &V3| (r[i] * v).norm_squared();
@@ -491,6 +496,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         omega_lower: omega2_lower.sqrt(),
         omega_upper: omega2_upper.sqrt(),
         power_converged: converged,
+        with_added_mass,
         mode_damping_rate: c_eff,
         zeta,
         drag_rate: air.rate_max.max(quadratic_rate),

@@ -123,7 +123,8 @@ fn unsteady_prototype(p: &str, extra: &str) -> Model {
 /// dense generalised problem's top mode, within the mass-only bounds and
 /// below the mass-only mode (A's flaps carry air along their normals: 636
 /// against 743 rad/s; B's top mode is in-plane and barely moves). Without
-/// added mass (`added_mass = 0`) the estimate is the mass-only one.
+/// added mass (`added_mass = 0`), with a spring that can break, and under
+/// the linear law the estimate is the mass-only one, and says so.
 #[test]
 fn added_mass_slows_the_spring_modes_as_the_dense_problem_says() {
     for p in ["a", "b"] {
@@ -139,8 +140,19 @@ fn added_mass_slows_the_spring_modes_as_the_dense_problem_says() {
         );
         assert!(top <= mass_only, "prototype {p}: {top} > {mass_only}");
         assert!(est.omega_lower <= top * (1.0 + 1e-12) && top <= est.omega_upper * (1.0 + 1e-12));
+        assert!(est.with_added_mass, "prototype {p}");
         let without = stability::estimate(&unsteady_prototype(p, "added_mass = 0"));
+        assert!(!without.with_added_mass);
         assert!((without.omega_max - mass_only).abs() < 1e-6 * mass_only);
+        // A spring that can break could tear a triangle and its added
+        // mass away: the mass-only estimate.
+        let mut breakable = unsteady_prototype(p, "");
+        breakable.springs[0].break_strain = Some(0.5);
+        let torn = stability::estimate(&breakable);
+        assert!(!torn.with_added_mass);
+        assert!((torn.omega_max - mass_only).abs() < 1e-6 * mass_only);
+        let linear = LeafSpec::load(p).unwrap().model().unwrap();
+        assert!(!stability::estimate(&linear).with_added_mass);
     }
     let a = stability::estimate(&unsteady_prototype("a", ""));
     let mass_only = dense_spectrum(&unsteady_prototype("a", ""))

@@ -75,8 +75,13 @@ pub fn stability(leaf: &str, model: &Model, est: &StabilityEstimate, steps: &[St
         )?;
         writeln!(
             out,
-            "stiffest mode      ω_max = {:.1} rad/s (bounds {:.1} … {:.1}; power iteration {}), ζ = {:.3}",
+            "stiffest mode      ω_max = {:.1} rad/s{} (bounds {:.1} … {:.1}; power iteration {}), ζ = {:.3}",
             est.omega_max,
+            if est.with_added_mass {
+                " with the added mass"
+            } else {
+                ""
+            },
             est.omega_lower,
             est.omega_upper,
             if est.power_converged {
