@@ -36,7 +36,7 @@ while [ $# -gt 0 ]; do
   esac
 done
 if [ $# -lt 1 ]; then
-  echo "usage: $0 [--rounds N] [--filter F] [--ratio NUM DEN] BENCH_BINARY..." >&2
+  echo "usage: $0 [--rounds N] [--filter F] [--ratio NUM DEN]... BENCH_BINARY..." >&2
   exit 2
 fi
 bins=()

@@ -155,14 +155,8 @@ fn coulomb(candidate: [f64; 2], p_n: f64, ground: &Ground) -> [f64; 2] {
 impl ContactSolver {
     /// A solver for `model` (which may have no ground: then it does nothing).
     pub fn new(model: &Model) -> ContactSolver {
-        let mut body_of = vec![None; model.len()];
-        for (b, body) in model.rigid.iter().enumerate() {
-            for &i in &body.members {
-                body_of[i] = Some(b);
-            }
-        }
         ContactSolver {
-            body_of,
+            body_of: model.body_of(),
             contacts: Vec::new(),
             bodies: Vec::with_capacity(model.rigid.len()),
             resolved: 0,

@@ -241,18 +241,13 @@ fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>
         return None;
     }
     let tensors = crate::physics::forces::unsteady::rest_added_mass_tensors(law, model);
-    let mut in_body = vec![false; model.len()];
-    for body in &model.rigid {
-        for &i in &body.members {
-            in_body[i] = true;
-        }
-    }
+    let body_of = model.body_of();
     let roots = (0..model.len())
         .map(|i| {
             let m = model.mass[i];
             if !free[i] {
                 Matrix3::zeros()
-            } else if in_body[i] {
+            } else if body_of[i].is_some() {
                 Matrix3::identity() * m.powf(-0.5)
             } else {
                 let eig = (Matrix3::identity() * m + tensors[i]).symmetric_eigen();

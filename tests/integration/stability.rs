@@ -13,8 +13,7 @@ use nalgebra::DMatrix;
 /// Dense M^-1/2 K M^-1/2 at the rest shape: springs and hinges.
 fn dense_spectrum(model: &Model) -> Vec<f64> {
     let n = model.len();
-    let k = dense_stiffness(model);
-    let mut k = k;
+    let mut k = dense_stiffness(model);
     for a in 0..3 * n {
         for b in 0..3 * n {
             k[(a, b)] /= (model.mass[a / 3] * model.mass[b / 3]).sqrt();
@@ -153,17 +152,14 @@ fn added_mass_slows_the_spring_modes_as_the_dense_problem_says() {
         assert!((torn.omega_max - mass_only).abs() < 1e-6 * mass_only);
         let linear = LeafSpec::load(p).unwrap().model().unwrap();
         assert!(!stability::estimate(&linear).with_added_mass);
+        if p == "a" {
+            assert!(
+                est.omega_max < 0.9 * mass_only,
+                "{} vs {mass_only}",
+                est.omega_max
+            );
+        }
     }
-    let a = stability::estimate(&unsteady_prototype("a", ""));
-    let mass_only = dense_spectrum(&unsteady_prototype("a", ""))
-        .last()
-        .unwrap()
-        .sqrt();
-    assert!(
-        a.omega_max < 0.9 * mass_only,
-        "{} vs {mass_only}",
-        a.omega_max
-    );
 }
 
 /// The limit the added mass lifts is real: prototype A under the unsteady

@@ -805,12 +805,7 @@ pub fn drag_rate_parts(model: &Model) -> (f64, f64) {
     let q_ref = wind + SPEED_MARGIN * face_on_speed(law, model);
     let x = &model.rest_position;
     let n = model.len();
-    let mut body_of: Vec<Option<usize>> = vec![None; n];
-    for (b, body) in model.rigid.iter().enumerate() {
-        for &i in &body.members {
-            body_of[i] = Some(b);
-        }
-    }
+    let body_of = model.body_of();
     let tensor = rest_added_mass_tensors(law, model);
     let mut normal_rate = vec![0.0; n];
     let mut plane_rate = vec![0.0; n];

@@ -380,6 +380,18 @@ impl Model {
         }
     }
 
+    /// The rigid body each particle belongs to (its index in
+    /// [`Model::rigid`]), `None` for a free particle.
+    pub fn body_of(&self) -> Vec<Option<usize>> {
+        let mut body_of = vec![None; self.len()];
+        for (b, body) in self.rigid.iter().enumerate() {
+            for &i in &body.members {
+                body_of[i] = Some(b);
+            }
+        }
+        body_of
+    }
+
     /// Number of particles.
     pub fn len(&self) -> usize {
         self.mass.len()
