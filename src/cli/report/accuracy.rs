@@ -79,7 +79,7 @@ pub fn sweep(
             "pts",
             "pairwise (finest 3)",
             "stable dt",
-            "diverged at",
+            "unstable at",
             "check dt_max",
             "ratio"
         )?;

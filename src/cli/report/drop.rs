@@ -13,10 +13,14 @@ use std::path::Path;
 
 /// The warning `drop` gives before a fixed step `h` above `limit`, the
 /// estimated stable step of `integrator` (one line, without its newline).
+/// Above the limit the stiffest mode grows every step; it may run away, or
+/// the springs' nonlinearity may hold it in a bounded ringing that no
+/// divergence check stops (docs/accuracy.md, "Stable limits").
 pub fn step_warning(h: f64, integrator: Integrator, limit: f64) -> String {
     format!(
         "warning: dt = {h:.3e} s exceeds the estimated stable step of {integrator} ({limit:.3e} s); \
-         the run will likely diverge"
+         the stiffest mode grows every step: the run will diverge, or end with its springs \
+         ringing step to step, which a 240 Hz trajectory does not show"
     )
 }
 

@@ -31,12 +31,15 @@
 //!
 //! **Divergence.** A run that the simulator stops (non-finite or runaway
 //! state, failed implicit solve) is kept as a row with `diverged = true` and
-//! no error. Between the largest stable and the smallest diverged step of
-//! each explicit scheme, the step count n (h = T/n) is then bisected, so the
-//! observed stability limit is located to about 1 % and can be set against
-//! the estimate that `check` prints. "Stable" means the run reached T: just
-//! above the true limit the growth per step is slight, so a 1 s run may end
-//! before it shows.
+//! no error. A run that reaches T ringing (its springs and hinges
+//! oscillating step to step: [`EndRun::oscillating`]) is kept with
+//! `oscillating = true` and no error: above the stable step the unstable
+//! mode need not run away, the springs' nonlinearity can hold it at a
+//! bounded amplitude for as long as the run lasts (docs/accuracy.md,
+//! "Stable limits"). Between the largest stable and the smallest unstable
+//! step of each explicit scheme, the step count n (h = T/n) is then
+//! bisected, so the observed stability limit is located to about 1 % and
+//! can be set against the estimate that `check` prints.
 //!
 //! **Observed order.** The least-squares slope of log error against log h
 //! over the non-diverged points whose error lies between
@@ -87,6 +90,20 @@ pub const IMPLICIT_MIN_STEP: f64 = 1.0 / 524_288.0;
 /// The stability-limit bisection stops when the step count is known to
 /// this relative precision.
 const LIMIT_PRECISION: f64 = 0.01;
+/// A run that reached T is still unstable when its internal acceleration
+/// (see [`EndRun::internal_acceleration`]) exceeds this many times the
+/// reference's plus [`OSCILLATION_FLOOR`]: above the stable step the
+/// stiffest mode grows each step until the springs' and hinges' geometric
+/// nonlinearity holds it in a bounded step-to-step oscillation (prototype A
+/// under Verlet at 1.11 × dt_max: springs ringing by 1.5 % of their length
+/// for 30 s, never stopped as a runaway; docs/accuracy.md, "Stable
+/// limits"). That oscillation's second difference is some 4 × its amplitude
+/// per step, so over h² it stands orders of magnitude above the smooth
+/// motion's.
+pub const OSCILLATION_FACTOR: f64 = 100.0;
+/// Internal acceleration below this, 1/s² (strain or radians per s²), never
+/// counts as oscillating: a ringing of 1e-6 strain at h = 1 ms reads 4.
+pub const OSCILLATION_FLOOR: f64 = 1.0;
 
 /// Why an accuracy computation could not be done.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -139,6 +156,69 @@ pub struct EndRun {
     pub force_evals: u64,
     /// Why the run stopped early, if it did.
     pub error: Option<SimError>,
+    /// The largest |d²q/dt²| at T over the internal coordinates q (each
+    /// spring's strain l/L − 1 and each hinge's fold angle, rad) from their
+    /// second difference over the last two steps, 1/s²; `None` when the
+    /// run stopped or took fewer than two steps. Smooth motion gives the
+    /// coordinates' real acceleration; a step above the stable limit gives
+    /// its ringing, about 4 × amplitude / h².
+    pub internal_acceleration: Option<f64>,
+}
+
+impl EndRun {
+    /// Whether the run is unstable against `reference`: it stopped, or it
+    /// reached T ringing (its internal acceleration above
+    /// [`OSCILLATION_FACTOR`] × the reference's + [`OSCILLATION_FLOOR`]).
+    pub fn unstable(&self, reference: &Reference) -> bool {
+        self.error.is_some() || self.oscillating(reference)
+    }
+
+    /// Whether the run reached T ringing (see [`Self::unstable`]).
+    pub fn oscillating(&self, reference: &Reference) -> bool {
+        self.internal_acceleration.is_some_and(|a| {
+            a > OSCILLATION_FACTOR * reference.internal_acceleration + OSCILLATION_FLOOR
+        })
+    }
+}
+
+/// The internal coordinates of `state`: each spring's strain l/L − 1 (0 for
+/// a zero-length spring) and each hinge's fold angle, rad (0 for a
+/// degenerate hinge). They do not move with the leaf as a whole, so their
+/// second difference over steps sees only deformation.
+fn internal_coordinates(model: &Model, state: &State) -> Vec<f64> {
+    let x = &state.position;
+    let strains = model.springs.iter().map(|s| {
+        if s.rest_length > 0.0 {
+            (x[s.i] - x[s.j]).norm() / s.rest_length - 1.0
+        } else {
+            0.0
+        }
+    });
+    let angles = model
+        .hinges
+        .iter()
+        .map(|h| crate::physics::forces::dihedral(x, h).map_or(0.0, |(theta, _)| theta));
+    strains.chain(angles).collect()
+}
+
+/// max |q₂ − 2q₁ + q₀| / h² over the coordinates; a fold angle's jump
+/// through ±π is wrapped back.
+fn second_difference(q: &[Vec<f64>; 3], h: f64, springs: usize) -> f64 {
+    let wrap = |d: f64| {
+        let tau = std::f64::consts::TAU;
+        d - tau * (d / tau).round()
+    };
+    (0..q[0].len())
+        .map(|k| {
+            let (d1, d0) = (q[2][k] - q[1][k], q[1][k] - q[0][k]);
+            let dd = if k < springs {
+                d1 - d0
+            } else {
+                wrap(d1) - wrap(d0)
+            };
+            dd.abs() / (h * h)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Runs `model` from `initial` for `steps` steps of `dt` with `integrator`,
@@ -155,13 +235,26 @@ pub fn run_steps(
     let mut sim = Simulator::new(model, integrator);
     let start = Instant::now();
     let mut error = None;
-    for _ in 0..steps {
+    // The coordinates before the last two steps and after the last one:
+    // three evaluations per run, outside the hot loop but for two steps.
+    let mut last: Vec<Vec<f64>> = Vec::with_capacity(3);
+    for k in 0..steps {
+        if k + 2 >= steps {
+            last.push(internal_coordinates(model, &state));
+        }
         if let Err(e) = sim.step(model, &mut state, dt) {
             error = Some(e);
             break;
         }
     }
     let wall_s = start.elapsed().as_secs_f64();
+    let internal_acceleration = match (error.is_none(), <[Vec<f64>; 2]>::try_from(last)) {
+        (true, Ok([q0, q1])) => {
+            let q2 = internal_coordinates(model, &state);
+            Some(second_difference(&[q0, q1, q2], dt, model.springs.len()))
+        }
+        _ => None,
+    };
     if error.is_none() {
         // The clock accumulates round-off over many steps; pin it to the end.
         state.time = t0 + steps as f64 * dt;
@@ -171,6 +264,7 @@ pub fn run_steps(
         wall_s,
         force_evals: sim.force_evaluations(),
         error,
+        internal_acceleration,
     }
 }
 
@@ -199,6 +293,9 @@ pub struct Reference {
     /// Particle positions at T.
     #[serde(skip)]
     pub positions: Vec<V3>,
+    /// The fine run's [`EndRun::internal_acceleration`], 1/s²: how fast
+    /// the leaf's springs and hinges really move at T.
+    pub internal_acceleration: f64,
 }
 
 /// Computes the RK4 reference at T/2^j and T/2^(j+1).
@@ -235,6 +332,7 @@ pub fn reference(
         dt: coarse_h / 2.0,
         self_difference: rms_difference(&coarse.state.position, &fine.state.position, chord),
         positions: fine.state.position,
+        internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
     })
 }
 
@@ -379,7 +477,8 @@ pub struct SweepRow {
     pub integrator: Integrator,
     /// The step, s.
     pub dt: f64,
-    /// RMS particle position error at T over the chord; `None` if diverged.
+    /// RMS particle position error at T over the chord; `None` if the run
+    /// diverged or rang (its end state is no solution to measure).
     pub error: Option<f64>,
     /// Median wall time of the stepping loop over the timed runs, s (up to
     /// the divergence for diverged runs).
@@ -388,6 +487,16 @@ pub struct SweepRow {
     pub force_evals: u64,
     /// The run stopped before T.
     pub diverged: bool,
+    /// The run reached T in a bounded step-to-step oscillation of its
+    /// unstable mode ([`EndRun::oscillating`]).
+    pub oscillating: bool,
+}
+
+impl SweepRow {
+    /// Whether the step is above the stable limit: the run stopped or rang.
+    pub fn unstable(&self) -> bool {
+        self.diverged || self.oscillating
+    }
 }
 
 /// The cheapest run that reached an error target.
@@ -529,19 +638,21 @@ pub fn sweep(
             let dt = step_size(seconds, j);
             let run = timed(model, initial, integrator, dt, 1 << j, settings.runs);
             let diverged = run.error.is_some();
+            let oscillating = run.oscillating(&reference);
             rows.push(SweepRow {
                 integrator,
                 dt,
-                error: (!diverged)
+                error: (!diverged && !oscillating)
                     .then(|| rms_difference(&run.state.position, &reference.positions, chord)),
                 wall_s: run.wall_s,
                 force_evals: run.force_evals,
                 diverged,
+                oscillating,
             });
         }
         let mine = &rows[start..];
         let (stable, diverged) = if settings.locate_limits {
-            locate_limit(model, initial, integrator, seconds, mine)
+            locate_limit(model, initial, integrator, seconds, mine, &reference)
         } else {
             stability_bracket(mine)
         };
@@ -674,11 +785,11 @@ pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
     sxy / sxx
 }
 
-/// The largest step that reached T below every diverged one, and the
-/// smallest diverged step above it, from the sweep's points alone.
+/// The largest stable step below every unstable one (diverged or ringing),
+/// and the smallest unstable step above it, from the sweep's points alone.
 fn stability_bracket(rows: &[SweepRow]) -> (Option<f64>, Option<f64>) {
-    // Rows go from large to small h; the limit is where divergence stops.
-    let last_diverged = rows.iter().rposition(|r| r.diverged);
+    // Rows go from large to small h; the limit is where instability stops.
+    let last_diverged = rows.iter().rposition(SweepRow::unstable);
     match last_diverged {
         None => (rows.first().map(|r| r.dt), None),
         Some(k) => (rows.get(k + 1).map(|r| r.dt), Some(rows[k].dt)),
@@ -693,6 +804,7 @@ fn locate_limit(
     integrator: Integrator,
     seconds: f64,
     rows: &[SweepRow],
+    reference: &Reference,
 ) -> (Option<f64>, Option<f64>) {
     let (stable, diverged) = stability_bracket(rows);
     let (Some(hs), Some(hd)) = (stable, diverged) else {
@@ -705,7 +817,7 @@ fn locate_limit(
     {
         let mid = n_diverged + (n_stable - n_diverged) / 2;
         let run = run_steps(model, initial, integrator, seconds / mid as f64, mid);
-        if run.error.is_some() {
+        if run.unstable(reference) {
             n_diverged = mid;
         } else {
             n_stable = mid;
@@ -731,7 +843,7 @@ fn cheapest(rows: &[SweepRow], tolerance: f64) -> Option<Cheapest> {
 }
 
 /// The header of `accuracy.csv`.
-pub const CSV_HEADER: &str = "integrator,dt,error,wall_s,force_evals,diverged";
+pub const CSV_HEADER: &str = "integrator,dt,error,wall_s,force_evals,diverged,oscillating";
 
 /// The rows as CSV (header [`CSV_HEADER`]); numbers in Rust's shortest
 /// round-trip form; `error` is empty for diverged rows (the run stopped
@@ -744,8 +856,8 @@ pub fn csv(rows: &[SweepRow]) -> String {
         let error = r.error.map_or(String::new(), |e| e.to_string());
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{}",
-            r.integrator, r.dt, error, r.wall_s, r.force_evals, r.diverged
+            "{},{},{},{},{},{},{}",
+            r.integrator, r.dt, error, r.wall_s, r.force_evals, r.diverged, r.oscillating
         );
     }
     out
@@ -780,6 +892,7 @@ mod tests {
             wall_s: 1.0 / dt,
             force_evals: 1,
             diverged,
+            oscillating: false,
         }
     }
 
@@ -811,10 +924,29 @@ mod tests {
 
     #[test]
     fn csv_leaves_the_error_of_diverged_rows_empty() {
-        let text = csv(&[row(4.0, true), row(0.5, false)]);
+        let ringing = SweepRow {
+            error: None,
+            oscillating: true,
+            ..row(2.0, false)
+        };
+        let text = csv(&[row(4.0, true), ringing, row(0.5, false)]);
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], CSV_HEADER);
-        assert_eq!(lines[1], "verlet,4,,0.25,1,true");
-        assert_eq!(lines[2], "verlet,0.5,0.5,2,1,false");
+        assert_eq!(lines[1], "verlet,4,,0.25,1,true,false");
+        assert_eq!(lines[2], "verlet,2,,0.5,1,false,true");
+        assert_eq!(lines[3], "verlet,0.5,0.5,2,1,false,false");
+    }
+
+    /// A step that reached T ringing bounds the stable range as a diverged
+    /// one does.
+    #[test]
+    fn ringing_rows_are_unstable() {
+        let ringing = SweepRow {
+            error: None,
+            oscillating: true,
+            ..row(2.0, false)
+        };
+        let rows = [row(4.0, true), ringing, row(1.0, false), row(0.5, false)];
+        assert_eq!(stability_bracket(&rows), (Some(1.0), Some(2.0)));
     }
 }

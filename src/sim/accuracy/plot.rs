@@ -124,7 +124,7 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, P
             chart
                 .draw_series(
                     rows.iter()
-                        .filter(|r| r.diverged && r.wall_s > 0.0)
+                        .filter(|r| r.unstable() && r.wall_s > 0.0)
                         .map(|r| Cross::new((r.wall_s, diverged_y), 5, c.stroke_width(2))),
                 )
                 .map_err(PlotError::of)?;
@@ -133,7 +133,7 @@ pub fn work_precision_svg(report: &SweepReport, title: &str) -> Result<String, P
         chart
             .draw_series(std::iter::empty::<Circle<(f64, f64), i32>>())
             .map_err(PlotError::of)?
-            .label("diverged (stopped before T)")
+            .label("unstable (stopped, or ringing at T)")
             .legend(|(x, y)| Cross::new((x + 12, y), 5, BLACK.stroke_width(2)));
         chart
             .configure_series_labels()
