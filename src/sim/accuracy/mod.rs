@@ -922,13 +922,18 @@ mod tests {
         assert!(cheapest(&rows, 1e-5).is_none());
     }
 
-    #[test]
-    fn csv_leaves_the_error_of_diverged_rows_empty() {
-        let ringing = SweepRow {
+    /// A row that reached T ringing: no error, not stopped.
+    fn ringing_row(dt: f64) -> SweepRow {
+        SweepRow {
             error: None,
             oscillating: true,
-            ..row(2.0, false)
-        };
+            ..row(dt, false)
+        }
+    }
+
+    #[test]
+    fn csv_leaves_the_error_of_diverged_rows_empty() {
+        let ringing = ringing_row(2.0);
         let text = csv(&[row(4.0, true), ringing, row(0.5, false)]);
         let lines: Vec<&str> = text.lines().collect();
         assert_eq!(lines[0], CSV_HEADER);
@@ -941,11 +946,7 @@ mod tests {
     /// one does.
     #[test]
     fn ringing_rows_are_unstable() {
-        let ringing = SweepRow {
-            error: None,
-            oscillating: true,
-            ..row(2.0, false)
-        };
+        let ringing = ringing_row(2.0);
         let rows = [row(4.0, true), ringing, row(1.0, false), row(0.5, false)];
         assert_eq!(stability_bracket(&rows), (Some(1.0), Some(2.0)));
     }
