@@ -235,8 +235,8 @@ pub fn run_steps(
     let mut sim = Simulator::new(model, integrator);
     let start = Instant::now();
     let mut error = None;
-    // The coordinates before the last two steps and after the last one:
-    // three evaluations per run, outside the hot loop but for two steps.
+    // The coordinates before each of the last two steps (the third, after
+    // the last step, is taken below, outside the clock).
     let mut last: Vec<Vec<f64>> = Vec::with_capacity(3);
     for k in 0..steps {
         if k + 2 >= steps {
@@ -789,8 +789,8 @@ pub fn loglog_slope(points: &[(f64, f64)]) -> f64 {
 /// and the smallest unstable step above it, from the sweep's points alone.
 fn stability_bracket(rows: &[SweepRow]) -> (Option<f64>, Option<f64>) {
     // Rows go from large to small h; the limit is where instability stops.
-    let last_diverged = rows.iter().rposition(SweepRow::unstable);
-    match last_diverged {
+    let last_unstable = rows.iter().rposition(SweepRow::unstable);
+    match last_unstable {
         None => (rows.first().map(|r| r.dt), None),
         Some(k) => (rows.get(k + 1).map(|r| r.dt), Some(rows[k].dt)),
     }
@@ -846,8 +846,8 @@ fn cheapest(rows: &[SweepRow], tolerance: f64) -> Option<Cheapest> {
 pub const CSV_HEADER: &str = "integrator,dt,error,wall_s,force_evals,diverged,oscillating";
 
 /// The rows as CSV (header [`CSV_HEADER`]); numbers in Rust's shortest
-/// round-trip form; `error` is empty for diverged rows (the run stopped
-/// before T, so there is no end state to compare).
+/// round-trip form; `error` is empty for unstable rows (a diverged run
+/// stopped before T; an oscillating one ended ringing, no solution).
 pub fn csv(rows: &[SweepRow]) -> String {
     use std::fmt::Write as _;
     let mut out = String::from(CSV_HEADER);
