@@ -128,6 +128,13 @@ pub struct AeroSpec {
     /// default 1008, paper).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solid_density: Option<f64>,
+    /// Gain on the lagged centre of pressure (unsteady law; default 0, off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure_lag_gain: Option<f64>,
+    /// The centre of pressure's lag in chord transits (unsteady law;
+    /// default 4).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pressure_lag: Option<f64>,
 }
 
 /// The name of an aerodynamic law in a leaf file.
@@ -171,7 +178,7 @@ impl std::str::FromStr for AeroLawName {
 
 /// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
 /// `alpha_t` apart).
-const KEY_LAWS: [(&str, &[AeroLawName]); 15] = {
+const KEY_LAWS: [(&str, &[AeroLawName]); 17] = {
     use AeroLawName::{Quadratic as Q, Unsteady as U};
     [
         ("air_density", &[Q, U]),
@@ -189,6 +196,8 @@ const KEY_LAWS: [(&str, &[AeroLawName]); 15] = {
         ("rotation_drag", &[U]),
         ("buoyancy", &[U]),
         ("solid_density", &[U]),
+        ("pressure_lag_gain", &[U]),
+        ("pressure_lag", &[U]),
     ]
 };
 
@@ -245,11 +254,13 @@ impl AeroSpec {
             rotation_drag: None,
             buoyancy: None,
             solid_density: None,
+            pressure_lag_gain: None,
+            pressure_lag: None,
         }
     }
 
     /// Which optional keys are set.
-    fn set_keys(&self) -> [(&'static str, bool); 15] {
+    fn set_keys(&self) -> [(&'static str, bool); 17] {
         let set = [
             self.air_density.is_some(),
             self.cd_parallel.is_some(),
@@ -266,6 +277,8 @@ impl AeroSpec {
             self.rotation_drag.is_some(),
             self.buoyancy.is_some(),
             self.solid_density.is_some(),
+            self.pressure_lag_gain.is_some(),
+            self.pressure_lag.is_some(),
         ];
         std::array::from_fn(|k| (KEY_LAWS[k].0, set[k]))
     }
@@ -366,6 +379,8 @@ impl AeroSpec {
             rotation_drag: self.rotation_drag.unwrap_or(d.rotation_drag),
             buoyancy: self.buoyancy.unwrap_or(d.buoyancy),
             solid_density: self.solid_density.unwrap_or(d.solid_density),
+            pressure_lag_gain: self.pressure_lag_gain.unwrap_or(d.pressure_lag_gain),
+            pressure_lag: self.pressure_lag.unwrap_or(d.pressure_lag),
         };
         law.validate()?;
         Ok(AeroLaw::Unsteady(law))

@@ -4,7 +4,7 @@
 
 use super::quadratic::quadratic_forces;
 use super::surfaces::surface;
-use super::unsteady::unsteady_forces;
+use super::unsteady::{PressureLag, unsteady_forces_lagged};
 use crate::physics::model::{AeroLaw, Model};
 use nalgebra::{Matrix3, Vector3};
 
@@ -65,10 +65,27 @@ pub fn triangle_aero_solved(
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
 ) {
+    triangle_aero_lagged(model, x, v, wind, torn, force, added, None);
+}
+
+/// [`triangle_aero_solved`] with the unsteady law's lagged centre of
+/// pressure read from, and its angles of attack recorded in, `lag` (the
+/// simulator's [`PressureLag`]; `None` leaves that term out).
+#[allow(clippy::too_many_arguments)]
+pub fn triangle_aero_lagged(
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+    added: &mut [Matrix3<f64>],
+    lag: Option<&mut PressureLag>,
+) {
     match &model.aero {
         AeroLaw::Quadratic(law) => return quadratic_forces(law, model, x, v, wind, torn, force),
         AeroLaw::Unsteady(law) => {
-            return unsteady_forces(law, model, x, v, wind, torn, force, added);
+            return unsteady_forces_lagged(law, model, x, v, wind, torn, force, added, lag);
         }
         AeroLaw::Linear => {}
     }

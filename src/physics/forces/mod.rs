@@ -13,7 +13,7 @@ mod surfaces;
 mod tears;
 pub mod unsteady;
 
-pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_solved};
+pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_lagged, triangle_aero_solved};
 pub use drag::particle_drag;
 pub use gravity::gravity;
 pub use hinges::{MIN_HINGE_HEIGHT_RATIO, dihedral, fold_rate, hinge_rest, hinges};
@@ -81,6 +81,9 @@ pub struct Forces {
     added: Vec<Matrix3<f64>>,
     /// Per object, the wind primitives that cannot reach it are skipped.
     skip: WindSkip,
+    /// The unsteady law's lagged centre of pressure, where the model's law
+    /// has one ([`unsteady::PressureLag`]): state carried from step to step.
+    lag: Option<unsteady::PressureLag>,
 }
 
 impl Forces {
@@ -119,6 +122,11 @@ impl Forces {
                 Vec::new()
             },
             skip: WindSkip::new(model, terms.wind),
+            lag: if terms.aero {
+                unsteady::PressureLag::for_model(model)
+            } else {
+                None
+            },
         }
     }
 
@@ -216,16 +224,27 @@ impl Forces {
         // Moved out for the call (no allocation): the wind borrows self.
         let torn = std::mem::take(&mut self.torn.triangles);
         let mut added = std::mem::take(&mut self.added);
+        let mut lag = self.lag.take();
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
             added.fill(Matrix3::zeros());
-            triangle_aero_solved(model, x, v, wind, &torn, force, &mut added);
+            triangle_aero_lagged(model, x, v, wind, &torn, force, &mut added, lag.as_mut());
         }
         if terms.particle_drag {
             particle_drag(model, v, wind, force);
         }
         self.torn.triangles = torn;
         self.added = added;
+        self.lag = lag;
+    }
+
+    /// Advances the lagged centre of pressure over a step of `h` s from the
+    /// angles of attack of the last evaluation
+    /// ([`unsteady::PressureLag::advance`]); nothing without one.
+    pub fn advance_pressure_lag(&mut self, h: f64) {
+        if let Some(lag) = &mut self.lag {
+            lag.advance(h);
+        }
     }
 
     /// Acceleration a_i = F_i / m_i (eq. 1); zero for fixed particles.

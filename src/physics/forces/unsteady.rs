@@ -93,6 +93,31 @@
 //!   against π μ₂ ρ a⁴ ω|ω| = 0.63 ρ a⁴ ω|ω|);
 //! - buoyancy (optional): ρ (m_i/ρ_s) g upward on every particle.
 //!
+//! # Lagged centre of pressure
+//!
+//! Off by default (`pressure_lag_gain = 0`). In steady flow a plate's
+//! normal force acts f(α) c∥ upstream of mid-chord, f(α) = ¼ (1 − 2α/π):
+//! a quarter chord at small angles (thin-aerofoil theory, which the Munk
+//! couple above already gives), none broadside. Separated flow answers a
+//! changing angle of attack late; dynamic-stall models lag the centre of
+//! pressure behind α by first-order lags measured in the time the flow
+//! takes to cross the chord (Leishman & Beddoes 1989, J. Am. Helicopter
+//! Soc. 34(3)). Here each triangle's α is followed by α_L,
+//! dα_L/dt = (α − α_L)/τ, τ = k c∥/|u| (k = `pressure_lag` chord
+//! transits), and the normal force ½ ρ A C_D⊥ |u| (u·n) n is moved
+//! G c∥ (f(α_L) − f(α)) further upstream along the in-plane flow
+//! (G = `pressure_lag_gain`): a couple, applied as the Munk couple is. On a
+//! gliding plate (α slow) α_L ≈ α and it vanishes; on a turning one it
+//! leads the turn, and since a lag's response falls once the turn is faster
+//! than 1/τ, it drives autorotation up to a rate set by |u|/c∥ and not by
+//! the plate's inertia: the torque balance behind Mahadevan, Ryu & Samuel's
+//! Ω ∝ σ^½ w⁻¹ (1999), which Iversen (1979) found in autorotating plates.
+//! α_L is state: [`PressureLag`], kept by the simulator and advanced after
+//! each step from the angles of the step's last force evaluation. The
+//! stability estimate leaves the term out. Screened on the real squares,
+//! the strips and the disks in docs/real-falls.md, "A lagged centre of
+//! pressure".
+//!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
 //! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.7, C_T = 1.2,
@@ -153,6 +178,25 @@ pub fn unsteady_forces(
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
 ) {
+    unsteady_forces_lagged(law, model, x, v, wind, torn, force, added, None);
+}
+
+/// [`unsteady_forces`] with the lagged centre of pressure: read from `lag`,
+/// and each triangle's angle of attack and lag time recorded in it for
+/// [`PressureLag::advance`] (`None`, or a law with
+/// `pressure_lag_gain = 0`, leaves the term out).
+#[allow(clippy::too_many_arguments)]
+pub fn unsteady_forces_lagged(
+    law: &UnsteadyAero,
+    model: &Model,
+    x: &[V3],
+    v: &[V3],
+    wind: Option<&[V3]>,
+    torn: &[bool],
+    force: &mut [V3],
+    added: &mut [Matrix3<f64>],
+    lag: Option<&mut PressureLag>,
+) {
     SCRATCH.with_borrow_mut(|scratch| {
         let Scratch {
             triangles,
@@ -164,11 +208,133 @@ pub fn unsteady_forces(
         relative_flows(law, model, x, v, wind, triangles, plates, flows);
         flow_coefficients(law, model, flows);
         per_triangle(law, model, v, wind, triangles, flows, force, added);
+        if let Some(lag) = lag.filter(|_| law.pressure_lag_gain > 0.0) {
+            lagged_pressure(law, model, triangles, flows, lag, force);
+        }
     });
     if law.buoyancy {
         let lift = -model.gravity * (law.air_density / law.solid_density);
         for (fi, &m) in force.iter_mut().zip(&model.mass) {
             *fi += lift * m;
+        }
+    }
+}
+
+/// The lagged angle of attack α_L of every triangle: the state of the
+/// law's lagged centre of pressure, carried by the simulator from step to
+/// step (module docs, "Lagged centre of pressure").
+#[derive(Clone, Debug, PartialEq)]
+pub struct PressureLag {
+    /// α_L per triangle, rad; NaN until the triangle has met the air.
+    lagged: Vec<f64>,
+    /// α and τ = k c∥/|u| of each triangle at the last evaluation (NaN:
+    /// no flow over it then).
+    alpha: Vec<f64>,
+    tau: Vec<f64>,
+}
+
+impl PressureLag {
+    /// The state for `model`, all triangles unlagged; `None` unless its
+    /// law is the unsteady one with a lag term (`pressure_lag_gain > 0`).
+    pub fn for_model(model: &Model) -> Option<PressureLag> {
+        let AeroLaw::Unsteady(law) = &model.aero else {
+            return None;
+        };
+        (law.pressure_lag_gain > 0.0).then(|| {
+            let n = model.triangles.len();
+            PressureLag {
+                lagged: vec![f64::NAN; n],
+                alpha: vec![f64::NAN; n],
+                tau: vec![f64::NAN; n],
+            }
+        })
+    }
+
+    /// The lagged angle of attack of triangle `t`, rad (NaN before it has
+    /// met the air).
+    pub fn lagged(&self, t: usize) -> f64 {
+        self.lagged[t]
+    }
+
+    /// Advances α_L over a step of `h` s: dα_L/dt = (α − α_L)/τ solved
+    /// exactly with α and τ held at the last evaluation's,
+    /// α_L ← α + (α_L − α) e^(−h/τ). A triangle meeting the air for the
+    /// first time starts unlagged (α_L = α); one with no flow keeps α_L.
+    pub fn advance(&mut self, h: f64) {
+        for ((lagged, &alpha), &tau) in self.lagged.iter_mut().zip(&self.alpha).zip(&self.tau) {
+            if alpha.is_nan() {
+                continue;
+            }
+            *lagged = if lagged.is_nan() || tau <= 0.0 {
+                alpha
+            } else {
+                alpha + (*lagged - alpha) * (-h / tau).exp()
+            };
+        }
+    }
+}
+
+/// The centre of pressure's offset upstream of mid-chord in steady flow,
+/// in chords: a quarter chord at α = 0 (thin-aerofoil theory), none
+/// broadside, linear between (module docs).
+#[inline]
+pub fn pressure_offset(alpha: f64) -> f64 {
+    0.25 * (1.0 - alpha * std::f64::consts::FRAC_2_PI)
+}
+
+/// The lagged centre of pressure's couple on every intact triangle with
+/// flow over it, and each triangle's α and τ recorded in `lag` (module
+/// docs): the normal force ½ ρ A C_D⊥ |u| (u·n) n moved G c∥ (f(α_L) −
+/// f(α)) upstream along the in-plane flow, applied as normal forces on
+/// the corners as the Munk couple is.
+fn lagged_pressure(
+    law: &UnsteadyAero,
+    model: &Model,
+    triangles: &[Option<TriangleMotion>],
+    flows: &[Flow],
+    lag: &mut PressureLag,
+    force: &mut [V3],
+) {
+    let half_rho = 0.5 * law.air_density;
+    for (t, ((tri, tm), geom)) in model
+        .triangles
+        .iter()
+        .zip(triangles)
+        .zip(&model.surfaces)
+        .enumerate()
+    {
+        lag.alpha[t] = f64::NAN;
+        let Some(tm) = tm else {
+            continue;
+        };
+        let flow = &flows[t];
+        if flow.u2 <= f64::MIN_POSITIVE {
+            continue;
+        }
+        let alpha = (flow.qn.abs() / flow.speed).min(1.0).asin();
+        lag.alpha[t] = alpha;
+        // Broadside (no in-plane flow) there is no upstream and no chord
+        // along the flow: α_L still follows α, no couple acts.
+        if flow.along2 <= f64::MIN_POSITIVE {
+            lag.tau[t] = 0.0;
+            continue;
+        }
+        let chord = geom.chord(flow.along_on[0], flow.along_on[1]);
+        lag.tau[t] = law.pressure_lag * chord / flow.speed;
+        let lagged = lag.lagged[t];
+        if lagged.is_nan() {
+            continue;
+        }
+        let shift =
+            law.pressure_lag_gain * chord * (pressure_offset(lagged) - pressure_offset(alpha));
+        let normal_force = half_rho * tm.area * law.cd_normal * flow.speed * flow.qn;
+        // Offset −ê s upstream (ê the in-plane flow's direction) of the
+        // force F n: couple C = −s F ê × n, so n × C = −s F ê.
+        let e_hat = (flow.u - tm.n * flow.qn) / flow.along2.sqrt();
+        let couple_arm = e_hat * (-shift * normal_force);
+        let grads = [-(flow.grad_b + flow.grad_c), flow.grad_b, flow.grad_c];
+        for (&i, g) in tri.corners.iter().zip(&grads) {
+            force[i] += tm.n * g.dot(&couple_arm);
         }
     }
 }

@@ -168,6 +168,10 @@ impl Simulator {
             Integrator::Implicit => self.step_implicit(model, state, dt)?,
         }
         state.time += dt;
+        // The lagged centre of pressure follows the angles of attack of the
+        // step's last force evaluation (first order in the split; Verlet's
+        // carried acceleration keeps the lag it was evaluated with).
+        self.forces.advance_pressure_lag(dt);
         if let Some(rigid) = &mut self.rigid {
             rigid.project(&model.rigid, state);
         }

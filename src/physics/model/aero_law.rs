@@ -245,6 +245,13 @@ pub struct UnsteadyAero {
     pub buoyancy: bool,
     /// Density of the leaf's material ρ_s for buoyancy, kg/m³.
     pub solid_density: f64,
+    /// G, the gain on the lagged centre of pressure: the normal force acts
+    /// G c∥ (f(α_L) − f(α)) upstream of where it acts in steady flow, α_L
+    /// the angle of attack lagged by [`Self::pressure_lag`] (0, the
+    /// default: no lag term; [`crate::physics::forces::unsteady`]).
+    pub pressure_lag_gain: f64,
+    /// k, the lag's time constant in chord transits: τ = k c∥/|u|.
+    pub pressure_lag: f64,
 }
 
 /// Default C_D face-on: 2.6, near APW 2005's 2-D A + B = 2.4. Fitted, with
@@ -279,6 +286,15 @@ pub const UNSTEADY_ROTATION_DRAG: f64 = 0.0;
 /// Density of paper, kg/m³ (70 g/m² paper is 69 µm thick:
 /// docs/falling-plates.md, "Measured regimes").
 pub const PAPER_DENSITY: f64 = 1008.0;
+/// Default gain on the lagged centre of pressure: none, so the fitted
+/// defaults above are unchanged; a screen found 0.75–1.5 at a lag of 4–6
+/// chord transits to hold the strips' scaling law with the squares
+/// (docs/real-falls.md, "A lagged centre of pressure").
+pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.0;
+/// Default lag of the centre of pressure, in chord transits c∥/|u|: 4
+/// (the screen's; Leishman & Beddoes' separated-flow lags are of a few
+/// semi-chords to some ten, docs/real-falls.md).
+pub const UNSTEADY_PRESSURE_LAG: f64 = 4.0;
 
 impl Default for UnsteadyAero {
     fn default() -> Self {
@@ -296,13 +312,15 @@ impl Default for UnsteadyAero {
             rotation_drag: UNSTEADY_ROTATION_DRAG,
             buoyancy: false,
             solid_density: PAPER_DENSITY,
+            pressure_lag_gain: UNSTEADY_PRESSURE_LAG_GAIN,
+            pressure_lag: UNSTEADY_PRESSURE_LAG,
         }
     }
 }
 
 impl UnsteadyAero {
     /// The coefficients by name, as leaf files spell them.
-    pub fn coefficients(&self) -> [(&'static str, f64); 12] {
+    pub fn coefficients(&self) -> [(&'static str, f64); 14] {
         [
             ("air_density", self.air_density),
             ("kinematic_viscosity", self.kinematic_viscosity),
@@ -319,6 +337,8 @@ impl UnsteadyAero {
             ),
             ("rotation_drag", self.rotation_drag),
             ("solid_density", self.solid_density),
+            ("pressure_lag_gain", self.pressure_lag_gain),
+            ("pressure_lag", self.pressure_lag),
         ]
     }
 
