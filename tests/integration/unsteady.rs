@@ -9,7 +9,6 @@ use leafmagic::leaf::plates::{PlateShape, plate, plate_meshed};
 use leafmagic::physics::forces::Forces;
 use leafmagic::physics::forces::unsteady::{
     BLASIUS, PressureLag, added_mass_energy, plate_added_masses, unsteady_forces,
-    unsteady_forces_lagged,
 };
 use leafmagic::physics::model::{AeroLaw, Model, UnsteadyAero};
 use nalgebra::{Matrix3, Vector3};
@@ -48,7 +47,7 @@ fn added_mass_only(model: &Model) -> UnsteadyAero {
 fn forces(law: &UnsteadyAero, model: &Model, x: &[V3], v: &[V3]) -> (Vec<V3>, Vec<Matrix3<f64>>) {
     let mut f = vec![V3::zeros(); model.len()];
     let mut added = vec![Matrix3::zeros(); model.len()];
-    unsteady_forces(law, model, x, v, None, &[], &mut f, &mut added);
+    unsteady_forces(law, model, x, v, None, &[], &mut f, &mut added, None);
     (f, added)
 }
 
@@ -278,6 +277,7 @@ fn a_plate_moving_with_the_wind_feels_no_air() {
         &[],
         &mut f,
         &mut added,
+        None,
     );
     assert!(f.iter().all(|f| f.norm() == 0.0));
     // Still air, the same velocity: drag.
@@ -823,7 +823,7 @@ fn lagged_forces(
 ) -> Vec<V3> {
     let mut f = vec![V3::zeros(); model.len()];
     let mut added = vec![Matrix3::zeros(); model.len()];
-    unsteady_forces_lagged(law, model, x, v, None, &[], &mut f, &mut added, lag);
+    unsteady_forces(law, model, x, v, None, &[], &mut f, &mut added, lag);
     f
 }
 

@@ -4,7 +4,7 @@
 
 use super::quadratic::quadratic_forces;
 use super::surfaces::surface;
-use super::unsteady::{PressureLag, unsteady_forces_lagged};
+use super::unsteady::{PressureLag, unsteady_forces};
 use crate::physics::model::{AeroLaw, Model};
 use nalgebra::{Matrix3, Vector3};
 
@@ -47,32 +47,18 @@ pub fn triangle_aero_intact(
 ) {
     if matches!(model.aero, AeroLaw::Unsteady(_)) {
         let mut added = vec![Matrix3::zeros(); model.len()];
-        return triangle_aero_solved(model, x, v, wind, torn, force, &mut added);
+        return triangle_aero_solved(model, x, v, wind, torn, force, &mut added, None);
     }
-    triangle_aero_solved(model, x, v, wind, torn, force, &mut [])
+    triangle_aero_solved(model, x, v, wind, torn, force, &mut [], None)
 }
 
 /// [`triangle_aero_intact`], and under the unsteady law each particle's
 /// added-mass tensor M_i = Σ m_k n nᵀ added into `added` (one per particle,
 /// zeroed by the caller; unused under the other laws), which Newton's law
-/// then solves for: (m_i I + M_i) a_i = f_i.
-pub fn triangle_aero_solved(
-    model: &Model,
-    x: &[V3],
-    v: &[V3],
-    wind: Option<&[V3]>,
-    torn: &[bool],
-    force: &mut [V3],
-    added: &mut [Matrix3<f64>],
-) {
-    triangle_aero_lagged(model, x, v, wind, torn, force, added, None);
-}
-
-/// [`triangle_aero_solved`] with the unsteady law's lagged centre of
-/// pressure read from, and its angles of attack recorded in, `lag` (the
-/// simulator's [`PressureLag`]; `None` leaves that term out).
+/// then solves for: (m_i I + M_i) a_i = f_i. `lag` is the unsteady law's
+/// lagged centre of pressure ([`PressureLag`]; `None` leaves that term out).
 #[allow(clippy::too_many_arguments)]
-pub fn triangle_aero_lagged(
+pub fn triangle_aero_solved(
     model: &Model,
     x: &[V3],
     v: &[V3],
@@ -85,7 +71,7 @@ pub fn triangle_aero_lagged(
     match &model.aero {
         AeroLaw::Quadratic(law) => return quadratic_forces(law, model, x, v, wind, torn, force),
         AeroLaw::Unsteady(law) => {
-            return unsteady_forces_lagged(law, model, x, v, wind, torn, force, added, lag);
+            return unsteady_forces(law, model, x, v, wind, torn, force, added, lag);
         }
         AeroLaw::Linear => {}
     }

@@ -13,7 +13,7 @@ mod surfaces;
 mod tears;
 pub mod unsteady;
 
-pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_lagged, triangle_aero_solved};
+pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_solved};
 pub use drag::particle_drag;
 pub use gravity::gravity;
 pub use hinges::{MIN_HINGE_HEIGHT_RATIO, dihedral, fold_rate, hinge_rest, hinges};
@@ -228,7 +228,7 @@ impl Forces {
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
             added.fill(Matrix3::zeros());
-            triangle_aero_lagged(model, x, v, wind, &torn, force, &mut added, lag.as_mut());
+            triangle_aero_solved(model, x, v, wind, &torn, force, &mut added, lag.as_mut());
         }
         if terms.particle_drag {
             particle_drag(model, v, wind, force);

@@ -166,27 +166,12 @@ pub fn cd_parallel(law: &UnsteadyAero, speed: f64, chord: f64) -> f64 {
 /// each corner's added-mass tensor m_k n nᵀ into `added` (which the caller
 /// zeroes; an empty slice skips them, for callers that read only the
 /// forces). `wind` holds G at every particle, or is `None` in still air.
-/// See the module docs for the equations.
+/// `lag` is the simulator's lagged centre of pressure: read, and each
+/// triangle's angle of attack recorded for [`PressureLag::advance`]
+/// (`None`, or `pressure_lag_gain = 0`, leaves that term out). See the
+/// module docs for the equations.
 #[allow(clippy::too_many_arguments)]
 pub fn unsteady_forces(
-    law: &UnsteadyAero,
-    model: &Model,
-    x: &[V3],
-    v: &[V3],
-    wind: Option<&[V3]>,
-    torn: &[bool],
-    force: &mut [V3],
-    added: &mut [Matrix3<f64>],
-) {
-    unsteady_forces_lagged(law, model, x, v, wind, torn, force, added, None);
-}
-
-/// [`unsteady_forces`] with the lagged centre of pressure: read from `lag`,
-/// and each triangle's angle of attack and lag time recorded in it for
-/// [`PressureLag::advance`] (`None`, or a law with
-/// `pressure_lag_gain = 0`, leaves the term out).
-#[allow(clippy::too_many_arguments)]
-pub fn unsteady_forces_lagged(
     law: &UnsteadyAero,
     model: &Model,
     x: &[V3],
@@ -1105,7 +1090,7 @@ pub fn free_particle_rate(
     for (vel, spin) in sampled_motions(&axes, v_ref, q_ref, omega_ref) {
         let base: Vec<V3> = (0..n).map(|i| vel + spin.cross(&(x[i] - centre))).collect();
         f_base.fill(V3::zeros());
-        unsteady_forces(law, model, x, &base, None, &[], &mut f_base, &mut []);
+        unsteady_forces(law, model, x, &base, None, &[], &mut f_base, &mut [], None);
         // A deterministic start with every component.
         let mut y: Vec<V3> = (0..n)
             .map(|i| {
@@ -1129,7 +1114,7 @@ pub fn free_particle_rate(
                 v[i] = base[i] + y[i] * eps;
             }
             f_plus.fill(V3::zeros());
-            unsteady_forces(law, model, x, &v, None, &[], &mut f_plus, &mut []);
+            unsteady_forces(law, model, x, &v, None, &[], &mut f_plus, &mut [], None);
             for i in 0..n {
                 y[i] = if free[i] {
                     inverse[i] * (f_plus[i] - f_base[i]) / eps
@@ -1252,7 +1237,7 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
         }
         f.fill(V3::zeros());
         added.fill(Matrix3::zeros());
-        unsteady_forces(law, model, x, &v, None, &[], &mut f, added);
+        unsteady_forces(law, model, x, &v, None, &[], &mut f, added, None);
         let mut total = (V3::zeros(), V3::zeros());
         for &i in &body.members {
             total.0 += f[i];
