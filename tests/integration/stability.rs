@@ -49,42 +49,49 @@ fn dense_top_with_added_mass(model: &Model) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// Dense K at the rest shape: springs and hinges.
-fn dense_stiffness(model: &Model) -> DMatrix<f64> {
+/// Adds `block` at particles (a, b) of a dense 3n × 3n matrix.
+fn add_block(m: &mut DMatrix<f64>, a: usize, b: usize, block: nalgebra::Matrix3<f64>) {
+    for r in 0..3 {
+        for q in 0..3 {
+            m[(3 * a + r, 3 * b + q)] += block[(r, q)];
+        }
+    }
+}
+
+/// Dense Σ_s w_s b_s b_sᵀ + Σ_h w_h g gᵀ at the rest shape: each spring's
+/// unit direction b on its two particles and each hinge's fold-angle
+/// gradient g (the Gauss–Newton part) weighted by `spring(s)` and
+/// `hinge(h)`; the stiffness matrix K, or the dashpots' and hinges' damping.
+fn dense_network(
+    model: &Model,
+    spring: impl Fn(&leafmagic::physics::model::Spring) -> f64,
+    hinge: impl Fn(&leafmagic::physics::model::Hinge) -> f64,
+) -> DMatrix<f64> {
     let n = model.len();
-    let mut k = DMatrix::<f64>::zeros(3 * n, 3 * n);
+    let mut m = DMatrix::<f64>::zeros(3 * n, 3 * n);
     for s in &model.springs {
         let d = model.rest_position[s.i] - model.rest_position[s.j];
         let dir = d / d.norm();
-        let block = dir * dir.transpose() * s.stiffness;
-        for (a, b, sign) in [
-            (s.i, s.i, 1.0),
-            (s.j, s.j, 1.0),
-            (s.i, s.j, -1.0),
-            (s.j, s.i, -1.0),
-        ] {
-            for r in 0..3 {
-                for c in 0..3 {
-                    k[(3 * a + r, 3 * b + c)] += sign * block[(r, c)];
-                }
-            }
-        }
+        let block = dir * dir.transpose() * spring(s);
+        add_block(&mut m, s.i, s.i, block);
+        add_block(&mut m, s.j, s.j, block);
+        add_block(&mut m, s.i, s.j, -block);
+        add_block(&mut m, s.j, s.i, -block);
     }
-    // Hinges: k_b g gᵀ with g the fold angle's gradient (Gauss–Newton part).
     for h in &model.hinges {
         let (_, g) = leafmagic::physics::forces::dihedral(&model.rest_position, h).unwrap();
-        let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
-        for (pa, &a) in ids.iter().enumerate() {
-            for (pb, &b) in ids.iter().enumerate() {
-                for r in 0..3 {
-                    for c in 0..3 {
-                        k[(3 * a + r, 3 * b + c)] += h.stiffness * g[pa][r] * g[pb][c];
-                    }
-                }
+        for (pa, &a) in h.particles().iter().enumerate() {
+            for (pb, &b) in h.particles().iter().enumerate() {
+                add_block(&mut m, a, b, g[pa] * g[pb].transpose() * hinge(h));
             }
         }
     }
-    k
+    m
+}
+
+/// Dense K at the rest shape: springs and hinges.
+fn dense_stiffness(model: &Model) -> DMatrix<f64> {
+    dense_network(model, |s| s.stiffness, |h| h.stiffness)
 }
 
 #[test]
@@ -286,33 +293,10 @@ fn overdamped_modes_keep_a_verlet_limit() {
 /// area A and normal n takes −A (αᵗ I + (αⁿ − αᵗ) n nᵀ) vᵢ (src/physics/forces/aero.rs),
 /// plus each particle's own drag.
 fn dense_damping(model: &Model) -> DMatrix<f64> {
-    let n = model.len();
-    let mut c = DMatrix::<f64>::zeros(3 * n, 3 * n);
-    let mut add = |a: usize, b: usize, block: nalgebra::Matrix3<f64>| {
-        for r in 0..3 {
-            for q in 0..3 {
-                c[(3 * a + r, 3 * b + q)] += block[(r, q)];
-            }
-        }
-    };
-    for s in &model.springs {
-        let d = model.rest_position[s.i] - model.rest_position[s.j];
-        let dir = d / d.norm();
-        let block = dir * dir.transpose() * s.damping;
-        add(s.i, s.i, block);
-        add(s.j, s.j, block);
-        add(s.i, s.j, -block);
-        add(s.j, s.i, -block);
-    }
-    for h in &model.hinges {
-        let (_, g) = leafmagic::physics::forces::dihedral(&model.rest_position, h).unwrap();
-        for (pa, &a) in h.particles().iter().enumerate() {
-            for (pb, &b) in h.particles().iter().enumerate() {
-                add(a, b, g[pa] * g[pb].transpose() * h.damping);
-            }
-        }
-    }
-    for i in 0..n {
+    let mut c = dense_network(model, |s| s.damping, |h| h.damping);
+    let mut add =
+        |a: usize, b: usize, block: nalgebra::Matrix3<f64>| add_block(&mut c, a, b, block);
+    for i in 0..model.len() {
         add(i, i, nalgebra::Matrix3::identity() * model.particle_drag[i]);
     }
     assert!(matches!(model.aero, AeroLaw::Linear), "the linear law only");

@@ -111,7 +111,9 @@
 //! leads the turn, and since a lag's response falls once the turn is faster
 //! than 1/τ, it drives autorotation up to a rate set by |u|/c∥ and not by
 //! the plate's inertia: the torque balance behind Mahadevan, Ryu & Samuel's
-//! Ω ∝ σ^½ w⁻¹ (1999), which Iversen (1979) found in autorotating plates.
+//! Ω ∝ σ^½ w⁻¹ (1999), and in line with Iversen (1979), who found the
+//! tip-speed ratio of autorotating plates set by their shape and by their
+//! inertia only when that is small.
 //! α_L is state: [`PressureLag`], kept by the simulator and advanced after
 //! each step from the angles of the step's last force evaluation. The
 //! stability estimate leaves the term out. Screened on the real squares,

@@ -291,9 +291,10 @@ pub const PAPER_DENSITY: f64 = 1008.0;
 /// chord transits to hold the strips' scaling law with the squares
 /// (docs/real-falls.md, "A lagged centre of pressure").
 pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.0;
-/// Default lag of the centre of pressure, in chord transits c∥/|u|: 4
-/// (the screen's; Leishman & Beddoes' separated-flow lags are of a few
-/// semi-chords to some ten, docs/real-falls.md).
+/// Default lag of the centre of pressure, in chord transits c∥/|u|: 4,
+/// the screen's best on the squares and strips (docs/real-falls.md, "A
+/// lagged centre of pressure"); the lag's form is Leishman & Beddoes',
+/// its value is not theirs.
 pub const UNSTEADY_PRESSURE_LAG: f64 = 4.0;
 
 impl Default for UnsteadyAero {
