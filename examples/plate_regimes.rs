@@ -13,13 +13,17 @@
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
+use leafmagic::motion::class::Regime;
 use leafmagic::motion::classify::classify;
-use leafmagic::physics::model::STANDARD_GRAVITY as G;
+use leafmagic::physics::model::{AIR_DENSITY_20C, STANDARD_GRAVITY as G};
 use leafmagic::sim::drop::{DropParams, drop_leaf};
+use leafmagic::sim::strips::{
+    SCALED_DURATION, SIGMAS, StripFall, WIDTHS, fit_exponents, strip_fall, strip_seconds,
+};
 use rayon::prelude::*;
 
 /// Density of air at 20 °C, the law's default, kg/m³.
-const RHO: f64 = 1.204;
+const RHO: f64 = AIR_DENSITY_20C;
 
 struct Fall {
     regime: String,
@@ -118,26 +122,18 @@ fn main() {
     );
     println!("|---|---|---|---|---|---|---|---|---|");
     let mut strips = Vec::new();
-    for sigma in [0.035, 0.07, 0.14, 0.28] {
-        for w in [0.01, 0.02, 0.04] {
+    for sigma in SIGMAS {
+        for w in WIDTHS {
             for duration in PROTOCOLS {
                 strips.push((sigma, w, duration));
             }
         }
     }
-    let falls: Vec<Fall> = strips
+    let falls: Vec<StripFall> = strips
         .par_iter()
         .map(|&(sigma, w, duration)| {
-            let seconds = duration.map_or(8.0, |tau| strip_seconds(sigma, w, tau));
-            fall(
-                PlateShape::Rectangle,
-                w,
-                5.0,
-                sigma,
-                [60.0, 0.0],
-                seconds,
-                &aero,
-            )
+            let seconds = duration.map_or(8.0, |tau| strip_seconds(sigma, w, tau, RHO));
+            strip_fall(sigma, w, seconds, &aero).expect("the strip falls")
         })
         .collect();
     for (&(sigma, w, duration), f) in strips.iter().zip(&falls) {
@@ -155,21 +151,20 @@ fn main() {
         );
     }
     for duration in PROTOCOLS {
-        let fit: Vec<(f64, f64, f64)> = strips
+        let group: Vec<StripFall> = strips
             .iter()
             .zip(&falls)
-            .filter(|((_, _, d), f)| *d == duration && f.regime == "tumble" && f.omega > 0.0)
-            .map(|(&(sigma, w, _), f)| (sigma.ln(), w.ln(), f.omega.ln()))
+            .filter(|((_, _, d), _)| *d == duration)
+            .map(|(_, f)| f.clone())
             .collect();
+        let tumbling = group.iter().filter(|f| f.regime == Regime::Tumble).count();
         let label = duration.map_or("over 8 s".to_string(), |tau| format!("at τ = {tau}"));
-        match fit_exponents(&fit) {
+        match fit_exponents(&group) {
             Some((p, q)) => println!(
-                "\nfit {label} over {} tumbling strips: p = {p:.2}, q = {q:.2} (target 0.5 ± 0.1, −1.0 ± 0.1)",
-                fit.len()
+                "\nfit {label} over {tumbling} tumbling strips: p = {p:.2}, q = {q:.2} (target 0.5 ± 0.1, −1.0 ± 0.1)"
             ),
             None => println!(
-                "\n{label}: only {} of 12 strips tumble, or they do not span σ and w: no fit",
-                fit.len()
+                "\n{label}: only {tumbling} of 12 strips tumble, or they do not span σ and w: no fit"
             ),
         }
     }
@@ -177,32 +172,9 @@ fn main() {
 
 /// The scaled durations τ = t √(σ g/ρ) / w over which the strips are
 /// compared besides 8 s: 150 (most strips still glide as they tumble) and
-/// 300 (the lightest have stopped gliding; docs/real-falls.md).
-const SCALED_DURATIONS: [f64; 2] = [150.0, 300.0];
+/// [`SCALED_DURATION`], the one the law is held at (docs/real-falls.md).
+const SCALED_DURATIONS: [f64; 2] = [150.0, SCALED_DURATION];
 
 /// How long each strip falls: 8 s (`None`), then each of
 /// [`SCALED_DURATIONS`].
 const PROTOCOLS: [Option<f64>; 3] = [None, Some(SCALED_DURATIONS[0]), Some(SCALED_DURATIONS[1])];
-
-/// Seconds for a strip of areal density `sigma` and width `w` to fall for
-/// `tau` scaled times.
-fn strip_seconds(sigma: f64, w: f64, tau: f64) -> f64 {
-    tau * w / (sigma * G / RHO).sqrt()
-}
-
-/// Least squares ln Ω = c + p ln σ + q ln w over (ln σ, ln w, ln Ω), or
-/// `None` with fewer than four points or ones that do not span σ and w.
-fn fit_exponents(fit: &[(f64, f64, f64)]) -> Option<(f64, f64)> {
-    if fit.len() < 4 {
-        return None;
-    }
-    let mut a = nalgebra::Matrix3::<f64>::zeros();
-    let mut b = nalgebra::Vector3::<f64>::zeros();
-    for &(s, w, o) in fit {
-        let row = nalgebra::Vector3::new(1.0, s, w);
-        a += row * row.transpose();
-        b += row * o;
-    }
-    let x = a.try_inverse()? * b;
-    Some((x[1], x[2]))
-}
