@@ -801,10 +801,13 @@ fn a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall() {
 }
 
 /// A 5 cm square under the law with the lagged centre of pressure at gain
-/// `gain`, and the law without it.
+/// `gain`, and the law without it (gain 0).
 fn lagged_square(gain: f64) -> (Model, UnsteadyAero, UnsteadyAero) {
     let mut model = model_of(PlateShape::Square, 0.05, 1);
-    let plain = law(&model);
+    let plain = UnsteadyAero {
+        pressure_lag_gain: 0.0,
+        ..law(&model)
+    };
     let lagged = UnsteadyAero {
         pressure_lag_gain: gain,
         ..plain
@@ -843,8 +846,12 @@ fn attitude(model: &Model, theta: f64, omega: f64, velocity: V3) -> (Vec<V3>, Ve
 /// are the law's without it to the bit. Off (gain 0) there is no state.
 #[test]
 fn the_lagged_angle_of_attack_relaxes_exponentially_and_then_acts_not() {
-    assert!(PressureLag::for_model(&model_of(PlateShape::Square, 0.05, 1)).is_none());
     let (model, lagged, plain) = lagged_square(1.0);
+    let off = Model {
+        aero: AeroLaw::Unsteady(plain),
+        ..model.clone()
+    };
+    assert!(PressureLag::for_model(&off).is_none());
     let mut lag = PressureLag::for_model(&model).expect("a lag state at gain 1");
     let fall = V3::new(0.0, 0.0, -0.7);
     let (x60, v60) = attitude(&model, 60f64.to_radians(), 0.0, fall);

@@ -247,8 +247,9 @@ pub struct UnsteadyAero {
     pub solid_density: f64,
     /// G, the gain on the lagged centre of pressure: the normal force acts
     /// G c∥ (f(α_L) − f(α)) upstream of where it acts in steady flow, α_L
-    /// the angle of attack lagged by [`Self::pressure_lag`] (0, the
-    /// default: no lag term; [`crate::physics::forces::unsteady`]).
+    /// the angle of attack lagged by [`Self::pressure_lag`] (default
+    /// [`UNSTEADY_PRESSURE_LAG_GAIN`]; 0 leaves the term out;
+    /// [`crate::physics::forces::unsteady`]).
     pub pressure_lag_gain: f64,
     /// k, the lag's time constant in chord transits: τ = k c∥/|u|.
     pub pressure_lag: f64,
@@ -258,22 +259,24 @@ pub struct UnsteadyAero {
 /// [`UNSTEADY_CD_PARALLEL`], [`UNSTEADY_TRANSLATIONAL_LIFT`],
 /// [`UNSTEADY_ROTATIONAL_LIFT`] and [`UNSTEADY_ROTATIONAL_DAMPING`], as one
 /// set to the real paper squares at steps that bound a tumbling plate's
-/// turn ([`crate::physics::stability::MAX_TURN_PER_STEP`]) and checked on
-/// ten seeds the fit did not see, the disks against Field et al. 1997 and
-/// the strips' scaling law: docs/real-falls.md, "The defaults".
+/// turn ([`crate::physics::stability::MAX_TURN_PER_STEP`]), then refitted
+/// with the lagged centre of pressure ([`UNSTEADY_PRESSURE_LAG_GAIN`],
+/// [`UNSTEADY_PRESSURE_LAG`]) to the squares and the strips' scaling law
+/// together, and checked on ten seeds the fit did not see and the disks
+/// against Field et al. 1997: docs/real-falls.md, "The defaults".
 pub const UNSTEADY_CD_NORMAL: f64 = 2.6;
-/// Default form drag edge-on beyond skin friction: 0.7 (APW 2005's C_D(0)
+/// Default form drag edge-on beyond skin friction: 0.65 (APW 2005's C_D(0)
 /// is 0.4). A paper sheet is far thinner than APW's plates, so this is not
 /// edge thickness: it stands for what the 2-D law leaves out at the
 /// Reynolds numbers of falling paper (10³–10⁴), the separated flow round
 /// the edges of a plate of finite span; set to 0 it lets squares glide up
 /// to 6 times too far (docs/real-falls.md).
-pub const UNSTEADY_CD_PARALLEL: f64 = 0.7;
+pub const UNSTEADY_CD_PARALLEL: f64 = 0.65;
 /// Default C_T: APW 2005's 1.2, under the law's bound C_D⊥/2 = 1.3.
 pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 1.2;
-/// Default C_R: 1.75, under APW 2005's π (thin-aerofoil theory), before
+/// Default C_R: 1.5, under APW 2005's π (thin-aerofoil theory), before
 /// the finite span's lifting-line factor.
-pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.75;
+pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.5;
 /// Default μ₁: 0.1, half APW 2005's 0.2.
 pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.1;
 /// Default μ₂: none (APW's 0.2 stops the real squares' tumbling glide; see
@@ -286,16 +289,18 @@ pub const UNSTEADY_ROTATION_DRAG: f64 = 0.0;
 /// Density of paper, kg/m³ (70 g/m² paper is 69 µm thick:
 /// docs/falling-plates.md, "Measured regimes").
 pub const PAPER_DENSITY: f64 = 1008.0;
-/// Default gain on the lagged centre of pressure: none, so the fitted
-/// defaults above are unchanged; a screen found 0.75–1.5 at a lag of 4–6
-/// chord transits to hold the strips' scaling law with the squares
-/// (docs/real-falls.md, "A lagged centre of pressure").
-pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.0;
-/// Default lag of the centre of pressure, in chord transits c∥/|u|: 4,
-/// the screen's best on the squares and strips (docs/real-falls.md, "A
-/// lagged centre of pressure"); the lag's form is Leishman & Beddoes',
-/// its value is not theirs.
-pub const UNSTEADY_PRESSURE_LAG: f64 = 4.0;
+/// Default gain G on the lagged centre of pressure: 0.6, fitted with the
+/// coefficients above and [`UNSTEADY_PRESSURE_LAG`]. With it the strips
+/// tumble at Ω ∝ σ^0.50 w^−0.97 over equal scaled times (Mahadevan, Ryu &
+/// Samuel 1999: 1/2 and −1) and the disks fall chaotically inside Field et
+/// al.'s band; with a gain of 0 and the other defaults 0.35 and −0.83,
+/// and no chaotic disks
+/// (docs/real-falls.md, "The defaults").
+pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.6;
+/// Default lag of the centre of pressure, in chord transits c∥/|u|: 3,
+/// fitted with [`UNSTEADY_PRESSURE_LAG_GAIN`]; the lag's form is Leishman
+/// & Beddoes', its value is not theirs.
+pub const UNSTEADY_PRESSURE_LAG: f64 = 3.0;
 
 impl Default for UnsteadyAero {
     fn default() -> Self {
