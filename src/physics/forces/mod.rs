@@ -225,6 +225,9 @@ impl Forces {
         let torn = std::mem::take(&mut self.torn.triangles);
         let mut added = std::mem::take(&mut self.added);
         let mut lag = self.lag.take();
+        if let Some(lag) = &mut lag {
+            lag.evaluate_at(t);
+        }
         let wind = self.sample_wind(model, x, t);
         if terms.aero {
             added.fill(Matrix3::zeros());
@@ -238,9 +241,9 @@ impl Forces {
         self.lag = lag;
     }
 
-    /// Advances the lagged centre of pressure over a step of `h` s from the
-    /// angles of attack of the last evaluation
-    /// ([`unsteady::PressureLag::advance`]); nothing without one.
+    /// Commits the lagged centre of pressure over a step of `h` s from the
+    /// step's last evaluation ([`unsteady::PressureLag::advance`]); nothing
+    /// without one.
     pub fn advance_pressure_lag(&mut self, h: f64) {
         if let Some(lag) = &mut self.lag {
             lag.advance(h);

@@ -114,9 +114,10 @@
 //! Ω ∝ σ^½ w⁻¹ (1999), and in line with Iversen (1979), who found the
 //! tip-speed ratio of autorotating plates set by their shape and by their
 //! inertia only when that is small.
-//! α_L is state: [`PressureLag`], kept by the simulator and advanced after
-//! each step from the angles of the step's last force evaluation. The
-//! stability estimate leaves the term out. Screened on the real squares,
+//! α_L is state: [`PressureLag`], kept by the simulator; each force
+//! evaluation reads it at its own time by a second-order exponential
+//! integrator and each step commits its last evaluation's. The stability
+//! estimate leaves the term out. Screened on the real squares,
 //! the strips and the disks in docs/real-falls.md, "A lagged centre of
 //! pressure".
 //!
@@ -211,14 +212,37 @@ pub fn unsteady_forces(
 /// The lagged angle of attack α_L of every triangle: the state of the
 /// law's lagged centre of pressure, carried by the simulator from step to
 /// step (module docs, "Lagged centre of pressure").
+///
+/// A force evaluation a time Δ after the committed state reads α_L at its
+/// own time: dα_L/dt = r (α − α_L), r = 1/τ, solved exactly with α taken
+/// linear between the committed α and the evaluation's own, and r their
+/// mean (exponential time differencing; Cox & Matthews 2002, J. Comput.
+/// Phys. 176): with x = r Δ and φ = (1 − e^(−x))/x,
+/// α_L(Δ) = e^(−x) α_L + (φ − e^(−x)) α₀ + (1 − φ) α, a convex combination
+/// (α_L stays between the angles it follows, at any step) and second order
+/// in Δ. So Verlet's end-of-step evaluation, whose acceleration it carries
+/// into the next step, sees the lag at that step's end, and the term keeps
+/// Verlet second order; RK4's stages are second order in the lag.
+/// [`Self::advance`] then commits the step's last evaluation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PressureLag {
-    /// α_L per triangle, rad; NaN until the triangle has met the air.
+    /// Committed α_L per triangle, rad; NaN until the triangle has met the
+    /// air.
     lagged: Vec<f64>,
-    /// α and the lag's rate 1/τ = |u|/(k c∥) of each triangle at the last
-    /// evaluation (α NaN: no flow over it then; rate ∞: broadside, no lag).
+    /// Committed α and lag rate r = |u|/(k c∥) of each triangle (α NaN: no
+    /// flow over it then; rate ∞: broadside, no lag).
     alpha: Vec<f64>,
     rate: Vec<f64>,
+    /// The last evaluation's α_L, α and r, not yet committed.
+    pending_lagged: Vec<f64>,
+    pending_alpha: Vec<f64>,
+    pending_rate: Vec<f64>,
+    /// Whether a force evaluation has run since the last commit.
+    evaluated: bool,
+    /// Time of the committed state, s (NaN before the first evaluation),
+    /// and the next (or last) evaluation's time after it, Δ.
+    time: f64,
+    elapsed: f64,
 }
 
 impl PressureLag {
@@ -234,31 +258,105 @@ impl PressureLag {
                 lagged: vec![f64::NAN; n],
                 alpha: vec![f64::NAN; n],
                 rate: vec![f64::NAN; n],
+                pending_lagged: vec![f64::NAN; n],
+                pending_alpha: vec![f64::NAN; n],
+                pending_rate: vec![f64::NAN; n],
+                evaluated: false,
+                time: f64::NAN,
+                elapsed: 0.0,
             }
         })
     }
 
-    /// The lagged angle of attack of triangle `t`, rad (NaN before it has
-    /// met the air).
+    /// The committed lagged angle of attack of triangle `t`, rad (NaN
+    /// before it has met the air).
     pub fn lagged(&self, t: usize) -> f64 {
         self.lagged[t]
     }
 
-    /// Advances α_L over a step of `h` s: dα_L/dt = (α − α_L)/τ solved
-    /// exactly with α and τ held at the last evaluation's,
-    /// α_L ← α + (α_L − α) e^(−h/τ). A triangle meeting the air for the
-    /// first time starts unlagged (α_L = α); one with no flow keeps α_L.
+    /// Places the next force evaluation at time `t`, s: Δ = t − the
+    /// committed state's time (the first evaluation fixes that time).
+    pub fn evaluate_at(&mut self, t: f64) {
+        if self.time.is_nan() {
+            self.time = t;
+        }
+        self.elapsed = (t - self.time).max(0.0);
+    }
+
+    /// Commits the last evaluation and carries it to `h` s after the
+    /// committed state (the step just taken): from the evaluation's time
+    /// to the step's end with α and r held, α_L ← α + (α_L − α) e^(−r h′),
+    /// h′ = h − Δ (none after an end-of-step evaluation; the whole step
+    /// after Euler's, at its start). Without an evaluation since the last
+    /// commit, the committed α and r are held over the whole of `h`. A
+    /// triangle meeting the air for the first time starts unlagged
+    /// (α_L = α); one with no flow keeps α_L.
     pub fn advance(&mut self, h: f64) {
-        for ((lagged, &alpha), &rate) in self.lagged.iter_mut().zip(&self.alpha).zip(&self.rate) {
+        // After an end-of-step evaluation Δ is h up to the clock's
+        // round-off: nothing is left to carry.
+        let rest = if self.evaluated {
+            let rest = h - self.elapsed;
+            if rest > 1e-9 * h { rest } else { 0.0 }
+        } else {
+            h
+        };
+        for t in 0..self.lagged.len() {
+            let (lagged, alpha, rate) = if self.evaluated {
+                let pending = (
+                    self.pending_lagged[t],
+                    self.pending_alpha[t],
+                    self.pending_rate[t],
+                );
+                self.pending_alpha[t] = f64::NAN;
+                pending
+            } else {
+                (self.lagged[t], self.alpha[t], self.rate[t])
+            };
             if alpha.is_nan() {
                 continue;
             }
-            *lagged = if lagged.is_nan() || rate == f64::INFINITY {
+            self.lagged[t] = if lagged.is_nan() || rate == f64::INFINITY {
+                alpha
+            } else if rest > 0.0 {
+                alpha + (lagged - alpha) * (-rest * rate).exp()
+            } else {
+                lagged
+            };
+            self.alpha[t] = alpha;
+            self.rate[t] = rate;
+        }
+        if !self.time.is_nan() {
+            self.time += h;
+        }
+        self.evaluated = false;
+        self.elapsed = 0.0;
+    }
+
+    /// α_L of triangle `t` at the evaluation (Δ after the committed state),
+    /// where its angle of attack is `alpha` and its lag rate `rate`.
+    fn lagged_now(&self, t: usize, alpha: f64, rate: f64) -> f64 {
+        let (lagged, alpha0, rate0) = (self.lagged[t], self.alpha[t], self.rate[t]);
+        if lagged.is_nan() || rate == f64::INFINITY || rate0 == f64::INFINITY {
+            return if lagged.is_nan() || self.elapsed > 0.0 {
                 alpha
             } else {
-                alpha + (*lagged - alpha) * (-h * rate).exp()
+                lagged
             };
         }
+        if self.elapsed <= 0.0 {
+            return lagged;
+        }
+        // No committed flow: α held at the evaluation's over the interval.
+        let (alpha0, rate0) = if alpha0.is_nan() {
+            (alpha, rate)
+        } else {
+            (alpha0, rate0)
+        };
+        let x = 0.5 * (rate0 + rate) * self.elapsed;
+        let em1 = (-x).exp_m1();
+        let decay = 1.0 + em1;
+        let phi = if x > 0.0 { -em1 / x } else { 1.0 };
+        decay * lagged + (phi - decay) * alpha0 + (1.0 - phi) * alpha
     }
 }
 
@@ -281,9 +379,15 @@ fn lagged_pressure(
     flows: &mut [Flow],
     lag: &mut PressureLag,
 ) {
+    lag.evaluated = true;
     // The angles first, back to back: each arcsine is a long chain of
     // its own, and independent ones overlap (as in `flow_coefficients`).
-    for ((alpha, flow), tm) in lag.alpha.iter_mut().zip(flows.iter()).zip(triangles) {
+    for ((alpha, flow), tm) in lag
+        .pending_alpha
+        .iter_mut()
+        .zip(flows.iter())
+        .zip(triangles)
+    {
         *alpha = if tm.is_some() && flow.u2 > f64::MIN_POSITIVE {
             (flow.qn.abs() / flow.speed).min(1.0).asin()
         } else {
@@ -292,20 +396,28 @@ fn lagged_pressure(
     }
     let half_rho = 0.5 * law.air_density;
     for (t, (flow, tm)) in flows.iter_mut().zip(triangles).enumerate() {
-        let alpha = lag.alpha[t];
+        let alpha = lag.pending_alpha[t];
         let Some(tm) = tm.as_ref().filter(|_| !alpha.is_nan()) else {
             continue;
         };
         // Broadside (no in-plane flow) there is no upstream and no chord
         // along the flow: α_L still follows α, no couple acts.
         if flow.along2 <= f64::MIN_POSITIVE {
-            lag.rate[t] = f64::INFINITY;
+            lag.pending_rate[t] = f64::INFINITY;
+            lag.pending_lagged[t] = alpha;
             continue;
         }
         let chord = flow.along_chord;
-        lag.rate[t] = flow.speed / (law.pressure_lag * chord);
-        let lagged = lag.lagged[t];
-        if lagged.is_nan() {
+        let rate = flow.speed / (law.pressure_lag * chord);
+        let fresh = lag.lagged[t].is_nan();
+        if fresh && lag.elapsed <= 0.0 {
+            // Met at the committed time: that is where its lag starts, so
+            // later evaluations of the step integrate from it.
+            (lag.lagged[t], lag.alpha[t], lag.rate[t]) = (alpha, alpha, rate);
+        }
+        let lagged = lag.lagged_now(t, alpha, rate);
+        (lag.pending_rate[t], lag.pending_lagged[t]) = (rate, lagged);
+        if fresh {
             continue;
         }
         let shift =

@@ -168,9 +168,9 @@ impl Simulator {
             Integrator::Implicit => self.step_implicit(model, state, dt)?,
         }
         state.time += dt;
-        // The lagged centre of pressure follows the angles of attack of the
-        // step's last force evaluation (first order in the split; Verlet's
-        // carried acceleration keeps the lag it was evaluated with).
+        // The lagged centre of pressure commits the step's last force
+        // evaluation: at the step's end for Verlet and RK4 (whose forces read
+        // the lag at their own times), carried over the step for the others.
         self.forces.advance_pressure_lag(dt);
         if let Some(rigid) = &mut self.rigid {
             rigid.project(&model.rigid, state);
