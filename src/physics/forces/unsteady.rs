@@ -96,9 +96,10 @@
 //! # Lagged centre of pressure
 //!
 //! On by default (`pressure_lag_gain` 0.6, `pressure_lag` 3; a gain of 0
-//! turns it off). In steady flow a plate's normal force acts f(α) c∥ upstream of mid-chord, f(α) = ¼ (1 − 2α/π):
-//! a quarter chord at small angles (thin-aerofoil theory, which the Munk
-//! couple above already gives), none broadside. Separated flow answers a
+//! turns it off). In steady flow a plate's normal force acts f(α) c∥
+//! upstream of mid-chord, f(α) = ¼ (1 − 2α/π): a quarter chord at small
+//! angles (thin-aerofoil theory, which the Munk couple above already
+//! gives), none broadside. Separated flow answers a
 //! changing angle of attack late; dynamic-stall models lag the centre of
 //! pressure behind α by first-order lags measured in the time the flow
 //! takes to cross the chord (Leishman & Beddoes 1989, J. Am. Helicopter
