@@ -994,3 +994,46 @@ fn the_lag_term_keeps_verlet_second_order() {
         assert!(p > 1.7, "order {p}");
     }
 }
+
+/// Read at an evaluation a time Δ after the committed state, the lag is a
+/// convex combination of the angles it follows, at any Δ: between the
+/// committed α and the evaluation's, moving monotonically from the first
+/// towards the second as Δ grows (an explicit step would overshoot past
+/// r Δ = 2). Over hundreds of lag times it trails the evaluation's α by
+/// the gap over r Δ, as a lag trails a ramp (α is taken linear over Δ).
+#[test]
+fn the_lag_read_between_steps_stays_between_the_angles_it_follows() {
+    let (model, lagged, _) = lagged_square(1.0);
+    let fall = V3::new(0.0, 0.0, -0.7);
+    let (xa, va) = attitude(&model, 60f64.to_radians(), 0.0, fall);
+    let (xb, vb) = attitude(&model, 25f64.to_radians(), 0.0, fall);
+    let mut previous = f64::NAN;
+    for delta in [1e-5, 1e-3, 1e-2, 0.1, 1.0, 100.0] {
+        let mut lag = PressureLag::for_model(&model).unwrap();
+        lag.evaluate_at(0.0);
+        lagged_forces(&lagged, &model, &xa, &va, Some(&mut lag));
+        lag.advance(1e-3);
+        let from = lag.lagged(0);
+        // α of attitude B: where a long carry with nothing new settles.
+        let mut settled = lag.clone();
+        settled.evaluate_at(1e-3);
+        lagged_forces(&lagged, &model, &xb, &vb, Some(&mut settled));
+        settled.advance(1e6);
+        let to = settled.lagged(0);
+        lag.evaluate_at(1e-3 + delta);
+        lagged_forces(&lagged, &model, &xb, &vb, Some(&mut lag));
+        lag.advance(delta);
+        let at = lag.lagged(0);
+        println!("Δ {delta}: α_L {at:.6} between {from:.6} and {to:.6}");
+        assert!((from - to).abs() > 0.3, "{from} {to}");
+        let share = (at - from) / (to - from);
+        assert!((0.0..=1.0).contains(&share), "Δ {delta}: share {share}");
+        if !previous.is_nan() {
+            assert!(share > previous, "Δ {delta}: {share} after {previous}");
+        }
+        previous = share;
+        if delta >= 100.0 {
+            assert!((to - at).abs() < 0.01 * (to - from).abs(), "{at} vs {to}");
+        }
+    }
+}
