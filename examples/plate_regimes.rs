@@ -11,14 +11,13 @@
 //!
 //! cargo run --release --example plate_regimes [-- KEY=VALUE ...]
 
-use leafmagic::leaf::plates::{PlateShape, plate};
+use leafmagic::leaf::plates::PlateShape;
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::class::Regime;
-use leafmagic::motion::classify::classify;
 use leafmagic::physics::model::{AIR_DENSITY_20C, STANDARD_GRAVITY as G};
-use leafmagic::sim::drop::{DropParams, drop_leaf};
 use leafmagic::sim::strips::{
-    SCALED_DURATION, SIGMAS, StripFall, WIDTHS, fit_exponents, strip_fall, strip_seconds,
+    SCALED_DURATION, SIGMAS, StripFall, WIDTHS, classify_plate_fall, fit_exponents, strip_fall,
+    strip_seconds,
 };
 use rayon::prelude::*;
 
@@ -33,31 +32,14 @@ struct Fall {
     rocking: f64,
 }
 
-fn fall(
-    shape: PlateShape,
-    size: f64,
-    aspect: f64,
-    sigma: f64,
-    tilt: [f64; 2],
-    seconds: f64,
-    aero: &AeroSpec,
-) -> Fall {
-    let model = plate(shape, size, aspect, sigma, aero.clone())
-        .expect("a valid plate")
-        .model()
-        .expect("a valid model");
-    let params = DropParams {
-        seconds,
-        tilt_deg: tilt,
-        ..Default::default()
-    };
-    let run = drop_leaf(&model, &params).expect("the drop runs");
-    let c = classify(&run.trajectory, model.chord());
+/// A disk's fall (`classify_plate_fall`) as the table shows it.
+fn fall(size: f64, sigma: f64, tilt: [f64; 2], aero: &AeroSpec) -> Fall {
+    let c = classify_plate_fall(PlateShape::Circle, size, 1.0, sigma, tilt, 8.0, aero)
+        .expect("the disk falls");
     let f = &c.features;
-    let window = (f.t_end_s - f.t_start_s).max(f64::MIN_POSITIVE);
     Fall {
         regime: c.regime.to_string(),
-        omega: std::f64::consts::TAU * f.net_turns.abs() / window,
+        omega: f.tumbling_rate_rad_s(),
         descent: f.mean_descent_speed_m_s,
         drift: f.drift_ratio,
         rocking: f.rocking_amplitude_deg,
@@ -88,7 +70,7 @@ fn main() {
         .par_iter()
         .map(|&(d, istar, tilt)| {
             let sigma = istar * 64.0 * RHO * d / std::f64::consts::PI;
-            fall(PlateShape::Circle, d, 1.0, sigma, tilt, 8.0, &aero)
+            fall(d, sigma, tilt, &aero)
         })
         .collect();
     for (&(d, istar, tilt), f) in cases.iter().zip(&disks) {

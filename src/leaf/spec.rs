@@ -128,11 +128,12 @@ pub struct AeroSpec {
     /// default 1008, paper).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub solid_density: Option<f64>,
-    /// Gain on the lagged centre of pressure (unsteady law; default 0, off).
+    /// Gain on the lagged centre of pressure (unsteady law; default 0.6;
+    /// 0 turns the term off).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_lag_gain: Option<f64>,
     /// The centre of pressure's lag in chord transits (unsteady law;
-    /// default 4).
+    /// default 3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_lag: Option<f64>,
 }

@@ -273,6 +273,15 @@ pub struct Features {
     pub regime_margin: f64,
 }
 
+impl Features {
+    /// The mean tumbling rate over the window, rad/s: the net turns about
+    /// the dominant horizontal axis over the window's length.
+    pub fn tumbling_rate_rad_s(&self) -> f64 {
+        let window = (self.t_end_s - self.t_start_s).max(f64::MIN_POSITIVE);
+        std::f64::consts::TAU * self.net_turns.abs() / window
+    }
+}
+
 /// Result of [`classify`].
 #[derive(Clone, Debug)]
 pub struct Classification {

@@ -163,7 +163,6 @@ impl Descriptors {
             });
         }
         let f = &c.features;
-        let window = (f.t_end_s - f.t_start_s).max(f64::MIN_POSITIVE);
         Ok(Descriptors {
             class: c.class,
             regime: c.regime,
@@ -171,7 +170,7 @@ impl Descriptors {
             values: [
                 f.mean_descent_speed_m_s,
                 f.mean_yaw_rate_rad_s.abs(),
-                std::f64::consts::TAU * f.net_turns.abs() / window,
+                f.tumbling_rate_rad_s(),
                 f.flips_per_s,
                 f.reversals_per_s,
                 f.drift_ratio,

@@ -14,7 +14,7 @@
 use crate::leaf::AeroSpec;
 use crate::leaf::plates::{PlateShape, plate};
 use crate::motion::class::Regime;
-use crate::motion::classify::classify;
+use crate::motion::classify::{Classification, classify};
 use crate::physics::model::STANDARD_GRAVITY;
 use crate::sim::drop::{DropParams, drop_leaf};
 
@@ -56,29 +56,53 @@ pub fn strip_seconds(sigma: f64, w: f64, tau: f64, rho: f64) -> f64 {
     tau * w / (sigma * STANDARD_GRAVITY / rho).sqrt()
 }
 
-/// One strip of the sweep falling `seconds` under `aero`, let go at
-/// [`RELEASE_TILT_DEG`] about its long axis and classified as every drop
-/// is. Errors name what failed (the plate, its model or the drop).
-pub fn strip_fall(sigma: f64, w: f64, seconds: f64, aero: &AeroSpec) -> Result<StripFall, String> {
-    let model = plate(PlateShape::Rectangle, w, ASPECT, sigma, aero.clone())
+/// A plate (`leafmagic plate`'s `shape`, `size`, `aspect`, areal density
+/// `sigma`) under `aero`, let go at `tilt` (degrees about x and y) from
+/// rest and falling `seconds` as `drop` runs it, classified as every drop
+/// is: the fall behind the plate-regime experiments (strips here, disks in
+/// examples/plate_regimes.rs). Errors name what failed (the plate, its
+/// model or the drop).
+pub fn classify_plate_fall(
+    shape: PlateShape,
+    size: f64,
+    aspect: f64,
+    sigma: f64,
+    tilt: [f64; 2],
+    seconds: f64,
+    aero: &AeroSpec,
+) -> Result<Classification, String> {
+    let model = plate(shape, size, aspect, sigma, aero.clone())
         .map_err(|e| e.to_string())?
         .model()
         .map_err(|e| e.to_string())?;
     let params = DropParams {
         seconds,
-        tilt_deg: [RELEASE_TILT_DEG, 0.0],
+        tilt_deg: tilt,
         ..Default::default()
     };
     let run = drop_leaf(&model, &params).map_err(|e| e.to_string())?;
-    let c = classify(&run.trajectory, model.chord());
+    Ok(classify(&run.trajectory, model.chord()))
+}
+
+/// One strip of the sweep falling `seconds` under `aero`, let go at
+/// [`RELEASE_TILT_DEG`] about its long axis ([`classify_plate_fall`]).
+pub fn strip_fall(sigma: f64, w: f64, seconds: f64, aero: &AeroSpec) -> Result<StripFall, String> {
+    let c = classify_plate_fall(
+        PlateShape::Rectangle,
+        w,
+        ASPECT,
+        sigma,
+        [RELEASE_TILT_DEG, 0.0],
+        seconds,
+        aero,
+    )?;
     let f = &c.features;
-    let window = (f.t_end_s - f.t_start_s).max(f64::MIN_POSITIVE);
     Ok(StripFall {
         sigma,
         width: w,
         seconds,
         regime: c.regime,
-        omega: std::f64::consts::TAU * f.net_turns.abs() / window,
+        omega: f.tumbling_rate_rad_s(),
         descent: f.mean_descent_speed_m_s,
         drift: f.drift_ratio,
     })

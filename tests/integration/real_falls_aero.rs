@@ -176,17 +176,8 @@ fn plate_fall(
     tilt: [f64; 2],
 ) -> Classification {
     let aero = AeroSpec::named(AeroLawName::Unsteady);
-    let model = plate(shape, size, aspect, sigma, aero)
+    leafmagic::sim::strips::classify_plate_fall(shape, size, aspect, sigma, tilt, 8.0, &aero)
         .unwrap()
-        .model()
-        .unwrap();
-    let params = DropParams {
-        seconds: 8.0,
-        tilt_deg: tilt,
-        ..Default::default()
-    };
-    let run = drop_leaf(&model, &params).unwrap();
-    classify(&run.trajectory, model.chord())
 }
 
 /// A plate tumbling at `--dt auto` falls as it does at half that step:

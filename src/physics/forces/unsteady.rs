@@ -223,7 +223,8 @@ pub fn unsteady_forces(
 /// (α_L stays between the angles it follows, at any step) and second order
 /// in Δ. So Verlet's end-of-step evaluation, whose acceleration it carries
 /// into the next step, sees the lag at that step's end, and the term keeps
-/// Verlet second order; RK4's stages are second order in the lag.
+/// Verlet second order (a test measures it). RK4 under this law is not
+/// fourth order, with the term or without it (docs/real-falls.md).
 /// [`Self::advance`] then commits the step's last evaluation.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PressureLag {
