@@ -274,6 +274,19 @@ impl Forces {
             }
             return;
         }
+        self.solve_added_mass(model, acc);
+        // A triangle with no flow yet: its flow starts along what the
+        // accelerations give it (still air only; `seed_flow_start`).
+        if let Some(lag) = self.lag.as_mut().filter(|l| l.wants_start())
+            && !self.terms.wind
+        {
+            unsteady::seed_flow_start(model, x, acc, &self.torn.triangles, lag);
+        }
+    }
+
+    /// Turns the forces in `acc` into accelerations under each particle's
+    /// added-mass tensor (rigid bodies are solved already).
+    fn solve_added_mass(&self, model: &Model, acc: &mut [V3]) {
         for (((a, &w), &m), added) in acc
             .iter_mut()
             .zip(&model.inv_mass)

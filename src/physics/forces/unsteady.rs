@@ -239,6 +239,11 @@ pub struct PressureLag {
     pending_lagged: Vec<f64>,
     pending_alpha: Vec<f64>,
     pending_rate: Vec<f64>,
+    /// The angle the flow over each triangle starts at where it had none
+    /// at the committed state ([`seed_flow_start`]; NaN: not known).
+    start: Vec<f64>,
+    /// Whether some triangle has not yet met the air (α_L NaN).
+    waiting: bool,
     /// Whether a force evaluation has run since the last commit.
     evaluated: bool,
     /// Time of the committed state, s (NaN before the first evaluation),
@@ -263,6 +268,8 @@ impl PressureLag {
                 pending_lagged: vec![f64::NAN; n],
                 pending_alpha: vec![f64::NAN; n],
                 pending_rate: vec![f64::NAN; n],
+                start: vec![f64::NAN; n],
+                waiting: n > 0,
                 evaluated: false,
                 time: f64::NAN,
                 elapsed: 0.0,
@@ -274,6 +281,13 @@ impl PressureLag {
     /// before it has met the air).
     pub fn lagged(&self, t: usize) -> f64 {
         self.lagged[t]
+    }
+
+    /// Whether the evaluation just placed is at the committed time and a
+    /// triangle there has not met the air: then the flow's start angles
+    /// are wanted ([`seed_flow_start`]).
+    pub fn wants_start(&self) -> bool {
+        self.waiting && self.elapsed <= 0.0
     }
 
     /// Places the next force evaluation at time `t`, s: Δ = t − the
@@ -291,8 +305,9 @@ impl PressureLag {
     /// h′ = h − Δ (none after an end-of-step evaluation; the whole step
     /// after Euler's, at its start). Without an evaluation since the last
     /// commit, the committed α and r are held over the whole of `h`. A
-    /// triangle meeting the air for the first time starts unlagged
-    /// (α_L = α); one with no flow keeps α_L.
+    /// triangle meeting the air for the first time starts from the angle
+    /// its flow started at ([`seed_flow_start`]) where that is known, and
+    /// unlagged (α_L = α) where not; one with no flow keeps α_L.
     pub fn advance(&mut self, h: f64) {
         // After an end-of-step evaluation Δ is h up to the clock's
         // round-off: nothing is left to carry.
@@ -326,7 +341,9 @@ impl PressureLag {
             };
             self.alpha[t] = alpha;
             self.rate[t] = rate;
+            self.start[t] = f64::NAN;
         }
+        self.waiting = self.lagged.iter().any(|l| l.is_nan());
         if !self.time.is_nan() {
             self.time += h;
         }
@@ -411,11 +428,20 @@ fn lagged_pressure(
         }
         let chord = flow.along_chord;
         let rate = flow.speed / (law.pressure_lag * chord);
-        let fresh = lag.lagged[t].is_nan();
+        let mut fresh = lag.lagged[t].is_nan();
         if fresh && lag.elapsed <= 0.0 {
             // Met at the committed time: that is where its lag starts, so
             // later evaluations of the step integrate from it.
             (lag.lagged[t], lag.alpha[t], lag.rate[t]) = (alpha, alpha, rate);
+        } else if fresh && !lag.start[t].is_nan() {
+            // The flow began at the committed time, from none, at the
+            // angle `seed_flow_start` found and at rate |u|/(k c) = 0: the
+            // lag starts there (started at this evaluation's α instead, it
+            // begins O(h) late, an error of first order in every fall from
+            // rest: small under Verlet's own, but RK4's whole error).
+            let start = lag.start[t];
+            (lag.lagged[t], lag.alpha[t], lag.rate[t]) = (start, start, 0.0);
+            fresh = false;
         }
         let lagged = lag.lagged_now(t, alpha, rate);
         (lag.pending_rate[t], lag.pending_lagged[t]) = (rate, lagged);
@@ -430,6 +456,39 @@ fn lagged_pressure(
         let e_hat = (flow.u - tm.n * flow.qn) / flow.along;
         flow.lag_arm = e_hat * (-shift * normal_force);
     }
+}
+
+/// Records in `lag` the angle of attack at which the flow over each
+/// triangle starts where it has none at the committed state (a release
+/// from rest in still air): `acc` holds the particles' accelerations
+/// there. The relative flow u is linear in the particles' velocities at
+/// fixed positions (the corners' mean, less the plate's rotation), so
+/// where they are all zero it grows as u(t) ≈ t L(a): its direction, and
+/// so α(0⁺), is the flow's own formula read with the accelerations for
+/// the velocities. Call after an evaluation at the committed time
+/// ([`PressureLag::wants_start`]); still air only (in wind the flow's
+/// start would need the wind's rate of change too, and a triangle falls
+/// back to starting unlagged).
+pub fn seed_flow_start(model: &Model, x: &[V3], acc: &[V3], torn: &[bool], lag: &mut PressureLag) {
+    let AeroLaw::Unsteady(law) = &model.aero else {
+        return;
+    };
+    SCRATCH.with_borrow_mut(|scratch| {
+        let Scratch {
+            triangles,
+            plates,
+            flows,
+        } = scratch;
+        triangle_motions(model, x, acc, torn, triangles);
+        plate_motions(law, model, triangles, plates);
+        relative_flows(law, model, x, acc, None, triangles, plates, flows);
+        for (t, (flow, tm)) in flows.iter().zip(triangles.iter()).enumerate() {
+            let unmet = lag.lagged[t].is_nan() && lag.pending_alpha[t].is_nan();
+            if unmet && tm.is_some() && flow.u2 > f64::MIN_POSITIVE {
+                lag.start[t] = (flow.qn.abs() / flow.u2.sqrt()).min(1.0).asin();
+            }
+        }
+    });
 }
 
 /// What drag and translational lift remove from a triangle's velocity: its
