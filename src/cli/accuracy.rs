@@ -30,6 +30,7 @@ pub fn accuracy(args: AccuracyArgs) -> Result<()> {
     settings.runs = args.runs;
     if let Some(j) = args.reference_j {
         settings.reference_j = j;
+        settings.refine_reference = false;
     }
     let report = accuracy::sweep_leaf(&model, &initial, &settings)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;

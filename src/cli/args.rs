@@ -277,7 +277,7 @@ pub struct AccuracyArgs {
     /// Timed runs per point (the median is reported; at least 5 for published figures).
     #[arg(long, default_value_t = leafmagic::sim::accuracy::DEFAULT_RUNS)]
     pub runs: usize,
-    /// Use RK4 at T/2^J as the reference instead of the default (it is validated either way).
+    /// Use RK4 at T/2^J as the reference, exactly (by default the reference starts three halvings below RK4's smallest step and is halved until it validates; it is checked either way).
     #[arg(long, value_name = "J")]
     pub reference_j: Option<u32>,
 }

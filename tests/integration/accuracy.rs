@@ -33,6 +33,7 @@ fn settings(seconds: f64, ranges: &[(Integrator, u32, u32)], reference_j: u32) -
             })
             .collect(),
         reference_j,
+        refine_reference: false,
         locate_limits: false,
     }
 }
@@ -300,6 +301,35 @@ fn a_too_coarse_reference_is_detected() {
     let fine = accuracy::sweep(&model, &initial, &settings(0.25, &ranges, 12)).unwrap();
     assert!(fine.reference_valid, "{:?}", fine.warnings);
     assert!(fine.warnings.is_empty(), "{:?}", fine.warnings);
+}
+
+/// A reference that does not validate is halved until it does, and every
+/// point measured again against it: the same coarse reference as above,
+/// refined, validates, says where it started, and gives the leaf's Verlet
+/// its order 2 over the whole range.
+#[test]
+fn a_reference_that_does_not_validate_is_refined() {
+    let model = leaf_a();
+    let initial = accuracy::default_release(&model);
+    let ranges = [(Integrator::Verlet, 9, 13)];
+    let mut refining = settings(0.25, &ranges, 7);
+    refining.refine_reference = true;
+    let refined = accuracy::sweep(&model, &initial, &refining).unwrap();
+    let pinned = accuracy::sweep(&model, &initial, &settings(0.25, &ranges, 7)).unwrap();
+    assert!(!pinned.reference_valid && pinned.refined_from.is_none());
+    assert!(refined.reference_valid, "{:?}", refined.warnings);
+    let from = refined.refined_from.expect("where the reference started");
+    assert_eq!(from.dt, pinned.reference.dt);
+    assert_eq!(from.self_difference, pinned.reference.self_difference);
+    assert!(refined.reference.dt < from.dt);
+    let smallest = refined.smallest_error.unwrap();
+    assert!(refined.reference.self_difference < accuracy::REFERENCE_FACTOR * smallest);
+    // Measured again: the rows differ from the pinned sweep's, and the
+    // order over them is Verlet's.
+    assert_ne!(refined.rows[4].error, pinned.rows[4].error);
+    let verlet = &refined.summaries[0];
+    let order = verlet.order.expect("an order fitted");
+    assert!((order - 2.0).abs() < 0.1, "order {order}");
 }
 
 /// Breaking is switched off for the sweep, and the report says so.

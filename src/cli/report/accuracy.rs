@@ -52,6 +52,13 @@ pub fn sweep(
                 "NOT VALIDATED"
             }
         )?;
+        if let Some(first) = &report.refined_from {
+            writeln!(
+                out,
+                "             (halved from h = {:.4e} s, which differed by {:.2e} chords: not valid)",
+                first.dt, first.self_difference
+            )?;
+        }
         writeln!(
             out,
             "events       {}",

@@ -17,8 +17,11 @@
 //!
 //! **Reference.** RK4 at h_ref = T/2^J. It is validated by self-convergence:
 //! the run at h_ref/2 must agree with it to [`REFERENCE_FACTOR`] × the
-//! smallest error plotted, else the report carries a warning. Errors are
-//! measured against the finer of the two runs. Because RK4 is fourth order,
+//! smallest error plotted. Where it does not (a law with kinks holds RK4 to
+//! second order), the reference is halved until it does, reaches round-off
+//! or 2^[`MAX_STEPS_LOG2`] steps ([`SweepSettings::refine_reference`]), and
+//! every point measured again; still not valid, the report carries a
+//! warning. Errors are measured against the finer of the two runs. Because RK4 is fourth order,
 //! h_ref need not be below the first-order curves' smallest step (the rule
 //! h_ref ≤ h_min/8 of docs/numerics.md, "Error against work", step 3, is for
 //! a reference of the same order); the validation is what guarantees it is
@@ -336,6 +339,44 @@ pub fn reference(
     })
 }
 
+/// A reference that did not validate and was refined: its step h_ref/2
+/// and its self-difference.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct RefinedFrom {
+    /// h_ref/2, s.
+    pub dt: f64,
+    /// Its RMS difference from the run at h_ref, chords.
+    pub self_difference: f64,
+}
+
+/// The reference halved once: RK4 at half its finer step, checked against
+/// that finer run.
+fn halve_reference(
+    model: &Model,
+    initial: &State,
+    seconds: f64,
+    coarser: &Reference,
+) -> Result<Reference, AccuracyError> {
+    let dt = coarser.dt / 2.0;
+    let fine = run_steps(
+        model,
+        initial,
+        Integrator::Rk4,
+        dt,
+        (seconds / dt).round() as u64,
+    );
+    if let Some(e) = fine.error {
+        return Err(AccuracyError::Reference(e));
+    }
+    Ok(Reference {
+        integrator: Integrator::Rk4,
+        dt,
+        self_difference: rms_difference(&coarser.positions, &fine.state.position, model.chord()),
+        positions: fine.state.position,
+        internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
+    })
+}
+
 /// Which steps one integrator is swept over: h = T/2^j for j in
 /// `j_min..=j_max`.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -359,6 +400,10 @@ pub struct SweepSettings {
     pub ranges: Vec<SweepRange>,
     /// The reference is RK4 at T/2^`reference_j`, checked against T/2^(j+1).
     pub reference_j: u32,
+    /// Halve the reference's step until it validates against the errors
+    /// plotted (or reaches round-off, or 2^[`MAX_STEPS_LOG2`] steps); off
+    /// keeps exactly `reference_j`.
+    pub refine_reference: bool,
     /// Bisect the step count between the largest stable and the smallest
     /// diverged step of each scheme.
     pub locate_limits: bool,
@@ -436,6 +481,7 @@ impl SweepSettings {
             runs: DEFAULT_RUNS,
             ranges,
             reference_j: (rk4_max + 3).min(MAX_STEPS_LOG2),
+            refine_reference: true,
             locate_limits: true,
         }
     }
@@ -569,6 +615,9 @@ pub struct SweepReport {
     pub breaking_disabled: usize,
     /// The reference.
     pub reference: Reference,
+    /// The reference first computed, where it did not validate and was
+    /// halved until it did ([`SweepSettings::refine_reference`]).
+    pub refined_from: Option<RefinedFrom>,
     /// The smallest error plotted, chords.
     pub smallest_error: Option<f64>,
     /// Whether the reference passed self-convergence validation.
@@ -627,9 +676,12 @@ pub fn sweep(
     settings.validate()?;
     let seconds = settings.seconds;
     let chord = model.chord();
-    let reference = reference(model, initial, seconds, settings.reference_j)?;
+    let mut reference = reference(model, initial, seconds, settings.reference_j)?;
     let est = stability::estimate(model);
     let mut rows = Vec::new();
+    // Each row's end positions, to measure again against a refined
+    // reference (`None` where the row has no error).
+    let mut ends: Vec<Option<Vec<V3>>> = Vec::new();
     let mut summaries = Vec::new();
     for range in &settings.ranges {
         let integrator = range.integrator;
@@ -639,6 +691,7 @@ pub fn sweep(
             let run = timed(model, initial, integrator, dt, 1 << j, settings.runs);
             let diverged = run.error.is_some();
             let oscillating = run.oscillating(&reference);
+            ends.push((!diverged && !oscillating).then(|| run.state.position.clone()));
             rows.push(SweepRow {
                 integrator,
                 dt,
@@ -669,16 +722,52 @@ pub fn sweep(
             extrapolated: Vec::new(),
         });
     }
-    let smallest_error = rows
-        .iter()
-        .filter_map(|r| r.error)
-        .filter(|e| *e > 0.0)
-        .min_by(f64::total_cmp);
-    let mut warnings = Vec::new();
-    let reference_valid = match smallest_error {
+    let smallest = |rows: &[SweepRow]| {
+        rows.iter()
+            .filter_map(|r| r.error)
+            .filter(|e| *e > 0.0)
+            .min_by(f64::total_cmp)
+    };
+    let valid = |reference: &Reference, smallest: Option<f64>| match smallest {
         Some(e) => reference.self_difference < REFERENCE_FACTOR * e,
         None => true,
     };
+    // A law whose forces have kinks (the unsteady law's angle of attack,
+    // edge-on and broadside) holds RK4 to second order, and its reference
+    // at the default step then does not validate: halve it until it does,
+    // as the error estimate does (`estimate`), and measure every point
+    // again against it.
+    let mut refined_from = None;
+    let mut reference_steps = (seconds / reference.dt).round();
+    while settings.refine_reference
+        && !valid(&reference, smallest(&rows))
+        && reference.self_difference >= estimate::ROUND_OFF_CHORDS
+        && 2.0 * reference_steps <= f64::from(2u32.pow(MAX_STEPS_LOG2))
+    {
+        let finer = halve_reference(model, initial, seconds, &reference)?;
+        refined_from.get_or_insert(RefinedFrom {
+            dt: reference.dt,
+            self_difference: reference.self_difference,
+        });
+        reference = finer;
+        reference_steps *= 2.0;
+        for (row, end) in rows.iter_mut().zip(&ends) {
+            if let Some(end) = end {
+                row.error = Some(rms_difference(end, &reference.positions, chord));
+            }
+        }
+        for summary in &mut summaries {
+            let mine: Vec<SweepRow> = rows
+                .iter()
+                .filter(|r| r.integrator == summary.integrator)
+                .cloned()
+                .collect();
+            summary.cheapest = TOLERANCES.iter().map(|&tol| cheapest(&mine, tol)).collect();
+        }
+    }
+    let smallest_error = smallest(&rows);
+    let mut warnings = Vec::new();
+    let reference_valid = valid(&reference, smallest_error);
     if !reference_valid {
         warnings.push(format!(
             "reference not converged: RK4 at h_ref = {:.3e} s and h_ref/2 differ by {:.3e} chords, \
@@ -741,6 +830,7 @@ pub fn sweep(
         chord,
         breaking_disabled: 0,
         reference,
+        refined_from,
         smallest_error,
         reference_valid,
         rows,
