@@ -6,8 +6,13 @@ use super::args::AccuracyArgs;
 use super::{input, report};
 use anyhow::{Context, Result, bail};
 use leafmagic::physics::model::Model;
+use leafmagic::physics::run::approximate_duration;
 use leafmagic::sim::accuracy::{self, SweepSettings, long::LongReport, long::LongSettings};
 use std::time::Instant;
+
+/// A sweep estimated to take longer than this (s of one core) says so
+/// before it starts.
+const LONG_SWEEP_S: f64 = 60.0;
 
 /// `accuracy`: runs the sweep (or the long comparison), writes its files
 /// and reports it.
@@ -31,6 +36,29 @@ pub fn accuracy(args: AccuracyArgs) -> Result<()> {
     if let Some(j) = args.reference_j {
         settings.reference_j = j;
         settings.refine_reference = false;
+    }
+    let cost = accuracy::estimated_cost(&accuracy::smooth_model(&model).0, &initial, &settings);
+    // Refining the reference may at most double the sweep (at least a
+    // minute): each halving costs twice the last.
+    settings.refine_budget_s = cost.total_s().max(LONG_SWEEP_S);
+    if cost.total_s() > LONG_SWEEP_S {
+        let parts: Vec<String> = cost
+            .per_integrator
+            .iter()
+            .map(|(integrator, s)| format!("{integrator} {}", approximate_duration(*s)))
+            .chain(std::iter::once(format!(
+                "reference {}",
+                approximate_duration(cost.reference_s)
+            )))
+            .collect();
+        eprintln!(
+            "note: this sweep needs {} of one core ({}; timed on {} steps of each), up \
+             to twice that if the reference must be refined; --seconds shortens every run, \
+             --runs 1 times each point once",
+            approximate_duration(cost.total_s()),
+            parts.join(", "),
+            accuracy::PILOT_STEPS
+        );
     }
     let report = accuracy::sweep_leaf(&model, &initial, &settings)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;

@@ -552,7 +552,13 @@ impl Work {
 /// Seconds as a rough phrase ("about 12 s", "about 7 minutes", "about 3
 /// hours").
 fn duration_phrase(seconds: f64) -> String {
-    let s = if !seconds.is_finite() {
+    format!("{} of one core", approximate_duration(seconds))
+}
+
+/// A duration in words: "under a second", "about 40 s", "about 12
+/// minutes", "about 3 hours", "about 5 days".
+pub fn approximate_duration(seconds: f64) -> String {
+    if !seconds.is_finite() {
         "longer than the age of the universe".to_string()
     } else if seconds < 1.0 {
         "under a second".to_string()
@@ -564,8 +570,7 @@ fn duration_phrase(seconds: f64) -> String {
         format!("about {:.0} hours", seconds / 3600.0)
     } else {
         format!("about {} days", quantity((seconds / 86400.0).round()))
-    };
-    format!("{s} of one core")
+    }
 }
 
 /// Which command's remedies a [`WorkError`] names.

@@ -34,6 +34,7 @@ fn settings(seconds: f64, ranges: &[(Integrator, u32, u32)], reference_j: u32) -
             .collect(),
         reference_j,
         refine_reference: false,
+        refine_budget_s: f64::INFINITY,
         locate_limits: false,
     }
 }
@@ -330,6 +331,19 @@ fn a_reference_that_does_not_validate_is_refined() {
     let verlet = &refined.summaries[0];
     let order = verlet.order.expect("an order fitted");
     assert!((order - 2.0).abs() < 0.1, "order {order}");
+    // Without the time for it, the refinement is not started, and the
+    // report says why and what to do.
+    refining.refine_budget_s = 0.0;
+    let broke = accuracy::sweep(&model, &initial, &refining).unwrap();
+    assert!(!broke.reference_valid && broke.refined_from.is_none());
+    assert!(
+        broke
+            .warnings
+            .iter()
+            .any(|w| w.contains("refinement stopped") && w.contains("--reference-j")),
+        "{:?}",
+        broke.warnings
+    );
 }
 
 /// Breaking is switched off for the sweep, and the report says so.

@@ -299,6 +299,10 @@ pub struct Reference {
     /// The fine run's [`EndRun::internal_acceleration`], 1/s²: how fast
     /// the leaf's springs and hinges really move at T.
     pub internal_acceleration: f64,
+    /// Wall time of the fine run, s: what the next halving will cost, by
+    /// half.
+    #[serde(skip)]
+    pub wall_s: f64,
 }
 
 /// Computes the RK4 reference at T/2^j and T/2^(j+1).
@@ -336,7 +340,68 @@ pub fn reference(
         self_difference: rms_difference(&coarse.state.position, &fine.state.position, chord),
         positions: fine.state.position,
         internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
+        wall_s: fine.wall_s,
     })
+}
+
+/// Steps of each integrator timed by [`estimated_cost`].
+pub const PILOT_STEPS: u64 = 256;
+
+/// Bisection runs [`locate_limit`] takes to 1 % (log₂ 100 ≈ 7), counted at
+/// twice the first point's steps.
+const BISECTION_RUNS: f64 = 7.0;
+
+/// What a sweep will cost, from a pilot of [`PILOT_STEPS`] steps of each
+/// integrator at its finest step (stable, and where the implicit scheme's
+/// conjugate gradients converge fastest, so that cost is a floor there).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SweepCost {
+    /// Seconds of one core per integrator, in the sweep's order, then the
+    /// reference's (RK4 at h_ref and h_ref/2).
+    pub per_integrator: Vec<(Integrator, f64)>,
+    /// The reference's seconds (more if it must be refined).
+    pub reference_s: f64,
+}
+
+impl SweepCost {
+    /// The whole sweep, s of one core.
+    pub fn total_s(&self) -> f64 {
+        self.per_integrator.iter().map(|(_, s)| s).sum::<f64>() + self.reference_s
+    }
+}
+
+/// Times [`PILOT_STEPS`] steps of each integrator of `settings` on `model`
+/// and scales them to the sweep: every point's timed and untimed runs, the
+/// bisection of each limit and the reference. A guide for the note a long
+/// sweep prints before it starts, not a promise (the implicit scheme takes
+/// more iterations at larger steps).
+pub fn estimated_cost(model: &Model, initial: &State, settings: &SweepSettings) -> SweepCost {
+    let seconds = settings.seconds;
+    let per_step = |integrator: Integrator, dt: f64| {
+        let run = run_steps(model, initial, integrator, dt, PILOT_STEPS);
+        run.wall_s / PILOT_STEPS as f64
+    };
+    let per_integrator = settings
+        .ranges
+        .iter()
+        .map(|r| {
+            let cost = per_step(r.integrator, step_size(seconds, r.j_max));
+            let steps: f64 = (r.j_min..=r.j_max).map(|j| 2f64.powi(j as i32)).sum();
+            let bisection = if settings.locate_limits {
+                BISECTION_RUNS * 2f64.powi(r.j_min as i32 + 1)
+            } else {
+                0.0
+            };
+            let runs = (settings.runs + 1) as f64;
+            (r.integrator, cost * (runs * steps + bisection))
+        })
+        .collect();
+    let j = settings.reference_j;
+    let rk4 = per_step(Integrator::Rk4, step_size(seconds, j + 1));
+    SweepCost {
+        per_integrator,
+        reference_s: rk4 * 3.0 * 2f64.powi(j as i32),
+    }
 }
 
 /// A reference that did not validate and was refined: its step h_ref/2
@@ -374,6 +439,7 @@ fn halve_reference(
         self_difference: rms_difference(&coarser.positions, &fine.state.position, model.chord()),
         positions: fine.state.position,
         internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
+        wall_s: fine.wall_s,
     })
 }
 
@@ -404,6 +470,9 @@ pub struct SweepSettings {
     /// plotted (or reaches round-off, or 2^[`MAX_STEPS_LOG2`] steps); off
     /// keeps exactly `reference_j`.
     pub refine_reference: bool,
+    /// Seconds the refinement may spend in all: a halving that would take
+    /// it past this is not started (each costs twice the last).
+    pub refine_budget_s: f64,
     /// Bisect the step count between the largest stable and the smallest
     /// diverged step of each scheme.
     pub locate_limits: bool,
@@ -482,6 +551,7 @@ impl SweepSettings {
             ranges,
             reference_j: (rk4_max + 3).min(MAX_STEPS_LOG2),
             refine_reference: true,
+            refine_budget_s: f64::INFINITY,
             locate_limits: true,
         }
     }
@@ -739,11 +809,19 @@ pub fn sweep(
     // again against it.
     let mut refined_from = None;
     let mut reference_steps = (seconds / reference.dt).round();
+    let mut refining_s = 0.0;
+    let mut over_budget = None;
     while settings.refine_reference
         && !valid(&reference, smallest(&rows))
         && reference.self_difference >= estimate::ROUND_OFF_CHORDS
         && 2.0 * reference_steps <= f64::from(2u32.pow(MAX_STEPS_LOG2))
     {
+        let next_s = 2.0 * reference.wall_s;
+        if refining_s + next_s > settings.refine_budget_s {
+            over_budget = Some(next_s);
+            break;
+        }
+        refining_s += next_s;
         let finer = halve_reference(model, initial, seconds, &reference)?;
         refined_from.get_or_insert(RefinedFrom {
             dt: reference.dt,
@@ -768,6 +846,13 @@ pub fn sweep(
     let smallest_error = smallest(&rows);
     let mut warnings = Vec::new();
     let reference_valid = valid(&reference, smallest_error);
+    if let Some(next_s) = over_budget {
+        warnings.push(format!(
+            "reference refinement stopped at h_ref/2 = {:.3e} s: the next halving would take \
+             about {next_s:.0} s, past the {:.0} s allowed; --reference-j pins a finer one",
+            reference.dt, settings.refine_budget_s
+        ));
+    }
     if !reference_valid {
         warnings.push(format!(
             "reference not converged: RK4 at h_ref = {:.3e} s and h_ref/2 differ by {:.3e} chords, \
