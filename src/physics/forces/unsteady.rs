@@ -106,7 +106,7 @@
 //! Soc. 34(3)). Here each triangle's α is followed by α_L,
 //! dα_L/dt = (α − α_L)/τ, τ = k c∥/|u| (k = `pressure_lag` chord
 //! transits), and the normal force ½ ρ A C_D⊥ |u| (u·n) n is moved
-//! G c∥ (f(α_L) − f(α)) further upstream along the in-plane flow
+//! G c∥ (f(α_L) − f(α)) cos α further upstream along the in-plane flow
 //! (G = `pressure_lag_gain`): a couple, applied as the Munk couple is. On a
 //! gliding plate (α slow) α_L ≈ α and it vanishes; on a turning one it
 //! leads the turn, and since a lag's response falls once the turn is faster
@@ -131,7 +131,9 @@
 //! every fall at a step that bounds a tumbling plate's turn, with the
 //! strips' scaling law and the disks' regimes as the lag term's check, and
 //! then checked on ten other seeds of the squares (docs/real-falls.md,
-//! "The defaults").
+//! "The defaults"). They were kept when the lag's couple was made
+//! continuous through face-on (cos α above), which moved the fit a little
+//! (docs/real-falls.md, "A couple without a jump").
 
 use super::surfaces::surface;
 use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
@@ -391,7 +393,9 @@ pub fn pressure_offset(alpha: f64) -> f64 {
 /// flow over it, as its in-plane arm in `flows` (which [`per_triangle`]
 /// applies with the Munk couple's), and each triangle's α and lag rate
 /// recorded in `lag` (module docs): the normal force ½ ρ A C_D⊥ |u| (u·n) n
-/// moved G c∥ (f(α_L) − f(α)) upstream along the in-plane flow.
+/// moved G c∥ (f(α_L) − f(α)) cos α upstream along the in-plane flow (the
+/// cos α, |u∥|/|u|, takes the couple through zero where the in-plane flow
+/// reverses, instead of through a jump).
 fn lagged_pressure(
     law: &UnsteadyAero,
     triangles: &[Option<TriangleMotion>],
@@ -451,10 +455,16 @@ fn lagged_pressure(
         let shift =
             law.pressure_lag_gain * chord * (pressure_offset(lagged) - pressure_offset(alpha));
         let normal_force = half_rho * tm.area * law.cd_normal * flow.speed * flow.qn;
-        // Offset −ê s upstream (ê the in-plane flow's direction) of the
-        // force F n: couple C = −s F ê × n, so n × C = −s F ê.
-        let e_hat = (flow.u - tm.n * flow.qn) / flow.along;
-        flow.lag_arm = e_hat * (-shift * normal_force);
+        // Offset −e s upstream of the force F n, along e = u∥/|u| (the
+        // in-plane flow's direction times cos α): couple C = −s F e × n,
+        // so n × C = −s F e. With the unit direction u∥/|u∥| instead, the
+        // couple reversed in a jump whenever the in-plane flow passed
+        // through zero (a plate rocking through face-on with α_L behind
+        // α), and a 5 cm plate's fall converged erratically, its Verlet
+        // error at 0.25 s 60× the smooth law's (docs/real-falls.md,
+        // "A couple without a jump").
+        let along_flow = (flow.u - tm.n * flow.qn) / flow.speed;
+        flow.lag_arm = along_flow * (-shift * normal_force);
     }
 }
 

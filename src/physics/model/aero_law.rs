@@ -246,7 +246,7 @@ pub struct UnsteadyAero {
     /// Density of the leaf's material ρ_s for buoyancy, kg/m³.
     pub solid_density: f64,
     /// G, the gain on the lagged centre of pressure: the normal force acts
-    /// G c∥ (f(α_L) − f(α)) upstream of where it acts in steady flow, α_L
+    /// G c∥ (f(α_L) − f(α)) cos α upstream of where it acts in steady flow, α_L
     /// the angle of attack lagged by [`Self::pressure_lag`] (default
     /// [`UNSTEADY_PRESSURE_LAG_GAIN`]; 0 leaves the term out;
     /// [`crate::physics::forces::unsteady`]).
@@ -291,9 +291,10 @@ pub const UNSTEADY_ROTATION_DRAG: f64 = 0.0;
 pub const PAPER_DENSITY: f64 = 1008.0;
 /// Default gain G on the lagged centre of pressure: 0.6, fitted with the
 /// coefficients above and [`UNSTEADY_PRESSURE_LAG`]. With it the strips
-/// tumble at Ω ∝ σ^0.50 w^−0.97 over equal scaled times (Mahadevan, Ryu &
-/// Samuel 1999: 1/2 and −1) and the disks fall chaotically inside Field et
-/// al.'s band; with a gain of 0 and the other defaults 0.35 and −0.83,
+/// tumble at Ω ∝ σ^0.42 w^−0.92 over equal scaled times (Mahadevan, Ryu &
+/// Samuel 1999: 1/2 and −1; 0.50 and −0.97 as fitted, before the couple
+/// was made continuous) and the 3 cm disks fall chaotically inside Field
+/// et al.'s band; with a gain of 0 and the other defaults 0.35 and −0.83,
 /// and no chaotic disks
 /// (docs/real-falls.md, "The defaults").
 pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.6;
