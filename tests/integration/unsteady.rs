@@ -942,6 +942,39 @@ fn the_lagged_centre_of_pressure_drives_a_turning_plate() {
     }
 }
 
+/// RMS position errors, in chords, of `integrator` from `initial` over
+/// `seconds` at each step in `steps`, against a run at the first step over
+/// 64, and the observed orders between consecutive steps (each step half
+/// the one before).
+fn step_errors(
+    model: &Model,
+    initial: &leafmagic::physics::state::State,
+    integrator: leafmagic::physics::params::Integrator,
+    seconds: f64,
+    steps: &[f64],
+) -> (Vec<f64>, Vec<f64>) {
+    use leafmagic::sim::accuracy::{rms_difference, run_steps};
+    let end = |dt: f64| {
+        let run = run_steps(
+            model,
+            initial,
+            integrator,
+            dt,
+            (seconds / dt).round() as u64,
+        );
+        assert!(run.error.is_none(), "{:?}", run.error);
+        run.state.position
+    };
+    let reference = end(steps[0] / 64.0);
+    let errors: Vec<f64> = steps
+        .iter()
+        .map(|&dt| rms_difference(&end(dt), &reference, model.chord()))
+        .collect();
+    let orders = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
+    println!("errors {errors:?} chords, orders {orders:?}");
+    (errors, orders)
+}
+
 /// The lagged centre of pressure keeps Verlet second order: prototype A
 /// under the law's defaults (the lag term on), tilted as `drop` releases
 /// it but already falling at 0.3 m/s, 0.5 s at h, h/2 and h/4 against
@@ -956,7 +989,7 @@ fn the_lagged_centre_of_pressure_drives_a_turning_plate() {
 fn the_lag_term_keeps_verlet_second_order() {
     use leafmagic::leaf::LeafSpec;
     use leafmagic::physics::params::Integrator;
-    use leafmagic::sim::accuracy::{default_release, rms_difference, run_steps};
+    use leafmagic::sim::accuracy::default_release;
     let model = LeafSpec::from_toml(&with_aero("law = \"unsteady\""), "a")
         .unwrap()
         .model()
@@ -969,26 +1002,14 @@ fn the_lag_term_keeps_verlet_second_order() {
     for v in &mut initial.velocity {
         *v = V3::new(0.0, 0.0, -0.3);
     }
-    let (seconds, h) = (0.5, 0.5 / 256.0);
-    let end = |dt: f64| {
-        let run = run_steps(
-            &model,
-            &initial,
-            Integrator::Verlet,
-            dt,
-            (seconds / dt) as u64,
-        );
-        assert!(run.error.is_none(), "{:?}", run.error);
-        run.state.position
-    };
-    let reference = end(h / 64.0);
-    let chord = model.chord();
-    let errors: Vec<f64> = [h, h / 2.0, h / 4.0]
-        .iter()
-        .map(|&dt| rms_difference(&end(dt), &reference, chord))
-        .collect();
-    let orders: Vec<f64> = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
-    println!("errors {errors:?} chords, orders {orders:?}");
+    let h = 0.5 / 256.0;
+    let (_, orders) = step_errors(
+        &model,
+        &initial,
+        Integrator::Verlet,
+        0.5,
+        &[h, h / 2.0, h / 4.0],
+    );
     for p in orders {
         assert!(p > 1.7, "order {p}");
     }
@@ -1006,28 +1027,16 @@ fn the_lag_term_keeps_verlet_second_order() {
 fn a_release_from_rest_keeps_rk4_above_first_order() {
     use leafmagic::leaf::LeafSpec;
     use leafmagic::physics::params::Integrator;
-    use leafmagic::sim::accuracy::{default_release, rms_difference, run_steps};
+    use leafmagic::sim::accuracy::default_release;
     let model = LeafSpec::from_toml(&with_aero("law = \"unsteady\""), "a")
         .unwrap()
         .model()
         .unwrap();
     let initial = default_release(&model);
     assert!(initial.velocity.iter().all(|v| *v == V3::zeros()));
-    let (seconds, h) = (0.5, 0.5 / 512.0);
-    let end = |dt: f64| {
-        let steps = (seconds / dt).round() as u64;
-        let run = run_steps(&model, &initial, Integrator::Rk4, dt, steps);
-        assert!(run.error.is_none(), "{:?}", run.error);
-        run.state.position
-    };
-    let reference = end(h / 64.0);
-    let chord = model.chord();
-    let errors: Vec<f64> = [h, h / 2.0, h / 4.0, h / 8.0]
-        .iter()
-        .map(|&dt| rms_difference(&end(dt), &reference, chord))
-        .collect();
-    let orders: Vec<f64> = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
-    println!("errors {errors:?} chords, orders {orders:?}");
+    let h = 0.5 / 512.0;
+    let steps = [h, h / 2.0, h / 4.0, h / 8.0];
+    let (errors, _) = step_errors(&model, &initial, Integrator::Rk4, 0.5, &steps);
     // Measured: 1.4e-5 … 8.6e-8 chords, 166× over three halvings (mean
     // order 2.5; 1.5 at the finest pair, where the kinks dominate); with
     // the lag started late, 3.9e-4 … 2.3e-5, 17× (orders 1.5, 1.3, 1.3).
@@ -1046,28 +1055,16 @@ fn a_release_from_rest_keeps_rk4_above_first_order() {
 #[test]
 fn a_plate_rocking_through_face_on_keeps_verlet_second_order() {
     use leafmagic::physics::params::Integrator;
-    use leafmagic::sim::accuracy::{default_release, rms_difference, run_steps};
+    use leafmagic::sim::accuracy::default_release;
     let model = plate(PlateShape::Square, 0.05, 1.0, 0.07, AeroSpec::unsteady())
         .unwrap()
         .model()
         .unwrap();
     assert!(PressureLag::for_model(&model).is_some());
     let initial = default_release(&model);
-    let (seconds, h) = (0.25, 0.25 / 1024.0);
-    let end = |dt: f64| {
-        let steps = (seconds / dt).round() as u64;
-        let run = run_steps(&model, &initial, Integrator::Verlet, dt, steps);
-        assert!(run.error.is_none(), "{:?}", run.error);
-        run.state.position
-    };
-    let reference = end(h / 64.0);
-    let chord = model.chord();
-    let errors: Vec<f64> = [h, h / 2.0, h / 4.0, h / 8.0]
-        .iter()
-        .map(|&dt| rms_difference(&end(dt), &reference, chord))
-        .collect();
-    let orders: Vec<f64> = errors.windows(2).map(|e| (e[0] / e[1]).log2()).collect();
-    println!("errors {errors:?} chords, orders {orders:?}");
+    let h = 0.25 / 1024.0;
+    let steps = [h, h / 2.0, h / 4.0, h / 8.0];
+    let (errors, orders) = step_errors(&model, &initial, Integrator::Verlet, 0.25, &steps);
     for p in orders {
         assert!(p > 1.8, "order {p}");
     }

@@ -190,14 +190,10 @@ pub fn unsteady_forces(
     lag: Option<&mut PressureLag>,
 ) {
     SCRATCH.with_borrow_mut(|scratch| {
+        scratch.measure(law, model, x, v, wind, torn);
         let Scratch {
-            triangles,
-            plates,
-            flows,
+            triangles, flows, ..
         } = scratch;
-        triangle_motions(model, x, v, torn, triangles);
-        plate_motions(law, model, triangles, plates);
-        relative_flows(law, model, x, v, wind, triangles, plates, flows);
         flow_coefficients(law, model, flows);
         if let Some(lag) = lag.filter(|_| law.pressure_lag_gain > 0.0) {
             lagged_pressure(law, triangles, flows, lag);
@@ -484,14 +480,10 @@ pub fn seed_flow_start(model: &Model, x: &[V3], acc: &[V3], torn: &[bool], lag: 
         return;
     };
     SCRATCH.with_borrow_mut(|scratch| {
+        scratch.measure(law, model, x, acc, None, torn);
         let Scratch {
-            triangles,
-            plates,
-            flows,
+            triangles, flows, ..
         } = scratch;
-        triangle_motions(model, x, acc, torn, triangles);
-        plate_motions(law, model, triangles, plates);
-        relative_flows(law, model, x, acc, None, triangles, plates, flows);
         for (t, (flow, tm)) in flows.iter().zip(triangles.iter()).enumerate() {
             let unmet = lag.lagged[t].is_nan() && lag.pending_alpha[t].is_nan();
             if unmet && tm.is_some() && flow.u2 > f64::MIN_POSITIVE {
@@ -539,6 +531,33 @@ struct Scratch {
     plates: Vec<PlateMotion>,
     /// One per triangle, as `triangles`; read only where that is `Some`.
     flows: Vec<Flow>,
+}
+
+impl Scratch {
+    /// The first passes of an evaluation at (x, v): each triangle's shape
+    /// and turning, each plate's motion, each triangle's relative flow.
+    fn measure(
+        &mut self,
+        law: &UnsteadyAero,
+        model: &Model,
+        x: &[V3],
+        v: &[V3],
+        wind: Option<&[V3]>,
+        torn: &[bool],
+    ) {
+        triangle_motions(model, x, v, torn, &mut self.triangles);
+        plate_motions(law, model, &self.triangles, &mut self.plates);
+        relative_flows(
+            law,
+            model,
+            x,
+            v,
+            wind,
+            &self.triangles,
+            &self.plates,
+            &mut self.flows,
+        );
+    }
 }
 
 thread_local! {
