@@ -346,6 +346,33 @@ fn a_reference_that_does_not_validate_is_refined() {
     );
 }
 
+/// The cost a sweep announces counts every integrator's points in the
+/// sweep's order and the reference, and scales with the steps: forward
+/// Euler's 2^10…2^20 steps (times the runs) come out far above RK4's
+/// 2^7…2^11 at four evaluations a step, whatever the machine's speed.
+#[test]
+fn the_sweep_cost_counts_every_integrator_and_the_reference() {
+    let model = leaf_a();
+    let initial = accuracy::default_release(&model);
+    let settings = SweepSettings::for_model(&model, 0.25);
+    let cost = accuracy::estimated_cost(&model, &initial, &settings);
+    let order: Vec<Integrator> = cost.per_integrator.iter().map(|(i, _)| *i).collect();
+    let expected: Vec<Integrator> = settings.ranges.iter().map(|r| r.integrator).collect();
+    assert_eq!(order, expected);
+    for (integrator, s) in &cost.per_integrator {
+        assert!(s.is_finite() && *s > 0.0, "{integrator}: {s}");
+    }
+    assert!(cost.reference_s > 0.0);
+    let sum: f64 = cost.per_integrator.iter().map(|(_, s)| s).sum();
+    assert_eq!(cost.total_s(), sum + cost.reference_s);
+    let of = |i: Integrator| cost.per_integrator.iter().find(|(j, _)| *j == i).unwrap().1;
+    assert!(
+        of(Integrator::Euler) > 10.0 * of(Integrator::Rk4),
+        "{:?}",
+        cost.per_integrator
+    );
+}
+
 /// Breaking is switched off for the sweep, and the report says so.
 #[test]
 fn breaking_is_switched_off_for_the_sweep() {
@@ -722,11 +749,10 @@ fn accuracy_command_writes_csv_svg_and_table() {
         .output()
         .unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{stderr}");
+    // A sweep of well under a minute says nothing of its cost.
+    assert!(!stderr.contains("note: this sweep"), "{stderr}");
     for i in Integrator::ALL {
         assert!(stdout.contains(i.name()), "{stdout}");
     }
