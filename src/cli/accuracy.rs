@@ -52,12 +52,11 @@ pub fn accuracy(args: AccuracyArgs) -> Result<()> {
             )))
             .collect();
         eprintln!(
-            "note: this sweep needs {} of one core ({}; timed on {} steps of each), up \
-             to twice that if the reference must be refined; --seconds shortens every run, \
+            "note: this sweep needs {} of one core ({}; from a short run of each), up to \
+             twice that if the reference must be refined; --seconds shortens every run, \
              --runs 1 times each point once",
             approximate_duration(cost.total_s()),
             parts.join(", "),
-            accuracy::PILOT_STEPS
         );
     }
     let report = accuracy::sweep_leaf(&model, &initial, &settings)

@@ -377,6 +377,13 @@ impl PressureLag {
     }
 }
 
+/// The angle of attack α = asin(|u·n|/|u|) of a flow of normal part `qn`
+/// and speed `speed` > 0, rad (min 1: round-off).
+#[inline]
+fn angle_of_attack(qn: f64, speed: f64) -> f64 {
+    (qn.abs() / speed).min(1.0).asin()
+}
+
 /// The centre of pressure's offset upstream of mid-chord in steady flow,
 /// in chords: a quarter chord at α = 0 (thin-aerofoil theory), none
 /// broadside, linear between (module docs).
@@ -408,7 +415,7 @@ fn lagged_pressure(
         .zip(triangles)
     {
         *alpha = if tm.is_some() && flow.u2 > f64::MIN_POSITIVE {
-            (flow.qn.abs() / flow.speed).min(1.0).asin()
+            angle_of_attack(flow.qn, flow.speed)
         } else {
             f64::NAN
         };
@@ -487,7 +494,7 @@ pub fn seed_flow_start(model: &Model, x: &[V3], acc: &[V3], torn: &[bool], lag: 
         for (t, (flow, tm)) in flows.iter().zip(triangles.iter()).enumerate() {
             let unmet = lag.lagged[t].is_nan() && lag.pending_alpha[t].is_nan();
             if unmet && tm.is_some() && flow.u2 > f64::MIN_POSITIVE {
-                lag.start[t] = (flow.qn.abs() / flow.u2.sqrt()).min(1.0).asin();
+                lag.start[t] = angle_of_attack(flow.qn, flow.u2.sqrt());
             }
         }
     });
@@ -661,11 +668,10 @@ struct Flow {
     across: V3,
     across_on: [f64; 2],
     omega_on: [f64; 2],
-    /// Then: |u|, |u∥| and the chord along it (0 with no in-plane flow),
-    /// C_D∥ (with skin friction), the chord across the axis and the
-    /// finite-span factor.
+    /// Then: |u|, the chord along u∥ (0 with no in-plane flow), C_D∥ (with
+    /// skin friction), the chord across the axis and the finite-span
+    /// factor.
     speed: f64,
-    along: f64,
     along_chord: f64,
     cd_par: f64,
     chord: f64,
@@ -764,7 +770,6 @@ fn flow_coefficients(law: &UnsteadyAero, model: &Model, flows: &mut [Flow]) {
     for (flow, geom) in flows.iter_mut().zip(&model.surfaces) {
         flow.speed = flow.u2.sqrt();
         let along = flow.along2.sqrt();
-        flow.along = along;
         // `chord` reads a direction, whatever its length: no division.
         (flow.along_chord, flow.cd_par) = if along > 0.0 {
             let chord = geom.chord(flow.along_on[0], flow.along_on[1]);

@@ -329,30 +329,53 @@ pub fn reference(
     if let Some(e) = coarse.error {
         return Err(AccuracyError::Reference(e));
     }
-    let fine = run_steps(model, initial, Integrator::Rk4, coarse_h / 2.0, 2 << j);
+    finer_reference(model, initial, seconds, &coarse.state.position, coarse_h)
+}
+
+/// RK4 at half of `coarse_h` over `seconds`, checked against the run at
+/// `coarse_h` that ended at `coarse`: a reference, or a refined one.
+fn finer_reference(
+    model: &Model,
+    initial: &State,
+    seconds: f64,
+    coarse: &[V3],
+    coarse_h: f64,
+) -> Result<Reference, AccuracyError> {
+    let dt = coarse_h / 2.0;
+    let fine = run_steps(
+        model,
+        initial,
+        Integrator::Rk4,
+        dt,
+        (seconds / dt).round() as u64,
+    );
     if let Some(e) = fine.error {
         return Err(AccuracyError::Reference(e));
     }
-    let chord = model.chord();
     Ok(Reference {
         integrator: Integrator::Rk4,
-        dt: coarse_h / 2.0,
-        self_difference: rms_difference(&coarse.state.position, &fine.state.position, chord),
+        dt,
+        self_difference: rms_difference(coarse, &fine.state.position, model.chord()),
         positions: fine.state.position,
         internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
         wall_s: fine.wall_s,
     })
 }
 
-/// Steps of each integrator timed by [`estimated_cost`].
+/// Steps of each integrator [`estimated_cost`] times at least.
 pub const PILOT_STEPS: u64 = 256;
+/// Wall time [`estimated_cost`] times each integrator for at least (unless
+/// that would run past the finest point's own steps), s: 256 steps of a
+/// 7-particle leaf take a quarter of a millisecond, where a cold start
+/// alone doubled the estimate.
+pub const PILOT_MIN_S: f64 = 0.02;
 
 /// Bisection runs [`locate_limit`] takes to 1 % (log₂ 100 ≈ 7), counted at
 /// twice the first point's steps.
 const BISECTION_RUNS: f64 = 7.0;
 
-/// What a sweep will cost, from a pilot of [`PILOT_STEPS`] steps of each
-/// integrator at its finest step (stable, and where the implicit scheme's
+/// What a sweep will cost, from a pilot run of each integrator at its
+/// finest step ([`PILOT_STEPS`] and [`PILOT_MIN_S`] at least) (stable, and where the implicit scheme's
 /// conjugate gradients converge fastest, so that cost is a floor there).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepCost {
@@ -370,22 +393,30 @@ impl SweepCost {
     }
 }
 
-/// Times [`PILOT_STEPS`] steps of each integrator of `settings` on `model`
-/// and scales them to the sweep: every point's timed and untimed runs, the
+/// Times a pilot run of each integrator of `settings` on `model` and
+/// scales it to the sweep: every point's timed and untimed runs, the
 /// bisection of each limit and the reference. A guide for the note a long
 /// sweep prints before it starts, not a promise (the implicit scheme takes
 /// more iterations at larger steps).
 pub fn estimated_cost(model: &Model, initial: &State, settings: &SweepSettings) -> SweepCost {
     let seconds = settings.seconds;
-    let per_step = |integrator: Integrator, dt: f64| {
-        let run = run_steps(model, initial, integrator, dt, PILOT_STEPS);
-        run.wall_s / PILOT_STEPS as f64
+    // Doubled until it takes PILOT_MIN_S, or as many steps as `j` gives.
+    let per_step = |integrator: Integrator, j: u32| {
+        let dt = step_size(seconds, j);
+        let mut steps = PILOT_STEPS.min(1 << j);
+        loop {
+            let run = run_steps(model, initial, integrator, dt, steps);
+            if run.wall_s >= PILOT_MIN_S || steps >= 1 << j {
+                return run.wall_s / steps as f64;
+            }
+            steps *= 2;
+        }
     };
     let per_integrator = settings
         .ranges
         .iter()
         .map(|r| {
-            let cost = per_step(r.integrator, step_size(seconds, r.j_max));
+            let cost = per_step(r.integrator, r.j_max);
             let steps: f64 = (r.j_min..=r.j_max).map(|j| 2f64.powi(j as i32)).sum();
             let bisection = if settings.locate_limits {
                 BISECTION_RUNS * 2f64.powi(r.j_min as i32 + 1)
@@ -397,7 +428,7 @@ pub fn estimated_cost(model: &Model, initial: &State, settings: &SweepSettings) 
         })
         .collect();
     let j = settings.reference_j;
-    let rk4 = per_step(Integrator::Rk4, step_size(seconds, j + 1));
+    let rk4 = per_step(Integrator::Rk4, j + 1);
     SweepCost {
         per_integrator,
         reference_s: rk4 * 3.0 * 2f64.powi(j as i32),
@@ -412,35 +443,6 @@ pub struct RefinedFrom {
     pub dt: f64,
     /// Its RMS difference from the run at h_ref, chords.
     pub self_difference: f64,
-}
-
-/// The reference halved once: RK4 at half its finer step, checked against
-/// that finer run.
-fn halve_reference(
-    model: &Model,
-    initial: &State,
-    seconds: f64,
-    coarser: &Reference,
-) -> Result<Reference, AccuracyError> {
-    let dt = coarser.dt / 2.0;
-    let fine = run_steps(
-        model,
-        initial,
-        Integrator::Rk4,
-        dt,
-        (seconds / dt).round() as u64,
-    );
-    if let Some(e) = fine.error {
-        return Err(AccuracyError::Reference(e));
-    }
-    Ok(Reference {
-        integrator: Integrator::Rk4,
-        dt,
-        self_difference: rms_difference(&coarser.positions, &fine.state.position, model.chord()),
-        positions: fine.state.position,
-        internal_acceleration: fine.internal_acceleration.unwrap_or(0.0),
-        wall_s: fine.wall_s,
-    })
 }
 
 /// Which steps one integrator is swept over: h = T/2^j for j in
@@ -788,7 +790,8 @@ pub fn sweep(
             largest_stable_dt: stable,
             smallest_diverged_dt: diverged,
             predicted_dt_max: est.dt_max(integrator),
-            cheapest: TOLERANCES.iter().map(|&tol| cheapest(mine, tol)).collect(),
+            // Filled below, once the reference is final.
+            cheapest: Vec::new(),
             extrapolated: Vec::new(),
         });
     }
@@ -808,13 +811,12 @@ pub fn sweep(
     // as the error estimate does (`estimate`), and measure every point
     // again against it.
     let mut refined_from = None;
-    let mut reference_steps = (seconds / reference.dt).round();
     let mut refining_s = 0.0;
     let mut over_budget = None;
     while settings.refine_reference
         && !valid(&reference, smallest(&rows))
         && reference.self_difference >= estimate::ROUND_OFF_CHORDS
-        && 2.0 * reference_steps <= f64::from(2u32.pow(MAX_STEPS_LOG2))
+        && (2.0 * seconds / reference.dt).round() <= f64::from(2u32.pow(MAX_STEPS_LOG2))
     {
         let next_s = 2.0 * reference.wall_s;
         if refining_s + next_s > settings.refine_budget_s {
@@ -822,26 +824,25 @@ pub fn sweep(
             break;
         }
         refining_s += next_s;
-        let finer = halve_reference(model, initial, seconds, &reference)?;
+        let finer = finer_reference(model, initial, seconds, &reference.positions, reference.dt)?;
         refined_from.get_or_insert(RefinedFrom {
             dt: reference.dt,
             self_difference: reference.self_difference,
         });
         reference = finer;
-        reference_steps *= 2.0;
         for (row, end) in rows.iter_mut().zip(&ends) {
             if let Some(end) = end {
                 row.error = Some(rms_difference(end, &reference.positions, chord));
             }
         }
-        for summary in &mut summaries {
-            let mine: Vec<SweepRow> = rows
-                .iter()
-                .filter(|r| r.integrator == summary.integrator)
-                .cloned()
-                .collect();
-            summary.cheapest = TOLERANCES.iter().map(|&tol| cheapest(&mine, tol)).collect();
-        }
+    }
+    for summary in &mut summaries {
+        let mine: Vec<SweepRow> = rows
+            .iter()
+            .filter(|r| r.integrator == summary.integrator)
+            .cloned()
+            .collect();
+        summary.cheapest = TOLERANCES.iter().map(|&tol| cheapest(&mine, tol)).collect();
     }
     let smallest_error = smallest(&rows);
     let mut warnings = Vec::new();
