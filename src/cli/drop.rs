@@ -135,6 +135,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
             "omega_with_added_mass": est.with_added_mass,
             "zeta": est.zeta,
             "drag_rate": est.drag_rate,
+            "damping_rate_max": est.damping_rate_max,
             "tumbling_rate": est.tumbling_rate,
             "drag_time_constant": est.drag_time_constant(),
             "stiffest_spring": est.stiffest_spring,

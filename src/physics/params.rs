@@ -39,6 +39,14 @@ impl Integrator {
         Integrator::Implicit,
     ];
 
+    /// The explicit integrators, whose steps a stability limit bounds.
+    pub const EXPLICIT: [Integrator; 4] = [
+        Integrator::Euler,
+        Integrator::Symplectic,
+        Integrator::Verlet,
+        Integrator::Rk4,
+    ];
+
     /// The command-line and file name.
     pub fn name(self) -> &'static str {
         match self {

@@ -127,6 +127,7 @@ pub fn check_estimate(estimate: &stability::StabilityEstimate) -> Result<(), Ste
             "1/s",
         ),
         ("the drag rate", estimate.drag_rate, "1/s"),
+        ("the fastest damping rate", estimate.damping_rate_max, "1/s"),
     ];
     let bad: Vec<String> = rates
         .iter()
@@ -369,6 +370,9 @@ pub enum StepReason {
         lightest: (usize, f64),
         /// The fastest drag rate γ, 1/s.
         drag_rate: f64,
+        /// The network's fastest damping rate, 1/s
+        /// ([`stability::StabilityEstimate::damping_rate_max`]).
+        damping_rate: f64,
         /// The tumbling-rate bound Ω, 1/s (0 but under the unsteady law).
         tumbling_rate: f64,
         /// Which limit bounds the step.
@@ -436,6 +440,7 @@ impl Work {
                 omega_max: estimate.omega_max,
                 lightest,
                 drag_rate: estimate.drag_rate,
+                damping_rate: estimate.damping_rate_max,
                 tumbling_rate: estimate.tumbling_rate,
                 bound,
             };
@@ -487,6 +492,7 @@ impl Work {
                 omega_max,
                 lightest,
                 drag_rate,
+                damping_rate,
                 tumbling_rate,
                 bound,
             } => {
@@ -503,6 +509,10 @@ impl Work {
                 );
                 let bound = match bound {
                     StepBound::Drag => format!("the drag rate γ = {} 1/s", quantity(*drag_rate)),
+                    StepBound::Damping => format!(
+                        "the fastest damping rate (dashpots and air) {} 1/s",
+                        quantity(*damping_rate)
+                    ),
                     StepBound::Spring => {
                         format!("the stiffest mode ω_max = {} rad/s", quantity(*omega_max))
                     }

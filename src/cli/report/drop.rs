@@ -114,6 +114,11 @@ pub fn stability(leaf: &str, model: &Model, est: &StabilityEstimate, steps: &[St
             est.drag_time_constant(),
             est.drag_rate
         )?;
+        writeln!(
+            out,
+            "fastest damping    {:.2} 1/s (dashpots and air, λ_max of M⁻¹C)",
+            est.damping_rate_max
+        )?;
         if let Some(step) = est.tumbling_step() {
             writeln!(
                 out,
