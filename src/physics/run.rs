@@ -510,7 +510,7 @@ impl Work {
                 let bound = match bound {
                     StepBound::Drag => format!("the drag rate γ = {} 1/s", quantity(*drag_rate)),
                     StepBound::Damping => format!(
-                        "the fastest damping rate (dashpots and air) {} 1/s",
+                        "the damping's fastest rate λ_max(M⁻¹C) = {} 1/s (dashpots and air)",
                         quantity(*damping_rate)
                     ),
                     StepBound::Spring => {
@@ -633,15 +633,22 @@ impl WorkError {
             Command::Breed => String::new(),
         });
         let mut remedies: Vec<String> = implicit.into_iter().filter(|r| !r.is_empty()).collect();
+        // What to change in the model: the springs' stiffness, or, where
+        // the damping's fastest rate sets the step, their damping.
+        let soften = match w.reason {
+            StepReason::Stability {
+                bound: StepBound::Damping,
+                ..
+            } => "lower the springs' and hinges' damping",
+            _ => "soften the stiffest springs",
+        };
         remedies.push(match self.command {
             Command::Drop => {
-                "soften the stiffest springs or make the lightest particles heavier, or shorten --seconds"
-                    .to_string()
+                format!("{soften} or make the lightest particles heavier, or shorten --seconds")
             }
-            Command::Scene => {
-                "soften the stiffest springs or make the lightest particles heavier, or shorten `duration` (or --seconds)"
-                    .to_string()
-            }
+            Command::Scene => format!(
+                "{soften} or make the lightest particles heavier, or shorten `duration` (or --seconds)"
+            ),
             Command::Breed => {
                 "breeding drops every leaf with verlet at its auto step: soften or weight the prototype, or lower --seconds, --population or --generations"
                     .to_string()

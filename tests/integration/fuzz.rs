@@ -353,7 +353,12 @@ fn the_cases_of_issue_22_end_as_they_should() {
             "light-masses.toml",
             &["--max-work", "1e7"],
             false,
-            &["lightest particle", "--integrator implicit"],
+            &[
+                "lightest particle",
+                "--integrator implicit",
+                "set by the damping's fastest rate",
+                "lower the springs' and hinges' damping",
+            ],
         ),
         (
             "drop",
