@@ -168,12 +168,7 @@ fn csv_rows_and_diverged_points() {
             assert!(e.is_finite() && e >= 0.0);
         }
     }
-    for integrator in [
-        Integrator::Euler,
-        Integrator::Symplectic,
-        Integrator::Verlet,
-        Integrator::Rk4,
-    ] {
+    for integrator in Integrator::EXPLICIT {
         let mine: Vec<_> = report
             .rows
             .iter()
@@ -239,8 +234,6 @@ fn located_limits_match_the_estimate() {
     }
 }
 
-/// A reference too coarse for the errors plotted is reported, and the same
-/// sweep with a fine reference is not.
 /// Why the runaway check alone is not a stability test: prototype A under
 /// Verlet at 1.11 × the estimated stable step falls 3 s without a runaway,
 /// its stiffest mode held by the springs' nonlinearity in a bounded
@@ -282,6 +275,8 @@ fn a_step_above_the_limit_rings_without_running_away() {
     );
 }
 
+/// A reference too coarse for the errors plotted is reported, and the same
+/// sweep with a fine reference is not.
 #[test]
 fn a_too_coarse_reference_is_detected() {
     let model = leaf_a();

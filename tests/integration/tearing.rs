@@ -148,13 +148,7 @@ fn a_hinge_with_a_torn_wing_bends_no_more() {
         }
         s
     };
-    for integrator in [
-        Integrator::Euler,
-        Integrator::Symplectic,
-        Integrator::Verlet,
-        Integrator::Rk4,
-        Integrator::Implicit,
-    ] {
+    for integrator in Integrator::ALL {
         let torn = fall(&hinged, integrator, true);
         assert!(!torn.spring_alive[0]);
         assert_eq!(
