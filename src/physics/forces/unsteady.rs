@@ -420,12 +420,18 @@ fn lagged_pressure(
             f64::NAN
         };
     }
-    let half_rho = 0.5 * law.air_density;
+    // Then the lag rates, each a division; then α_L at the evaluation,
+    // each an exponential and a division; then the couples. Passes of
+    // their own for the same reason: one triangle's chain (arcsine, rate,
+    // exponential, quotient, couple) filled the reorder window, so no two
+    // triangles' chains overlapped (perf). Same operations per triangle,
+    // same bits.
     for (t, (flow, tm)) in flows.iter_mut().zip(triangles).enumerate() {
+        flow.lag = LagCouple::None;
         let alpha = lag.pending_alpha[t];
-        let Some(tm) = tm.as_ref().filter(|_| !alpha.is_nan()) else {
+        if tm.is_none() || alpha.is_nan() {
             continue;
-        };
+        }
         // Broadside (no in-plane flow) there is no upstream and no chord
         // along the flow: α_L still follows α, no couple acts.
         if flow.along2 <= f64::MIN_POSITIVE {
@@ -433,8 +439,7 @@ fn lagged_pressure(
             lag.pending_lagged[t] = alpha;
             continue;
         }
-        let chord = flow.along_chord;
-        let rate = flow.speed / (law.pressure_lag * chord);
+        let rate = flow.speed / (law.pressure_lag * flow.along_chord);
         let mut fresh = lag.lagged[t].is_nan();
         if fresh && lag.elapsed <= 0.0 {
             // Met at the committed time: that is where its lag starts, so
@@ -450,13 +455,27 @@ fn lagged_pressure(
             (lag.lagged[t], lag.alpha[t], lag.rate[t]) = (start, start, 0.0);
             fresh = false;
         }
-        let lagged = lag.lagged_now(t, alpha, rate);
-        (lag.pending_rate[t], lag.pending_lagged[t]) = (rate, lagged);
-        if fresh {
-            continue;
+        lag.pending_rate[t] = rate;
+        flow.lag = if fresh {
+            LagCouple::Follows
+        } else {
+            LagCouple::Acts
+        };
+    }
+    for (t, flow) in flows.iter().enumerate() {
+        if flow.lag != LagCouple::None {
+            lag.pending_lagged[t] = lag.lagged_now(t, lag.pending_alpha[t], lag.pending_rate[t]);
         }
-        let shift =
-            law.pressure_lag_gain * chord * (pressure_offset(lagged) - pressure_offset(alpha));
+    }
+    let half_rho = 0.5 * law.air_density;
+    for (t, (flow, tm)) in flows.iter_mut().zip(triangles).enumerate() {
+        let Some(tm) = tm.as_ref().filter(|_| flow.lag == LagCouple::Acts) else {
+            continue;
+        };
+        let (alpha, lagged) = (lag.pending_alpha[t], lag.pending_lagged[t]);
+        let shift = law.pressure_lag_gain
+            * flow.along_chord
+            * (pressure_offset(lagged) - pressure_offset(alpha));
         let normal_force = half_rho * tm.area * law.cd_normal * flow.speed * flow.qn;
         // Offset −e s upstream of the force F n, along e = u∥/|u| (the
         // in-plane flow's direction times cos α): couple C = −s F e × n,
@@ -469,6 +488,19 @@ fn lagged_pressure(
         let along_flow = (flow.u - tm.n * flow.qn) / flow.speed;
         flow.lag_arm = along_flow * (-shift * normal_force);
     }
+}
+
+/// What the lagged centre of pressure does on a triangle in an evaluation
+/// ([`lagged_pressure`]'s passes).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+enum LagCouple {
+    /// No flow over it, or broadside: no lag rate, no couple.
+    #[default]
+    None,
+    /// Its lag starts at this evaluation: α_L follows, no couple yet.
+    Follows,
+    /// α_L lags α and the couple acts.
+    Acts,
 }
 
 /// Records in `lag` the angle of attack at which the flow over each
@@ -679,6 +711,8 @@ struct Flow {
     /// The lagged centre of pressure's share of the couples' in-plane arm
     /// (n × C; zero without the term), added with the Munk couple's.
     lag_arm: V3,
+    /// What the lag does on the triangle in this evaluation.
+    lag: LagCouple,
 }
 
 /// Whether the law's rotational terms act on a triangle turning at |ω|² =
