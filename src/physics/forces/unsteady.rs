@@ -348,33 +348,35 @@ impl PressureLag {
         self.evaluated = false;
         self.elapsed = 0.0;
     }
+}
 
-    /// α_L of triangle `t` at the evaluation (Δ after the committed state),
-    /// where its angle of attack is `alpha` and its lag rate `rate`.
-    fn lagged_now(&self, t: usize, alpha: f64, rate: f64) -> f64 {
-        let (lagged, alpha0, rate0) = (self.lagged[t], self.alpha[t], self.rate[t]);
-        if lagged.is_nan() || rate == f64::INFINITY || rate0 == f64::INFINITY {
-            return if lagged.is_nan() || self.elapsed > 0.0 {
-                alpha
-            } else {
-                lagged
-            };
-        }
-        if self.elapsed <= 0.0 {
-            return lagged;
-        }
-        // No committed flow: α held at the evaluation's over the interval.
-        let (alpha0, rate0) = if alpha0.is_nan() {
-            (alpha, rate)
+/// α_L a time `elapsed` after the committed state (α_L, α₀, r₀) =
+/// `committed`, where the angle of attack is `alpha` and the lag rate
+/// `rate` ([`PressureLag`]: exponential time differencing).
+#[inline]
+fn lag_at(committed: (f64, f64, f64), elapsed: f64, alpha: f64, rate: f64) -> f64 {
+    let (lagged, alpha0, rate0) = committed;
+    if lagged.is_nan() || rate == f64::INFINITY || rate0 == f64::INFINITY {
+        return if lagged.is_nan() || elapsed > 0.0 {
+            alpha
         } else {
-            (alpha0, rate0)
+            lagged
         };
-        let x = 0.5 * (rate0 + rate) * self.elapsed;
-        let em1 = (-x).exp_m1();
-        let decay = 1.0 + em1;
-        let phi = if x > 0.0 { -em1 / x } else { 1.0 };
-        decay * lagged + (phi - decay) * alpha0 + (1.0 - phi) * alpha
     }
+    if elapsed <= 0.0 {
+        return lagged;
+    }
+    // No committed flow: α held at the evaluation's over the interval.
+    let (alpha0, rate0) = if alpha0.is_nan() {
+        (alpha, rate)
+    } else {
+        (alpha0, rate0)
+    };
+    let x = 0.5 * (rate0 + rate) * elapsed;
+    let em1 = (-x).exp_m1();
+    let decay = 1.0 + em1;
+    let phi = if x > 0.0 { -em1 / x } else { 1.0 };
+    decay * lagged + (phi - decay) * alpha0 + (1.0 - phi) * alpha
 }
 
 /// The angle of attack α = asin(|u·n|/|u|) of a flow of normal part `qn`
@@ -462,17 +464,30 @@ fn lagged_pressure(
             LagCouple::Acts
         };
     }
-    for (t, flow) in flows.iter().enumerate() {
+    let elapsed = lag.elapsed;
+    for (((((pending, flow), &alpha), &rate), &lagged), (&alpha0, &rate0)) in lag
+        .pending_lagged
+        .iter_mut()
+        .zip(flows.iter())
+        .zip(&lag.pending_alpha)
+        .zip(&lag.pending_rate)
+        .zip(&lag.lagged)
+        .zip(lag.alpha.iter().zip(&lag.rate))
+    {
         if flow.lag != LagCouple::None {
-            lag.pending_lagged[t] = lag.lagged_now(t, lag.pending_alpha[t], lag.pending_rate[t]);
+            *pending = lag_at((lagged, alpha0, rate0), elapsed, alpha, rate);
         }
     }
     let half_rho = 0.5 * law.air_density;
-    for (t, (flow, tm)) in flows.iter_mut().zip(triangles).enumerate() {
+    for (((flow, tm), &alpha), &lagged) in flows
+        .iter_mut()
+        .zip(triangles)
+        .zip(&lag.pending_alpha)
+        .zip(&lag.pending_lagged)
+    {
         let Some(tm) = tm.as_ref().filter(|_| flow.lag == LagCouple::Acts) else {
             continue;
         };
-        let (alpha, lagged) = (lag.pending_alpha[t], lag.pending_lagged[t]);
         let shift = law.pressure_lag_gain
             * flow.along_chord
             * (pressure_offset(lagged) - pressure_offset(alpha));
