@@ -4,6 +4,7 @@
 use super::args::SceneArgs;
 use super::{output, report};
 use anyhow::Result;
+use leafmagic::physics::model::AeroLaw;
 use leafmagic::physics::run;
 use leafmagic::sim::scene::{self, Scene};
 use serde_json::json;
@@ -19,6 +20,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     let frame = 1.0 / scene.frame_rate;
     if args.explain {
         let dt = run::resolve_dt(&scene.model, scene.integrator, scene.dt, frame);
+        let why = step_reason(&scene);
         if args.json {
             let out = json!({
                 "scene": scene.name,
@@ -29,6 +31,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
                 "rigid_bodies": scene.model.rigid.len(),
                 "integrator": scene.integrator,
                 "dt": dt.as_ref().ok(),
+                "dt_reason": why,
                 "kept": decisions.iter().filter(|d| d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
                 "left_out": decisions.iter().filter(|d| !d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
                 "pruned": scene.pruned,
@@ -41,7 +44,10 @@ pub fn scene(args: SceneArgs) -> Result<()> {
             println!("{}", serde_json::to_string_pretty(&out)?);
             return Ok(());
         }
-        print!("{}", report::scene::explain(&scene, &dt, &decisions));
+        print!(
+            "{}",
+            report::scene::explain(&scene, &dt, why.as_deref(), &decisions)
+        );
         return Ok(());
     }
     let failed = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: {e}", args.file.display());
@@ -119,4 +125,30 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         report::scene::summary(&scene, s, &dir, written.len(), export_note.as_deref())
     );
     Ok(())
+}
+
+/// Why the scene steps at its step, as `scene --explain` prints it: the
+/// fixed step, the output frame, or the stability limit that sets the auto
+/// step ([`run::Work::why`]), and, where the air's rate sets it in wind,
+/// the wind's speed bound that the rate is taken at (the air's rates grow
+/// with the relative speed, which the wind can raise to its bound).
+fn step_reason(scene: &Scene) -> Option<String> {
+    let frame = 1.0 / scene.frame_rate;
+    let work = scene.work(None).ok()?.explained(&scene.model, frame);
+    let why = work.why();
+    let wind = scene.model.wind.speed_bound();
+    Some(match &work.reason {
+        run::StepReason::Frame => format!(
+            "the output frame's 1/{} s: every stability limit of {} is longer",
+            scene.frame_rate, scene.integrator
+        ),
+        run::StepReason::Stability {
+            bound: run::StepBound::Drag,
+            ..
+        } if wind > 0.0 && scene.model.aero != AeroLaw::Linear => format!(
+            "{why}; under the {} law the air's rates grow with the relative speed, and are taken at speeds up to the wind's bound, {wind:.2} m/s (the sum of its primitives' peak speeds), plus twice the fastest fall in still air",
+            scene.model.aero.name()
+        ),
+        _ => why,
+    })
 }

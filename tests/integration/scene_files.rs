@@ -526,3 +526,62 @@ fn scene_output_directories_are_replaced_whole_or_left_as_they_were() {
     );
     let _ = std::fs::remove_dir_all(&work);
 }
+
+/// `scene --explain` says what sets the step: the leaves' stiffest mode for
+/// the shockwave as shipped (linear law), and for the same scene with
+/// unsteady-law leaves the air's rate at the wind's speed bound, whose
+/// value it prints (the step is then shorter than the springs' limit).
+#[test]
+fn scene_explain_names_what_sets_the_step() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let shipped = root.join("scenes/shockwave.toml");
+    let explain = |file: &Path, json: bool| {
+        let mut cmd = leafmagic();
+        cmd.args(["scene", file.to_str().unwrap(), "--explain"]);
+        if json {
+            cmd.arg("--json");
+        }
+        let out = cmd.output().unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let step_line = |text: &str| {
+        text.lines()
+            .find(|l| l.starts_with("step "))
+            .unwrap_or_else(|| panic!("no step line in\n{text}"))
+            .to_string()
+    };
+    let linear = step_line(&explain(&shipped, false));
+    assert!(linear.contains("set by the stiffest mode"), "{linear}");
+    assert!(!linear.contains("wind's bound"), "{linear}");
+
+    let dir = std::env::temp_dir().join(format!("leafmagic-explain-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let leaf = crate::common::with_aero(
+        &std::fs::read_to_string(root.join("prototypes/leaf-a.toml")).unwrap(),
+        "law = \"unsteady\"",
+    );
+    std::fs::write(dir.join("a-unsteady.toml"), leaf).unwrap();
+    let text = std::fs::read_to_string(&shipped)
+        .unwrap()
+        .replace("leaf = \"a\"", "leaf = \"a-unsteady.toml\"");
+    let scene = dir.join("shockwave-unsteady.toml");
+    std::fs::write(&scene, text).unwrap();
+    let unsteady = step_line(&explain(&scene, false));
+    assert!(unsteady.contains("set by the drag rate"), "{unsteady}");
+    let wind = Scene::load(&scene).unwrap().model.wind.speed_bound();
+    assert!(
+        unsteady.contains(&format!("the wind's bound, {wind:.2} m/s")),
+        "{unsteady}"
+    );
+    let json: serde_json::Value = serde_json::from_str(&explain(&scene, true)).unwrap();
+    assert_eq!(
+        json["dt_reason"].as_str(),
+        Some(unsteady.trim_start_matches("step").trim())
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

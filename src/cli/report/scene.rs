@@ -12,7 +12,12 @@ use std::path::Path;
 /// `scene --explain`: the compiled model's size, the integrator and its
 /// step (or why there is none), each term kept or left out, and what the
 /// compiler pruned.
-pub fn explain(scene: &Scene, dt: &Result<f64, StepError>, decisions: &[Decision]) -> String {
+pub fn explain(
+    scene: &Scene,
+    dt: &Result<f64, StepError>,
+    why: Option<&str>,
+    decisions: &[Decision],
+) -> String {
     text(|out| {
         writeln!(
             out,
@@ -29,6 +34,9 @@ pub fn explain(scene: &Scene, dt: &Result<f64, StepError>, decisions: &[Decision
         match dt {
             Ok(dt) => writeln!(out, "integrator  {} (dt = {dt:.4e} s)", scene.integrator)?,
             Err(e) => writeln!(out, "integrator  {} ({e})", scene.integrator)?,
+        }
+        if let Some(why) = why {
+            writeln!(out, "{:<11} {why}", "step")?;
         }
         for d in decisions {
             let verdict = if d.kept { "kept" } else { "left out" };
