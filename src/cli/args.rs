@@ -183,8 +183,9 @@ pub struct DropArgs {
     /// Simulated seconds.
     #[arg(long, default_value_t = 10.0)]
     pub seconds: f64,
-    /// Release tilt about the leaf's x and y axes, degrees.
-    #[arg(long, default_value = "10,2", value_parser = parse_tilt)]
+    /// Release tilt about the leaf's x and y axes, degrees (`--tilt -4,2`
+    /// as well as `--tilt=-4,2`).
+    #[arg(long, default_value = "10,2", value_parser = parse_tilt, allow_hyphen_values = true)]
     pub tilt: [f64; 2],
     /// Write the trajectory (t,x,y,z,qw,qx,qy,qz at 240 Hz) to this CSV file.
     #[arg(long)]

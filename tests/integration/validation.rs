@@ -243,3 +243,28 @@ fn closed_stdout_is_not_a_panic() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(!err.contains("panicked"), "{err}");
 }
+
+/// A negative release tilt is a value, not a flag: `--tilt -4,2` drops the
+/// leaf as `--tilt=-4,2` does (clap took `-4,2` for an option), and another
+/// tilt gives another fall.
+#[test]
+fn a_negative_tilt_is_read_as_a_value() {
+    let drop = |tilt: &[&str]| {
+        let out = leafmagic()
+            .args(["drop", "a", "--seconds", "0.5", "--json"])
+            .args(tilt)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let mut json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        json.as_object_mut().unwrap().remove("wall_s");
+        json
+    };
+    let spaced = drop(&["--tilt", "-4,2"]);
+    assert_eq!(spaced, drop(&["--tilt=-4,2"]));
+    assert_ne!(spaced, drop(&["--tilt", "4,2"]));
+}
