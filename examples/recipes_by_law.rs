@@ -3,7 +3,11 @@
 //! variants, classified under a chosen aerodynamic law: how many of 16 show
 //! the recipe's class. Every drop is 10 s at the default settings.
 //!
-//! cargo run --release --example recipes_by_law [-- linear|quadratic|unsteady]
+//! cargo run --release --example recipes_by_law [-- linear|quadratic|unsteady [KEY=VALUE ...]]
+//!
+//! `KEY=VALUE` sets a coefficient of the law's `[aero]` table (as in a leaf
+//! file, e.g. `pressure_lag_gain=0`), to see which term makes a recipe hold
+//! or fail.
 
 use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroLawName, AeroSpec, LeafSpec};
@@ -11,10 +15,13 @@ use leafmagic::motion::classify::{MotionClass, classify};
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rayon::prelude::*;
 
-/// `spec` under `law` (the linear law: unchanged; the others: no α).
-fn under(mut spec: LeafSpec, law: AeroLawName) -> LeafSpec {
+/// `spec` under `law` with the `[aero]` lines `extra` (the linear law:
+/// unchanged; the others: no α).
+fn under(mut spec: LeafSpec, law: AeroLawName, extra: &[String]) -> LeafSpec {
     if law != AeroLawName::Linear {
-        spec.aero = AeroSpec::named(law);
+        spec.aero = AeroSpec::named(law)
+            .with_lines(extra)
+            .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
         for t in &mut spec.triangles {
             t.alpha_n = None;
             t.alpha_t = None;
@@ -24,14 +31,21 @@ fn under(mut spec: LeafSpec, law: AeroLawName) -> LeafSpec {
 }
 
 fn main() {
-    let law: AeroLawName = std::env::args()
-        .nth(1)
-        .unwrap_or_else(|| "unsteady".to_string())
+    let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--").collect();
+    let law: AeroLawName = args
+        .first()
+        .map_or("unsteady", String::as_str)
         .parse()
         .expect("a law: linear, quadratic or unsteady");
+    let extra = args.get(1..).unwrap_or_default();
+    assert!(
+        extra.is_empty() || law != AeroLawName::Linear,
+        "the linear law's coefficients are each leaf's own α"
+    );
     println!(
-        "the paper's recipes, 16 variants each, under law = \"{}\"",
-        law.as_str()
+        "the paper's recipes, 16 variants each, under law = \"{}\" {}",
+        law.as_str(),
+        extra.join(" ")
     );
     for (recipe, class) in [
         (Recipe::Floater, MotionClass::Floater),
@@ -42,7 +56,7 @@ fn main() {
             .into_par_iter()
             .map(|seed| {
                 let (spec, tilt) = recipe.variant(seed);
-                let model = under(spec, law).model().expect("a valid leaf");
+                let model = under(spec, law, extra).model().expect("a valid leaf");
                 assert_eq!(model.aero.name(), law.as_str());
                 let params = DropParams {
                     tilt_deg: tilt,
