@@ -709,11 +709,7 @@ fn stress_json_has_the_documented_fields() {
         .args(["check", "a", "--stress", "--json", "--explicit", "refuse"])
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(rows.len(), CASES.len() * Integrator::ALL.len());
     for r in &rows {

@@ -377,11 +377,7 @@ fn a_run_started_from_another_begins_with_its_archive() {
         &[&small[..], &["--archive", "--releases", "1"]].concat(),
         &first,
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let json = |run: &Path| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(run.join("checkpoint.json")).unwrap())
             .unwrap()

@@ -74,3 +74,13 @@ pub fn with_aero(leaf: &str, aero: &str) -> String {
     let end = start + leaf[start..].find("\n[bounds]").unwrap();
     format!("{}[aero]\n{aero}\n{}", &leaf[..start], &leaf[end..])
 }
+
+/// Fails the test with the command's standard error unless `out` is that of
+/// a run that exited 0.
+pub fn assert_succeeded(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -43,11 +43,7 @@ fn drop_to(leaf: &str, csv: &Path) {
         .arg(csv)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
 }
 
 /// The round trip of the issue: the tumbling variant of A (a fixture whose
@@ -77,11 +73,7 @@ fn breeding_like_a_tumbler_halves_the_distance_and_keeps_its_class() {
         "1",
     ];
     let out = breed(&args, &run);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let d = best_distances(&run);
     let (first, last) = (d[0].expect("gen 0 has spinners"), d[d.len() - 1].unwrap());
     assert!(
@@ -132,11 +124,7 @@ fn falls_from_another_engine_are_reached_in_class() {
             "6",
         ];
         let out = breed(&args, &run);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        crate::common::assert_succeeded(&out);
         let (best, score) = best_class(&run);
         assert_eq!(best, class, "{file}");
         assert!(
@@ -226,11 +214,7 @@ fn compare_prints_both_vectors_and_gates_by_class() {
             .arg("--json")
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        crate::common::assert_succeeded(&out);
         serde_json::from_slice(&out.stdout).unwrap()
     };
     let same = json(&a, &a);
@@ -388,11 +372,7 @@ fn model_steps_from_a_real_population_come_closer_than_its_best() {
         "1",
     ];
     let out = breed(&args, &run);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let cp: Checkpoint =
         serde_json::from_str(&std::fs::read_to_string(run.join("checkpoint.json")).unwrap())
             .unwrap();

@@ -251,11 +251,7 @@ fn classify_reads_real_records_by_header_and_says_what_it_used() {
         .arg(square_file("square_000"))
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(json["class"], "spinner");
     assert_eq!(json["regime"], "tumble");
@@ -269,11 +265,7 @@ fn classify_reads_real_records_by_header_and_says_what_it_used() {
         .arg(&file)
         .output()
         .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let back: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(back["class"], "spinner");
     assert_eq!(back["ignored_columns"], serde_json::json!(["frame"]));
@@ -457,11 +449,7 @@ fn breeding_like_a_real_tumbling_square_reaches_its_class() {
         "3",
     ];
     let out = breed(&args, &run);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let toml = std::fs::read_to_string(run.join("run.toml")).unwrap();
     assert!(toml.contains("tumble") && toml.contains("drift"), "{toml}");
     assert!(
@@ -496,11 +484,7 @@ fn breed_reads_a_y_up_example_with_up_y() {
             "--create-only",
         ];
         let out = breed(&args, &run);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        crate::common::assert_succeeded(&out);
         let toml: toml::Table =
             toml::from_str(&std::fs::read_to_string(run.join("run.toml")).unwrap()).unwrap();
         let mut like = toml["settings"]

@@ -42,11 +42,7 @@ fn damaged_runs_are_recomputed_to_the_bytes_of_an_uninterrupted_run() {
     let dir = scratch("verify");
     let whole = dir.join("whole");
     let out = breed(&SMALL, &whole);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    crate::common::assert_succeeded(&out);
     let reference = contents(&whole);
     let cp: Value =
         serde_json::from_str(&std::fs::read_to_string(whole.join("checkpoint.json")).unwrap())

@@ -542,11 +542,7 @@ fn scene_explain_names_what_sets_the_step() {
             cmd.arg("--json");
         }
         let out = cmd.output().unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        crate::common::assert_succeeded(&out);
         String::from_utf8(out.stdout).unwrap()
     };
     let step_line = |text: &str| {

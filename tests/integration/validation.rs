@@ -255,11 +255,7 @@ fn a_negative_tilt_is_read_as_a_value() {
             .args(tilt)
             .output()
             .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        crate::common::assert_succeeded(&out);
         let mut json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
         json.as_object_mut().unwrap().remove("wall_s");
         json
