@@ -146,7 +146,7 @@ fn step_reason(scene: &Scene) -> Option<String> {
             bound: run::StepBound::Drag,
             ..
         } if wind > 0.0 && scene.model.aero != AeroLaw::Linear => format!(
-            "{why}; under the {} law the air's rates grow with the relative speed, and are taken at speeds up to the wind's bound, {wind:.2} m/s (the sum of its primitives' peak speeds), plus twice the fastest fall in still air",
+            "{why}; under the {} law the air's rates grow with the relative speed, and are taken at speeds up to the wind's bound, {wind:.2} m/s (the fastest group of its primitives whose regions can meet), plus twice the fastest fall in still air",
             scene.model.aero.name()
         ),
         _ => why,

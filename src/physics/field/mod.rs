@@ -42,7 +42,8 @@
 //! (`primitive.rs`), [`Bounds`] (`bounds.rs`), [`Front`] (`front.rs`),
 //! [`Keyframes`] (`keys.rs`), the falloff weight (`weight.rs`), [`FieldError`]
 //! and the number checks (`error.rs`), the key checks of every table
-//! (`spec.rs`). No file imports from the `mod.rs` above it (the tests aside)
+//! (`spec.rs`), and which primitives can act together, for the field's speed
+//! bound (`reach.rs`). No file imports from the `mod.rs` above it (the tests aside)
 //! or from a file that imports it back; that is why [`VortexCore`], named by
 //! the vortex and by the TOML keys alike, has a file of its own
 //! (`flows/vortex_core.rs`).
@@ -62,6 +63,7 @@ mod flows;
 mod front;
 mod keys;
 mod primitive;
+mod reach;
 mod spec;
 mod weight;
 
@@ -145,11 +147,14 @@ impl WindField {
         Ok(())
     }
 
-    /// Upper bound of |G| over all space and time (m/s): the sum of each
-    /// primitive's peak speed times its largest |keyframe multiplier|. Exact
-    /// for a single primitive without bounds; finite because cores are
+    /// Upper bound of |G| over all space and time (m/s): the largest speed
+    /// of a group of primitives whose regions (with their falloff bands)
+    /// can meet, uniform primitives without keys added as vectors and the
+    /// others by peak speed times largest |keyframe multiplier| (`reach.rs`);
+    /// never more than the sum of every primitive's peak speed. Exact for a
+    /// single primitive without bounds; finite because cores are
     /// regularised.
     pub fn speed_bound(&self) -> f64 {
-        self.primitives.iter().map(Primitive::speed_bound).sum()
+        reach::speed_bound(&self.primitives)
     }
 }

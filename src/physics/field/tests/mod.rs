@@ -13,6 +13,7 @@ mod bounds;
 mod cores;
 mod keys;
 mod potential;
+mod reach;
 mod tables;
 mod tracers;
 mod validation;
