@@ -20,13 +20,15 @@ use super::flows::Flow;
 use super::primitive::Primitive;
 
 /// Beyond this many primitives the overlap graph is not searched and the
-/// bound is the plain sum of peak speeds (the search is exponential in the
-/// worst case).
-const MAX_SEARCHED: usize = 24;
+/// bound is the plain sum of peak speeds: a graph of n vertices has up to
+/// 3^(n/3) maximal cliques (Moon & Moser 1965), about 1,600 at 20.
+const MAX_SEARCHED: usize = 20;
 
 /// Beyond this many uniform primitives in one group their vertex search
-/// (2ⁿ subsets) gives way to the sum of their speeds.
-const MAX_VERTEX_SEARCH: usize = 12;
+/// (2ⁿ subsets) gives way to the sum of their speeds; with
+/// [`MAX_SEARCHED`], at most some 10⁷ vector additions per bound, which is
+/// taken once per simulator.
+const MAX_VERTEX_SEARCH: usize = 10;
 
 /// The closed set outside which a primitive is exactly zero at all times.
 #[derive(Clone, Debug)]
