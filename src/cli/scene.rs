@@ -5,6 +5,7 @@ use super::args::SceneArgs;
 use super::{output, report};
 use anyhow::Result;
 use leafmagic::physics::model::AeroLaw;
+use leafmagic::physics::params::TimeStep;
 use leafmagic::physics::run;
 use leafmagic::sim::scene::{self, Scene};
 use serde_json::json;
@@ -20,7 +21,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     let frame = 1.0 / scene.frame_rate;
     if args.explain {
         let dt = run::resolve_dt(&scene.model, scene.integrator, scene.dt, frame);
-        let why = step_reason(&scene);
+        let why = dt.as_ref().ok().map(|&h| step_reason(&scene, h));
         if args.json {
             let out = json!({
                 "scene": scene.name,
@@ -127,17 +128,26 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     Ok(())
 }
 
-/// Why the scene steps at its step, as `scene --explain` prints it: the
-/// fixed step, the output frame, or the stability limit that sets the auto
-/// step ([`run::Work::why`]), and, where the air's rate sets it in wind,
-/// the wind's speed bound that the rate is taken at (the air's rates grow
-/// with the relative speed, which the wind can raise to its bound).
-fn step_reason(scene: &Scene) -> Option<String> {
+/// Why the scene steps at `dt`, as `scene --explain` prints it: the fixed
+/// step, the output frame, or the stability limit that sets the auto step
+/// ([`run::Work::why`]), and, where the air's rate sets it in wind, the
+/// wind's speed bound that the rate is taken at (the air's rates grow with
+/// the relative speed, which the wind can raise to its bound).
+fn step_reason(scene: &Scene, dt: f64) -> String {
     let frame = 1.0 / scene.frame_rate;
-    let work = scene.work(None).ok()?.explained(&scene.model, frame);
+    let auto = scene.dt == TimeStep::Auto;
+    let work = run::Work::of(
+        &scene.model,
+        scene.integrator,
+        dt,
+        auto,
+        scene.duration,
+        frame,
+    )
+    .explained(&scene.model, frame);
     let why = work.why();
     let wind = scene.model.wind.speed_bound();
-    Some(match &work.reason {
+    match &work.reason {
         run::StepReason::Frame => format!(
             "the output frame's 1/{} s: every stability limit of {} is longer",
             scene.frame_rate, scene.integrator
@@ -150,5 +160,5 @@ fn step_reason(scene: &Scene) -> Option<String> {
             scene.model.aero.name()
         ),
         _ => why,
-    })
+    }
 }

@@ -379,10 +379,10 @@ const BISECTION_RUNS: f64 = 7.0;
 /// conjugate gradients converge fastest, so that cost is a floor there).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SweepCost {
-    /// Seconds of one core per integrator, in the sweep's order, then the
-    /// reference's (RK4 at h_ref and h_ref/2).
+    /// Seconds of one core per integrator, in the sweep's order.
     pub per_integrator: Vec<(Integrator, f64)>,
-    /// The reference's seconds (more if it must be refined).
+    /// The reference's seconds, RK4 at h_ref and h_ref/2 (more if it must
+    /// be refined).
     pub reference_s: f64,
 }
 
