@@ -8,12 +8,17 @@
 //! the squares' bin sizes: the simulated side only, a prediction for the
 //! study's held-out shapes (docs/real-falls.md, "Predictions for the
 //! held-out shapes").
+//! A last table splits each bin by release (flat, on edge): the pooled
+//! medians mix the two in each side's own proportion. `--mix filmed` lets
+//! each bin go flat and on edge in its real proportion instead of half and
+//! half, `--flat-tilt LO,HI` tilts flat releases LO–HI° instead of 1–5°
+//! (docs/real-falls.md, "The release protocol").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI KEY=VALUE ...]
 
 use leafmagic::leaf::plates::PlateShape;
 use leafmagic::leaf::{AeroLawName, AeroSpec};
-use leafmagic::sim::real_falls::{self, BinStats};
+use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::Path;
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
@@ -25,6 +30,7 @@ fn main() {
     let mut seed = 1;
     let mut shape = PlateShape::Square;
     let mut aero = AeroSpec::unsteady();
+    let mut protocol = Protocol::default();
     let mut args = std::env::args().skip(1);
     let mut extra = Vec::new();
     while let Some(a) = args.next() {
@@ -50,6 +56,27 @@ fn main() {
                     AeroSpec::named(law)
                 };
             }
+            "--mix" => {
+                protocol.mix = args
+                    .next()
+                    .expect("--mix halves|filmed")
+                    .parse()
+                    .unwrap_or_else(|e| panic!("--mix: {e}"))
+            }
+            "--flat-tilt" => {
+                let v = args.next().expect("--flat-tilt LO,HI");
+                let parts: Vec<f64> = v
+                    .split(',')
+                    .map(|x| x.trim().parse().expect("--flat-tilt LO,HI in degrees"))
+                    .collect();
+                let [lo, hi] = parts[..] else {
+                    panic!("--flat-tilt LO,HI: two numbers, got {v:?}")
+                };
+                protocol.flat_tilt_deg = [lo, hi];
+                protocol
+                    .check()
+                    .unwrap_or_else(|e| panic!("--flat-tilt: {e}"));
+            }
             kv => extra.push(kv.to_string()),
         }
     }
@@ -63,13 +90,23 @@ fn main() {
         return;
     }
     let t0 = std::time::Instant::now();
-    let cmp = real_falls::compare(&real, &aero, releases, seed).expect("the experiment runs");
+    let cmp = real_falls::compare_with(&real, &aero, releases, seed, &protocol)
+        .expect("the experiment runs");
     let wall = t0.elapsed().as_secs_f64();
     let law = toml::to_string(&real_falls::experiment_air(aero.clone()))
         .unwrap()
         .replace('\n', " ");
     println!(
         "real falls of 70 g/m² paper squares against leafmagic plates ({releases} releases per bin, seed {seed}; [aero] {law})"
+    );
+    println!(
+        "released {}, flat ones tilted {}–{}°",
+        match protocol.mix {
+            real_falls::ReleaseMix::Halves => "half flat, half on edge",
+            real_falls::ReleaseMix::AsFilmed => "flat and on edge in each bin's real proportion",
+        },
+        protocol.flat_tilt_deg[0],
+        protocol.flat_tilt_deg[1]
     );
     println!();
     println!(
@@ -121,6 +158,36 @@ fn main() {
             span(i.descent, 3, inside[1]),
             span(i.drift, 2, inside[2]),
             span(i.omega, 1, inside[3]),
+        );
+    }
+    println!();
+    println!(
+        "by release (real / sim): drops, median drift, Ω rad/s, and a flat release's steady start (median s, of how many)"
+    );
+    println!();
+    println!(
+        "{:<9} {:>7} {:>11} {:>13} {:>19}   {:>7} {:>11} {:>13}",
+        "side cm", "flat", "drift", "Ω", "steady start s", "edge", "drift", "Ω"
+    );
+    let by_real = real_falls::real_by_release(&real);
+    for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
+        let bs = real_falls::sim_by_release(drops);
+        let side = |a: &ReleaseStats, b: &ReleaseStats| {
+            (
+                format!("{}/{}", a.drops, b.drops),
+                format!("{:.2}/{:.2}", a.drift, b.drift),
+                format!("{:.1}/{:.1}", a.omega, b.omega),
+            )
+        };
+        let (fd, fdr, fo) = side(&br.flat, &bs.flat);
+        let (ed, edr, eo) = side(&br.edge, &bs.edge);
+        let steady = format!(
+            "{:.3}({})/{:.3}({})",
+            br.flat.steady, br.flat.steady_drops, bs.flat.steady, bs.flat.steady_drops
+        );
+        println!(
+            "{:<9.1} {fd:>7} {fdr:>11} {fo:>13} {steady:>19}   {ed:>7} {edr:>11} {eo:>13}",
+            r.side * 100.0
         );
     }
     let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;

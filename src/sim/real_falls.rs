@@ -508,6 +508,106 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
         .collect()
 }
 
+/// One kind of release's numbers in one bin, real or simulated: what the
+/// bin's pooled medians ([`BinStats`]) mix in the proportion of its flat
+/// and on-edge drops.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct ReleaseStats {
+    /// Tumbling and chaotic drops.
+    pub drops: usize,
+    /// Median descent speed over their segments, m/s.
+    pub descent: f64,
+    /// Median drift over their segments.
+    pub drift: f64,
+    /// Median tumbling rate over the drops that give one, rad/s.
+    pub omega: f64,
+    /// Median duration of a flat release's steady start (filmed until the
+    /// plate is 0.2 r sideways; kept where it lasts over 2 frames), s; NaN
+    /// without any.
+    pub steady: f64,
+    /// Steady starts behind [`ReleaseStats::steady`].
+    pub steady_drops: usize,
+}
+
+/// A bin's drops split by how they were let go.
+#[derive(Clone, Copy, Debug, PartialEq, Default)]
+pub struct ByRelease {
+    /// Let go flat.
+    pub flat: ReleaseStats,
+    /// Let go on edge.
+    pub edge: ReleaseStats,
+}
+
+/// The statistics of one kind of release from its moving segments (with
+/// the tumbling rate of each one's drop) and its steady starts.
+fn release_stats(moving: &[(Features, Option<f64>)], steady: &[f64]) -> ReleaseStats {
+    ReleaseStats {
+        drops: moving.len(),
+        descent: median(moving.iter().map(|m| m.0.descent())),
+        drift: median(moving.iter().map(|m| m.0.drift())),
+        omega: median(moving.iter().filter_map(|m| m.1)),
+        steady: median(steady.iter().copied()),
+        steady_drops: steady.len(),
+    }
+}
+
+/// The real side split by release, per bin of [`SQUARE_BINS`] (people's
+/// labels, as [`real_table`]).
+pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
+    SQUARE_BINS
+        .iter()
+        .map(|&(lo, hi)| {
+            let in_bin: Vec<&RealSegment> = real
+                .iter()
+                .filter(|s| (lo..hi).contains(&s.radius))
+                .collect();
+            let side = |on_edge: bool| {
+                let mine = in_bin.iter().filter(|s| s.on_edge == on_edge);
+                let moving: Vec<(Features, Option<f64>)> = mine
+                    .clone()
+                    .filter(|s| s.human != Label::Steady)
+                    .filter_map(|s| s.film.features().map(|f| (f, s.film.tumbling_rate())))
+                    .collect();
+                let steady: Vec<f64> = mine
+                    .filter(|s| s.human == Label::Steady)
+                    .filter_map(|s| s.film.features().map(|f| f.time))
+                    .collect();
+                release_stats(&moving, &steady)
+            };
+            ByRelease {
+                flat: side(false),
+                edge: side(true),
+            }
+        })
+        .collect()
+}
+
+/// One bin's simulated drops split by release.
+pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
+    let side = |on_edge: bool| {
+        let mine = drops.iter().filter(|d| d.on_edge == on_edge);
+        let moving: Vec<(Features, Option<f64>)> = mine
+            .clone()
+            .flat_map(|d| {
+                d.segments
+                    .iter()
+                    .filter(|m| m.label != Label::Steady)
+                    .map(|m| (m.features, d.omega))
+            })
+            .collect();
+        let steady: Vec<f64> = mine
+            .flat_map(|d| d.segments.iter())
+            .filter(|m| m.label == Label::Steady)
+            .map(|m| m.features.time)
+            .collect();
+        release_stats(&moving, &steady)
+    };
+    ByRelease {
+        flat: side(false),
+        edge: side(true),
+    }
+}
+
 /// Confidence level of [`real_intervals`]: the 5th to the 95th percentile.
 pub const BOOTSTRAP_LEVEL: f64 = 0.90;
 
@@ -660,12 +760,107 @@ pub struct Release {
     pub rotation: UnitQuaternion<f64>,
 }
 
-/// The `k`-th of `n` releases of bin `bin` at `seed`: the first half flat
-/// (tilted 1–5° about a horizontal axis at a random azimuth), the rest on
-/// edge (90 ± 1–5° about one in-plane axis, ±5° about the other), each at
-/// a random in-plane angle and turned by a random yaw.
-pub fn release(seed: u64, bin: usize, k: usize, n: usize) -> Release {
-    let on_edge = k >= n.div_ceil(2);
+/// How the simulated experiment lets its plates go: how far a flat
+/// release is tilted and which share of a bin's releases is on edge.
+///
+/// The default is the protocol of the project's cross-check
+/// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
+/// 1–5°, half the releases on edge. The films say otherwise on both counts
+/// (docs/real-falls.md, "The release protocol"): the real flat releases
+/// leave their steady start within 0.03–0.07 s, which a 1–5° tilt from
+/// rest takes 0.8–1.1 s to do, and the real bins hold 5:9 to 17:7 flat to
+/// on-edge drops, not 1:1.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Protocol {
+    /// A flat release's tilt out of the horizontal, degrees: uniform in
+    /// [lo, hi) about a horizontal axis at a random azimuth.
+    pub flat_tilt_deg: [f64; 2],
+    /// Which releases are on edge.
+    pub mix: ReleaseMix,
+}
+
+impl Protocol {
+    /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, naming it.
+    ///
+    /// # Errors
+    /// The reason, for the caller to prefix with where the range came from.
+    pub fn check(&self) -> Result<(), String> {
+        let [lo, hi] = self.flat_tilt_deg;
+        if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi && hi <= 90.0) {
+            return Err(format!(
+                "flat tilt {lo},{hi}: expected degrees with 0 <= lo <= hi <= 90"
+            ));
+        }
+        Ok(())
+    }
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Self {
+            flat_tilt_deg: [1.0, 5.0],
+            mix: ReleaseMix::Halves,
+        }
+    }
+}
+
+/// Which share of a bin's releases is on edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ReleaseMix {
+    /// The first half (rounded up) flat, the rest on edge: the
+    /// cross-check's protocol.
+    Halves,
+    /// Each bin's share of on-edge drops among its real tumbling and
+    /// chaotic drops ([`real_flat_share`]), rounded to whole releases.
+    AsFilmed,
+}
+
+impl std::str::FromStr for ReleaseMix {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        match s {
+            "halves" => Ok(Self::Halves),
+            "filmed" => Ok(Self::AsFilmed),
+            other => Err(format!(
+                "release mix {other:?}: expected \"halves\" or \"filmed\""
+            )),
+        }
+    }
+}
+
+/// Per bin of [`SQUARE_BINS`], the share of the real tumbling and chaotic
+/// drops that were let go flat (NaN for a bin without any).
+pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
+    SQUARE_BINS
+        .iter()
+        .map(|&(lo, hi)| {
+            let moving: Vec<&RealSegment> = real
+                .iter()
+                .filter(|s| (lo..hi).contains(&s.radius) && s.human != Label::Steady)
+                .collect();
+            moving.iter().filter(|s| !s.on_edge).count() as f64 / moving.len() as f64
+        })
+        .collect()
+}
+
+/// How many of `releases` are flat under `mix`, given the bin's real flat
+/// share `flat_share` (used by [`ReleaseMix::AsFilmed`] only; a NaN share
+/// falls back to halves).
+pub fn flat_releases(mix: ReleaseMix, releases: usize, flat_share: f64) -> usize {
+    match mix {
+        ReleaseMix::AsFilmed if flat_share.is_finite() => {
+            ((releases as f64 * flat_share).round() as usize).min(releases)
+        }
+        _ => releases.div_ceil(2),
+    }
+}
+
+/// The `k`-th release of bin `bin` at `seed`, of which the first `flat`
+/// are flat (tilted as `protocol` says, about a horizontal axis at a random
+/// azimuth), the rest on edge (90 ± 1–5° about one in-plane axis, ±5° about
+/// the other), each at a random in-plane angle and turned by a random yaw.
+pub fn release(protocol: &Protocol, seed: u64, bin: usize, k: usize, flat: usize) -> Release {
+    let on_edge = k >= flat;
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(
         seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64,
     );
@@ -681,7 +876,12 @@ pub fn release(seed: u64, bin: usize, k: usize, n: usize) -> Release {
             };
         (90.0 + d, rng.random_range(-5.0..5.0))
     } else {
-        let t: f64 = rng.random_range(1.0..5.0);
+        let [lo, hi] = protocol.flat_tilt_deg;
+        let t: f64 = if hi > lo {
+            rng.random_range(lo..hi)
+        } else {
+            lo
+        };
         let a: f64 = rng.random_range(0.0..tau);
         (t * a.cos(), t * a.sin())
     };
@@ -889,29 +1089,43 @@ pub fn simulate_drop(
     })
 }
 
-/// The simulated side of one bin: `releases` drops of a plate of `shape`
-/// and size `side` (twice the inradius, as `leafmagic plate` reads it)
-/// under `aero` (air and paper of the experiment).
+/// Which releases one bin's simulation makes: `releases` drops at `seed`,
+/// the first `flat` of them flat, let go as `protocol` says.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BinReleases {
+    /// The bin's index in [`SQUARE_BINS`] (it seeds the releases).
+    pub bin: usize,
+    /// Drops in the bin.
+    pub releases: usize,
+    /// How many of them are flat ([`flat_releases`]).
+    pub flat: usize,
+    /// The seed.
+    pub seed: u64,
+    /// How they are let go.
+    pub protocol: Protocol,
+}
+
+/// The simulated side of one bin: the drops of `run` with a plate of
+/// `shape` and size `side` (twice the inradius, as `leafmagic plate` reads
+/// it) under `aero` (air and paper of the experiment).
 pub fn simulate_bin(
     shape: PlateShape,
     side: f64,
     aero: &AeroSpec,
-    bin: usize,
-    releases: usize,
-    seed: u64,
+    run: &BinReleases,
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
     let spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
     let model = spec.model()?;
     let dt = experiment_step(&model)?;
-    let drops: Vec<SimulatedDrop> = (0..releases)
+    let drops: Vec<SimulatedDrop> = (0..run.releases)
         .into_par_iter()
         .map(|k| {
             simulate_drop(
                 &model,
                 dt,
                 0.5 * side,
-                &release(seed, bin, k, releases),
+                &release(&run.protocol, run.seed, run.bin, k, run.flat),
                 centres,
             )
         })
@@ -984,12 +1198,24 @@ impl Comparison {
 }
 
 /// Simulates the experiment for every bin of the real table (`releases`
-/// per bin) under `aero` and compares.
+/// per bin) under `aero` and compares, releasing as the cross-check does
+/// ([`Protocol::default`]).
 pub fn compare(
     real_segments: &[RealSegment],
     aero: &AeroSpec,
     releases: usize,
     seed: u64,
+) -> Result<Comparison, ExperimentError> {
+    compare_with(real_segments, aero, releases, seed, &Protocol::default())
+}
+
+/// [`compare`] with the plates let go as `protocol` says.
+pub fn compare_with(
+    real_segments: &[RealSegment],
+    aero: &AeroSpec,
+    releases: usize,
+    seed: u64,
+    protocol: &Protocol,
 ) -> Result<Comparison, ExperimentError> {
     let real = real_table(real_segments);
     let (sim, drops): (Vec<BinStats>, Vec<Vec<SimulatedDrop>>) = simulate_table(
@@ -999,6 +1225,7 @@ pub fn compare(
         aero,
         releases,
         seed,
+        protocol,
     )?
     .into_iter()
     .unzip();
@@ -1030,12 +1257,21 @@ pub fn predict(
     seed: u64,
 ) -> Result<Vec<BinStats>, ExperimentError> {
     let real = real_table(real_segments);
-    let table = simulate_table(shape, &real, real_segments, aero, releases, seed)?;
+    let table = simulate_table(
+        shape,
+        &real,
+        real_segments,
+        aero,
+        releases,
+        seed,
+        &Protocol::default(),
+    )?;
     Ok(table.into_iter().map(|(stats, _)| stats).collect())
 }
 
 /// Every bin of `real` simulated with plates of `shape` at the bin's size,
-/// in the experiment's air and labelled by the centres of `real_segments`.
+/// in the experiment's air and labelled by the centres of `real_segments`,
+/// let go as `protocol` says (the release mix read from `real_segments`).
 fn simulate_table(
     shape: PlateShape,
     real: &[BinStats],
@@ -1043,12 +1279,23 @@ fn simulate_table(
     aero: &AeroSpec,
     releases: usize,
     seed: u64,
+    protocol: &Protocol,
 ) -> Result<Vec<(BinStats, Vec<SimulatedDrop>)>, ExperimentError> {
     let centres = centres(real_segments);
     let aero = experiment_air(aero.clone());
+    let shares = real_flat_share(real_segments);
     real.iter()
         .enumerate()
-        .map(|(bin, r)| simulate_bin(shape, r.side, &aero, bin, releases, seed, &centres))
+        .map(|(bin, r)| {
+            let run = BinReleases {
+                bin,
+                releases,
+                flat: flat_releases(protocol.mix, releases, shares[bin]),
+                seed,
+                protocol: *protocol,
+            };
+            simulate_bin(shape, r.side, &aero, &run, &centres)
+        })
         .collect()
 }
 

@@ -339,3 +339,117 @@ fn held_out_shapes_are_predicted_by_the_experiments_own_path() {
         last.side
     );
 }
+
+/// Each bin's share of flat releases, read from the labels file itself (an
+/// independent reading of `release_vertical` and people's label): what
+/// `--mix filmed` lets go flat, and what [`real_falls::real_by_release`]
+/// splits the bin's moving drops into.
+#[test]
+fn the_filmed_mix_and_the_split_by_release_follow_the_labels() {
+    let real = squares();
+    let labels = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares/labels.csv"),
+    )
+    .unwrap();
+    let mut flat = [0usize; 5];
+    let mut edge = [0usize; 5];
+    for line in labels.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let radius: f64 = f[2].parse().unwrap();
+        // People's label 3 is steady: a flat release's start, not a drop.
+        if f[5] == "3" {
+            continue;
+        }
+        if let Some(b) = real_falls::SQUARE_BINS
+            .iter()
+            .position(|&(lo, hi)| (lo..hi).contains(&radius))
+        {
+            if f[4] == "1" {
+                edge[b] += 1;
+            } else {
+                flat[b] += 1;
+            }
+        }
+    }
+    let shares = real_falls::real_flat_share(&real);
+    let split = real_falls::real_by_release(&real);
+    let table = real_falls::real_table(&real);
+    for b in 0..5 {
+        let share = flat[b] as f64 / (flat[b] + edge[b]) as f64;
+        assert_eq!(shares[b], share, "bin {b}");
+        assert_eq!(
+            (split[b].flat.drops, split[b].edge.drops),
+            (flat[b], edge[b])
+        );
+        assert_eq!(split[b].flat.drops + split[b].edge.drops, table[b].drops);
+        // Only flat releases have a steady start.
+        assert_eq!(split[b].edge.steady_drops, 0);
+        for n in [4, 12, 24] {
+            let k = real_falls::flat_releases(real_falls::ReleaseMix::AsFilmed, n, share);
+            assert_eq!(k, (n as f64 * share).round() as usize);
+            let protocol = real_falls::Protocol {
+                mix: real_falls::ReleaseMix::AsFilmed,
+                ..Default::default()
+            };
+            let lets_go_flat = (0..n)
+                .filter(|&i| !real_falls::release(&protocol, 1, b, i, k).on_edge)
+                .count();
+            assert_eq!(lets_go_flat, k);
+            assert_eq!(
+                real_falls::flat_releases(real_falls::ReleaseMix::Halves, n, share),
+                n.div_ceil(2)
+            );
+        }
+    }
+}
+
+/// A flat release's tilt sets how soon it leaves its steady start: the
+/// experiment's films leave it within 0.03–0.07 s, the cross-check's 1–5°
+/// from rest take 0.8–1.1 s, 20–40° about 0.1 s (docs/real-falls.md, "The
+/// release protocol"). Measured on a 5.6 cm square, two flat releases each.
+#[test]
+fn a_more_tilted_flat_release_leaves_its_steady_start_sooner() {
+    let real = squares();
+    let centres = real_falls::centres(&real);
+    let aero = real_falls::experiment_air(AeroSpec::unsteady());
+    let steady = |tilt: [f64; 2]| {
+        let run = real_falls::BinReleases {
+            bin: 2,
+            releases: 2,
+            flat: 2,
+            seed: 1,
+            protocol: real_falls::Protocol {
+                flat_tilt_deg: tilt,
+                ..Default::default()
+            },
+        };
+        let (_, drops) =
+            real_falls::simulate_bin(PlateShape::Square, 0.056, &aero, &run, &centres).unwrap();
+        let by = real_falls::sim_by_release(&drops);
+        assert_eq!(by.edge.drops, 0);
+        assert_eq!(by.flat.steady_drops, 2, "both start steady");
+        by.flat.steady
+    };
+    let (slight, steep) = (steady([1.0, 5.0]), steady([20.0, 40.0]));
+    println!("steady start: 1–5° {slight:.3} s, 20–40° {steep:.3} s");
+    assert!(slight > 3.0 * steep, "{slight} against {steep}");
+    // The real flat releases of that bin leave it sooner than either.
+    let real_steady = real_falls::real_by_release(&real)[2].flat.steady;
+    assert!(real_steady < steep, "{real_steady} against {steep}");
+}
+
+/// A flat tilt range outside 0 ≤ lo ≤ hi ≤ 90° is refused with the range.
+#[test]
+fn a_bad_flat_tilt_is_refused() {
+    for bad in [[5.0, 1.0], [-1.0, 5.0], [1.0, 95.0], [f64::NAN, 5.0]] {
+        let p = real_falls::Protocol {
+            flat_tilt_deg: bad,
+            ..Default::default()
+        };
+        let err = p.check().unwrap_err();
+        assert!(err.contains("flat tilt"), "{err}");
+    }
+    assert!(real_falls::Protocol::default().check().is_ok());
+    assert!("filmed".parse::<real_falls::ReleaseMix>().is_ok());
+    assert!("thirds".parse::<real_falls::ReleaseMix>().is_err());
+}
