@@ -831,15 +831,9 @@ impl std::str::FromStr for ReleaseMix {
 /// Per bin of [`SQUARE_BINS`], the share of the real tumbling and chaotic
 /// drops that were let go flat (NaN for a bin without any).
 pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
-    SQUARE_BINS
+    real_by_release(real)
         .iter()
-        .map(|&(lo, hi)| {
-            let moving: Vec<&RealSegment> = real
-                .iter()
-                .filter(|s| (lo..hi).contains(&s.radius) && s.human != Label::Steady)
-                .collect();
-            moving.iter().filter(|s| !s.on_edge).count() as f64 / moving.len() as f64
-        })
+        .map(|b| b.flat.drops as f64 / (b.flat.drops + b.edge.drops) as f64)
         .collect()
 }
 
