@@ -552,25 +552,21 @@ fn release_stats(moving: &[(Features, Option<f64>)], steady: &[f64]) -> ReleaseS
 }
 
 /// The real side split by release, per bin of [`SQUARE_BINS`] (people's
-/// labels, as [`real_table`]).
+/// labels, the drops as [`real_table`] measures them).
 pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
-    SQUARE_BINS
+    real_bins(real)
         .iter()
-        .map(|&(lo, hi)| {
-            let in_bin: Vec<&RealSegment> = real
-                .iter()
-                .filter(|s| (lo..hi).contains(&s.radius))
-                .collect();
+        .map(|bin| {
             let side = |on_edge: bool| {
-                let mine = in_bin.iter().filter(|s| s.on_edge == on_edge);
+                let mine = bin.drops.iter().filter(|d| d.on_edge == on_edge);
                 let moving: Vec<(Features, Option<f64>)> = mine
                     .clone()
-                    .filter(|s| s.human != Label::Steady)
-                    .filter_map(|s| s.film.features().map(|f| (f, s.film.tumbling_rate())))
+                    .filter(|d| d.moving)
+                    .filter_map(|d| d.measured.map(|m| (m.features, d.omega)))
                     .collect();
                 let steady: Vec<f64> = mine
-                    .filter(|s| s.human == Label::Steady)
-                    .filter_map(|s| s.film.features().map(|f| f.time))
+                    .filter(|d| !d.moving)
+                    .filter_map(|d| d.measured.map(|m| m.features.time))
                     .collect();
                 release_stats(&moving, &steady)
             };
@@ -702,6 +698,8 @@ struct RealDrop {
     radius: f64,
     /// Labelled tumbling or chaotic.
     moving: bool,
+    /// Let go on edge.
+    on_edge: bool,
 }
 
 /// One bin's real drops: what [`real_table`] and [`real_intervals`] take
@@ -744,6 +742,7 @@ fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
                         omega: if moving { s.film.tumbling_rate() } else { None },
                         radius: s.radius,
                         moving,
+                        on_edge: s.on_edge,
                     }
                 })
                 .collect(),
@@ -902,6 +901,9 @@ pub enum ExperimentError {
     /// The fall diverged.
     #[error(transparent)]
     Sim(#[from] crate::physics::integrate::SimError),
+    /// The release protocol is out of range ([`Protocol::check`]).
+    #[error("release protocol: {0}")]
+    Protocol(String),
 }
 
 /// The camera's projected area of every triangle of `model` at `x`, px.
@@ -1109,6 +1111,7 @@ pub fn simulate_bin(
     run: &BinReleases,
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
+    run.protocol.check().map_err(ExperimentError::Protocol)?;
     let spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
     let model = spec.model()?;
     let dt = experiment_step(&model)?;

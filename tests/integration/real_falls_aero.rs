@@ -448,6 +448,25 @@ fn a_bad_flat_tilt_is_refused() {
         };
         let err = p.check().unwrap_err();
         assert!(err.contains("flat tilt"), "{err}");
+        // The experiment refuses it before it lets anything go.
+        let run = real_falls::BinReleases {
+            bin: 0,
+            releases: 2,
+            flat: 2,
+            seed: 1,
+            protocol: p,
+        };
+        let centres = real_falls::centres(&squares());
+        let refused = real_falls::simulate_bin(
+            PlateShape::Square,
+            0.03,
+            &AeroSpec::unsteady(),
+            &run,
+            &centres,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(refused.contains("release protocol: flat tilt"), "{refused}");
     }
     assert!(real_falls::Protocol::default().check().is_ok());
     assert!("filmed".parse::<real_falls::ReleaseMix>().is_ok());
