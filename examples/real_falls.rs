@@ -162,12 +162,12 @@ fn main() {
     }
     println!();
     println!(
-        "by release (real / sim): drops, median drift, Ω rad/s, and a flat release's steady start (median s, of how many)"
+        "by release (real / sim): drops, median drift, Ω rad/s, and when a flat release departs from its flat fall (median s, of how many; the films' past their first frames)"
     );
     println!();
     println!(
         "{:<9} {:>7} {:>11} {:>13} {:>19}   {:>7} {:>11} {:>13}",
-        "side cm", "flat", "drift", "Ω", "steady start s", "edge", "drift", "Ω"
+        "side cm", "flat", "drift", "Ω", "departs s", "edge", "drift", "Ω"
     );
     let by_real = real_falls::real_by_release(&real);
     for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
@@ -181,12 +181,12 @@ fn main() {
         };
         let (fd, fdr, fo) = side(&br.flat, &bs.flat);
         let (ed, edr, eo) = side(&br.edge, &bs.edge);
-        let steady = format!(
+        let departs = format!(
             "{:.3}({})/{:.3}({})",
-            br.flat.steady, br.flat.steady_drops, bs.flat.steady, bs.flat.steady_drops
+            br.flat.departs, br.flat.departs_drops, bs.flat.departs, bs.flat.departs_drops
         );
         println!(
-            "{:<9.1} {fd:>7} {fdr:>11} {fo:>13} {steady:>19}   {ed:>7} {edr:>11} {eo:>13}",
+            "{:<9.1} {fd:>7} {fdr:>11} {fo:>13} {departs:>19}   {ed:>7} {edr:>11} {eo:>13}",
             r.side * 100.0
         );
     }

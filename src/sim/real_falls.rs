@@ -34,6 +34,8 @@ use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
 use std::path::Path;
 
+pub mod departure;
+
 type V3 = Vector3<f64>;
 
 /// Frames per second of the experiment's cameras.
@@ -523,10 +525,17 @@ pub struct ReleaseStats {
     pub omega: f64,
     /// Median duration of a flat release's steady start (filmed until the
     /// plate is 0.2 r sideways; kept where it lasts over 2 frames), s; NaN
-    /// without any.
+    /// without any. On the real side this times the films' first-frames
+    /// artefact ([`departure`]), not the fall.
     pub steady: f64,
     /// Steady starts behind [`ReleaseStats::steady`].
     pub steady_drops: usize,
+    /// Median time a flat release takes to leave its flat fall, s
+    /// ([`departure`]: on the real side past the films' first-frames
+    /// artefact); NaN without any.
+    pub departs: f64,
+    /// Flat releases behind [`ReleaseStats::departs`].
+    pub departs_drops: usize,
 }
 
 /// A bin's drops split by how they were let go.
@@ -540,7 +549,11 @@ pub struct ByRelease {
 
 /// The statistics of one kind of release from its moving segments (with
 /// the tumbling rate of each one's drop) and its steady starts.
-fn release_stats(moving: &[(Features, Option<f64>)], steady: &[f64]) -> ReleaseStats {
+fn release_stats(
+    moving: &[(Features, Option<f64>)],
+    steady: &[f64],
+    departs: &[f64],
+) -> ReleaseStats {
     ReleaseStats {
         drops: moving.len(),
         descent: median(moving.iter().map(|m| m.0.descent())),
@@ -548,15 +561,19 @@ fn release_stats(moving: &[(Features, Option<f64>)], steady: &[f64]) -> ReleaseS
         omega: median(moving.iter().filter_map(|m| m.1)),
         steady: median(steady.iter().copied()),
         steady_drops: steady.len(),
+        departs: median(departs.iter().copied()),
+        departs_drops: departs.len(),
     }
 }
 
 /// The real side split by release, per bin of [`SQUARE_BINS`] (people's
 /// labels, the drops as [`real_table`] measures them).
 pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
+    let departures = departure::departures_by_bin(real);
     real_bins(real)
         .iter()
-        .map(|bin| {
+        .zip(&departures)
+        .map(|(bin, departs)| {
             let side = |on_edge: bool| {
                 let mine = bin.drops.iter().filter(|d| d.on_edge == on_edge);
                 let moving: Vec<(Features, Option<f64>)> = mine
@@ -568,7 +585,8 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
                     .filter(|d| !d.moving)
                     .filter_map(|d| d.measured.map(|m| m.features.time))
                     .collect();
-                release_stats(&moving, &steady)
+                let departs: &[f64] = if on_edge { &[] } else { departs };
+                release_stats(&moving, &steady, departs)
             };
             ByRelease {
                 flat: side(false),
@@ -592,11 +610,13 @@ pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
             })
             .collect();
         let steady: Vec<f64> = mine
+            .clone()
             .flat_map(|d| d.segments.iter())
             .filter(|m| m.label == Label::Steady)
             .map(|m| m.features.time)
             .collect();
-        release_stats(&moving, &steady)
+        let departs: Vec<f64> = mine.filter_map(|d| d.departs).collect();
+        release_stats(&moving, &steady, &departs)
     };
     ByRelease {
         flat: side(false),
@@ -765,9 +785,10 @@ pub struct Release {
 /// The default is the protocol of the project's cross-check
 /// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
 /// 1–5°, half the releases on edge. The films say otherwise on both counts
-/// (docs/real-falls.md, "The release protocol"): the real flat releases
-/// leave their steady start within 0.03–0.07 s, which a 1–5° tilt from
-/// rest takes 0.8–1.1 s to do, and the real bins hold 5:9 to 17:7 flat to
+/// (docs/real-falls.md, "The release protocol" and "When a flat release
+/// departs"): the real flat releases depart 0.2 r sideways 0.13–0.37 s
+/// after their first frame ([`departure`]), which a 1–5° tilt from rest
+/// takes 0.76–1.05 s to do, and the real bins hold 5:9 to 17:7 flat to
 /// on-edge drops, not 1:1.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Protocol {
@@ -948,6 +969,10 @@ pub struct SimulatedDrop {
     pub flips: usize,
     /// Simulated seconds to the floor.
     pub seconds: f64,
+    /// A flat release's departure from its flat fall, measured on its film
+    /// as on the real ones ([`departure::departure`]), s; `None` on edge or
+    /// if it never departs.
+    pub departs: Option<f64>,
 }
 
 /// Longest fall simulated, s: a drop that has not reached the floor by
@@ -1050,6 +1075,11 @@ pub fn simulate_drop(
         n -= 1;
     }
     film = film.slice(0, n);
+    let departs = if release.on_edge {
+        None
+    } else {
+        departure::departure(radius, &film).and_then(|d| d.departs)
+    };
     let threshold = if release.on_edge { 0.01 } else { 0.2 * radius };
     let mut tc = 1;
     while tc < n && film.position[tc - 1].xy().norm() < threshold {
@@ -1082,6 +1112,7 @@ pub fn simulate_drop(
         omega,
         flips,
         seconds,
+        departs,
     })
 }
 

@@ -1,0 +1,153 @@
+//! When a real flat release leaves its flat fall, measured past the films'
+//! first frames (docs/real-falls.md, "When a flat release departs").
+//!
+//! The experiment cuts a flat release's start as "steady" until the tracked
+//! centre has moved 0.2 r sideways, and those segments last 3–7 frames. But
+//! over those frames the two cameras' silhouettes of a plate that is still
+//! flat grow 2.6–8.4 times (frame 5 against frame 0, all 50 flat drops),
+//! which a tilt of a few degrees cannot do: the plate is still coming into
+//! full view (the release holds part of it out of sight, or the tracking's
+//! smoothing runs into frames without it), and the centre of what is seen
+//! moves while it does. The cut therefore times the artefact, not the fall.
+//! Here a drop's centre is taken once its silhouette is whole, and the
+//! drop departs when it is 0.2 r sideways from there, the experiment's own
+//! threshold: 0.13–0.37 s after the first frame, longer for larger squares.
+
+use super::{FPS, Film, RealSegment, SQUARE_BINS, median};
+
+/// Frames at the start of a flat drop within which the end of the first
+/// frames' artefact is sought: 0.15 s, twice the longest the silhouettes
+/// take to grow whole (0.13 s, the 9 cm squares).
+pub const ARTEFACT_FRAMES: usize = 15;
+
+/// Share of its largest value within [`ARTEFACT_FRAMES`] at which the two
+/// cameras' summed silhouette is taken as whole. 0.8 or a window of 10 or
+/// 20 frames moves no bin's median departure by more than 0.06 s.
+pub const WHOLE_SHARE: f64 = 0.9;
+
+/// Sideways distance, in half-sides, at which a flat drop departs: the
+/// threshold of the experiment's steady cut (classifyBehaviour.m).
+pub const DEPARTURE_RADII: f64 = 0.2;
+
+/// One real flat drop, its segments joined.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FlatDrop {
+    /// Half the side, m.
+    pub radius: f64,
+    /// The segments it was cut into, in order (file names).
+    pub segments: Vec<String>,
+    /// The whole drop as filmed (frames shared by two segments once).
+    pub film: Film,
+}
+
+/// The real flat drops of `real`, each with its segments joined: a segment
+/// continues the one before it when its first frame is that one's last (the
+/// experiment cut drops at a frame that both segments keep).
+pub fn flat_drops(real: &[RealSegment]) -> Vec<FlatDrop> {
+    let mut drops: Vec<(bool, FlatDrop)> = Vec::new();
+    for s in real {
+        let film = &s.film;
+        let continues = drops.last().is_some_and(|(edge, d)| {
+            *edge == s.on_edge
+                && d.radius == s.radius
+                && d.film.position.last() == film.position.first()
+                && d.film.area[0].last() == film.area[0].first()
+        });
+        if continues {
+            let d = &mut drops.last_mut().expect("checked").1;
+            d.film.position.extend_from_slice(&film.position[1..]);
+            for k in 0..2 {
+                d.film.area[k].extend_from_slice(&film.area[k][1..]);
+            }
+            d.segments.push(s.name.clone());
+        } else {
+            drops.push((
+                s.on_edge,
+                FlatDrop {
+                    radius: s.radius,
+                    segments: vec![s.name.clone()],
+                    film: film.clone(),
+                },
+            ));
+        }
+    }
+    drops
+        .into_iter()
+        .filter(|(edge, _)| !edge)
+        .map(|(_, d)| d)
+        .collect()
+}
+
+/// How one real flat drop left its flat fall.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Departure {
+    /// Half the side, m.
+    pub radius: f64,
+    /// First frame at which the summed silhouette reaches [`WHOLE_SHARE`]
+    /// of its largest within [`ARTEFACT_FRAMES`]: where the artefact ends.
+    pub whole_from: usize,
+    /// The summed silhouette at frame 5 over its first frame's: how much
+    /// a still-flat plate seems to grow.
+    pub growth: f64,
+    /// Seconds from the first frame to the first at which the centre is
+    /// [`DEPARTURE_RADII`] half-sides sideways from where it was at
+    /// `whole_from`; `None` if it never is.
+    pub departs: Option<f64>,
+}
+
+/// Measures [`Departure`] on a flat drop's film; `None` for a film shorter
+/// than [`ARTEFACT_FRAMES`].
+pub fn departure(radius: f64, film: &Film) -> Option<Departure> {
+    if film.len() < ARTEFACT_FRAMES {
+        return None;
+    }
+    let seen: Vec<f64> = (0..film.len())
+        .map(|k| film.area[0][k] + film.area[1][k])
+        .collect();
+    let largest = seen[..ARTEFACT_FRAMES]
+        .iter()
+        .copied()
+        .fold(f64::NEG_INFINITY, f64::max);
+    let whole_from = seen[..ARTEFACT_FRAMES]
+        .iter()
+        .position(|&a| a >= WHOLE_SHARE * largest)
+        .expect("the largest is reached");
+    let from = film.position[whole_from].xy();
+    let departs = (whole_from..film.len())
+        .find(|&k| (film.position[k].xy() - from).norm() > DEPARTURE_RADII * radius)
+        .map(|k| k as f64 / FPS);
+    Some(Departure {
+        radius,
+        whole_from,
+        growth: seen[5] / seen[0],
+        departs,
+    })
+}
+
+/// Every real flat drop's [`Departure`].
+pub fn real_departures(real: &[RealSegment]) -> Vec<Departure> {
+    flat_drops(real)
+        .iter()
+        .filter_map(|d| departure(d.radius, &d.film))
+        .collect()
+}
+
+/// Per bin of [`SQUARE_BINS`], the departures of its real flat drops
+/// that depart, s.
+pub fn departures_by_bin(real: &[RealSegment]) -> Vec<Vec<f64>> {
+    let all = real_departures(real);
+    SQUARE_BINS
+        .iter()
+        .map(|&(lo, hi)| {
+            all.iter()
+                .filter(|d| (lo..hi).contains(&d.radius))
+                .filter_map(|d| d.departs)
+                .collect()
+        })
+        .collect()
+}
+
+/// Per bin, the median of [`departures_by_bin`], s.
+pub fn median_departures(real: &[RealSegment]) -> Vec<f64> {
+    departures_by_bin(real).into_iter().map(median).collect()
+}
