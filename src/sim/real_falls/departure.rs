@@ -151,3 +151,74 @@ pub fn departures_by_bin(real: &[RealSegment]) -> Vec<Vec<f64>> {
 pub fn median_departures(real: &[RealSegment]) -> Vec<f64> {
     departures_by_bin(real).into_iter().map(median).collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::Vector3;
+
+    /// A film of `n` frames: silhouette `area(k)` in both cameras, centre
+    /// `centre(k)`.
+    fn film(n: usize, area: impl Fn(usize) -> f64, centre: impl Fn(usize) -> [f64; 2]) -> Film {
+        let mut f = Film::default();
+        for k in 0..n {
+            let [x, y] = centre(k);
+            f.position.push(Vector3::new(x, y, 1.0 - 0.008 * k as f64));
+            f.area[0].push(area(k));
+            f.area[1].push(2.0 * area(k));
+        }
+        f
+    }
+
+    /// A whole silhouette from the first frame and a centre moving
+    /// sideways at a constant rate: the drop departs at the first frame
+    /// past 0.2 r, ⌊0.2 r / step⌋ + 1.
+    #[test]
+    fn a_steady_drift_departs_where_it_passes_a_fifth_of_the_half_side() {
+        let r = 0.02;
+        for step in [1e-4, 3e-4, 7e-4, 1.3e-3] {
+            let f = film(
+                200,
+                |_| 100.0,
+                |k| [0.6 * step * k as f64, 0.8 * step * k as f64],
+            );
+            let d = departure(r, &f).unwrap();
+            assert_eq!(d.whole_from, 0);
+            assert!((d.growth - 1.0).abs() < 1e-12);
+            let frame = (DEPARTURE_RADII * r / step).floor() as usize + 1;
+            assert_eq!(d.departs, Some(frame as f64 / FPS), "step {step}");
+        }
+    }
+
+    /// A silhouette that grows to whole over its first frames while the
+    /// centre of what is seen shifts by more than 0.2 r, then a plate that
+    /// stays put: the shift is the artefact, and the drop never departs.
+    /// Timed from the first frame instead, it would depart at once.
+    #[test]
+    fn a_shift_while_the_silhouette_grows_is_not_a_departure() {
+        let r = 0.02;
+        let grow = 6;
+        let f = film(
+            100,
+            |k| 30.0 + 70.0 * (k.min(grow) as f64 / grow as f64),
+            |k| {
+                let s = 0.3 * r * k.min(grow) as f64 / grow as f64;
+                [s, -s]
+            },
+        );
+        let d = departure(r, &f).unwrap();
+        assert!((d.growth - (30.0 + 70.0 * 5.0 / 6.0) / 30.0).abs() < 1e-12);
+        // 0.9 of the whole (90) is passed at frame 6, not 5 (30 + 70 × 5/6 ≈ 88).
+        assert_eq!(d.whole_from, 6);
+        assert_eq!(d.departs, None);
+        assert!(f.position[2].xy().norm() > 0.0);
+        assert!(f.position[grow].xy().norm() > DEPARTURE_RADII * r);
+    }
+
+    /// Too short a film gives no measurement.
+    #[test]
+    fn a_film_shorter_than_the_window_is_not_measured() {
+        let f = film(ARTEFACT_FRAMES - 1, |_| 1.0, |_| [0.0, 0.0]);
+        assert_eq!(departure(0.02, &f), None);
+    }
+}
