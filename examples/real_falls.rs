@@ -12,12 +12,17 @@
 //! medians mix the two in each side's own proportion. `--mix filmed` lets
 //! each bin go flat and on edge in its real proportion instead of half and
 //! half, `--flat-tilt LO,HI` tilts flat releases LO–HI° instead of 1–5°
-//! (docs/real-falls.md, "The release protocol").
+//! (docs/real-falls.md, "The release protocol"); that table also times when
+//! each flat release departs from its flat fall ("When a flat release
+//! departs"). The last table gives each release's fastest descent beside
+//! the simulated plate's steady edge-on fall ("How fast real paper dives").
 //!
 //! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI KEY=VALUE ...]
 
-use leafmagic::leaf::plates::PlateShape;
+use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
+use leafmagic::physics::forces::unsteady;
+use leafmagic::physics::model::AeroLaw;
 use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::Path;
 
@@ -190,6 +195,27 @@ fn main() {
             r.side * 100.0
         );
     }
+    println!();
+    println!(
+        "fastest descent over a moving segment (median m/s, real / sim) and the simulated plate's steady edge-on fall"
+    );
+    println!();
+    println!(
+        "{:<9} {:>11} {:>11} {:>9}",
+        "side cm", "flat", "edge", "edge-on"
+    );
+    for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
+        let bs = real_falls::sim_by_release(drops);
+        let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
+        let edge_on = edge_on_speed(shape, r.side, &aero)
+            .map_or_else(|| "-".to_string(), |v| format!("{v:.2}"));
+        println!(
+            "{:<9.1} {:>11} {:>11} {edge_on:>9}",
+            r.side * 100.0,
+            pair(br.flat.fastest, bs.flat.fastest),
+            pair(br.edge.fastest, bs.edge.fastest),
+        );
+    }
     let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;
     println!();
     println!(
@@ -202,6 +228,25 @@ fn main() {
         cmp.parts.len(),
         wall
     );
+}
+
+/// The steady edge-on fall of the simulated plate of `shape` and `side`
+/// in the experiment's air under the unsteady law
+/// ([`unsteady::edge_on_speed`]), m/s; `None` under another law.
+fn edge_on_speed(shape: PlateShape, side: f64, aero: &AeroSpec) -> Option<f64> {
+    let spec = plate(
+        shape,
+        side,
+        1.0,
+        real_falls::PAPER,
+        real_falls::experiment_air(aero.clone()),
+    )
+    .ok()?;
+    let model = spec.model().ok()?;
+    match &model.aero {
+        AeroLaw::Unsteady(law) => Some(unsteady::edge_on_speed(law, &model)),
+        _ => None,
+    }
 }
 
 /// The simulated side alone for plates of `shape` at the squares' bin sizes.

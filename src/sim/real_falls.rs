@@ -228,6 +228,20 @@ impl Film {
     }
 }
 
+impl Film {
+    /// The fastest descent over the film, m/s: the largest central
+    /// difference (z_k − z_{k+2}) · FPS / 2 (exact for a fall at constant
+    /// acceleration); `None` under 3 frames. An edge-on plate falls
+    /// nearly freely until it turns, so on an edge-on release this is how
+    /// fast it was going when it turned.
+    pub fn fastest_descent(&self) -> Option<f64> {
+        self.position
+            .windows(3)
+            .map(|w| (w[0].z - w[2].z) * FPS / 2.0)
+            .reduce(f64::max)
+    }
+}
+
 /// Local maxima of `y` strictly above both neighbours (a flat top counts
 /// once), the ends excluded: MATLAB's `findpeaks` without options.
 pub fn count_peaks(y: &[f64]) -> usize {
@@ -536,6 +550,9 @@ pub struct ReleaseStats {
     pub departs: f64,
     /// Flat releases behind [`ReleaseStats::departs`].
     pub departs_drops: usize,
+    /// Median over the moving drops of their fastest descent
+    /// ([`Film::fastest_descent`] on the moving segment), m/s.
+    pub fastest: f64,
 }
 
 /// A bin's drops split by how they were let go.
@@ -547,22 +564,29 @@ pub struct ByRelease {
     pub edge: ReleaseStats,
 }
 
+/// One moving segment as [`release_stats`] reads it.
+#[derive(Clone, Copy, Debug)]
+struct MovingDrop {
+    features: Features,
+    /// Its drop's tumbling rate.
+    omega: Option<f64>,
+    /// Its fastest descent, m/s.
+    fastest: Option<f64>,
+}
+
 /// The statistics of one kind of release from its moving segments (with
 /// the tumbling rate of each one's drop) and its steady starts.
-fn release_stats(
-    moving: &[(Features, Option<f64>)],
-    steady: &[f64],
-    departs: &[f64],
-) -> ReleaseStats {
+fn release_stats(moving: &[MovingDrop], steady: &[f64], departs: &[f64]) -> ReleaseStats {
     ReleaseStats {
         drops: moving.len(),
-        descent: median(moving.iter().map(|m| m.0.descent())),
-        drift: median(moving.iter().map(|m| m.0.drift())),
-        omega: median(moving.iter().filter_map(|m| m.1)),
+        descent: median(moving.iter().map(|m| m.features.descent())),
+        drift: median(moving.iter().map(|m| m.features.drift())),
+        omega: median(moving.iter().filter_map(|m| m.omega)),
         steady: median(steady.iter().copied()),
         steady_drops: steady.len(),
         departs: median(departs.iter().copied()),
         departs_drops: departs.len(),
+        fastest: median(moving.iter().filter_map(|m| m.fastest)),
     }
 }
 
@@ -576,10 +600,16 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
         .map(|(bin, departs)| {
             let side = |on_edge: bool| {
                 let mine = bin.drops.iter().filter(|d| d.on_edge == on_edge);
-                let moving: Vec<(Features, Option<f64>)> = mine
+                let moving: Vec<MovingDrop> = mine
                     .clone()
                     .filter(|d| d.moving)
-                    .filter_map(|d| d.measured.map(|m| (m.features, d.omega)))
+                    .filter_map(|d| {
+                        d.measured.map(|m| MovingDrop {
+                            features: m.features,
+                            omega: d.omega,
+                            fastest: d.fastest,
+                        })
+                    })
                     .collect();
                 let steady: Vec<f64> = mine
                     .filter(|d| !d.moving)
@@ -600,13 +630,17 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
 pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
     let side = |on_edge: bool| {
         let mine = drops.iter().filter(|d| d.on_edge == on_edge);
-        let moving: Vec<(Features, Option<f64>)> = mine
+        let moving: Vec<MovingDrop> = mine
             .clone()
             .flat_map(|d| {
                 d.segments
                     .iter()
                     .filter(|m| m.label != Label::Steady)
-                    .map(|m| (m.features, d.omega))
+                    .map(|m| MovingDrop {
+                        features: m.features,
+                        omega: d.omega,
+                        fastest: d.fastest,
+                    })
             })
             .collect();
         let steady: Vec<f64> = mine
@@ -720,6 +754,8 @@ struct RealDrop {
     moving: bool,
     /// Let go on edge.
     on_edge: bool,
+    /// Its segment's fastest descent ([`Film::fastest_descent`]), m/s.
+    fastest: Option<f64>,
 }
 
 /// One bin's real drops: what [`real_table`] and [`real_intervals`] take
@@ -763,6 +799,7 @@ fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
                         radius: s.radius,
                         moving,
                         on_edge: s.on_edge,
+                        fastest: s.film.fastest_descent(),
                     }
                 })
                 .collect(),
@@ -973,6 +1010,9 @@ pub struct SimulatedDrop {
     /// as on the real ones ([`departure::departure`]), s; `None` on edge or
     /// if it never departs.
     pub departs: Option<f64>,
+    /// Its moving segment's fastest descent ([`Film::fastest_descent`]),
+    /// m/s; `None` without one.
+    pub fastest: Option<f64>,
 }
 
 /// Longest fall simulated, s: a drop that has not reached the floor by
@@ -1086,11 +1126,14 @@ pub fn simulate_drop(
         tc += 1;
     }
     let mut segments = Vec::new();
+    let mut fastest = None;
     let mut push = |from: usize, to: usize, steady: bool| {
-        if let Some(features) = film.slice(from, to).features() {
+        let cut = film.slice(from, to);
+        if let Some(features) = cut.features() {
             let label = if steady {
                 Label::Steady
             } else {
+                fastest = cut.fastest_descent();
                 label_of(&features, centres)
             };
             segments.push(Measured { label, features });
@@ -1113,6 +1156,7 @@ pub fn simulate_drop(
         flips,
         seconds,
         departs,
+        fastest,
     })
 }
 
