@@ -198,6 +198,18 @@ impl Film {
         })
     }
 
+    /// The fastest descent over the film, m/s: the largest central
+    /// difference (z_k − z_{k+2}) · FPS / 2 (exact for a fall at constant
+    /// acceleration); `None` under 3 frames. A plate that falls edge-first
+    /// gains speed until it turns, so this is how fast its dives went
+    /// (docs/real-falls.md, "How fast real paper dives").
+    pub fn fastest_descent(&self) -> Option<f64> {
+        self.position
+            .windows(3)
+            .map(|w| (w[0].z - w[2].z) * FPS / 2.0)
+            .reduce(f64::max)
+    }
+
     /// The tumbling rate Ω = π × area maxima per second, rad/s: frames above
     /// [`FLOOR_TRIM`], the first 30 dropped, maxima of prominence at least
     /// 5 % of the range, (count − 1) over the time from the first to the
@@ -225,20 +237,6 @@ impl Film {
         }
         (!rates.is_empty())
             .then(|| std::f64::consts::PI * rates.iter().sum::<f64>() / rates.len() as f64)
-    }
-}
-
-impl Film {
-    /// The fastest descent over the film, m/s: the largest central
-    /// difference (z_k − z_{k+2}) · FPS / 2 (exact for a fall at constant
-    /// acceleration); `None` under 3 frames. An edge-on plate falls
-    /// nearly freely until it turns, so on an edge-on release this is how
-    /// fast it was going when it turned.
-    pub fn fastest_descent(&self) -> Option<f64> {
-        self.position
-            .windows(3)
-            .map(|w| (w[0].z - w[2].z) * FPS / 2.0)
-            .reduce(f64::max)
     }
 }
 

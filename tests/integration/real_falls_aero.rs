@@ -404,8 +404,8 @@ fn the_filmed_mix_and_the_split_by_release_follow_the_labels() {
 }
 
 /// The films' flat drops, joined from their segments: 50 of the 92 drops
-/// (the data's README), 35 of them cut into a steady start and the rest
-/// (people's label 3 first, then a moving one) and 15 left whole. Over
+/// (the data's README), 35 of them cut in two (people's label 3, then a
+/// moving segment) and 15 left whole. Over
 /// each one's first five frames the two silhouettes grow at least 2.5
 /// times while the plate is still flat (a tilt of a few degrees changes
 /// them by a few per cent): the steady cut times that artefact. Measured
