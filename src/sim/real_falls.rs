@@ -396,6 +396,17 @@ pub fn read_squares(dir: &Path) -> Result<Vec<RealSegment>, RealFallsError> {
                     format!("line {}: expected t,x,y,z,area1,area2", k + 1),
                 ));
             }
+            if let Some(c) = v.iter().position(|x| !x.is_finite()) {
+                let column = ["t", "x", "y", "z", "area1", "area2"][c];
+                return Err(fail(
+                    &path,
+                    format!(
+                        "line {}: {column} is {} (a film's values are finite)",
+                        k + 1,
+                        v[c]
+                    ),
+                ));
+            }
             film.position.push(V3::new(v[1], v[2], v[3]));
             film.area[0].push(v[4]);
             film.area[1].push(v[5]);

@@ -598,3 +598,32 @@ fn real_paper_dives_faster_than_the_laws_steady_edge_on_fall() {
         }
     }
 }
+
+/// A segment file with a value that is not a finite number, or a labels
+/// file that names a missing segment, is refused with the file, the line
+/// and the reason, before anything is measured.
+#[test]
+fn bad_real_fall_files_are_refused_with_file_line_and_reason() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-bad-squares-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(
+        dir.join("labels.csv"),
+        "name,shape,radius_m,width_px,release_vertical,human,auto,rows\nsquare_000,square,0.0150,156,1,1,1,3\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.join("square_000.csv"),
+        "t,x,y,z,area1,area2\n0.0,0.0,0.0,1.0,10.0,10.0\n0.0102,0.0,0.0,NaN,10.0,10.0\n",
+    )
+    .unwrap();
+    let err = real_falls::read_squares(&dir).unwrap_err().to_string();
+    assert!(err.contains("square_000.csv"), "{err}");
+    assert!(err.contains("line 3") && err.contains("z is NaN"), "{err}");
+    std::fs::remove_file(dir.join("square_000.csv")).unwrap();
+    let err = real_falls::read_squares(&dir).unwrap_err().to_string();
+    assert!(
+        err.contains("square_000.csv") && err.contains("cannot read"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -96,7 +96,7 @@ pub struct Departure {
 }
 
 /// Measures [`Departure`] on a flat drop's film; `None` for a film shorter
-/// than [`ARTEFACT_FRAMES`].
+/// than [`ARTEFACT_FRAMES`] or without a finite silhouette in them.
 pub fn departure(radius: f64, film: &Film) -> Option<Departure> {
     if film.len() < ARTEFACT_FRAMES {
         return None;
@@ -104,14 +104,17 @@ pub fn departure(radius: f64, film: &Film) -> Option<Departure> {
     let seen: Vec<f64> = (0..film.len())
         .map(|k| film.area[0][k] + film.area[1][k])
         .collect();
+    // f64::max passes over NaN: a frame the tracking lost is not the largest.
     let largest = seen[..ARTEFACT_FRAMES]
         .iter()
         .copied()
         .fold(f64::NEG_INFINITY, f64::max);
+    if !largest.is_finite() {
+        return None;
+    }
     let whole_from = seen[..ARTEFACT_FRAMES]
         .iter()
-        .position(|&a| a >= WHOLE_SHARE * largest)
-        .expect("the largest is reached");
+        .position(|&a| a >= WHOLE_SHARE * largest)?;
     let from = film.position[whole_from].xy();
     let departs = (whole_from..film.len())
         .find(|&k| (film.position[k].xy() - from).norm() > DEPARTURE_RADII * radius)
@@ -215,10 +218,16 @@ mod tests {
         assert!(f.position[grow].xy().norm() > DEPARTURE_RADII * r);
     }
 
-    /// Too short a film gives no measurement.
+    /// Too short a film, or one whose silhouettes are all lost (NaN) in
+    /// the window, gives no measurement rather than a panic.
     #[test]
-    fn a_film_shorter_than_the_window_is_not_measured() {
+    fn a_film_shorter_than_the_window_or_without_silhouettes_is_not_measured() {
         let f = film(ARTEFACT_FRAMES - 1, |_| 1.0, |_| [0.0, 0.0]);
         assert_eq!(departure(0.02, &f), None);
+        let lost = film(40, |_| f64::NAN, |_| [0.0, 0.0]);
+        assert_eq!(departure(0.02, &lost), None);
+        // One lost frame among whole ones is passed over.
+        let one = film(40, |k| if k == 2 { f64::NAN } else { 1.0 }, |_| [0.0, 0.0]);
+        assert_eq!(departure(0.02, &one).unwrap().whole_from, 0);
     }
 }
