@@ -8,7 +8,7 @@
 //! the squares' bin sizes: the simulated side only, a prediction for the
 //! study's held-out shapes (docs/real-falls.md, "Predictions for the
 //! held-out shapes").
-//! A last table splits each bin by release (flat, on edge): the pooled
+//! A third table splits each bin by release (flat, on edge): the pooled
 //! medians mix the two in each side's own proportion. `--mix filmed` lets
 //! each bin go flat and on edge in its real proportion instead of half and
 //! half, `--flat-tilt LO,HI` tilts flat releases LO–HI° instead of 1–5°
