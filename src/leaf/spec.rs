@@ -136,6 +136,13 @@ pub struct AeroSpec {
     /// default 3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pressure_lag: Option<f64>,
+    /// The wake's rocking couple C_W on a plate falling face-on (unsteady
+    /// law; default 0, off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wake_couple: Option<f64>,
+    /// The wake's Strouhal number (unsteady law; default 0.15).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub wake_strouhal: Option<f64>,
 }
 
 /// The name of an aerodynamic law in a leaf file.
@@ -179,7 +186,7 @@ impl std::str::FromStr for AeroLawName {
 
 /// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
 /// `alpha_t` apart).
-const KEY_LAWS: [(&str, &[AeroLawName]); 17] = {
+const KEY_LAWS: [(&str, &[AeroLawName]); 19] = {
     use AeroLawName::{Quadratic as Q, Unsteady as U};
     [
         ("air_density", &[Q, U]),
@@ -199,6 +206,8 @@ const KEY_LAWS: [(&str, &[AeroLawName]); 17] = {
         ("solid_density", &[U]),
         ("pressure_lag_gain", &[U]),
         ("pressure_lag", &[U]),
+        ("wake_couple", &[U]),
+        ("wake_strouhal", &[U]),
     ]
 };
 
@@ -257,11 +266,13 @@ impl AeroSpec {
             solid_density: None,
             pressure_lag_gain: None,
             pressure_lag: None,
+            wake_couple: None,
+            wake_strouhal: None,
         }
     }
 
     /// Which optional keys are set.
-    fn set_keys(&self) -> [(&'static str, bool); 17] {
+    fn set_keys(&self) -> [(&'static str, bool); 19] {
         let set = [
             self.air_density.is_some(),
             self.cd_parallel.is_some(),
@@ -280,6 +291,8 @@ impl AeroSpec {
             self.solid_density.is_some(),
             self.pressure_lag_gain.is_some(),
             self.pressure_lag.is_some(),
+            self.wake_couple.is_some(),
+            self.wake_strouhal.is_some(),
         ];
         std::array::from_fn(|k| (KEY_LAWS[k].0, set[k]))
     }
@@ -382,6 +395,8 @@ impl AeroSpec {
             solid_density: self.solid_density.unwrap_or(d.solid_density),
             pressure_lag_gain: self.pressure_lag_gain.unwrap_or(d.pressure_lag_gain),
             pressure_lag: self.pressure_lag.unwrap_or(d.pressure_lag),
+            wake_couple: self.wake_couple.unwrap_or(d.wake_couple),
+            wake_strouhal: self.wake_strouhal.unwrap_or(d.wake_strouhal),
         };
         law.validate()?;
         Ok(AeroLaw::Unsteady(law))

@@ -122,6 +122,22 @@
 //! the strips and the disks in docs/real-falls.md, "A lagged centre of
 //! pressure".
 //!
+//! # Wake
+//!
+//! Off by default (`wake_couple` 0). A bluff plate falling face-on sheds
+//! vortices from alternate edges at f = St |u| / c (`wake_strouhal`,
+//! default 0.15), and the uneven pressure rocks it; the quasi-steady terms
+//! above have no such thing, and a plate let go at 1–5° rocks about
+//! face-on for 0.76–1.05 s where real paper leaves its flat fall in
+//! 0.13–0.37 s (docs/real-falls.md, "When a flat release departs"). With
+//! the term on, each plate carries a wake phase φ turning at 2π St U / c
+//! and each of its triangles the normal force C_W ½ ρ U² sin φ sin⁴α A
+//! (d / c) n, d its distance from the plate's centre along an axis fixed
+//! in the plate: a couple that acts only near face-on. The equations,
+//! their integration and what the term leaves out are in
+//! `src/physics/forces/unsteady/wake.rs`; what it does to the real falls
+//! in docs/real-falls.md, "A wake that rocks the face-on fall".
+//!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
 //! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.65, C_T = 1.2,
@@ -134,6 +150,8 @@
 //! "The defaults"). They were kept when the lag's couple was made
 //! continuous through face-on (cos α above), which moved the fit a little
 //! (docs/real-falls.md, "A couple without a jump").
+
+mod wake;
 
 use super::surfaces::surface;
 use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
@@ -189,16 +207,20 @@ pub fn unsteady_forces(
     added: &mut [Matrix3<f64>],
     lag: Option<&mut PressureLag>,
 ) {
+    let mut lag = lag;
     SCRATCH.with_borrow_mut(|scratch| {
         scratch.measure(law, model, x, v, wind, torn);
         let Scratch {
             triangles, flows, ..
         } = scratch;
         flow_coefficients(law, model, flows);
-        if let Some(lag) = lag.filter(|_| law.pressure_lag_gain > 0.0) {
+        if let Some(lag) = lag.as_deref_mut().filter(|_| law.pressure_lag_gain > 0.0) {
             lagged_pressure(law, triangles, flows, lag);
         }
         per_triangle(law, model, v, wind, triangles, flows, force, added);
+        if let Some(lag) = lag.filter(|_| law.wake_couple > 0.0) {
+            wake_couples(law, model, x, triangles, flows, lag, force);
+        }
     });
     if law.buoyancy {
         let lift = -model.gravity * (law.air_density / law.solid_density);
@@ -248,16 +270,23 @@ pub struct PressureLag {
     /// and the next (or last) evaluation's time after it, Δ.
     time: f64,
     elapsed: f64,
+    /// Whether the lag term is on (`pressure_lag_gain > 0`); the state also
+    /// carries the wake's phases ([`wake`]) when only that term is on.
+    lag_on: bool,
+    /// Each plate's wake ([`wake::WakePhase`]); empty with the term off.
+    wake: Vec<wake::WakePhase>,
 }
 
 impl PressureLag {
-    /// The state for `model`, all triangles unlagged; `None` unless its
-    /// law is the unsteady one with a lag term (`pressure_lag_gain > 0`).
+    /// The state for `model`, all triangles unlagged and every plate's wake
+    /// at its start; `None` unless its law is the unsteady one with a lag
+    /// term (`pressure_lag_gain > 0`) or a wake (`wake_couple > 0`).
     pub fn for_model(model: &Model) -> Option<PressureLag> {
         let AeroLaw::Unsteady(law) = &model.aero else {
             return None;
         };
-        (law.pressure_lag_gain > 0.0).then(|| {
+        let lag_on = law.pressure_lag_gain > 0.0;
+        (lag_on || law.wake_couple > 0.0).then(|| {
             let n = model.triangles.len();
             PressureLag {
                 lagged: vec![f64::NAN; n],
@@ -267,12 +296,24 @@ impl PressureLag {
                 pending_alpha: vec![f64::NAN; n],
                 pending_rate: vec![f64::NAN; n],
                 start: vec![f64::NAN; n],
-                waiting: n > 0,
+                waiting: lag_on && n > 0,
                 evaluated: false,
                 time: f64::NAN,
                 elapsed: 0.0,
+                lag_on,
+                wake: if law.wake_couple > 0.0 {
+                    wake::WakePhase::for_model(model, plate_count(model))
+                } else {
+                    Vec::new()
+                },
             }
         })
+    }
+
+    /// Plate `p`'s wake phase φ at the committed state, rad (NaN without
+    /// the wake term or such a plate).
+    pub fn wake_phase(&self, p: usize) -> f64 {
+        self.wake.get(p).map_or(f64::NAN, |w| w.phase)
     }
 
     /// The committed lagged angle of attack of triangle `t`, rad (NaN
@@ -341,7 +382,10 @@ impl PressureLag {
             self.rate[t] = rate;
             self.start[t] = f64::NAN;
         }
-        self.waiting = self.lagged.iter().any(|l| l.is_nan());
+        self.waiting = self.lag_on && self.lagged.iter().any(|l| l.is_nan());
+        for w in &mut self.wake {
+            w.advance(h, self.evaluated);
+        }
         if !self.time.is_nan() {
             self.time += h;
         }
@@ -647,6 +691,77 @@ fn triangle_motions(
             corner_sum: x[a] + x[b] + x[c],
         })
     }));
+}
+
+/// Adds the wake's couple (module docs, "Wake") on every plate of `model` to
+/// `force`, from the evaluation's triangle motions and flows, and records
+/// each plate's rate in `lag`.
+fn wake_couples(
+    law: &UnsteadyAero,
+    model: &Model,
+    x: &[V3],
+    triangles: &[Option<TriangleMotion>],
+    flows: &[Flow],
+    lag: &mut PressureLag,
+    force: &mut [V3],
+) {
+    lag.evaluated = true;
+    let elapsed = lag.elapsed;
+    let plates = lag.wake.len();
+    // Per plate: Σ A, Σ A |u|, Σ A c (the centroid), the axis.
+    let mut area = vec![0.0; plates];
+    let mut speed = vec![0.0; plates];
+    let mut centre = vec![V3::zeros(); plates];
+    let mut axis: Vec<Option<V3>> = vec![None; plates];
+    for ((tm, flow), (geom, tri)) in triangles
+        .iter()
+        .zip(flows)
+        .zip(model.surfaces.iter().zip(&model.triangles))
+    {
+        let Some(tm) = tm else {
+            continue;
+        };
+        let p = geom.plate;
+        area[p] += tm.area;
+        speed[p] += tm.area * flow.speed;
+        centre[p] += tm.corner_sum * (tm.area / 3.0);
+        if axis[p].is_none() {
+            let [a, b, _] = tri.corners;
+            axis[p] = Some((x[b] - x[a]).normalize());
+        }
+    }
+    // Each plate's pressure scale ½ ρ U² sin φ / c at this evaluation.
+    let mut scale = vec![0.0; plates];
+    for (p, w) in lag.wake.iter_mut().enumerate() {
+        if area[p] <= 0.0 || w.chord <= 0.0 {
+            continue;
+        }
+        let u = speed[p] / area[p];
+        centre[p] /= area[p];
+        let rate = std::f64::consts::TAU * law.wake_strouhal * u / w.chord;
+        w.pending = rate;
+        let phase = w.phase_at(elapsed, rate);
+        scale[p] = law.wake_couple * 0.5 * law.air_density * u * u * phase.sin() / w.chord;
+    }
+    for ((tm, flow), (geom, tri)) in triangles
+        .iter()
+        .zip(flows)
+        .zip(model.surfaces.iter().zip(&model.triangles))
+    {
+        let (Some(tm), Some(e)) = (tm, axis[geom.plate]) else {
+            continue;
+        };
+        if flow.u2 <= f64::MIN_POSITIVE {
+            continue;
+        }
+        let p = geom.plate;
+        let sin2 = flow.qn * flow.qn / flow.u2;
+        let d = (tm.corner_sum / 3.0 - centre[p]).dot(&e);
+        let f = tm.n * (scale[p] * sin2 * sin2 * tm.area * d / 3.0);
+        for &i in &tri.corners {
+            force[i] += f;
+        }
+    }
 }
 
 /// Fills `plates` with each plate's [`PlateMotion`]; left empty when the law

@@ -253,6 +253,23 @@ pub struct UnsteadyAero {
     pub pressure_lag_gain: f64,
     /// k, the lag's time constant in chord transits: τ = k c∥/|u|.
     pub pressure_lag: f64,
+    /// C_W, the wake's rocking couple on a plate falling face-on (default
+    /// 0: off; [`crate::physics::forces::unsteady`], "Wake").
+    #[serde(default)]
+    pub wake_couple: f64,
+    /// St, the Strouhal number of the wake's shedding on the plate's
+    /// largest chord (default [`UNSTEADY_WAKE_STROUHAL`]).
+    #[serde(default = "default_wake_strouhal")]
+    pub wake_strouhal: f64,
+}
+
+/// Default Strouhal number of the wake: 0.15, about what flat plates held
+/// normal to a stream shed at on their width (bluff plates 0.13–0.15;
+/// Roshko 1954, NACA TN 3169).
+pub const UNSTEADY_WAKE_STROUHAL: f64 = 0.15;
+
+fn default_wake_strouhal() -> f64 {
+    UNSTEADY_WAKE_STROUHAL
 }
 
 /// Default C_D face-on: 2.6, near APW 2005's 2-D A + B = 2.4. Fitted, with
@@ -321,13 +338,15 @@ impl Default for UnsteadyAero {
             solid_density: PAPER_DENSITY,
             pressure_lag_gain: UNSTEADY_PRESSURE_LAG_GAIN,
             pressure_lag: UNSTEADY_PRESSURE_LAG,
+            wake_couple: 0.0,
+            wake_strouhal: UNSTEADY_WAKE_STROUHAL,
         }
     }
 }
 
 impl UnsteadyAero {
     /// The coefficients by name, as leaf files spell them.
-    pub fn coefficients(&self) -> [(&'static str, f64); 14] {
+    pub fn coefficients(&self) -> [(&'static str, f64); 16] {
         [
             ("air_density", self.air_density),
             ("kinematic_viscosity", self.kinematic_viscosity),
@@ -346,6 +365,8 @@ impl UnsteadyAero {
             ("solid_density", self.solid_density),
             ("pressure_lag_gain", self.pressure_lag_gain),
             ("pressure_lag", self.pressure_lag),
+            ("wake_couple", self.wake_couple),
+            ("wake_strouhal", self.wake_strouhal),
         ]
     }
 
@@ -395,6 +416,15 @@ impl UnsteadyAero {
                     "must be at most cd_normal/2 = {} (larger lift makes the in-plane drag negative), got {}",
                     0.5 * self.cd_normal,
                     self.translational_lift
+                ),
+            ));
+        }
+        if self.wake_couple > 0.0 && self.wake_strouhal <= 0.0 {
+            return Err(err(
+                "wake_strouhal",
+                format!(
+                    "must be > 0 when wake_couple > 0 (the wake sheds at St |u| / c), got {}",
+                    self.wake_strouhal
                 ),
             ));
         }
