@@ -43,10 +43,23 @@ fn allocations() -> u64 {
     ALLOCATIONS.with(|c| c.get())
 }
 
+/// Prototypes A and B under the paper's linear law, and A under the
+/// unsteady law with its lagged centre of pressure and its opt-in wake.
 #[test]
 fn stepping_allocates_nothing() {
-    for p in ["a", "b"] {
-        let model = LeafSpec::load(p).unwrap().model().unwrap();
+    let unsteady = crate::common::with_aero(
+        leafmagic::leaf::PROTOTYPE_A,
+        "law = \"unsteady\"\nwake_couple = 1.25",
+    );
+    for p in ["a", "b", "unsteady a"] {
+        let model = if p == "unsteady a" {
+            LeafSpec::from_toml(&unsteady, "a-unsteady.toml")
+        } else {
+            LeafSpec::load(p)
+        }
+        .unwrap()
+        .model()
+        .unwrap();
         for integrator in Integrator::ALL {
             let mut state = State::released(
                 &model,

@@ -211,7 +211,10 @@ pub fn unsteady_forces(
     SCRATCH.with_borrow_mut(|scratch| {
         scratch.measure(law, model, x, v, wind, torn);
         let Scratch {
-            triangles, flows, ..
+            triangles,
+            flows,
+            wake,
+            ..
         } = scratch;
         flow_coefficients(law, model, flows);
         if let Some(lag) = lag.as_deref_mut().filter(|_| law.pressure_lag_gain > 0.0) {
@@ -219,7 +222,7 @@ pub fn unsteady_forces(
         }
         per_triangle(law, model, v, wind, triangles, flows, force, added);
         if let Some(lag) = lag.filter(|_| law.wake_couple > 0.0) {
-            wake_couples(law, model, x, triangles, flows, lag, force);
+            wake_couples(law, model, x, triangles, flows, lag, wake, force);
         }
     });
     if law.buoyancy {
@@ -629,6 +632,8 @@ struct Scratch {
     plates: Vec<PlateMotion>,
     /// One per triangle, as `triangles`; read only where that is `Some`.
     flows: Vec<Flow>,
+    /// One per plate, for the wake's couple (empty with it off).
+    wake: Vec<WakeSums>,
 }
 
 impl Scratch {
@@ -696,6 +701,7 @@ fn triangle_motions(
 /// Adds the wake's couple (module docs, "Wake") on every plate of `model` to
 /// `force`, from the evaluation's triangle motions and flows, and records
 /// each plate's rate in `lag`.
+#[allow(clippy::too_many_arguments)]
 fn wake_couples(
     law: &UnsteadyAero,
     model: &Model,
@@ -703,16 +709,13 @@ fn wake_couples(
     triangles: &[Option<TriangleMotion>],
     flows: &[Flow],
     lag: &mut PressureLag,
+    sums: &mut Vec<WakeSums>,
     force: &mut [V3],
 ) {
     lag.evaluated = true;
     let elapsed = lag.elapsed;
-    let plates = lag.wake.len();
-    // Per plate: Σ A, Σ A |u|, Σ A c (the centroid), the axis.
-    let mut area = vec![0.0; plates];
-    let mut speed = vec![0.0; plates];
-    let mut centre = vec![V3::zeros(); plates];
-    let mut axis: Vec<Option<V3>> = vec![None; plates];
+    sums.clear();
+    sums.resize(lag.wake.len(), WakeSums::default());
     for ((tm, flow), (geom, tri)) in triangles
         .iter()
         .zip(flows)
@@ -721,47 +724,57 @@ fn wake_couples(
         let Some(tm) = tm else {
             continue;
         };
-        let p = geom.plate;
-        area[p] += tm.area;
-        speed[p] += tm.area * flow.speed;
-        centre[p] += tm.corner_sum * (tm.area / 3.0);
-        if axis[p].is_none() {
+        let sum = &mut sums[geom.plate];
+        sum.area += tm.area;
+        sum.speed += tm.area * flow.speed;
+        sum.centre += tm.corner_sum * (tm.area / 3.0);
+        if sum.axis.is_none() {
             let [a, b, _] = tri.corners;
-            axis[p] = Some((x[b] - x[a]).normalize());
+            sum.axis = Some((x[b] - x[a]).normalize());
         }
     }
     // Each plate's pressure scale ½ ρ U² sin φ / c at this evaluation.
-    let mut scale = vec![0.0; plates];
-    for (p, w) in lag.wake.iter_mut().enumerate() {
-        if area[p] <= 0.0 || w.chord <= 0.0 {
+    for (sum, w) in sums.iter_mut().zip(lag.wake.iter_mut()) {
+        if sum.area <= 0.0 || w.chord <= 0.0 {
             continue;
         }
-        let u = speed[p] / area[p];
-        centre[p] /= area[p];
+        let u = sum.speed / sum.area;
+        sum.centre /= sum.area;
         let rate = std::f64::consts::TAU * law.wake_strouhal * u / w.chord;
         w.pending = rate;
         let phase = w.phase_at(elapsed, rate);
-        scale[p] = law.wake_couple * 0.5 * law.air_density * u * u * phase.sin() / w.chord;
+        sum.scale = law.wake_couple * 0.5 * law.air_density * u * u * phase.sin() / w.chord;
     }
     for ((tm, flow), (geom, tri)) in triangles
         .iter()
         .zip(flows)
         .zip(model.surfaces.iter().zip(&model.triangles))
     {
-        let (Some(tm), Some(e)) = (tm, axis[geom.plate]) else {
+        let sum = &sums[geom.plate];
+        let (Some(tm), Some(e)) = (tm, sum.axis) else {
             continue;
         };
         if flow.u2 <= f64::MIN_POSITIVE {
             continue;
         }
-        let p = geom.plate;
         let sin2 = flow.qn * flow.qn / flow.u2;
-        let d = (tm.corner_sum / 3.0 - centre[p]).dot(&e);
-        let f = tm.n * (scale[p] * sin2 * sin2 * tm.area * d / 3.0);
+        let d = (tm.corner_sum / 3.0 - sum.centre).dot(&e);
+        let f = tm.n * (sum.scale * sin2 * sin2 * tm.area * d / 3.0);
         for &i in &tri.corners {
             force[i] += f;
         }
     }
+}
+
+/// One plate's sums for [`wake_couples`]: Σ A, Σ A |u|, Σ A c (then the
+/// centre), its axis, and its pressure scale ½ ρ U² sin φ / c times C_W.
+#[derive(Clone, Copy, Debug, Default)]
+struct WakeSums {
+    area: f64,
+    speed: f64,
+    centre: V3,
+    axis: Option<V3>,
+    scale: f64,
 }
 
 /// Fills `plates` with each plate's [`PlateMotion`]; left empty when the law
