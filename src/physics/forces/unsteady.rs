@@ -248,7 +248,9 @@ pub fn unsteady_forces(
 /// into the next step, sees the lag at that step's end, and the term keeps
 /// Verlet second order (a test measures it). RK4 under this law is not
 /// fourth order, with the term or without it (docs/real-falls.md).
-/// [`Self::advance`] then commits the step's last evaluation.
+/// [`Self::advance`] then commits the step's last evaluation. The same
+/// state carries each plate's wake phase when the opt-in wake term is on
+/// (module docs, "Wake"), read and committed the same way.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PressureLag {
     /// Committed α_L per triangle, rad; NaN until the triangle has met the
