@@ -789,14 +789,20 @@ impl RealBin {
     }
 }
 
-/// The real segments of each bin of [`SQUARE_BINS`], each measured once.
-fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
+/// The bin of [`SQUARE_BINS`] a square of half-side `radius` falls in.
+pub fn bin_of(radius: f64) -> Option<usize> {
     SQUARE_BINS
         .iter()
-        .map(|&(lo, hi)| RealBin {
+        .position(|&(lo, hi)| (lo..hi).contains(&radius))
+}
+
+/// The real segments of each bin of [`SQUARE_BINS`], each measured once.
+fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
+    (0..SQUARE_BINS.len())
+        .map(|b| RealBin {
             drops: real
                 .iter()
-                .filter(|s| (lo..hi).contains(&s.radius))
+                .filter(|s| bin_of(s.radius) == Some(b))
                 .map(|s| {
                     let moving = s.human != Label::Steady;
                     RealDrop {

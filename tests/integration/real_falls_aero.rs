@@ -434,7 +434,10 @@ fn the_films_flat_drops_depart_past_their_first_frames_artefact() {
         assert!(d.whole_from >= 3, "{d:?}");
         assert!(d.departs.is_some(), "{d:?}");
     }
-    let medians = real_falls::departure::median_departures(&real);
+    let medians: Vec<f64> = real_falls::real_by_release(&real)
+        .iter()
+        .map(|b| b.flat.departs)
+        .collect();
     println!("real flat drops depart (median per bin, s): {medians:.3?}");
     assert!(medians.windows(2).all(|w| w[0] < w[1]), "{medians:?}");
     assert!(medians[4] > 2.0 * medians[0], "{medians:?}");

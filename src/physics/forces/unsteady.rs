@@ -205,16 +205,15 @@ pub fn unsteady_forces(
     torn: &[bool],
     force: &mut [V3],
     added: &mut [Matrix3<f64>],
-    lag: Option<&mut PressureLag>,
+    mut lag: Option<&mut PressureLag>,
 ) {
-    let mut lag = lag;
     SCRATCH.with_borrow_mut(|scratch| {
         scratch.measure(law, model, x, v, wind, torn);
         let Scratch {
             triangles,
+            plates,
             flows,
             wake,
-            ..
         } = scratch;
         flow_coefficients(law, model, flows);
         if let Some(lag) = lag.as_deref_mut().filter(|_| law.pressure_lag_gain > 0.0) {
@@ -222,7 +221,7 @@ pub fn unsteady_forces(
         }
         per_triangle(law, model, v, wind, triangles, flows, force, added);
         if let Some(lag) = lag.filter(|_| law.wake_couple > 0.0) {
-            wake_couples(law, model, x, triangles, flows, lag, wake, force);
+            wake_couples(law, model, x, triangles, plates, flows, lag, wake, force);
         }
     });
     if law.buoyancy {
@@ -701,14 +700,16 @@ fn triangle_motions(
 }
 
 /// Adds the wake's couple (module docs, "Wake") on every plate of `model` to
-/// `force`, from the evaluation's triangle motions and flows, and records
-/// each plate's rate in `lag`.
+/// `force`, from the evaluation's triangle motions, plate motions (area and
+/// centre, [`plate_motions`]) and flows, and records each plate's rate in
+/// `lag`.
 #[allow(clippy::too_many_arguments)]
 fn wake_couples(
     law: &UnsteadyAero,
     model: &Model,
     x: &[V3],
     triangles: &[Option<TriangleMotion>],
+    plates: &[PlateMotion],
     flows: &[Flow],
     lag: &mut PressureLag,
     sums: &mut Vec<WakeSums>,
@@ -727,21 +728,18 @@ fn wake_couples(
             continue;
         };
         let sum = &mut sums[geom.plate];
-        sum.area += tm.area;
         sum.speed += tm.area * flow.speed;
-        sum.centre += tm.corner_sum * (tm.area / 3.0);
         if sum.axis.is_none() {
             let [a, b, _] = tri.corners;
             sum.axis = Some((x[b] - x[a]).normalize());
         }
     }
     // Each plate's pressure scale ½ ρ U² sin φ / c at this evaluation.
-    for (sum, w) in sums.iter_mut().zip(lag.wake.iter_mut()) {
-        if sum.area <= 0.0 || w.chord <= 0.0 {
+    for ((sum, w), p) in sums.iter_mut().zip(lag.wake.iter_mut()).zip(plates) {
+        if p.area <= 0.0 || w.chord <= 0.0 {
             continue;
         }
-        let u = sum.speed / sum.area;
-        sum.centre /= sum.area;
+        let u = sum.speed / p.area;
         let rate = std::f64::consts::TAU * law.wake_strouhal * u / w.chord;
         w.pending = rate;
         let phase = w.phase_at(elapsed, rate);
@@ -760,7 +758,7 @@ fn wake_couples(
             continue;
         }
         let sin2 = flow.qn * flow.qn / flow.u2;
-        let d = (tm.corner_sum / 3.0 - sum.centre).dot(&e);
+        let d = (tm.corner_sum / 3.0 - plates[geom.plate].centre).dot(&e);
         let f = tm.n * (sum.scale * sin2 * sin2 * tm.area * d / 3.0);
         for &i in &tri.corners {
             force[i] += f;
@@ -768,19 +766,18 @@ fn wake_couples(
     }
 }
 
-/// One plate's sums for [`wake_couples`]: Σ A, Σ A |u|, Σ A c (then the
-/// centre), its axis, and its pressure scale ½ ρ U² sin φ / c times C_W.
+/// One plate's sums for [`wake_couples`]: Σ A |u|, its axis, and its
+/// pressure scale ½ ρ U² sin φ / c times C_W.
 #[derive(Clone, Copy, Debug, Default)]
 struct WakeSums {
-    area: f64,
     speed: f64,
-    centre: V3,
     axis: Option<V3>,
     scale: f64,
 }
 
-/// Fills `plates` with each plate's [`PlateMotion`]; left empty when the law
-/// keeps the whole rotation in drag (`rotation_drag = 1`).
+/// Fills `plates` with each plate's [`PlateMotion`]; left empty when no
+/// term reads them: the law keeps the whole rotation in drag
+/// (`rotation_drag = 1`) and has no wake.
 fn plate_motions(
     law: &UnsteadyAero,
     model: &Model,
@@ -788,7 +785,7 @@ fn plate_motions(
     plates: &mut Vec<PlateMotion>,
 ) {
     plates.clear();
-    if law.rotation_drag >= 1.0 {
+    if law.rotation_drag >= 1.0 && law.wake_couple <= 0.0 {
         return;
     }
     plates.resize(plate_count(model), PlateMotion::default());
@@ -915,7 +912,10 @@ fn relative_flows(
         // Less the share (1 − rotation_drag) of what the plate's rotation
         // gives the triangle.
         let mut u = -(w[0] + w[1] + w[2]) * third;
-        if let Some(p) = plates.get(geom.plate).filter(|p| p.area > 0.0) {
+        if let Some(p) = plates
+            .get(geom.plate)
+            .filter(|p| p.area > 0.0 && law.rotation_drag < 1.0)
+        {
             let r = corner_sum * third - p.centre;
             u += p.omega.cross(&r) * (1.0 - law.rotation_drag);
         }

@@ -13,7 +13,7 @@
 //! drop departs when it is 0.2 r sideways from there, the experiment's own
 //! threshold: 0.13–0.37 s after the first frame, longer for larger squares.
 
-use super::{FPS, Film, RealSegment, SQUARE_BINS, median};
+use super::{FPS, Film, RealSegment, SQUARE_BINS, bin_of};
 
 /// Frames at the start of a flat drop within which the end of the first
 /// frames' artefact is sought: 0.15 s, twice the longest the silhouettes
@@ -138,21 +138,13 @@ pub fn real_departures(real: &[RealSegment]) -> Vec<Departure> {
 /// Per bin of [`SQUARE_BINS`], the departures of its real flat drops
 /// that depart, s.
 pub fn departures_by_bin(real: &[RealSegment]) -> Vec<Vec<f64>> {
-    let all = real_departures(real);
-    SQUARE_BINS
-        .iter()
-        .map(|&(lo, hi)| {
-            all.iter()
-                .filter(|d| (lo..hi).contains(&d.radius))
-                .filter_map(|d| d.departs)
-                .collect()
-        })
-        .collect()
-}
-
-/// Per bin, the median of [`departures_by_bin`], s.
-pub fn median_departures(real: &[RealSegment]) -> Vec<f64> {
-    departures_by_bin(real).into_iter().map(median).collect()
+    let mut bins = vec![Vec::new(); SQUARE_BINS.len()];
+    for d in real_departures(real) {
+        if let (Some(b), Some(t)) = (bin_of(d.radius), d.departs) {
+            bins[b].push(t);
+        }
+    }
+    bins
 }
 
 #[cfg(test)]
