@@ -25,14 +25,42 @@ use leafmagic::physics::forces::unsteady;
 use leafmagic::physics::model::AeroLaw;
 use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::Path;
+use std::process::ExitCode;
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
 const BOOTSTRAP_RESAMPLES: usize = 2000;
 
-fn main() {
-    let mut releases = 12;
-    let mut seed = 1;
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("real_falls: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// The value after flag `flag`, parsed, or an error naming the flag, what
+/// it wants and what it got.
+fn value<T: std::str::FromStr>(
+    args: &mut impl Iterator<Item = String>,
+    flag: &str,
+    wants: &str,
+) -> Result<T, String>
+where
+    T::Err: std::fmt::Display,
+{
+    let v = args
+        .next()
+        .ok_or_else(|| format!("{flag}: missing value ({wants})"))?;
+    v.parse()
+        .map_err(|e| format!("{flag}: {v:?} is not {wants}: {e}"))
+}
+
+fn run() -> Result<(), String> {
+    let mut releases: usize = 12;
+    let mut seed: u64 = 1;
     let mut shape = PlateShape::Square;
     let mut aero = AeroSpec::unsteady();
     let mut protocol = Protocol::default();
@@ -40,66 +68,55 @@ fn main() {
     let mut extra = Vec::new();
     while let Some(a) = args.next() {
         match a.as_str() {
-            "--releases" => {
-                releases = args
-                    .next()
-                    .and_then(|v| v.parse().ok())
-                    .expect("--releases N")
-            }
-            "--seed" => seed = args.next().and_then(|v| v.parse().ok()).expect("--seed S"),
+            "--releases" => releases = value(&mut args, "--releases", "a count")?,
+            "--seed" => seed = value(&mut args, "--seed", "a whole number")?,
             "--shape" => {
-                shape = args
-                    .next()
-                    .and_then(|v| v.parse().ok())
-                    .expect("--shape square|circle|hexagon|rectangle")
+                shape = value(&mut args, "--shape", "square, circle, hexagon or rectangle")?
             }
             "--law" => {
-                let law: AeroLawName = args.next().expect("--law NAME").parse().expect("a law");
+                let law: AeroLawName = value(&mut args, "--law", "a law's name")?;
                 aero = if law == AeroLawName::Linear {
                     AeroSpec::linear(0.47, 0.047)
                 } else {
                     AeroSpec::named(law)
                 };
             }
-            "--mix" => {
-                protocol.mix = args
-                    .next()
-                    .expect("--mix halves|filmed")
-                    .parse()
-                    .unwrap_or_else(|e| panic!("--mix: {e}"))
-            }
+            "--mix" => protocol.mix = value(&mut args, "--mix", "halves or filmed")?,
             "--flat-tilt" => {
-                let v = args.next().expect("--flat-tilt LO,HI");
-                let parts: Vec<f64> = v
+                let v: String = value(&mut args, "--flat-tilt", "LO,HI in degrees")?;
+                let parts = v
                     .split(',')
-                    .map(|x| x.trim().parse().expect("--flat-tilt LO,HI in degrees"))
-                    .collect();
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| format!("--flat-tilt: {v:?} is not LO,HI in degrees: {e}"))?;
                 let [lo, hi] = parts[..] else {
-                    panic!("--flat-tilt LO,HI: two numbers, got {v:?}")
+                    return Err(format!("--flat-tilt: {v:?} is not two numbers LO,HI"));
                 };
                 protocol.flat_tilt_deg = [lo, hi];
-                protocol
-                    .check()
-                    .unwrap_or_else(|e| panic!("--flat-tilt: {e}"));
+                protocol.check().map_err(|e| format!("--flat-tilt: {e}"))?;
             }
             kv => extra.push(kv.to_string()),
         }
     }
+    if releases == 0 {
+        return Err("--releases: must be at least 1".into());
+    }
     let aero = aero
         .with_lines(&extra)
-        .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
+        .map_err(|e| format!("bad [aero] key: {e}"))?;
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
-    let real = real_falls::read_squares(&dir).expect("the real falls");
+    let real = real_falls::read_squares(&dir).map_err(|e| e.to_string())?;
     if shape != PlateShape::Square {
-        predict(shape, &real, &aero, releases, seed);
-        return;
+        return predict(shape, &real, &aero, releases, seed);
     }
     let t0 = std::time::Instant::now();
+    // A law whose keys pass one by one can still be refused as a whole
+    // (translational lift above half the normal drag): say which.
     let cmp = real_falls::compare_with(&real, &aero, releases, seed, &protocol)
-        .expect("the experiment runs");
+        .map_err(|e| format!("the experiment cannot run: {e}"))?;
     let wall = t0.elapsed().as_secs_f64();
     let law = toml::to_string(&real_falls::experiment_air(aero.clone()))
-        .unwrap()
+        .map_err(|e| format!("the law cannot be written: {e}"))?
         .replace('\n', " ");
     println!(
         "real falls of 70 g/m² paper squares against leafmagic plates ({releases} releases per bin, seed {seed}; [aero] {law})"
@@ -228,6 +245,7 @@ fn main() {
         cmp.parts.len(),
         wall
     );
+    Ok(())
 }
 
 /// The steady edge-on fall of the simulated plate of `shape` and `side`
@@ -256,9 +274,10 @@ fn predict(
     aero: &AeroSpec,
     releases: usize,
     seed: u64,
-) {
+) -> Result<(), String> {
     let t0 = std::time::Instant::now();
-    let sim = real_falls::predict(shape, real, aero, releases, seed).expect("the experiment runs");
+    let sim = real_falls::predict(shape, real, aero, releases, seed)
+        .map_err(|e| format!("the experiment cannot run: {e}"))?;
     let wall = t0.elapsed().as_secs_f64();
     println!(
         "{} plates of 70 g/m² paper at the squares' bin sizes, simulated only ({releases} releases per bin, seed {seed}); the real falls of this shape are held back",
@@ -282,4 +301,5 @@ fn predict(
     }
     println!();
     println!("{:.1} s wall", wall);
+    Ok(())
 }
