@@ -143,6 +143,10 @@ pub struct AeroSpec {
     /// The wake's Strouhal number (unsteady law; default 0.15).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub wake_strouhal: Option<f64>,
+    /// The share of the Munk couple relieved at broadside (unsteady law;
+    /// default 0, off).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub munk_relief: Option<f64>,
 }
 
 /// The name of an aerodynamic law in a leaf file.
@@ -186,7 +190,7 @@ impl std::str::FromStr for AeroLawName {
 
 /// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
 /// `alpha_t` apart).
-const KEY_LAWS: [(&str, &[AeroLawName]); 19] = {
+const KEY_LAWS: [(&str, &[AeroLawName]); 20] = {
     use AeroLawName::{Quadratic as Q, Unsteady as U};
     [
         ("air_density", &[Q, U]),
@@ -208,6 +212,7 @@ const KEY_LAWS: [(&str, &[AeroLawName]); 19] = {
         ("pressure_lag", &[U]),
         ("wake_couple", &[U]),
         ("wake_strouhal", &[U]),
+        ("munk_relief", &[U]),
     ]
 };
 
@@ -268,11 +273,12 @@ impl AeroSpec {
             pressure_lag: None,
             wake_couple: None,
             wake_strouhal: None,
+            munk_relief: None,
         }
     }
 
     /// Which optional keys are set.
-    fn set_keys(&self) -> [(&'static str, bool); 19] {
+    fn set_keys(&self) -> [(&'static str, bool); 20] {
         let set = [
             self.air_density.is_some(),
             self.cd_parallel.is_some(),
@@ -293,6 +299,7 @@ impl AeroSpec {
             self.pressure_lag.is_some(),
             self.wake_couple.is_some(),
             self.wake_strouhal.is_some(),
+            self.munk_relief.is_some(),
         ];
         std::array::from_fn(|k| (KEY_LAWS[k].0, set[k]))
     }
@@ -397,6 +404,7 @@ impl AeroSpec {
             pressure_lag: self.pressure_lag.unwrap_or(d.pressure_lag),
             wake_couple: self.wake_couple.unwrap_or(d.wake_couple),
             wake_strouhal: self.wake_strouhal.unwrap_or(d.wake_strouhal),
+            munk_relief: self.munk_relief.unwrap_or(d.munk_relief),
         };
         law.validate()?;
         Ok(AeroLaw::Unsteady(law))

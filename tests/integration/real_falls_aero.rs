@@ -667,3 +667,78 @@ fn the_wakes_couple_lets_a_flat_release_depart_as_the_films_do() {
         "{with} against {films}"
     );
 }
+
+/// With the wake on, the Munk relief (`munk_relief = 1`; docs/real-falls.md,
+/// "Munk relief near broadside") lets a departed flat release glide instead
+/// of rocking about face-on at the Munk couple's period: 4 cm squares let
+/// go flat (twelve, two seeds) drift at least 1.5 times as far as with the
+/// wake alone, which leaves them under half the films' flat releases, and
+/// closer to the films; they still depart as the films do.
+#[test]
+fn the_munk_relief_lets_a_departed_flat_release_glide() {
+    let real = squares();
+    let centres = real_falls::centres(&real);
+    let flat_falls = |aero: &AeroSpec| {
+        let drops: Vec<_> = [1, 2]
+            .into_iter()
+            .flat_map(|seed| {
+                let run = real_falls::BinReleases {
+                    bin: 1,
+                    releases: 6,
+                    flat: 6,
+                    seed,
+                    protocol: real_falls::Protocol::default(),
+                };
+                real_falls::simulate_bin(PlateShape::Square, 0.040, aero, &run, &centres)
+                    .unwrap()
+                    .1
+            })
+            .collect();
+        real_falls::sim_by_release(&drops).flat
+    };
+    let woken = real_falls::experiment_air(AeroSpec::unsteady())
+        .with_lines(&["wake_couple = 1.25".to_string()])
+        .unwrap();
+    let relieved = woken
+        .clone()
+        .with_lines(&["munk_relief = 1".to_string()])
+        .unwrap();
+    let films = real_falls::real_by_release(&real)[1].flat;
+    let (wake, both) = (flat_falls(&woken), flat_falls(&relieved));
+    println!(
+        "4 cm flat releases: drift films {:.3}, wake {:.3}, wake and relief {:.3}; \
+         departs films {:.3} s, wake and relief {:.3} s; Ω films {:.1}, wake {:.1}, both {:.1}",
+        films.drift,
+        wake.drift,
+        both.drift,
+        films.departs,
+        both.departs,
+        films.omega,
+        wake.omega,
+        both.omega
+    );
+    assert!(
+        wake.drift < 0.5 * films.drift,
+        "{} against {}",
+        wake.drift,
+        films.drift
+    );
+    assert!(
+        both.drift > 1.5 * wake.drift,
+        "{} against {}",
+        both.drift,
+        wake.drift
+    );
+    assert!(
+        both.drift < films.drift,
+        "{} against {}",
+        both.drift,
+        films.drift
+    );
+    assert!(
+        (0.5 * films.departs..1.5 * films.departs).contains(&both.departs),
+        "{} against {}",
+        both.departs,
+        films.departs
+    );
+}

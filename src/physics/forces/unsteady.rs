@@ -138,6 +138,28 @@
 //! `src/physics/forces/unsteady/wake.rs`; what it does to the real falls
 //! in docs/real-falls.md, "A wake that rocks the face-on fall".
 //!
+//! # Munk relief
+//!
+//! Off by default (`munk_relief` β = 0). The Munk couple is potential
+//! flow's steady moment: at small angles it is what puts the centre of
+//! pressure a quarter chord upstream; near broadside it turns a plate back
+//! to face-on in proportion to its tilt ε = π/2 − α, and a plate falling
+//! face-on rocks at that couple's period (some 0.1 s for a 3 cm square)
+//! with hardly any sideways motion. A real plate held near broadside in a
+//! steady stream has its centre of pressure at mid-chord, leaving it only
+//! to second order in ε (Joessel's empirical rule for flat rudders,
+//! x_cp/c ≈ 0.195 + 0.305 sin α from the leading edge, as naval-architecture
+//! texts quote it): in the separated flow behind the plate the potential
+//! couple mostly does not act. With the term on, each triangle's Munk
+//! couple is scaled by 1 − β sin⁶α: kept whole to within β/8 below 45°,
+//! where the flow is attached, and at β = 1 left only at third order in ε
+//! near broadside. The added-mass forces, and with them the added mass and
+//! added inertia, are untouched; the relieved couple no longer conserves
+//! the fluid's kinetic energy, so the energy identity holds at β = 0 only.
+//! The power 6 was chosen on the real squares among sin⁴–sin¹⁶ and
+//! cosᵠα forms; what the term does there is in docs/real-falls.md, "Munk
+//! relief near broadside".
+//!
 //! Coefficients and defaults: [`UnsteadyAero`] (docs/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
 //! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.65, C_T = 1.2,
@@ -1044,8 +1066,16 @@ fn per_triangle(
                 f[k] -= (n * n_dot.dot(&w[k]) + n_dot * wn) * m;
                 q += w[k] * (m * wn);
             }
-            // Munk couple C = −Q × n: n × C = −Q∥.
-            couple_arm -= q - n * n.dot(&q);
+            // Munk couple C = −Q × n: n × C = −Q∥; relieved near
+            // broadside where the flow has separated (module docs, "Munk
+            // relief").
+            let munk = q - n * n.dot(&q);
+            if law.munk_relief > 0.0 && u2 > f64::MIN_POSITIVE {
+                let sin2 = qn * qn / u2;
+                couple_arm -= munk * (1.0 - law.munk_relief * sin2 * sin2 * sin2);
+            } else {
+                couple_arm -= munk;
+            }
         }
 
         if u2 > f64::MIN_POSITIVE {

@@ -261,6 +261,11 @@ pub struct UnsteadyAero {
     /// largest chord (default [`UNSTEADY_WAKE_STROUHAL`]).
     #[serde(default = "default_wake_strouhal")]
     pub wake_strouhal: f64,
+    /// β, the share of the Munk couple relieved at broadside: the couple
+    /// times 1 − β sin⁶α (default 0: the whole potential-flow couple;
+    /// [`crate::physics::forces::unsteady`], "Munk relief").
+    #[serde(default)]
+    pub munk_relief: f64,
 }
 
 /// Default Strouhal number of the wake: 0.15, about what flat plates held
@@ -340,13 +345,14 @@ impl Default for UnsteadyAero {
             pressure_lag: UNSTEADY_PRESSURE_LAG,
             wake_couple: 0.0,
             wake_strouhal: UNSTEADY_WAKE_STROUHAL,
+            munk_relief: 0.0,
         }
     }
 }
 
 impl UnsteadyAero {
     /// The coefficients by name, as leaf files spell them.
-    pub fn coefficients(&self) -> [(&'static str, f64); 16] {
+    pub fn coefficients(&self) -> [(&'static str, f64); 17] {
         [
             ("air_density", self.air_density),
             ("kinematic_viscosity", self.kinematic_viscosity),
@@ -367,6 +373,7 @@ impl UnsteadyAero {
             ("pressure_lag", self.pressure_lag),
             ("wake_couple", self.wake_couple),
             ("wake_strouhal", self.wake_strouhal),
+            ("munk_relief", self.munk_relief),
         ]
     }
 
@@ -416,6 +423,15 @@ impl UnsteadyAero {
                     "must be at most cd_normal/2 = {} (larger lift makes the in-plane drag negative), got {}",
                     0.5 * self.cd_normal,
                     self.translational_lift
+                ),
+            ));
+        }
+        if self.munk_relief > 1.0 {
+            return Err(err(
+                "munk_relief",
+                format!(
+                    "must be in [0, 1] (the share of the Munk couple relieved at broadside), got {}",
+                    self.munk_relief
                 ),
             ));
         }
