@@ -192,8 +192,15 @@ fn run() -> Result<(), String> {
         "side cm", "flat", "drift", "Ω", "departs s", "edge", "drift", "Ω"
     );
     let by_real = real_falls::real_by_release(&real);
+    let mut mismatch: [Vec<f64>; 4] = Default::default();
     for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
         let bs = real_falls::sim_by_release(drops);
+        for (all, part) in mismatch
+            .iter_mut()
+            .zip(real_falls::release_mismatch(br, &bs))
+        {
+            all.extend(part);
+        }
         let side = |a: &ReleaseStats, b: &ReleaseStats| {
             (
                 format!("{}/{}", a.drops, b.drops),
@@ -212,6 +219,16 @@ fn run() -> Result<(), String> {
             r.side * 100.0
         );
     }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    println!();
+    println!(
+        "like for like, each release against the films' own (mean over bins of |ln sim/real|): flat drift {:.2}, flat Ω {:.2}, edge drift {:.2}, edge Ω {:.2}; sum {:.2}",
+        mean(&mismatch[0]),
+        mean(&mismatch[1]),
+        mean(&mismatch[2]),
+        mean(&mismatch[3]),
+        mismatch.iter().map(|m| mean(m)).sum::<f64>()
+    );
     println!();
     println!(
         "fastest descent over a moving segment (median m/s, real / sim) and the simulated plate's steady edge-on fall"

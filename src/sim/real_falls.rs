@@ -635,6 +635,24 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
         .collect()
 }
 
+/// Like for like: how far each kind of release falls from the films' own
+/// in one bin, as |ln(sim/real)| of the median drift and of the median
+/// tumbling rate, for flat and for on-edge releases (in that order: flat
+/// drift, flat Ω, edge drift, edge Ω); `None` where either side has no
+/// positive median. The pooled table ([`BinStats`]) mixes the two releases
+/// in each side's own proportion, and the films' bins are not half and
+/// half (docs/real-falls.md, "The release protocol"), so a law can score
+/// well pooled with each release off on its own.
+pub fn release_mismatch(real: &ByRelease, sim: &ByRelease) -> [Option<f64>; 4] {
+    let log_ratio = |r: f64, s: f64| (r > 0.0 && s > 0.0).then(|| (s / r).ln().abs());
+    [
+        log_ratio(real.flat.drift, sim.flat.drift),
+        log_ratio(real.flat.omega, sim.flat.omega),
+        log_ratio(real.edge.drift, sim.edge.drift),
+        log_ratio(real.edge.omega, sim.edge.omega),
+    ]
+}
+
 /// One bin's simulated drops split by release.
 pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
     let side = |on_edge: bool| {

@@ -742,3 +742,31 @@ fn the_munk_relief_lets_a_departed_flat_release_glide() {
         films.departs
     );
 }
+
+/// `release_mismatch` is |ln(sim/real)| of each release's median drift and
+/// tumbling rate, exactly, and nothing where a side has no median.
+#[test]
+fn the_like_for_like_mismatch_is_the_log_ratio_of_each_release() {
+    use real_falls::{ByRelease, ReleaseStats};
+    let stats = |drift: f64, omega: f64| ReleaseStats {
+        drift,
+        omega,
+        ..ReleaseStats::default()
+    };
+    let real = ByRelease {
+        flat: stats(0.2, 10.0),
+        edge: stats(0.6, f64::NAN),
+    };
+    let sim = ByRelease {
+        flat: stats(0.1, 10.0 * std::f64::consts::E),
+        edge: stats(0.6, 12.0),
+    };
+    let m = real_falls::release_mismatch(&real, &sim);
+    assert!((m[0].unwrap() - 2f64.ln()).abs() < 1e-15, "{m:?}");
+    assert!((m[1].unwrap() - 1.0).abs() < 1e-15, "{m:?}");
+    assert_eq!(m[2], Some(0.0));
+    assert_eq!(m[3], None);
+    // Symmetric in which side is further: the same distance both ways.
+    let back = real_falls::release_mismatch(&sim, &real);
+    assert_eq!(back[0], m[0]);
+}
