@@ -11,7 +11,7 @@
 //!
 //! cargo run --release --example plate_regimes [-- KEY=VALUE ...]
 
-use leafmagic::leaf::plates::PlateShape;
+use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::class::Regime;
 use leafmagic::physics::model::{AIR_DENSITY_20C, STANDARD_GRAVITY as G};
@@ -20,6 +20,7 @@ use leafmagic::sim::strips::{
     strip_seconds,
 };
 use rayon::prelude::*;
+use std::process::ExitCode;
 
 /// Density of air at 20 °C, the law's default, kg/m³.
 const RHO: f64 = AIR_DENSITY_20C;
@@ -46,12 +47,27 @@ fn fall(size: f64, sigma: f64, tilt: [f64; 2], aero: &AeroSpec) -> Fall {
     }
 }
 
-fn main() {
-    let aero = AeroSpec::named(AeroLawName::Unsteady);
+fn main() -> ExitCode {
     let extra: Vec<String> = std::env::args().skip(1).filter(|a| a != "--").collect();
-    let aero = aero
+    // Keys that read one by one can still make a law that is refused as a
+    // whole (translational lift above half the normal drag): build a plate
+    // with it first, so bad input is one line and exit 1, not a panic in
+    // a worker thread.
+    let aero = match AeroSpec::named(AeroLawName::Unsteady)
         .with_lines(&extra)
-        .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
+        .map_err(|e| e.to_string())
+        .and_then(|aero| {
+            plate(PlateShape::Circle, 0.03, 1.0, 0.07, aero.clone())
+                .map_err(|e| e.to_string())
+                .and_then(|spec| spec.model().map_err(|e| e.to_string()))
+                .map(|_| aero)
+        }) {
+        Ok(aero) => aero,
+        Err(e) => {
+            eprintln!("plate_regimes: bad [aero] table: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
 
     println!("## Disks: regime against I*_disk (Field et al. 1997)\n");
     println!(
@@ -150,6 +166,7 @@ fn main() {
             ),
         }
     }
+    ExitCode::SUCCESS
 }
 
 /// The scaled durations τ = t √(σ g/ρ) / w over which the strips are

@@ -14,34 +14,61 @@ use leafmagic::leaf::{AeroLawName, AeroSpec, LeafSpec};
 use leafmagic::motion::classify::{MotionClass, classify};
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rayon::prelude::*;
+use std::process::ExitCode;
 
 /// `spec` under `law` with the `[aero]` lines `extra` (the linear law:
 /// unchanged; the others: no α).
-fn under(mut spec: LeafSpec, law: AeroLawName, extra: &[String]) -> LeafSpec {
+fn under(spec: LeafSpec, law: AeroLawName, extra: &[String]) -> LeafSpec {
+    under_checked(spec, law, extra).expect("checked in run")
+}
+
+/// [`under`], or the reason the `[aero]` lines or the leaf they make are
+/// refused.
+fn under_checked(
+    mut spec: LeafSpec,
+    law: AeroLawName,
+    extra: &[String],
+) -> Result<LeafSpec, String> {
     if law != AeroLawName::Linear {
         spec.aero = AeroSpec::named(law)
             .with_lines(extra)
-            .unwrap_or_else(|e| panic!("bad [aero] key: {e}"));
+            .map_err(|e| format!("bad [aero] key: {e}"))?;
         for t in &mut spec.triangles {
             t.alpha_n = None;
             t.alpha_t = None;
         }
     }
-    spec
+    spec.model()
+        .map_err(|e| format!("the leaf under this law: {e}"))?;
+    Ok(spec)
 }
 
-fn main() {
+fn main() -> ExitCode {
+    match run() {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("recipes_by_law: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).filter(|a| a != "--").collect();
     let law: AeroLawName = args
         .first()
         .map_or("unsteady", String::as_str)
         .parse()
-        .expect("a law: linear, quadratic or unsteady");
+        .map_err(|e| format!("the law: {e}"))?;
     let extra = args.get(1..).unwrap_or_default();
-    assert!(
-        extra.is_empty() || law != AeroLawName::Linear,
-        "the linear law's coefficients are each leaf's own α"
-    );
+    if !extra.is_empty() && law == AeroLawName::Linear {
+        return Err(
+            "the linear law's coefficients are each leaf's own α: no KEY=VALUE with it".into(),
+        );
+    }
+    // Bad keys, and laws refused as a whole, stop here with one line
+    // rather than in a worker thread.
+    under_checked(Recipe::Floater.variant(1).0, law, extra)?;
     println!(
         "the paper's recipes, 16 variants each, under law = \"{}\" {}",
         law.as_str(),
@@ -80,4 +107,5 @@ fn main() {
             others.join(", ")
         );
     }
+    Ok(())
 }
