@@ -14,8 +14,11 @@
 //! half, `--flat-tilt LO,HI` tilts flat releases LO–HI° instead of 1–5°
 //! (docs/real-falls.md, "The release protocol"); that table also times when
 //! each flat release departs from its flat fall ("When a flat release
-//! departs"). The last table gives each release's fastest descent beside
-//! the simulated plate's steady edge-on fall ("How fast real paper dives").
+//! departs"). A line under it gives the like-for-like mismatch: each kind
+//! of release's median drift and Ω against the films' own of that kind
+//! (`real_falls::release_mismatch`; "Munk relief near broadside"). The
+//! last table gives each release's fastest descent beside the simulated
+//! plate's steady edge-on fall ("How fast real paper dives").
 //!
 //! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI KEY=VALUE ...]
 
