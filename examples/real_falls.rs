@@ -222,15 +222,15 @@ fn run() -> Result<(), String> {
             r.side * 100.0
         );
     }
-    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    let average = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     println!();
     println!(
         "like for like, each release against the films' own (mean over bins of |ln sim/real|): flat drift {:.2}, flat Ω {:.2}, edge drift {:.2}, edge Ω {:.2}; sum {:.2}",
-        mean(&mismatch[0]),
-        mean(&mismatch[1]),
-        mean(&mismatch[2]),
-        mean(&mismatch[3]),
-        mismatch.iter().map(|m| mean(m)).sum::<f64>()
+        average(&mismatch[0]),
+        average(&mismatch[1]),
+        average(&mismatch[2]),
+        average(&mismatch[3]),
+        mismatch.iter().map(|m| average(m)).sum::<f64>()
     );
     println!();
     println!(

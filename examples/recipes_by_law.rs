@@ -12,23 +12,15 @@
 use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroLawName, AeroSpec, LeafSpec};
 use leafmagic::motion::classify::{MotionClass, classify};
+use leafmagic::physics::model::Model;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rayon::prelude::*;
 use std::process::ExitCode;
 
-/// `spec` under `law` with the `[aero]` lines `extra` (the linear law:
-/// unchanged; the others: no α).
-fn under(spec: LeafSpec, law: AeroLawName, extra: &[String]) -> LeafSpec {
-    under_checked(spec, law, extra).expect("checked in run")
-}
-
-/// [`under`], or the reason the `[aero]` lines or the leaf they make are
-/// refused.
-fn under_checked(
-    mut spec: LeafSpec,
-    law: AeroLawName,
-    extra: &[String],
-) -> Result<LeafSpec, String> {
+/// The model of `spec` under `law` with the `[aero]` lines `extra` (the
+/// linear law: unchanged; the others: no α), or the reason the lines or
+/// the leaf they make are refused.
+fn under(mut spec: LeafSpec, law: AeroLawName, extra: &[String]) -> Result<Model, String> {
     if law != AeroLawName::Linear {
         spec.aero = AeroSpec::named(law)
             .with_lines(extra)
@@ -39,8 +31,7 @@ fn under_checked(
         }
     }
     spec.model()
-        .map_err(|e| format!("the leaf under this law: {e}"))?;
-    Ok(spec)
+        .map_err(|e| format!("the leaf under this law: {e}"))
 }
 
 fn main() -> ExitCode {
@@ -68,7 +59,7 @@ fn run() -> Result<(), String> {
     }
     // Bad keys, and laws refused as a whole, stop here with one line
     // rather than in a worker thread.
-    under_checked(Recipe::Floater.variant(1).0, law, extra)?;
+    under(Recipe::Floater.variant(1).0, law, extra)?;
     println!(
         "the paper's recipes, 16 variants each, under law = \"{}\" {}",
         law.as_str(),
@@ -83,7 +74,8 @@ fn run() -> Result<(), String> {
             .into_par_iter()
             .map(|seed| {
                 let (spec, tilt) = recipe.variant(seed);
-                let model = under(spec, law, extra).model().expect("a valid leaf");
+                let model = under(spec, law, extra)
+                    .expect("the law is checked in run; a variant is a valid leaf");
                 assert_eq!(model.aero.name(), law.as_str());
                 let params = DropParams {
                     tilt_deg: tilt,
