@@ -34,6 +34,9 @@ use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::Path;
 use std::process::ExitCode;
 
+/// What the example takes.
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon] [--mix halves|filmed] [--flat-tilt LO,HI] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
 const BOOTSTRAP_RESAMPLES: usize = 2000;
@@ -102,7 +105,19 @@ fn run() -> Result<(), String> {
                 protocol.flat_tilt_deg = [lo, hi];
                 protocol.check().map_err(|e| format!("--flat-tilt: {e}"))?;
             }
-            kv => extra.push(kv.to_string()),
+            "-h" | "--help" => {
+                println!("{USAGE}");
+                return Ok(());
+            }
+            flag if flag.starts_with("--") => {
+                return Err(format!("unknown flag {flag}\n{USAGE}"));
+            }
+            kv if kv.contains('=') => extra.push(kv.to_string()),
+            other => {
+                return Err(format!(
+                    "{other:?} is neither a flag nor an [aero] KEY=VALUE\n{USAGE}"
+                ));
+            }
         }
     }
     if releases == 0 {
