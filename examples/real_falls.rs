@@ -257,10 +257,7 @@ fn run() -> Result<(), String> {
     let sim_shares: Vec<f64> = cmp
         .drops
         .iter()
-        .map(|drops| {
-            let bs = real_falls::sim_by_release(drops);
-            bs.flat.drops as f64 / (bs.flat.drops + bs.edge.drops) as f64
-        })
+        .map(|d| real_falls::sim_flat_share(d))
         .collect();
     let film_shares = real_falls::real_flat_share(&real);
     let remixed = real_falls::real_table_at_mix(&real, &sim_shares);

@@ -558,6 +558,14 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
         .collect()
 }
 
+/// The share of one simulated bin's moving drops (`drops`, as
+/// [`sim_by_release`] splits them) that were let go flat: the share to
+/// re-weight the films to ([`real_table_at_mix`]); NaN without any.
+pub fn sim_flat_share(drops: &[SimulatedDrop]) -> f64 {
+    let by = sim_by_release(drops);
+    by.flat.drops as f64 / (by.flat.drops + by.edge.drops) as f64
+}
+
 /// The real table with each bin's flat and on-edge drops re-weighted so
 /// that flat ones carry the share `flat_share[b]` of bin b's tumbling and
 /// chaotic drops (each kind's drops equally), as if the films had let go

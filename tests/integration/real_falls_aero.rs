@@ -159,10 +159,7 @@ fn the_simulated_experiment_holds_what_it_reaches() {
     let shares: Vec<f64> = cmp
         .drops
         .iter()
-        .map(|drops| {
-            let by = real_falls::sim_by_release(drops);
-            by.flat.drops as f64 / (by.flat.drops + by.edge.drops) as f64
-        })
+        .map(|d| real_falls::sim_flat_share(d))
         .collect();
     let remixed = real_falls::real_table_at_mix(&real, &shares);
     let like: f64 = remixed
@@ -950,7 +947,7 @@ fn the_smallest_squares_drift_as_the_films_do_at_the_same_mix() {
             real_falls::simulate_bin(PlateShape::Square, table[0].side, &aero, &run, &centres)
                 .unwrap();
         let by = real_falls::sim_by_release(&drops);
-        let share = by.flat.drops as f64 / (by.flat.drops + by.edge.drops) as f64;
+        let share = real_falls::sim_flat_share(&drops);
         let remixed = real_falls::real_table_at_mix(&real, &[share; 5]);
         let (like, pooled) = (sim.drift / remixed[0].drift, sim.drift / table[0].drift);
         println!(
