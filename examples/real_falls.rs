@@ -22,7 +22,9 @@
 //! and a line lists the statistics outside issue 17's per-bin bounds
 //! against both ("The films at the simulated mix"). The
 //! last table gives each release's fastest descent beside the simulated
-//! plate's steady edge-on fall ("How fast real paper dives").
+//! plate's steady edge-on fall ("How fast real paper dives") and how far
+//! its path turns from the first third of its fall to the last ("How far
+//! a tumbling path turns").
 //!
 //! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI KEY=VALUE ...]
 
@@ -328,23 +330,26 @@ fn run() -> Result<(), String> {
     );
     println!();
     println!(
-        "fastest descent over a moving segment (median m/s, real / sim) and the simulated plate's steady edge-on fall"
+        "fastest descent over a moving segment (median m/s, real / sim), the simulated plate's steady edge-on fall, and how far the path turns from the first third of the moving segment to the last (median |°|, real / sim)"
     );
     println!();
     println!(
-        "{:<9} {:>11} {:>11} {:>9}",
-        "side cm", "flat", "edge", "edge-on"
+        "{:<9} {:>11} {:>11} {:>9}   {:>11} {:>11}",
+        "side cm", "flat", "edge", "edge-on", "turn flat", "turn edge"
     );
     for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
         let bs = real_falls::sim_by_release(drops);
         let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
         let edge_on = edge_on_speed(shape, r.side, &aero)
             .map_or_else(|| "-".to_string(), |v| format!("{v:.2}"));
+        let turn = |a: f64, b: f64| format!("{a:.0}/{b:.0}");
         println!(
-            "{:<9.1} {:>11} {:>11} {edge_on:>9}",
+            "{:<9.1} {:>11} {:>11} {edge_on:>9}   {:>11} {:>11}",
             r.side * 100.0,
             pair(br.flat.fastest, bs.flat.fastest),
             pair(br.edge.fastest, bs.edge.fastest),
+            turn(br.flat.turn, bs.flat.turn),
+            turn(br.edge.turn, bs.edge.turn),
         );
     }
     let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;

@@ -32,6 +32,7 @@ use nalgebra::{UnitQuaternion, Vector3};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 use rayon::prelude::*;
+use std::f64::consts::{PI, TAU};
 use std::path::Path;
 
 pub mod departure;
@@ -55,6 +56,9 @@ pub const SQUARE_BINS: [(f64, f64); 5] = [
     (0.030, 0.040),
     (0.040, 0.0505),
 ];
+
+/// Least sideways run of a third of a film for [`Film::path_turn`], m.
+pub const MIN_THIRD_RUN: f64 = 0.02;
 
 /// A flat release: at rest, centre 1.000 m above the floor.
 pub const FLAT_HEIGHT: f64 = 1.000;
@@ -208,6 +212,36 @@ impl Film {
             .windows(3)
             .map(|w| (w[0].z - w[2].z) * FPS / 2.0)
             .reduce(f64::max)
+    }
+
+    /// How far the horizontal path turns over the film, degrees in
+    /// (−180, 180]: the heading of the sideways displacement over its last
+    /// third less that over its first third. `None` under 6 frames, or where
+    /// either third moves less than [`MIN_THIRD_RUN`] sideways (a fall
+    /// nearly straight down has no heading). A plate tumbling in one plane
+    /// glides on a straight line and turns 0°; the films' squares turn a
+    /// median 16–125° per bin and kind of release (docs/real-falls.md, "How
+    /// far a tumbling path turns").
+    pub fn path_turn(&self) -> Option<f64> {
+        let p = &self.position;
+        let n = p.len();
+        if n < 6 {
+            return None;
+        }
+        let run = |a: usize, b: usize| (p[b] - p[a]).xy();
+        let (first, last) = (run(0, n / 3), run(2 * n / 3, n - 1));
+        if first.norm() < MIN_THIRD_RUN || last.norm() < MIN_THIRD_RUN {
+            return None;
+        }
+        // A difference of two headings in (−π, π] lies in (−2π, 2π): one
+        // turn at most brings it into (−π, π].
+        let mut turn = last.y.atan2(last.x) - first.y.atan2(first.x);
+        if turn > PI {
+            turn -= TAU;
+        } else if turn <= -PI {
+            turn += TAU;
+        }
+        Some(turn.to_degrees())
     }
 
     /// The tumbling rate Ω = π × area maxima per second, rad/s: frames above
@@ -615,6 +649,12 @@ pub struct ReleaseStats {
     /// Median over the moving drops of their fastest descent
     /// ([`Film::fastest_descent`] on the moving segment), m/s.
     pub fastest: f64,
+    /// Median over the moving drops of how far their path turns
+    /// ([`Film::path_turn`] on the moving segment, its size), degrees; NaN
+    /// without any.
+    pub turn: f64,
+    /// Moving drops behind [`ReleaseStats::turn`].
+    pub turn_drops: usize,
 }
 
 /// A bin's drops split by how they were let go.
@@ -634,6 +674,8 @@ struct MovingDrop {
     omega: Option<f64>,
     /// Its fastest descent, m/s.
     fastest: Option<f64>,
+    /// How far its path turns, degrees.
+    turn: Option<f64>,
 }
 
 /// The statistics of one kind of release from its moving segments (with
@@ -649,6 +691,8 @@ fn release_stats(moving: &[MovingDrop], steady: &[f64], departs: &[f64]) -> Rele
         departs: median(departs.iter().copied()),
         departs_drops: departs.len(),
         fastest: median(moving.iter().filter_map(|m| m.fastest)),
+        turn: median(moving.iter().filter_map(|m| m.turn.map(f64::abs))),
+        turn_drops: moving.iter().filter(|m| m.turn.is_some()).count(),
     }
 }
 
@@ -670,6 +714,7 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
                             features: m.features,
                             omega: d.omega,
                             fastest: d.fastest,
+                            turn: d.turn,
                         })
                     })
                     .collect();
@@ -720,6 +765,7 @@ pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
                         features: m.features,
                         omega: d.omega,
                         fastest: d.fastest,
+                        turn: d.turn,
                     })
             })
             .collect();
@@ -836,6 +882,8 @@ struct RealDrop {
     on_edge: bool,
     /// Its segment's fastest descent ([`Film::fastest_descent`]), m/s.
     fastest: Option<f64>,
+    /// How far its segment's path turns ([`Film::path_turn`]), degrees.
+    turn: Option<f64>,
 }
 
 /// One bin's real drops: what [`real_table`] and [`real_intervals`] take
@@ -930,6 +978,7 @@ fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
                         moving,
                         on_edge: s.on_edge,
                         fastest: s.film.fastest_descent(),
+                        turn: s.film.path_turn(),
                     }
                 })
                 .collect(),
@@ -1143,6 +1192,9 @@ pub struct SimulatedDrop {
     /// Its moving segment's fastest descent ([`Film::fastest_descent`]),
     /// m/s; `None` without one.
     pub fastest: Option<f64>,
+    /// How far its moving segment's path turns ([`Film::path_turn`]),
+    /// degrees; `None` without one or without a heading.
+    pub turn: Option<f64>,
 }
 
 /// Longest fall simulated, s: a drop that has not reached the floor by
@@ -1257,6 +1309,7 @@ pub fn simulate_drop(
     }
     let mut segments = Vec::new();
     let mut fastest = None;
+    let mut turn = None;
     let mut push = |from: usize, to: usize, steady: bool| {
         let cut = film.slice(from, to);
         if let Some(features) = cut.features() {
@@ -1264,6 +1317,7 @@ pub fn simulate_drop(
                 Label::Steady
             } else {
                 fastest = cut.fastest_descent();
+                turn = cut.path_turn();
                 label_of(&features, centres)
             };
             segments.push(Measured { label, features });
@@ -1287,6 +1341,7 @@ pub fn simulate_drop(
         seconds,
         departs,
         fastest,
+        turn,
     })
 }
 
