@@ -37,7 +37,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon] [--mix halves|filmed] [--flat-tilt LO,HI] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
@@ -256,13 +256,9 @@ fn run() -> Result<(), String> {
     // The pooled medians mix the two kinds of release in each side's own
     // proportion: the films re-weighted to the simulated bins' mix compare
     // like for like.
-    let sim_shares: Vec<f64> = cmp
-        .drops
-        .iter()
-        .map(|d| real_falls::sim_flat_share(d))
-        .collect();
+    let sim_shares = cmp.sim_flat_shares();
     let film_shares = real_falls::real_flat_share(&real);
-    let remixed = real_falls::real_table_at_mix(&real, &sim_shares);
+    let remixed = cmp.films_at_simulated_mix(&real);
     println!();
     println!(
         "the films at the simulated mix: each bin's real drops re-weighted to the simulated share of flat releases among its moving drops"
@@ -278,14 +274,12 @@ fn run() -> Result<(), String> {
         "Ω rad/s r/s",
         "score"
     );
-    let mut remixed_parts = Vec::new();
     for (((r, s), film), share) in remixed
         .iter()
         .zip(&cmp.sim)
         .zip(&film_shares)
         .zip(&sim_shares)
     {
-        let part = real_falls::bin_score(r, s);
         println!(
             "{:<9.1} {:>13} {:>15} {:>15} {:>15} {:>15} {:>6.2}",
             r.side * 100.0,
@@ -294,9 +288,8 @@ fn run() -> Result<(), String> {
             cell(r.descent, s.descent, 3),
             cell(r.drift, s.drift, 2),
             cell(r.omega, s.omega, 1),
-            part.iter().sum::<f64>()
+            real_falls::bin_score(r, s).iter().sum::<f64>()
         );
-        remixed_parts.push(part);
     }
     let missed = |real: &[BinStats]| {
         let all: Vec<String> = real
@@ -317,11 +310,7 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "score at the simulated mix {:.2}; per-bin bounds (v {:.0} %, drift ×{}, Ω {:.0} %) missed at the films' mix: {}; at the simulated mix: {}",
-        remixed_parts
-            .iter()
-            .map(|p| p.iter().sum::<f64>())
-            .sum::<f64>()
-            / remixed_parts.len() as f64,
+        cmp.score_against(&remixed),
         real_falls::DESCENT_BOUND * 100.0,
         real_falls::DRIFT_FACTOR,
         real_falls::OMEGA_BOUND * 100.0,

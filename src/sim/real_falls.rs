@@ -596,8 +596,7 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
 /// [`sim_by_release`] splits them) that were let go flat: the share to
 /// re-weight the films to ([`real_table_at_mix`]); NaN without any.
 pub fn sim_flat_share(drops: &[SimulatedDrop]) -> f64 {
-    let by = sim_by_release(drops);
-    by.flat.drops as f64 / (by.flat.drops + by.edge.drops) as f64
+    sim_by_release(drops).flat_share()
 }
 
 /// The real table with each bin's flat and on-edge drops re-weighted so
@@ -664,6 +663,13 @@ pub struct ByRelease {
     pub flat: ReleaseStats,
     /// Let go on edge.
     pub edge: ReleaseStats,
+}
+
+impl ByRelease {
+    /// The share of the moving drops let go flat (NaN without any).
+    pub fn flat_share(&self) -> f64 {
+        self.flat.drops as f64 / (self.flat.drops + self.edge.drops) as f64
+    }
 }
 
 /// One moving segment as [`release_stats`] reads it.
@@ -1069,7 +1075,7 @@ impl std::str::FromStr for ReleaseMix {
 pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
     real_by_release(real)
         .iter()
-        .map(|b| b.flat.drops as f64 / (b.flat.drops + b.edge.drops) as f64)
+        .map(ByRelease::flat_share)
         .collect()
 }
 
@@ -1479,6 +1485,31 @@ impl Comparison {
             .map(|p| p.iter().sum::<f64>())
             .sum::<f64>()
             / self.parts.len() as f64
+    }
+
+    /// The simulated bins' shares of flat releases among their moving
+    /// drops ([`sim_flat_share`]).
+    pub fn sim_flat_shares(&self) -> Vec<f64> {
+        self.drops.iter().map(|d| sim_flat_share(d)).collect()
+    }
+
+    /// The films (`real`, the segments the real side came from)
+    /// re-weighted to the simulated bins' mix of releases
+    /// ([`real_table_at_mix`]): the real side like for like.
+    pub fn films_at_simulated_mix(&self, real: &[RealSegment]) -> Vec<BinStats> {
+        real_table_at_mix(real, &self.sim_flat_shares())
+    }
+
+    /// The score of the simulated side against another real side (`real`,
+    /// one [`BinStats`] per bin, such as
+    /// [`Comparison::films_at_simulated_mix`]): the mean over bins of the
+    /// summed [`bin_score`] parts.
+    pub fn score_against(&self, real: &[BinStats]) -> f64 {
+        real.iter()
+            .zip(&self.sim)
+            .map(|(r, s)| bin_score(r, s).iter().sum::<f64>())
+            .sum::<f64>()
+            / real.len() as f64
     }
 }
 

@@ -156,18 +156,7 @@ fn the_simulated_experiment_holds_what_it_reaches() {
     assert!(cmp.score() <= 0.7, "score {}", cmp.score());
     // Like for like: the films re-weighted to the simulated bins' mix of
     // releases (0.45 at these 4 releases; 0.39 at 24).
-    let shares: Vec<f64> = cmp
-        .drops
-        .iter()
-        .map(|d| real_falls::sim_flat_share(d))
-        .collect();
-    let remixed = real_falls::real_table_at_mix(&real, &shares);
-    let like: f64 = remixed
-        .iter()
-        .zip(&cmp.sim)
-        .map(|(r, s)| real_falls::bin_score(r, s).iter().sum::<f64>())
-        .sum::<f64>()
-        / remixed.len() as f64;
+    let like = cmp.score_against(&cmp.films_at_simulated_mix(&real));
     println!("score at the simulated mix {like:.2}");
     assert!(like <= 0.6, "score at the simulated mix {like}");
     assert!(
