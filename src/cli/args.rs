@@ -239,6 +239,13 @@ pub struct PlateArgs {
     /// Aerodynamic law: linear, quadratic or unsteady.
     #[arg(long, default_value = "unsteady")]
     pub law: AeroLawName,
+    /// Make the plate a sheet that bends, of this bending stiffness D =
+    /// E t³/12(1 − ν²), N·m (70 g/m² paper: about 2.5e-4), instead of one
+    /// rigid body: hinges on every shared edge, springs on every edge.
+    // Hyphen values, so that a negative one in any notation (-1e-4) is
+    // refused for its value rather than read as a flag.
+    #[arg(long, allow_hyphen_values = true)]
+    pub bending_stiffness: Option<f64>,
     /// Leaf file to write (standard output if absent).
     #[arg(long)]
     pub out: Option<PathBuf>,

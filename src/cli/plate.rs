@@ -1,11 +1,12 @@
 //! `plate`: writes a flat plate of paper as a leaf file (the falling-plate
-//! literature's uniform rigid plate, [`leafmagic::leaf::plates::plate`]).
+//! literature's uniform rigid plate, [`leafmagic::leaf::plates::plate`], or
+//! with `--bending-stiffness` a sheet that bends, [`flexible`]).
 
 use super::args::PlateArgs;
 use anyhow::{Context, Result};
 use leafmagic::leaf::AeroLawName;
 use leafmagic::leaf::AeroSpec;
-use leafmagic::leaf::plates::plate as build_plate;
+use leafmagic::leaf::plates::{flexible, plate as build_plate};
 
 /// Linear-law coefficients of a `--law linear` plate: the paper's
 /// prototypes' values (prototypes/leaf-a.toml).
@@ -18,7 +19,10 @@ pub fn plate(args: PlateArgs) -> Result<()> {
         AeroLawName::Linear => AeroSpec::linear(LINEAR_ALPHA.0, LINEAR_ALPHA.1),
         law => AeroSpec::named(law),
     };
-    let spec = build_plate(args.shape, args.size, args.aspect, args.areal_density, aero)?;
+    let mut spec = build_plate(args.shape, args.size, args.aspect, args.areal_density, aero)?;
+    if let Some(d) = args.bending_stiffness {
+        spec = flexible(spec, d)?;
+    }
     spec.model()
         .with_context(|| format!("the plate {} is not a valid leaf", spec.name))?;
     let text = spec.to_toml();

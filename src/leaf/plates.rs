@@ -548,3 +548,261 @@ pub fn uniform_plate_moments(shape: PlateShape, size: f64, aspect: f64) -> [f64;
         PlateShape::Circle => [size * size / 16.0; 2],
     }
 }
+
+/// Bending stiffness (flexural rigidity D = E t³ / 12(1 − ν²)) of 70 g/m²
+/// paper, N·m: a middle value. Paper of that grammage is about 90 µm thick
+/// with Young's moduli of 3–6.5 GPa across and along the machine direction
+/// (Niskanen, *Paper Physics*, 2nd ed. 2008, ch. 5, as recalled), so D lies
+/// between about 1.5e-4 and 4e-4 N·m (docs/real-falls.md, "Paper that
+/// bends").
+pub const PAPER_BENDING_STIFFNESS: f64 = 2.5e-4;
+
+/// Largest ratio of a mesh's bending stiffness along one direction to
+/// another that [`flexible`] accepts: [`plate`]'s square cells bend 1.11 ×
+/// as stiffly along their diagonals as along their sides, its ring meshes
+/// the same every way; a rectangle's cells, twice as long as wide, 6 ×.
+pub const MAX_BENDING_ANISOTROPY: f64 = 1.25;
+
+/// Curvatures imposed on a flat mesh to measure its discrete bending
+/// energy ([`flexible`]): cylindrical bending along these directions of its
+/// plane, degrees.
+pub const CALIBRATION_DIRECTIONS_DEG: [f64; 4] = [0.0, 45.0, 90.0, 135.0];
+
+/// The plate `spec` of [`plate`] (flat, in the x-y plane) made to bend as a
+/// thin sheet of bending stiffness `stiffness` (D, N·m) instead of moving
+/// as one rigid body: a hinge on every shared edge and a spring on every
+/// edge, the leaf's usual springs and hinges.
+///
+/// - **Hinges.** A hinge of stiffness k_b stores ½ k_b θ², θ its fold
+///   angle. Bent to a uniform curvature κ, the sheet stores ½ D κ² A; so
+///   k_b = D κ² A / Σθ², with Σθ² summed over the mesh's hinges at that
+///   curvature. That sum is measured on the mesh itself, averaged over
+///   cylindrical bending along four directions ([`bending_energy_ratio`]),
+///   so any of [`plate`]'s meshes gets the sheet's D: the ring meshes of
+///   hexagons and circles every way, the square cells within 5 % (stiffer
+///   along their diagonals). A rectangle's cells, twice as long as wide,
+///   would bend 6 × as stiffly along it as across: refused
+///   ([`MAX_BENDING_ANISOTROPY`]).
+/// - **Springs.** Real paper stretches far less than it bends (E t ≈ 3e5
+///   N/m), which explicit steps cannot afford; the springs are made as
+///   stiff as the hinges' fastest mode, so stretching never limits the
+///   step that bending sets; a 9 cm sheet of paper stretches by 1.1e-3 at
+///   most in a steep fall (a test holds it below 2e-3; springs three times
+///   stiffer would cut that to 4e-4 and halve the step).
+/// - **Damping.** Springs and hinges at [`CARD_DAMPING_RATIO`] of critical
+///   at that fastest mode: the mesh's own ringing decays, the slow bending
+///   modes the air drives are hardly touched.
+///
+/// # Errors
+/// A stiffness that is not finite and positive (`--bending-stiffness`), a
+/// plate that is not flat in the x-y plane or has no shared edge, or a
+/// mesh that bends much more stiffly one way than another.
+pub fn flexible(mut spec: LeafSpec, stiffness: f64) -> Result<LeafSpec, PlateError> {
+    let refuse = |reason: String| PlateError {
+        field: "--bending-stiffness".to_string(),
+        reason,
+    };
+    if !(stiffness.is_finite() && stiffness > 0.0) {
+        return Err(refuse(format!(
+            "must be a finite number > 0 N·m, got {stiffness}"
+        )));
+    }
+    if spec.particles.iter().any(|p| p.position[2] != 0.0) || !spec.folds.is_empty() {
+        return Err(refuse(format!(
+            "{} is not a flat plate in the x-y plane",
+            spec.name
+        )));
+    }
+    spec.rigid = false;
+    spec.springs.clear();
+    spec.bending = Some(BendingSpec {
+        stiffness: 1.0,
+        damping: 0.0,
+    });
+    let unit = spec
+        .model()
+        .map_err(|e| refuse(format!("{} cannot be meshed: {e}", spec.name)))?;
+    if unit.hinges.is_empty() {
+        return Err(refuse(format!("{} has no shared edge to bend", spec.name)));
+    }
+    let along: Vec<f64> = CALIBRATION_DIRECTIONS_DEG
+        .iter()
+        .map(|&deg| bending_energy_ratio_along(&unit, deg))
+        .collect();
+    let (lo, hi) = along
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(l, h), &r| (l.min(r), h.max(r)));
+    if !(lo > 0.0 && hi <= MAX_BENDING_ANISOTROPY * lo) {
+        return Err(refuse(format!(
+            "{}'s mesh bends {:.1} times as stiffly one way as another (cells longer than wide): \
+             it would not bend as a sheet",
+            spec.name,
+            hi / lo
+        )));
+    }
+    let k_b = stiffness * CALIBRATION_DIRECTIONS_DEG.len() as f64 / along.iter().sum::<f64>();
+    // Fastest hinge mode: k_b Σ_h |∇_i θ_h|² / m_i over the particles.
+    let mut grad2 = vec![0.0; unit.len()];
+    for h in &unit.hinges {
+        if let Some((_, grad)) = crate::physics::forces::dihedral(&unit.rest_position, h) {
+            let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
+            for (&i, g) in ids.iter().zip(&grad) {
+                grad2[i] += g.norm_squared();
+            }
+        }
+    }
+    let omega2 = grad2
+        .iter()
+        .zip(&unit.mass)
+        .map(|(g, m)| k_b * g / m)
+        .fold(0.0, f64::max);
+    let omega = omega2.sqrt();
+    // A spring's mode on its lighter end, shared among the about six
+    // springs at a particle: k = m ω² / 6 keeps Σk/m at ω².
+    let mut edges = std::collections::BTreeSet::new();
+    for t in &spec.triangles {
+        for k in 0..3 {
+            let (a, b) = (t.corners[k], t.corners[(k + 1) % 3]);
+            edges.insert((a.min(b), a.max(b)));
+        }
+    }
+    spec.springs = edges
+        .into_iter()
+        .map(|(a, b)| {
+            let m = unit.mass[a].min(unit.mass[b]);
+            let k = m * omega2 / 6.0;
+            SpringSpec {
+                ends: [a, b],
+                stiffness: k,
+                damping: 2.0 * CARD_DAMPING_RATIO * (k * m).sqrt(),
+                group: "sheet".to_string(),
+                rest_length: None,
+                break_strain: None,
+            }
+        })
+        .collect();
+    spec.bending = Some(BendingSpec {
+        stiffness: k_b,
+        damping: 2.0 * CARD_DAMPING_RATIO * k_b / omega,
+    });
+    spec.name = format!("{}-bending-{stiffness:.1e}Nm", spec.name);
+    Ok(spec)
+}
+
+/// D / k_b of `model`'s mesh (flat at rest in the x-y plane): the mean of
+/// [`bending_energy_ratio_along`] over [`CALIBRATION_DIRECTIONS_DEG`].
+pub fn bending_energy_ratio(model: &Model) -> f64 {
+    CALIBRATION_DIRECTIONS_DEG
+        .iter()
+        .map(|&deg| bending_energy_ratio_along(model, deg))
+        .sum::<f64>()
+        / CALIBRATION_DIRECTIONS_DEG.len() as f64
+}
+
+/// Σθ² / (κ² A) of `model`'s hinges (flat at rest in the x-y plane) bent
+/// to a small uniform curvature κ along the direction `direction_deg` of
+/// its plane (cylindrical bending): the sheet's bending stiffness per unit
+/// hinge stiffness in that direction (on a continuum, ½ D κ² A = ½ k_b Σθ²).
+///
+/// The mesh's lattice nodes are put on the bent surface; its sub-lattice
+/// nodes (the centres of [`plate`]'s four-triangle cells: interior nodes
+/// of four triangles) are left where the hinges put them, by least squares
+/// on the linearised fold angles: held on the surface, they would make the
+/// sheet a third stiffer than it bends (a clamped strip sagged 1.29 × less
+/// than the D fitted that way says).
+pub fn bending_energy_ratio_along(model: &Model, direction_deg: f64) -> f64 {
+    let rest = &model.rest_position;
+    let extent = rest
+        .iter()
+        .map(|x| x.xy().norm())
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    // Small enough that θ ≈ κ × spacing stays linear (1e-3 rad over the plate).
+    let kappa = 1e-3 / extent;
+    let area = model.surface_area();
+    let relaxed = cell_centres(model);
+    let column: Vec<Option<usize>> = {
+        let mut c = vec![None; model.len()];
+        for (k, &i) in relaxed.iter().enumerate() {
+            c[i] = Some(k);
+        }
+        c
+    };
+    {
+        let deg = direction_deg;
+        let d = Vector3::new(deg.to_radians().cos(), deg.to_radians().sin(), 0.0);
+        let bent: Vec<Vector3<f64>> = rest
+            .iter()
+            .map(|x| {
+                let s = x.dot(&d);
+                Vector3::new(x.x, x.y, 0.5 * kappa * s * s)
+            })
+            .collect();
+        // θ = θ₀ + J δz over the relaxed nodes' heights; minimise |θ|².
+        let rows: Vec<(f64, [(usize, f64); 4])> = model
+            .hinges
+            .iter()
+            .filter_map(|h| {
+                let (theta, grad) = crate::physics::forces::dihedral(&bent, h)?;
+                let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
+                Some((theta, std::array::from_fn(|k| (ids[k], grad[k].z))))
+            })
+            .collect();
+        let m = relaxed.len();
+        let shift = if m == 0 {
+            nalgebra::DVector::zeros(0)
+        } else {
+            let mut normal = nalgebra::DMatrix::<f64>::zeros(m, m);
+            let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+            for (theta, entries) in &rows {
+                for &(i, gi) in entries {
+                    let Some(a) = column[i] else { continue };
+                    rhs[a] -= gi * theta;
+                    for &(j, gj) in entries {
+                        if let Some(b) = column[j] {
+                            normal[(a, b)] += gi * gj;
+                        }
+                    }
+                }
+            }
+            normal
+                .cholesky()
+                .map_or_else(|| nalgebra::DVector::zeros(m), |c| c.solve(&rhs))
+        };
+        let sum: f64 = rows
+            .iter()
+            .map(|(theta, entries)| {
+                let moved: f64 = entries
+                    .iter()
+                    .filter_map(|&(i, g)| column[i].map(|a| g * shift[a]))
+                    .sum();
+                (theta + moved).powi(2)
+            })
+            .sum();
+        sum / (kappa * kappa * area)
+    }
+}
+
+/// The interior nodes that four triangles share: the centres of
+/// [`plate`]'s square cells (its lattice nodes are shared by eight, a ring
+/// mesh's by six).
+fn cell_centres(model: &Model) -> Vec<usize> {
+    let n = model.len();
+    let mut valence = vec![0usize; n];
+    let mut edge_use = std::collections::HashMap::new();
+    for t in &model.triangles {
+        for k in 0..3 {
+            valence[t.corners[k]] += 1;
+            let (a, b) = (t.corners[k], t.corners[(k + 1) % 3]);
+            *edge_use.entry((a.min(b), a.max(b))).or_insert(0usize) += 1;
+        }
+    }
+    let mut on_rim = vec![false; n];
+    for (&(a, b), &uses) in &edge_use {
+        if uses == 1 {
+            on_rim[a] = true;
+            on_rim[b] = true;
+        }
+    }
+    (0..n).filter(|&i| valence[i] == 4 && !on_rim[i]).collect()
+}

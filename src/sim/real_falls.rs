@@ -1002,7 +1002,8 @@ pub struct Release {
 }
 
 /// How the simulated experiment lets its plates go: how far a flat
-/// release is tilted and which share of a bin's releases is on edge.
+/// release is tilted and which share of a bin's releases is on edge; and
+/// whether its paper bends.
 ///
 /// The default is the protocol of the project's cross-check
 /// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
@@ -1019,10 +1020,16 @@ pub struct Protocol {
     pub flat_tilt_deg: [f64; 2],
     /// Which releases are on edge.
     pub mix: ReleaseMix,
+    /// The paper's bending stiffness D, N·m: `None` cuts rigid plates (the
+    /// falling-plate literature's, and the cross-check's); `Some(D)` sheets
+    /// that bend ([`crate::leaf::plates::flexible`]; docs/real-falls.md,
+    /// "Paper that bends").
+    pub bending: Option<f64>,
 }
 
 impl Protocol {
-    /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, naming it.
+    /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, or a bending
+    /// stiffness that is not finite and positive, naming it.
     ///
     /// # Errors
     /// The reason, for the caller to prefix with where the range came from.
@@ -1031,6 +1038,13 @@ impl Protocol {
         if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi && hi <= 90.0) {
             return Err(format!(
                 "flat tilt {lo},{hi}: expected degrees with 0 <= lo <= hi <= 90"
+            ));
+        }
+        if let Some(d) = self.bending
+            && !(d.is_finite() && d > 0.0)
+        {
+            return Err(format!(
+                "bending stiffness {d}: expected a finite number > 0 N·m"
             ));
         }
         Ok(())
@@ -1042,6 +1056,7 @@ impl Default for Protocol {
         Self {
             flat_tilt_deg: [1.0, 5.0],
             mix: ReleaseMix::Halves,
+            bending: None,
         }
     }
 }
@@ -1378,7 +1393,10 @@ pub fn simulate_bin(
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
     run.protocol.check().map_err(ExperimentError::Protocol)?;
-    let spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
+    let mut spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
+    if let Some(d) = run.protocol.bending {
+        spec = crate::leaf::plates::flexible(spec, d)?;
+    }
     let model = spec.model()?;
     let dt = experiment_step(&model)?;
     let drops: Vec<SimulatedDrop> = (0..run.releases)

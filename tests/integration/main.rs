@@ -5,6 +5,7 @@ mod accuracy;
 mod aero_law;
 mod alloc;
 mod batch;
+mod bending;
 mod breeding;
 mod classes;
 mod common;

@@ -141,6 +141,52 @@ fn bad_plate_flags_are_refused_by_name_and_write_nothing() {
             vec!["--shape", "square", "--size", "0.05", "--law", "magic"],
             "--law",
         ),
+        (
+            vec![
+                "--shape",
+                "square",
+                "--size",
+                "0.05",
+                "--bending-stiffness",
+                "0",
+            ],
+            "--bending-stiffness",
+        ),
+        (
+            vec![
+                "--shape",
+                "square",
+                "--size",
+                "0.05",
+                "--bending-stiffness",
+                "-1e-4",
+            ],
+            "--bending-stiffness",
+        ),
+        (
+            vec![
+                "--shape",
+                "square",
+                "--size",
+                "0.05",
+                "--bending-stiffness",
+                "nan",
+            ],
+            "--bending-stiffness",
+        ),
+        (
+            vec![
+                "--shape",
+                "rectangle",
+                "--size",
+                "0.02",
+                "--aspect",
+                "4",
+                "--bending-stiffness",
+                "2.5e-4",
+            ],
+            "--bending-stiffness",
+        ),
     ] {
         let mut all = args.clone();
         all.extend(["--out", out_s]);
