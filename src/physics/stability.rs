@@ -288,6 +288,9 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     let mut omega2_lower: f64 = 0.0;
     let mut stiffest = None;
     let mut row_sum = vec![0.0; n];
+    // Springs above WARN_SPRING_RATE: how many, and the stiffest of them
+    // (one warning, not one per spring: a sheet has hundreds alike).
+    let mut too_stiff: (usize, Option<(usize, f64)>) = (0, None);
     for (k, s) in model.springs.iter().enumerate() {
         let rate = match &roots {
             Some(r) => {
@@ -305,10 +308,21 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         row_sum[s.i] += s.stiffness;
         row_sum[s.j] += s.stiffness;
         if rate > WARN_SPRING_RATE {
-            warnings.push(format!(
-                "spring[{k}]: k (1/m_i + 1/m_j) = {rate:.3e} s^-2 exceeds {WARN_SPRING_RATE:.0e}: explicit steps must be tiny"
-            ));
+            too_stiff.0 += 1;
+            if too_stiff.1.is_none_or(|(_, r)| rate > r) {
+                too_stiff.1 = Some((k, rate));
+            }
         }
+    }
+    if let (count, Some((k, rate))) = too_stiff {
+        let others = if count > 1 {
+            format!(" (the stiffest of {count} springs above it)")
+        } else {
+            String::new()
+        };
+        warnings.push(format!(
+            "spring[{k}]: k (1/m_i + 1/m_j) = {rate:.3e} s^-2 exceeds {WARN_SPRING_RATE:.0e}{others}: explicit steps must be tiny"
+        ));
     }
     // Hinges at rest: K_h = k_b g gᵀ with g = ∇θ (4 particles).
     let hinge_grads: Vec<([usize; 4], [V3; 4], f64, f64)> = model

@@ -480,3 +480,33 @@ fn an_overdamped_network_is_bounded_by_its_fastest_damping() {
         }
     }
 }
+
+/// A sheet of paper 3.2 cm across (`plates::flexible`) has 400 springs
+/// above the warning's rate, all alike: one warning names the stiffest and
+/// how many there are, instead of 400 lines.
+#[test]
+fn many_stiff_springs_make_one_warning_with_their_count() {
+    use leafmagic::leaf::AeroSpec;
+    use leafmagic::leaf::plates::{PlateShape, flexible, plate};
+    let spec = plate(PlateShape::Square, 0.032, 1.0, 0.07, AeroSpec::unsteady()).unwrap();
+    let model = flexible(spec, 2.5e-4).unwrap().model().unwrap();
+    let above = model
+        .springs
+        .iter()
+        .filter(|s| {
+            s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]) > stability::WARN_SPRING_RATE
+        })
+        .count();
+    assert!(above > 100, "{above}");
+    let est = stability::estimate(&model);
+    let springs: Vec<&String> = est
+        .warnings
+        .iter()
+        .filter(|w| w.starts_with("spring["))
+        .collect();
+    assert_eq!(springs.len(), 1, "{springs:?}");
+    assert!(
+        springs[0].contains(&format!("the stiffest of {above} springs")),
+        "{springs:?}"
+    );
+}
