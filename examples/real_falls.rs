@@ -27,9 +27,10 @@
 //! a tumbling path turns"). `--bending D` cuts the squares from paper that
 //! bends, of bending stiffness D N·m, instead of rigid plates (`plates::
 //! flexible`; "Paper that bends, and a draught in the room"): minutes, not
-//! a second.
+//! a second. `--refine N` meshes the plates N times finer across ("Is the
+//! experiment converged?").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI --bending N_M KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N KEY=VALUE ...]
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
@@ -40,7 +41,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
@@ -115,6 +116,10 @@ fn run() -> Result<(), String> {
                 protocol.bending = Some(d);
                 protocol.check().map_err(|e| format!("--bending: {e}"))?;
             }
+            "--refine" => {
+                protocol.refine = value(&mut args, "--refine", "a whole number >= 1")?;
+                protocol.check().map_err(|e| format!("--refine: {e}"))?;
+            }
             "-h" | "--help" => {
                 println!("{USAGE}");
                 return Ok(());
@@ -139,8 +144,11 @@ fn run() -> Result<(), String> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
     let real = real_falls::read_squares(&dir).map_err(|e| e.to_string())?;
     if shape != PlateShape::Square {
-        if protocol.bending.is_some() {
-            return Err("--bending: the held-out shapes' predictions are of rigid plates".into());
+        if protocol.bending.is_some() || protocol.refine != 1 {
+            return Err(
+                "--bending, --refine: the held-out shapes' predictions are of `leafmagic plate`'s plates"
+                    .into(),
+            );
         }
         return predict(shape, &real, &aero, releases, seed);
     }
@@ -165,6 +173,12 @@ fn run() -> Result<(), String> {
         protocol.flat_tilt_deg[0],
         protocol.flat_tilt_deg[1]
     );
+    if protocol.refine != 1 {
+        println!(
+            "plates meshed {} times finer across than `leafmagic plate`'s",
+            protocol.refine
+        );
+    }
     if let Some(d) = protocol.bending {
         println!("plates that bend: paper of bending stiffness {d:.2e} N·m (plates::flexible)");
     }

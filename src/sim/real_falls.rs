@@ -23,7 +23,7 @@
 //! no smallest blob.
 
 use crate::leaf::AeroSpec;
-use crate::leaf::plates::{PlateShape, plate};
+use crate::leaf::plates::{PlateShape, plate_meshed};
 use crate::physics::model::{Model, STANDARD_GRAVITY};
 use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::run::{StepError, resolve_step, run_sampled};
@@ -1003,7 +1003,7 @@ pub struct Release {
 
 /// How the simulated experiment lets its plates go: how far a flat
 /// release is tilted and which share of a bin's releases is on edge; and
-/// whether its paper bends.
+/// whether its paper bends and how finely its plates are meshed.
 ///
 /// The default is the protocol of the project's cross-check
 /// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
@@ -1025,11 +1025,16 @@ pub struct Protocol {
     /// that bend ([`crate::leaf::plates::flexible`]; docs/real-falls.md,
     /// "Paper that bends").
     pub bending: Option<f64>,
+    /// Plates meshed this many times finer across than `leafmagic plate`'s
+    /// (1; [`crate::leaf::plates::plate_meshed`]): for convergence studies
+    /// (docs/real-falls.md, "Is the experiment converged?").
+    pub refine: usize,
 }
 
 impl Protocol {
-    /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, or a bending
-    /// stiffness that is not finite and positive, naming it.
+    /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, a bending
+    /// stiffness that is not finite and positive, or a refinement of 0,
+    /// naming it.
     ///
     /// # Errors
     /// The reason, for the caller to prefix with where the range came from.
@@ -1047,6 +1052,9 @@ impl Protocol {
                 "bending stiffness {d}: expected a finite number > 0 N·m"
             ));
         }
+        if self.refine == 0 {
+            return Err("mesh refinement 0: expected a whole number >= 1".to_string());
+        }
         Ok(())
     }
 }
@@ -1057,6 +1065,7 @@ impl Default for Protocol {
             flat_tilt_deg: [1.0, 5.0],
             mix: ReleaseMix::Halves,
             bending: None,
+            refine: 1,
         }
     }
 }
@@ -1393,7 +1402,7 @@ pub fn simulate_bin(
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
     run.protocol.check().map_err(ExperimentError::Protocol)?;
-    let mut spec = plate(shape, side, 1.0, PAPER, aero.clone())?;
+    let mut spec = plate_meshed(shape, side, 1.0, PAPER, aero.clone(), run.protocol.refine)?;
     if let Some(d) = run.protocol.bending {
         spec = crate::leaf::plates::flexible(spec, d)?;
     }
