@@ -852,6 +852,48 @@ fn the_films_paths_turn_as_they_fall() {
     }
 }
 
+/// Among the films' large squares (the 6.9 and 9 cm bins, where they fall
+/// chaotically), the drops whose paths turn least swing as fast as those
+/// whose paths turn most: the straighter half's median Ω c/U (c the side,
+/// U the segment's descent) is within 10 % of the wandering half's, and
+/// both are above 1.35, where the law's planar swing gives 1.2
+/// (docs/real-falls.md, "Paper that bends, and a draught in the room").
+/// The faster swing does not come with the wandering.
+#[test]
+fn the_films_large_squares_swing_as_fast_whether_or_not_their_paths_turn() {
+    let mut drops: Vec<(f64, f64)> = squares()
+        .iter()
+        .filter(|s| s.human != Label::Steady)
+        .filter(|s| real_falls::bin_of(s.radius).is_some_and(|b| b >= 3))
+        .filter_map(|s| {
+            let omega = s.film.tumbling_rate()?;
+            let turn = s.film.path_turn()?.abs();
+            let descent = s.film.features()?.descent();
+            Some((turn, omega * 2.0 * s.radius / descent))
+        })
+        .collect();
+    assert!(drops.len() >= 30, "{} drops", drops.len());
+    drops.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let half = drops.len() / 2;
+    let median = |part: &[(f64, f64)], k: usize| match k {
+        0 => real_falls::median(part.iter().map(|d| d.0)),
+        _ => real_falls::median(part.iter().map(|d| d.1)),
+    };
+    let (straight, wandering) = (&drops[..half], &drops[half..]);
+    let (s_turn, s_rate) = (median(straight, 0), median(straight, 1));
+    let (w_turn, w_rate) = (median(wandering, 0), median(wandering, 1));
+    println!(
+        "{} drops: turning least {s_turn:.0}° at Ω c/U {s_rate:.2}, most {w_turn:.0}° at {w_rate:.2}",
+        drops.len()
+    );
+    assert!(w_turn > 2.0 * s_turn, "{s_turn} against {w_turn}");
+    assert!(
+        (s_rate / w_rate - 1.0).abs() < 0.1,
+        "{s_rate} against {w_rate}"
+    );
+    assert!(s_rate.min(w_rate) > 1.35, "{s_rate}, {w_rate}");
+}
+
 /// The weighted median is the median where the weights are equal (any
 /// length, odd or even, any common weight), and otherwise follows the
 /// weights: the value where the cumulative weight passes half, or the mean
