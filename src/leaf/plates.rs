@@ -707,9 +707,10 @@ pub fn bending_energy_ratio(model: &Model) -> f64 {
 /// The mesh's lattice nodes are put on the bent surface; its sub-lattice
 /// nodes (the centres of [`plate`]'s four-triangle cells: interior nodes
 /// of four triangles) are left where the hinges put them, by least squares
-/// on the linearised fold angles: held on the surface, they would make the
-/// sheet a third stiffer than it bends (a clamped strip sagged 1.29 × less
-/// than the D fitted that way says).
+/// on the linearised fold angles. Held on the surface, they make Σθ² a
+/// third too large (1.35 × on the square cells), so the hinges come out a
+/// quarter too soft: a clamped strip calibrated that way sagged 1.29 × as
+/// far as its D says.
 pub fn bending_energy_ratio_along(model: &Model, direction_deg: f64) -> f64 {
     let rest = &model.rest_position;
     let extent = rest
@@ -728,59 +729,60 @@ pub fn bending_energy_ratio_along(model: &Model, direction_deg: f64) -> f64 {
         }
         c
     };
-    {
-        let deg = direction_deg;
-        let d = Vector3::new(deg.to_radians().cos(), deg.to_radians().sin(), 0.0);
-        let bent: Vec<Vector3<f64>> = rest
-            .iter()
-            .map(|x| {
-                let s = x.dot(&d);
-                Vector3::new(x.x, x.y, 0.5 * kappa * s * s)
-            })
-            .collect();
-        // θ = θ₀ + J δz over the relaxed nodes' heights; minimise |θ|².
-        let rows: Vec<(f64, [(usize, f64); 4])> = model
-            .hinges
-            .iter()
-            .filter_map(|h| {
-                let (theta, grad) = crate::physics::forces::dihedral(&bent, h)?;
-                let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
-                Some((theta, std::array::from_fn(|k| (ids[k], grad[k].z))))
-            })
-            .collect();
-        let m = relaxed.len();
-        let shift = if m == 0 {
-            nalgebra::DVector::zeros(0)
-        } else {
-            let mut normal = nalgebra::DMatrix::<f64>::zeros(m, m);
-            let mut rhs = nalgebra::DVector::<f64>::zeros(m);
-            for (theta, entries) in &rows {
-                for &(i, gi) in entries {
-                    let Some(a) = column[i] else { continue };
-                    rhs[a] -= gi * theta;
-                    for &(j, gj) in entries {
-                        if let Some(b) = column[j] {
-                            normal[(a, b)] += gi * gj;
-                        }
+    let d = Vector3::new(
+        direction_deg.to_radians().cos(),
+        direction_deg.to_radians().sin(),
+        0.0,
+    );
+    let bent: Vec<Vector3<f64>> = rest
+        .iter()
+        .map(|x| {
+            let s = x.dot(&d);
+            Vector3::new(x.x, x.y, 0.5 * kappa * s * s)
+        })
+        .collect();
+    // θ = θ₀ + J δz over the relaxed nodes' heights; minimise |θ|².
+    let rows: Vec<(f64, [(usize, f64); 4])> = model
+        .hinges
+        .iter()
+        .filter_map(|h| {
+            let (theta, grad) = crate::physics::forces::dihedral(&bent, h)?;
+            let ids = [h.edge[0], h.edge[1], h.apexes[0], h.apexes[1]];
+            Some((theta, std::array::from_fn(|k| (ids[k], grad[k].z))))
+        })
+        .collect();
+    let m = relaxed.len();
+    let shift = if m == 0 {
+        nalgebra::DVector::zeros(0)
+    } else {
+        let mut normal = nalgebra::DMatrix::<f64>::zeros(m, m);
+        let mut rhs = nalgebra::DVector::<f64>::zeros(m);
+        for (theta, entries) in &rows {
+            for &(i, gi) in entries {
+                let Some(a) = column[i] else { continue };
+                rhs[a] -= gi * theta;
+                for &(j, gj) in entries {
+                    if let Some(b) = column[j] {
+                        normal[(a, b)] += gi * gj;
                     }
                 }
             }
-            normal
-                .cholesky()
-                .map_or_else(|| nalgebra::DVector::zeros(m), |c| c.solve(&rhs))
-        };
-        let sum: f64 = rows
-            .iter()
-            .map(|(theta, entries)| {
-                let moved: f64 = entries
-                    .iter()
-                    .filter_map(|&(i, g)| column[i].map(|a| g * shift[a]))
-                    .sum();
-                (theta + moved).powi(2)
-            })
-            .sum();
-        sum / (kappa * kappa * area)
-    }
+        }
+        normal
+            .cholesky()
+            .map_or_else(|| nalgebra::DVector::zeros(m), |c| c.solve(&rhs))
+    };
+    let sum: f64 = rows
+        .iter()
+        .map(|(theta, entries)| {
+            let moved: f64 = entries
+                .iter()
+                .filter_map(|&(i, g)| column[i].map(|a| g * shift[a]))
+                .sum();
+            (theta + moved).powi(2)
+        })
+        .sum();
+    sum / (kappa * kappa * area)
 }
 
 /// The interior nodes that four triangles share: the centres of
