@@ -28,9 +28,11 @@
 //! bends, of bending stiffness D N·m, instead of rigid plates (`plates::
 //! flexible`; "Paper that bends, and a draught in the room"): minutes, not
 //! a second. `--refine N` meshes the plates N times finer across ("Is the
-//! experiment converged?").
+//! experiment converged?"). `--draught SPEED,TIME` lets each release fall
+//! in its own random draught ("Paper that bends, and a draught in the
+//! room").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N --draught SPEED,TIME KEY=VALUE ...]
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
@@ -41,7 +43,7 @@ use std::path::Path;
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
@@ -116,6 +118,19 @@ fn run() -> Result<(), String> {
                 protocol.bending = Some(d);
                 protocol.check().map_err(|e| format!("--bending: {e}"))?;
             }
+            "--draught" => {
+                let v: String = value(&mut args, "--draught", "SPEED,TIME in m/s and s")?;
+                let parts = v
+                    .split(',')
+                    .map(|x| x.trim().parse::<f64>())
+                    .collect::<Result<Vec<_>, _>>()
+                    .map_err(|e| format!("--draught: {v:?} is not SPEED,TIME: {e}"))?;
+                let [speed, correlation] = parts[..] else {
+                    return Err(format!("--draught: {v:?} is not two numbers SPEED,TIME"));
+                };
+                protocol.draught = Some(real_falls::Draught { speed, correlation });
+                protocol.check().map_err(|e| format!("--draught: {e}"))?;
+            }
             "--refine" => {
                 protocol.refine = value(&mut args, "--refine", "a whole number >= 1")?;
                 protocol.check().map_err(|e| format!("--refine: {e}"))?;
@@ -144,9 +159,9 @@ fn run() -> Result<(), String> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
     let real = real_falls::read_squares(&dir).map_err(|e| e.to_string())?;
     if shape != PlateShape::Square {
-        if protocol.bending.is_some() || protocol.refine != 1 {
+        if protocol.bending.is_some() || protocol.refine != 1 || protocol.draught.is_some() {
             return Err(
-                "--bending, --refine: the held-out shapes' predictions are of `leafmagic plate`'s plates"
+                "--bending, --refine, --draught: the held-out shapes' predictions are of `leafmagic plate`'s plates in still air"
                     .into(),
             );
         }
@@ -177,6 +192,12 @@ fn run() -> Result<(), String> {
         println!(
             "plates meshed {} times finer across than `leafmagic plate`'s",
             protocol.refine
+        );
+    }
+    if let Some(d) = protocol.draught {
+        println!(
+            "a draught in the room: each horizontal component {} m/s r.m.s., correlated over {} s (real_falls::draught_field)",
+            d.speed, d.correlation
         );
     }
     if let Some(d) = protocol.bending {

@@ -1003,7 +1003,8 @@ pub struct Release {
 
 /// How the simulated experiment lets its plates go: how far a flat
 /// release is tilted and which share of a bin's releases is on edge; and
-/// whether its paper bends and how finely its plates are meshed.
+/// whether its paper bends, how finely its plates are meshed and whether
+/// the room's air moves.
 ///
 /// The default is the protocol of the project's cross-check
 /// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
@@ -1029,12 +1030,80 @@ pub struct Protocol {
     /// (1; [`crate::leaf::plates::plate_meshed`]): for convergence studies
     /// (docs/real-falls.md, "Is the experiment converged?").
     pub refine: usize,
+    /// A draught in the room ([`Draught`]): `None` is still air, the
+    /// experiment's and the cross-check's.
+    pub draught: Option<Draught>,
+}
+
+/// A draught in the room: a uniform horizontal wind, each component a
+/// stationary Ornstein–Uhlenbeck process (Gaussian, of standard deviation
+/// `speed` and exponential autocorrelation e^(−|Δt|/`correlation`)), its
+/// own for each release ([`draught_field`]; docs/real-falls.md, "Paper that
+/// bends, and a draught in the room").
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Draught {
+    /// Standard deviation of each horizontal component, m/s.
+    pub speed: f64,
+    /// Correlation time, s.
+    pub correlation: f64,
+}
+
+/// Keyframes of a [`draught_field`] per correlation time: the wind is
+/// linear between them, so a quarter of τ keeps the process's own
+/// variation well above what the interpolation smooths away.
+pub const DRAUGHT_KEYS_PER_CORRELATION: f64 = 4.0;
+
+/// The draught `draught` of release `k` of bin `bin` at `seed`, laid down
+/// for `seconds` (and one correlation time more): for each horizontal axis
+/// a uniform wind primitive keyframed every τ/[`DRAUGHT_KEYS_PER_CORRELATION`]
+/// with the exact Ornstein–Uhlenbeck update x ← a x + σ √(1 − a²) z,
+/// a = e^(−Δt/τ), z standard normal, from x₀ of the stationary law N(0, σ²).
+/// The same arguments give the same field; its random stream is not the
+/// release's ([`release`]), so a draught leaves the releases as they were.
+pub fn draught_field(
+    draught: &Draught,
+    seed: u64,
+    bin: usize,
+    k: usize,
+    seconds: f64,
+) -> crate::physics::field::WindField {
+    use crate::physics::field::{Interpolation, Keyframes, Primitive, WindField};
+    use rand_distr::{Distribution, StandardNormal};
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(
+        (seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64)
+            .wrapping_add(0xD1B5_4A32_D192_ED03),
+    );
+    let (sigma, tau) = (draught.speed, draught.correlation);
+    let h = tau / DRAUGHT_KEYS_PER_CORRELATION;
+    let a = (-h / tau).exp();
+    let kick = sigma * (1.0 - a * a).sqrt();
+    let count = ((seconds + tau) / h).ceil() as usize + 1;
+    let primitives = [V3::x(), V3::y()]
+        .into_iter()
+        .map(|axis| {
+            let z: f64 = StandardNormal.sample(&mut rng);
+            let mut x = sigma * z;
+            let keys = (0..count)
+                .map(|n| {
+                    let key = (n as f64 * h, x);
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    x = a * x + kick * z;
+                    key
+                })
+                .collect();
+            Primitive::uniform(axis).with_keys(Keyframes {
+                keys,
+                interpolation: Interpolation::Linear,
+            })
+        })
+        .collect();
+    WindField::new(primitives)
 }
 
 impl Protocol {
     /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, a bending
-    /// stiffness that is not finite and positive, or a refinement of 0,
-    /// naming it.
+    /// stiffness that is not finite and positive, a refinement of 0 or a
+    /// draught without a positive speed and correlation time, naming it.
     ///
     /// # Errors
     /// The reason, for the caller to prefix with where the range came from.
@@ -1055,6 +1124,17 @@ impl Protocol {
         if self.refine == 0 {
             return Err("mesh refinement 0: expected a whole number >= 1".to_string());
         }
+        if let Some(d) = self.draught
+            && !(d.speed.is_finite()
+                && d.speed > 0.0
+                && d.correlation.is_finite()
+                && d.correlation > 0.0)
+        {
+            return Err(format!(
+                "draught {},{}: expected a speed > 0 m/s and a correlation time > 0 s",
+                d.speed, d.correlation
+            ));
+        }
         Ok(())
     }
 }
@@ -1066,6 +1146,7 @@ impl Default for Protocol {
             mix: ReleaseMix::Halves,
             bending: None,
             refine: 1,
+            draught: None,
         }
     }
 }
@@ -1407,12 +1488,35 @@ pub fn simulate_bin(
         spec = crate::leaf::plates::flexible(spec, d)?;
     }
     let model = spec.model()?;
-    let dt = experiment_step(&model)?;
+    // Each release's own draught, if any; the step is found once, under the
+    // strongest of them (a faster relative flow only shortens it).
+    let fields: Vec<Option<crate::physics::field::WindField>> = (0..run.releases)
+        .map(|k| {
+            run.protocol
+                .draught
+                .map(|d| draught_field(&d, run.seed, run.bin, k, MAX_SECONDS))
+        })
+        .collect();
+    let strongest = fields
+        .iter()
+        .flatten()
+        .max_by(|a, b| a.speed_bound().total_cmp(&b.speed_bound()));
+    let dt = match strongest {
+        Some(field) => experiment_step(&Model {
+            wind: field.clone(),
+            ..model.clone()
+        })?,
+        None => experiment_step(&model)?,
+    };
     let drops: Vec<SimulatedDrop> = (0..run.releases)
         .into_par_iter()
         .map(|k| {
+            let gusty = fields[k].as_ref().map(|field| Model {
+                wind: field.clone(),
+                ..model.clone()
+            });
             simulate_drop(
-                &model,
+                gusty.as_ref().unwrap_or(&model),
                 dt,
                 0.5 * side,
                 &release(&run.protocol, run.seed, run.bin, k, run.flat),

@@ -1080,3 +1080,103 @@ fn the_experiment_is_converged_in_the_mesh() {
     };
     assert!(p.check().unwrap_err().contains("refinement"));
 }
+
+/// A draught is the Ornstein–Uhlenbeck wind it says (each horizontal
+/// component of 3,000 s sampled at its keys: standard deviation within 3 %
+/// of σ, mean within 0.06 σ, autocorrelation after one correlation time
+/// within 0.05 of e⁻¹, the two components uncorrelated within 0.05,
+/// nothing vertical); the same release gets the same draught, another
+/// release or seed another; a draught without a positive speed and
+/// correlation time is refused.
+#[test]
+fn a_draught_is_an_ornstein_uhlenbeck_wind_of_its_speed_and_correlation() {
+    use nalgebra::Vector3;
+    let draught = real_falls::Draught {
+        speed: 0.05,
+        correlation: 0.3,
+    };
+    let field = real_falls::draught_field(&draught, 7, 2, 5, 3000.0);
+    let h = draught.correlation / real_falls::DRAUGHT_KEYS_PER_CORRELATION;
+    let at = |f: &leafmagic::physics::field::WindField, t: f64| f.velocity(&Vector3::zeros(), t);
+    let samples: Vec<Vector3<f64>> = (0..(3000.0 / h) as usize)
+        .map(|n| at(&field, n as f64 * h))
+        .collect();
+    let n = samples.len() as f64;
+    let lag = real_falls::DRAUGHT_KEYS_PER_CORRELATION as usize;
+    for axis in 0..2 {
+        let x: Vec<f64> = samples.iter().map(|v| v[axis]).collect();
+        let mean = x.iter().sum::<f64>() / n;
+        let var = x.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n;
+        let auto = x
+            .windows(lag + 1)
+            .map(|w| (w[0] - mean) * (w[lag] - mean))
+            .sum::<f64>()
+            / (x.len() - lag) as f64
+            / var;
+        println!(
+            "axis {axis}: mean {mean:.5}, sd {:.5}, autocorrelation at τ {auto:.3}",
+            var.sqrt()
+        );
+        assert!(
+            (var.sqrt() / draught.speed - 1.0).abs() < 0.03,
+            "{}",
+            var.sqrt()
+        );
+        assert!(mean.abs() < 0.06 * draught.speed, "{mean}");
+        assert!((auto - (-1f64).exp()).abs() < 0.05, "{auto}");
+    }
+    let cross =
+        samples.iter().map(|v| v.x * v.y).sum::<f64>() / n / (draught.speed * draught.speed);
+    assert!(cross.abs() < 0.05, "{cross}");
+    assert!(samples.iter().all(|v| v.z == 0.0));
+    let short = |seed, k| real_falls::draught_field(&draught, seed, 2, k, 2.0);
+    for t in [0.0, 0.31, 1.7] {
+        assert_eq!(at(&short(7, 5), t), at(&short(7, 5), t));
+        assert_ne!(at(&short(7, 5), t), at(&short(7, 6), t));
+        assert_ne!(at(&short(7, 5), t), at(&short(8, 5), t));
+    }
+    for (speed, correlation) in [(0.0, 0.3), (-0.05, 0.3), (0.05, 0.0), (f64::NAN, 0.3)] {
+        let p = real_falls::Protocol {
+            draught: Some(real_falls::Draught { speed, correlation }),
+            ..Default::default()
+        };
+        assert!(
+            p.check().unwrap_err().contains("draught"),
+            "{speed} {correlation}"
+        );
+    }
+}
+
+/// In still air the law's 3.2 cm squares let go on edge tumble in one plane
+/// and their paths do not turn; in a draught of 5 cm/s they turn, as the
+/// films' do (16° on edge) and more (docs/real-falls.md, "Paper that bends,
+/// and a draught in the room").
+#[test]
+fn a_draught_turns_the_small_squares_paths() {
+    let real = squares();
+    let centres = real_falls::centres(&real);
+    let aero = real_falls::experiment_air(AeroSpec::unsteady());
+    let turns = |draught| {
+        let run = real_falls::BinReleases {
+            bin: 0,
+            releases: 6,
+            flat: 0,
+            seed: 1,
+            protocol: real_falls::Protocol {
+                draught,
+                ..Default::default()
+            },
+        };
+        let (_, drops) =
+            real_falls::simulate_bin(PlateShape::Square, 0.032, &aero, &run, &centres).unwrap();
+        real_falls::median(drops.iter().filter_map(|d| d.turn).map(f64::abs))
+    };
+    let still = turns(None);
+    let draught = turns(Some(real_falls::Draught {
+        speed: 0.05,
+        correlation: 0.3,
+    }));
+    println!("3.2 cm on edge, median path turn: still air {still:.1}°, draught {draught:.0}°");
+    assert!(still < 1.0, "{still}");
+    assert!(draught > 16.0, "{draught}");
+}
