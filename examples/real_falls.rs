@@ -76,6 +76,25 @@ where
         .map_err(|e| format!("{flag}: {v:?} is not {wants}: {e}"))
 }
 
+/// The two numbers `A,B` after flag `flag`, or an error naming the flag,
+/// what it wants and what it got.
+fn pair(
+    args: &mut impl Iterator<Item = String>,
+    flag: &str,
+    wants: &str,
+) -> Result<[f64; 2], String> {
+    let v: String = value(args, flag, wants)?;
+    let parts = v
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|e| format!("{flag}: {v:?} is not {wants}: {e}"))?;
+    match parts[..] {
+        [a, b] => Ok([a, b]),
+        _ => Err(format!("{flag}: {v:?} is not two numbers ({wants})")),
+    }
+}
+
 fn run() -> Result<(), String> {
     let mut releases: usize = 12;
     let mut seed: u64 = 1;
@@ -101,16 +120,7 @@ fn run() -> Result<(), String> {
             }
             "--mix" => protocol.mix = value(&mut args, "--mix", "halves or filmed")?,
             "--flat-tilt" => {
-                let v: String = value(&mut args, "--flat-tilt", "LO,HI in degrees")?;
-                let parts = v
-                    .split(',')
-                    .map(|x| x.trim().parse::<f64>())
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| format!("--flat-tilt: {v:?} is not LO,HI in degrees: {e}"))?;
-                let [lo, hi] = parts[..] else {
-                    return Err(format!("--flat-tilt: {v:?} is not two numbers LO,HI"));
-                };
-                protocol.flat_tilt_deg = [lo, hi];
+                protocol.flat_tilt_deg = pair(&mut args, "--flat-tilt", "LO,HI in degrees")?;
                 protocol.check().map_err(|e| format!("--flat-tilt: {e}"))?;
             }
             "--bending" => {
@@ -119,15 +129,7 @@ fn run() -> Result<(), String> {
                 protocol.check().map_err(|e| format!("--bending: {e}"))?;
             }
             "--draught" => {
-                let v: String = value(&mut args, "--draught", "SPEED,TIME in m/s and s")?;
-                let parts = v
-                    .split(',')
-                    .map(|x| x.trim().parse::<f64>())
-                    .collect::<Result<Vec<_>, _>>()
-                    .map_err(|e| format!("--draught: {v:?} is not SPEED,TIME: {e}"))?;
-                let [speed, correlation] = parts[..] else {
-                    return Err(format!("--draught: {v:?} is not two numbers SPEED,TIME"));
-                };
+                let [speed, correlation] = pair(&mut args, "--draught", "SPEED,TIME in m/s and s")?;
                 protocol.draught = Some(real_falls::Draught { speed, correlation });
                 protocol.check().map_err(|e| format!("--draught: {e}"))?;
             }
