@@ -1695,24 +1695,18 @@ pub fn compare_with(
 /// against. The study's circles and hexagons are held back to check what
 /// was tuned on the squares, so this is a prediction for them, written
 /// down before they are seen (docs/real-falls.md, "Predictions for the
-/// held-out shapes").
+/// held-out shapes"). The plates are let go as `protocol` says (the
+/// recorded predictions: [`Protocol::default`]).
 pub fn predict(
     shape: PlateShape,
     real_segments: &[RealSegment],
     aero: &AeroSpec,
     releases: usize,
     seed: u64,
+    protocol: &Protocol,
 ) -> Result<Vec<BinStats>, ExperimentError> {
     let real = real_table(real_segments);
-    let table = simulate_table(
-        shape,
-        &real,
-        real_segments,
-        aero,
-        releases,
-        seed,
-        &Protocol::default(),
-    )?;
+    let table = simulate_table(shape, &real, real_segments, aero, releases, seed, protocol)?;
     Ok(table.into_iter().map(|(stats, _)| stats).collect())
 }
 

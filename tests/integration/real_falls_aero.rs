@@ -315,7 +315,8 @@ fn held_out_shapes_are_predicted_by_the_experiments_own_path() {
     let real = squares();
     let aero = AeroSpec::unsteady();
     let cmp = real_falls::compare(&real, &aero, 4, 1).unwrap();
-    let same = real_falls::predict(PlateShape::Square, &real, &aero, 4, 1).unwrap();
+    let same =
+        real_falls::predict(PlateShape::Square, &real, &aero, 4, 1, &Default::default()).unwrap();
     let bits = |b: &real_falls::BinStats| {
         (
             b.counts,
@@ -325,7 +326,8 @@ fn held_out_shapes_are_predicted_by_the_experiments_own_path() {
     for (a, b) in cmp.sim.iter().zip(&same) {
         assert_eq!(bits(a), bits(b));
     }
-    let circles = real_falls::predict(PlateShape::Circle, &real, &aero, 4, 1).unwrap();
+    let circles =
+        real_falls::predict(PlateShape::Circle, &real, &aero, 4, 1, &Default::default()).unwrap();
     assert_eq!(circles.len(), cmp.sim.len());
     for (c, s) in circles.iter().zip(&cmp.sim) {
         assert_eq!(c.drops, 4);
