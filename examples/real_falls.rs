@@ -363,6 +363,37 @@ fn run() -> Result<(), String> {
             turn(br.edge.turn, bs.edge.turn),
         );
     }
+    println!();
+    println!(
+        "what the simulated falls did, read from the plate's rotation over the filmed fall (T tumbling: turned over, never back; F fluttering: swung back, never over; M mixed: both; S neither), and how many of the tumbling falls the experiment's rule labels chaotic"
+    );
+    println!();
+    println!(
+        "{:<9} {:>12} {:>12}   {:>22}",
+        "side cm", "flat T:F:M:S", "edge T:F:M:S", "tumbling called chaotic"
+    );
+    for (r, drops) in cmp.real.iter().zip(&cmp.drops) {
+        let counts = |on_edge| {
+            let [t, f, m, st] = real_falls::rotation_counts(drops, on_edge);
+            format!("{t}:{f}:{m}:{st}")
+        };
+        let tumbling: Vec<_> = drops
+            .iter()
+            .filter(|d| d.rotation() == real_falls::Rotation::Tumbling)
+            .filter_map(|d| d.moving_label())
+            .collect();
+        let chaotic = tumbling
+            .iter()
+            .filter(|&&l| l == real_falls::Label::Chaotic)
+            .count();
+        println!(
+            "{:<9.1} {:>12} {:>12}   {:>22}",
+            r.side * 100.0,
+            counts(false),
+            counts(true),
+            format!("{chaotic} of {}", tumbling.len())
+        );
+    }
     let mean = |k: usize| cmp.parts.iter().map(|p| p[k]).sum::<f64>() / cmp.parts.len() as f64;
     println!();
     println!(

@@ -1306,6 +1306,10 @@ pub struct SimulatedDrop {
     /// How far its moving segment's path turns ([`Film::path_turn`]),
     /// degrees; `None` without one or without a heading.
     pub turn: Option<f64>,
+    /// Net turns of the plate over the filmed fall ([`rotation_of`]).
+    pub turns: f64,
+    /// How many times it reversed its turning over the filmed fall.
+    pub reversals: usize,
 }
 
 /// Longest fall simulated, s: a drop that has not reached the floor by
@@ -1344,14 +1348,14 @@ pub fn simulate_drop(
     let mut state = State::released(model, release.rotation, start);
     let mut raw = Film::default();
     let mut normals = Vec::new();
-    let record = |x: &[V3], raw: &mut Film, normals: &mut Vec<f64>| {
+    let record = |x: &[V3], raw: &mut Film, normals: &mut Vec<V3>| {
         raw.position.push(centroid(model, x));
         for (k, cam) in CAMERAS.iter().enumerate() {
             raw.area[k].push(projected_area(model, x, cam));
         }
         let t = &model.triangles[0];
         let [a, b, c] = t.corners;
-        normals.push((x[b] - x[a]).cross(&(x[c] - x[a])).z);
+        normals.push((x[b] - x[a]).cross(&(x[c] - x[a])).normalize());
     };
     // In chunks of 0.5 s until the floor.
     let chunk = (0.5 * FPS).round() as u64;
@@ -1388,10 +1392,12 @@ pub fn simulate_drop(
         .position(|p| p.z < 0.0)
         .unwrap_or(raw.len());
     let cut = raw.slice(first, last.max(first));
-    let flips = normals[first..last.max(first)]
+    let filmed = &normals[first..last.max(first)];
+    let flips = filmed
         .windows(2)
-        .filter(|w| w[0].signum() != w[1].signum())
+        .filter(|w| w[0].z.signum() != w[1].z.signum())
         .count();
+    let (turns, reversals) = rotation_of(filmed);
     let coord = |k: usize| smooth5(&cut.position.iter().map(|p| p[k]).collect::<Vec<_>>());
     let (xs, ys, zs) = (coord(0), coord(1), coord(2));
     let mut film = Film {
@@ -1453,7 +1459,95 @@ pub fn simulate_drop(
         departs,
         fastest,
         turn,
+        turns,
+        reversals,
     })
+}
+
+/// Smallest turning rate, rad per frame, at which [`rotation_of`] reads a
+/// direction of turning (1 rad/s at [`FPS`]): slower, a swing is at its
+/// turning point and its direction is not counted.
+pub const REVERSAL_RATE: f64 = 0.01;
+
+/// How a plate with unit normals `normals` (one per frame) turned: its net
+/// turns about its mean axis of turning (the normalised sum of
+/// nᵢ × nᵢ₊₁), and how many times it reversed its turning about that axis
+/// (the signed angle per frame, averaged over 5 frames, changing sign
+/// where it runs faster than [`REVERSAL_RATE`]). A plate tumbling end over
+/// end turns without reversing; a fluttering one swings back and forth.
+pub fn rotation_of(normals: &[V3]) -> (f64, usize) {
+    let axis = normals
+        .windows(2)
+        .map(|w| w[0].cross(&w[1]))
+        .sum::<V3>()
+        .try_normalize(0.0)
+        .unwrap_or_else(V3::x);
+    let angles: Vec<f64> = normals
+        .windows(2)
+        .map(|w| w[0].cross(&w[1]).dot(&axis).atan2(w[0].dot(&w[1])))
+        .collect();
+    let turns = angles.iter().sum::<f64>() / TAU;
+    let mut direction = 0.0;
+    let mut reversals = 0;
+    for w in angles.windows(5) {
+        let rate = w.iter().sum::<f64>() / 5.0;
+        if rate.abs() > REVERSAL_RATE {
+            if direction != 0.0 && rate.signum() != direction {
+                reversals += 1;
+            }
+            direction = rate.signum();
+        }
+    }
+    (turns.abs(), reversals)
+}
+
+/// What a simulated fall did, read from its rotation rather than from the
+/// experiment's labelling rule ([`label_of`], whose features have units:
+/// a large plate tumbling end over end shows as few area maxima per second
+/// as a small one falling chaotically).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Rotation {
+    /// Turned end over end without reversing, at least once over.
+    Tumbling,
+    /// Swung back and forth without turning over.
+    Fluttering,
+    /// Both: turned over and swung back (the chaotic regime's mark).
+    Mixed,
+    /// Neither reversed nor turned over.
+    Steady,
+}
+
+/// How many of `drops` let go on edge (`on_edge`) or flat fell each way
+/// ([`SimulatedDrop::rotation`]): tumbling, fluttering, mixed, steady.
+pub fn rotation_counts(drops: &[SimulatedDrop], on_edge: bool) -> [usize; 4] {
+    let mut counts = [0; 4];
+    for d in drops.iter().filter(|d| d.on_edge == on_edge) {
+        counts[d.rotation() as usize] += 1;
+    }
+    counts
+}
+
+impl SimulatedDrop {
+    /// The experiment's label of its moving (tumbling or chaotic) segment,
+    /// if it has one.
+    pub fn moving_label(&self) -> Option<Label> {
+        self.segments
+            .iter()
+            .map(|s| s.label)
+            .find(|&l| l != Label::Steady)
+    }
+
+    /// [`Rotation`] of the filmed fall: tumbling with no reversal and at
+    /// least two flips (a whole turn), fluttering with reversals and no
+    /// flip, mixed with both.
+    pub fn rotation(&self) -> Rotation {
+        match (self.reversals > 0, self.flips) {
+            (false, f) if f >= 2 => Rotation::Tumbling,
+            (true, 0) => Rotation::Fluttering,
+            (true, _) => Rotation::Mixed,
+            (false, _) => Rotation::Steady,
+        }
+    }
 }
 
 /// Which releases one bin's simulation makes: `releases` drops at `seed`,

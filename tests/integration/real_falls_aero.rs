@@ -1182,3 +1182,79 @@ fn a_draught_turns_the_small_squares_paths() {
     assert!(still < 1.0, "{still}");
     assert!(draught > 16.0, "{draught}");
 }
+
+/// `rotation_of` reads a plate's turning from its normals alone: a steady
+/// rotation at 20 rad/s for 1 s turns 20/2π times without reversing (to
+/// 1e-9), a pendulum swing of ±0.8 rad at 2 Hz for 2 s reverses at every
+/// turning point (8 ± 1) and never flips, a swing of ±2 rad flips as well,
+/// and a plate at rest neither turns nor reverses.
+#[test]
+fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
+    use nalgebra::Vector3;
+    let fps = real_falls::FPS;
+    let frames = |seconds: f64, angle: &dyn Fn(f64) -> f64| -> Vec<Vector3<f64>> {
+        (0..=(seconds * fps) as usize)
+            .map(|k| {
+                let a = angle(k as f64 / fps);
+                Vector3::new(0.0, a.sin(), a.cos())
+            })
+            .collect()
+    };
+    let flips = |n: &[Vector3<f64>]| {
+        n.windows(2)
+            .filter(|w| w[0].z.signum() != w[1].z.signum())
+            .count()
+    };
+    let spin = frames(1.0, &|t| 20.0 * t);
+    let (turns, reversals) = real_falls::rotation_of(&spin);
+    assert!(
+        (turns - 20.0 / std::f64::consts::TAU).abs() < 1e-9,
+        "{turns}"
+    );
+    assert_eq!(reversals, 0);
+    let swing = |amplitude: f64| {
+        frames(2.0, &move |t| {
+            amplitude * (std::f64::consts::TAU * 2.0 * t).sin()
+        })
+    };
+    let small = swing(0.8);
+    let (turns, reversals) = real_falls::rotation_of(&small);
+    assert!(turns < 0.05, "{turns}");
+    assert!((7..=9).contains(&reversals), "{reversals}");
+    assert_eq!(flips(&small), 0);
+    let large = swing(2.0);
+    let (_, reversals) = real_falls::rotation_of(&large);
+    assert!((7..=9).contains(&reversals), "{reversals}");
+    assert!(flips(&large) >= 8, "{}", flips(&large));
+    let rest = vec![Vector3::z(); 50];
+    assert_eq!(real_falls::rotation_of(&rest), (0.0, 0));
+}
+
+/// What the law's 9 cm squares do in the experiment, read from their
+/// rotation: let go on edge they tumble end over end without once swinging
+/// back, let go flat they flutter without once turning over; none does
+/// both, as a chaotic fall would. The experiment's rule still labels the
+/// tumbling ones chaotic: they turn at about 3.3 area maxima per second,
+/// nearer the films' chaotic centre (4.3) than their tumbling one (7.2),
+/// because a large plate turns slowly (docs/real-falls.md, "What the law's
+/// falls are, by their rotation").
+#[test]
+fn the_laws_large_squares_tumble_or_flutter_and_the_rule_calls_the_tumbles_chaotic() {
+    let real = squares();
+    let centres = real_falls::centres(&real);
+    let aero = real_falls::experiment_air(AeroSpec::unsteady());
+    let run = real_falls::BinReleases {
+        bin: 4,
+        releases: 8,
+        flat: 4,
+        seed: 1,
+        protocol: Default::default(),
+    };
+    let (_, drops) =
+        real_falls::simulate_bin(PlateShape::Square, 0.09, &aero, &run, &centres).unwrap();
+    assert_eq!(real_falls::rotation_counts(&drops, true), [4, 0, 0, 0]);
+    assert_eq!(real_falls::rotation_counts(&drops, false), [0, 4, 0, 0]);
+    for d in drops.iter().filter(|d| d.on_edge) {
+        assert_eq!(d.moving_label(), Some(Label::Chaotic), "{d:?}");
+    }
+}
