@@ -1470,15 +1470,23 @@ pub fn simulate_drop(
 pub const REVERSAL_RATE: f64 = 0.01;
 
 /// How a plate with unit normals `normals` (one per frame) turned: its net
-/// turns about its mean axis of turning (the normalised sum of
-/// nᵢ × nᵢ₊₁), and how many times it reversed its turning about that axis
-/// (the signed angle per frame, averaged over 5 frames, changing sign
-/// where it runs faster than [`REVERSAL_RATE`]). A plate tumbling end over
-/// end turns without reversing; a fluttering one swings back and forth.
+/// turns about its axis of turning, and how many times it reversed its
+/// turning about that axis (the signed angle per frame, averaged over 5
+/// frames, changing sign where it runs faster than [`REVERSAL_RATE`]). A
+/// plate tumbling end over end turns without reversing; a fluttering one
+/// swings back and forth. The axis is the sum of the per-frame turns
+/// nᵢ × nᵢ₊₁, each counted along the largest of them, so that a swing's
+/// turns back and forth add up instead of cancelling.
 pub fn rotation_of(normals: &[V3]) -> (f64, usize) {
-    let axis = normals
-        .windows(2)
-        .map(|w| w[0].cross(&w[1]))
+    let steps: Vec<V3> = normals.windows(2).map(|w| w[0].cross(&w[1])).collect();
+    let largest = steps
+        .iter()
+        .copied()
+        .max_by(|a, b| a.norm_squared().total_cmp(&b.norm_squared()))
+        .unwrap_or_else(V3::zeros);
+    let axis = steps
+        .iter()
+        .map(|c| if c.dot(&largest) < 0.0 { -c } else { *c })
         .sum::<V3>()
         .try_normalize(0.0)
         .unwrap_or_else(V3::x);
@@ -1507,7 +1515,8 @@ pub fn rotation_of(normals: &[V3]) -> (f64, usize) {
 /// as a small one falling chaotically).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Rotation {
-    /// Turned end over end without reversing, at least once over.
+    /// Turned end over end without reversing, a whole turn (two flips) or
+    /// more.
     Tumbling,
     /// Swung back and forth without turning over.
     Fluttering,

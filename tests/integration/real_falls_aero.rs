@@ -1186,8 +1186,8 @@ fn a_draught_turns_the_small_squares_paths() {
 /// `rotation_of` reads a plate's turning from its normals alone: a steady
 /// rotation at 20 rad/s for 1 s turns 20/2π times without reversing (to
 /// 1e-9), a pendulum swing of ±0.8 rad at 2 Hz for 2 s reverses at every
-/// turning point (8 ± 1) and never flips, a swing of ±2 rad flips as well,
-/// and a plate at rest neither turns nor reverses.
+/// turning point (8 ± 1) and never flips, also about another axis, a swing
+/// of ±2 rad flips as well, and a plate at rest neither turns nor reverses.
 #[test]
 fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
     use nalgebra::Vector3;
@@ -1226,6 +1226,12 @@ fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
     let (_, reversals) = real_falls::rotation_of(&large);
     assert!((7..=9).contains(&reversals), "{reversals}");
     assert!(flips(&large) >= 8, "{}", flips(&large));
+    // A swing about another axis, exactly symmetric: its turns back and
+    // forth cancel, and the axis must still be found.
+    let about_y: Vec<Vector3<f64>> = small.iter().map(|n| Vector3::new(n.y, 0.0, n.z)).collect();
+    let (turns, reversals) = real_falls::rotation_of(&about_y);
+    assert!(turns < 0.05, "{turns}");
+    assert!((7..=9).contains(&reversals), "{reversals}");
     let rest = vec![Vector3::z(); 50];
     assert_eq!(real_falls::rotation_of(&rest), (0.0, 0));
 }
