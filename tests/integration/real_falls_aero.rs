@@ -26,6 +26,29 @@ fn squares() -> Vec<real_falls::RealSegment> {
     .unwrap()
 }
 
+/// One bin of the experiment as `compare` runs it, labelled by the films'
+/// centres: squares of side `side` under `aero` in bin `bin` (which seeds
+/// the releases with `seed`), `releases` drops of which the first `flat`
+/// are let go flat, as `protocol` says.
+fn simulate_squares(
+    aero: &AeroSpec,
+    side: f64,
+    bin: usize,
+    [releases, flat]: [usize; 2],
+    seed: u64,
+    protocol: real_falls::Protocol,
+) -> (real_falls::BinStats, Vec<real_falls::SimulatedDrop>) {
+    let run = real_falls::BinReleases {
+        bin,
+        releases,
+        flat,
+        seed,
+        protocol,
+    };
+    let centres = real_falls::centres(&squares());
+    real_falls::simulate_bin(PlateShape::Square, side, aero, &run, &centres).unwrap()
+}
+
 /// The real table: small squares tumble, large ones fall chaotically, all
 /// descend at 0.73–0.81 m/s and turn at 26 → 12.6 rad/s (Howison, Hughes
 /// & Iida 2020, as docs/real-falls.md summarises them).
@@ -462,21 +485,13 @@ fn the_films_flat_drops_depart_past_their_first_frames_artefact() {
 #[test]
 fn a_more_tilted_flat_release_departs_sooner_and_the_films_fall_between() {
     let real = squares();
-    let centres = real_falls::centres(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
     let departs = |tilt: [f64; 2]| {
-        let run = real_falls::BinReleases {
-            bin: 2,
-            releases: 2,
-            flat: 2,
-            seed: 1,
-            protocol: real_falls::Protocol {
-                flat_tilt_deg: tilt,
-                ..Default::default()
-            },
+        let protocol = real_falls::Protocol {
+            flat_tilt_deg: tilt,
+            ..Default::default()
         };
-        let (_, drops) =
-            real_falls::simulate_bin(PlateShape::Square, 0.056, &aero, &run, &centres).unwrap();
+        let (_, drops) = simulate_squares(&aero, 0.056, 2, [2, 2], 1, protocol);
         let by = real_falls::sim_by_release(&drops);
         assert_eq!(by.edge.drops, 0);
         assert_eq!(by.flat.departs_drops, 2, "both depart");
@@ -565,7 +580,6 @@ fn real_paper_dives_faster_than_the_laws_steady_edge_on_fall() {
     use leafmagic::physics::forces::unsteady;
     use leafmagic::physics::model::AeroLaw;
     let real = squares();
-    let centres = real_falls::centres(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
     let table = real_falls::real_table(&real);
     let by_real = real_falls::real_by_release(&real);
@@ -585,15 +599,7 @@ fn real_paper_dives_faster_than_the_laws_steady_edge_on_fall() {
             panic!("the unsteady law")
         };
         let edge_on = unsteady::edge_on_speed(law, &model);
-        let run = real_falls::BinReleases {
-            bin,
-            releases: 4,
-            flat: 2,
-            seed: 1,
-            protocol: real_falls::Protocol::default(),
-        };
-        let (_, drops) =
-            real_falls::simulate_bin(PlateShape::Square, side, &aero, &run, &centres).unwrap();
+        let (_, drops) = simulate_squares(&aero, side, bin, [4, 2], 1, Default::default());
         for d in &drops {
             let fastest = d.fastest.unwrap();
             assert!(
@@ -647,17 +653,8 @@ fn bad_real_fall_files_are_refused_with_file_line_and_reason() {
 #[test]
 fn the_wakes_couple_lets_a_flat_release_depart_as_the_films_do() {
     let real = squares();
-    let centres = real_falls::centres(&real);
     let departs = |aero: &AeroSpec| {
-        let run = real_falls::BinReleases {
-            bin: 2,
-            releases: 2,
-            flat: 2,
-            seed: 1,
-            protocol: real_falls::Protocol::default(),
-        };
-        let (_, drops) =
-            real_falls::simulate_bin(PlateShape::Square, 0.056, aero, &run, &centres).unwrap();
+        let (_, drops) = simulate_squares(aero, 0.056, 2, [2, 2], 1, Default::default());
         let by = real_falls::sim_by_release(&drops);
         assert_eq!(by.flat.departs_drops, 2, "both depart");
         by.flat.departs
@@ -686,22 +683,10 @@ fn the_wakes_couple_lets_a_flat_release_depart_as_the_films_do() {
 #[test]
 fn the_munk_relief_lets_a_departed_flat_release_glide() {
     let real = squares();
-    let centres = real_falls::centres(&real);
     let flat_falls = |aero: &AeroSpec| {
         let drops: Vec<_> = [1, 2]
             .into_iter()
-            .flat_map(|seed| {
-                let run = real_falls::BinReleases {
-                    bin: 1,
-                    releases: 6,
-                    flat: 6,
-                    seed,
-                    protocol: real_falls::Protocol::default(),
-                };
-                real_falls::simulate_bin(PlateShape::Square, 0.040, aero, &run, &centres)
-                    .unwrap()
-                    .1
-            })
+            .flat_map(|seed| simulate_squares(aero, 0.040, 1, [6, 6], seed, Default::default()).1)
             .collect();
         real_falls::sim_by_release(&drops).flat
     };
@@ -999,20 +984,11 @@ fn the_per_bin_bounds_name_each_statistic_outside_them() {
 #[test]
 fn the_smallest_squares_drift_as_the_films_do_at_the_same_mix() {
     let real = squares();
-    let centres = real_falls::centres(&real);
     let table = real_falls::real_table(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
     for seed in [1, 2] {
-        let run = real_falls::BinReleases {
-            bin: 0,
-            releases: 24,
-            flat: 12,
-            seed,
-            protocol: real_falls::Protocol::default(),
-        };
         let (sim, drops) =
-            real_falls::simulate_bin(PlateShape::Square, table[0].side, &aero, &run, &centres)
-                .unwrap();
+            simulate_squares(&aero, table[0].side, 0, [24, 12], seed, Default::default());
         let by = real_falls::sim_by_release(&drops);
         let share = real_falls::sim_flat_share(&drops);
         let remixed = real_falls::real_table_at_mix(&real, &[share; 5]);
@@ -1043,24 +1019,14 @@ fn the_smallest_squares_drift_as_the_films_do_at_the_same_mix() {
 /// of 0 is refused.
 #[test]
 fn the_experiment_is_converged_in_the_mesh() {
-    let real = squares();
-    let centres = real_falls::centres(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
     for (bin, side) in [(2, 0.056), (4, 0.09)] {
         let stats = |refine: usize| {
-            let run = real_falls::BinReleases {
-                bin,
-                releases: 12,
-                flat: 6,
-                seed: 3,
-                protocol: real_falls::Protocol {
-                    refine,
-                    ..Default::default()
-                },
+            let protocol = real_falls::Protocol {
+                refine,
+                ..Default::default()
             };
-            real_falls::simulate_bin(PlateShape::Square, side, &aero, &run, &centres)
-                .unwrap()
-                .0
+            simulate_squares(&aero, side, bin, [12, 6], 3, protocol).0
         };
         let (coarse, fine) = (stats(1), stats(2));
         let ratio = |a: f64, b: f64| b / a;
@@ -1155,22 +1121,13 @@ fn a_draught_is_an_ornstein_uhlenbeck_wind_of_its_speed_and_correlation() {
 /// and a draught in the room").
 #[test]
 fn a_draught_turns_the_small_squares_paths() {
-    let real = squares();
-    let centres = real_falls::centres(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
     let turns = |draught| {
-        let run = real_falls::BinReleases {
-            bin: 0,
-            releases: 6,
-            flat: 0,
-            seed: 1,
-            protocol: real_falls::Protocol {
-                draught,
-                ..Default::default()
-            },
+        let protocol = real_falls::Protocol {
+            draught,
+            ..Default::default()
         };
-        let (_, drops) =
-            real_falls::simulate_bin(PlateShape::Square, 0.032, &aero, &run, &centres).unwrap();
+        let (_, drops) = simulate_squares(&aero, 0.032, 0, [6, 0], 1, protocol);
         real_falls::median(drops.iter().filter_map(|d| d.turn).map(f64::abs))
     };
     let still = turns(None);
@@ -1246,18 +1203,8 @@ fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
 /// falls are, by their rotation").
 #[test]
 fn the_laws_large_squares_tumble_or_flutter_and_the_rule_calls_the_tumbles_chaotic() {
-    let real = squares();
-    let centres = real_falls::centres(&real);
     let aero = real_falls::experiment_air(AeroSpec::unsteady());
-    let run = real_falls::BinReleases {
-        bin: 4,
-        releases: 8,
-        flat: 4,
-        seed: 1,
-        protocol: Default::default(),
-    };
-    let (_, drops) =
-        real_falls::simulate_bin(PlateShape::Square, 0.09, &aero, &run, &centres).unwrap();
+    let (_, drops) = simulate_squares(&aero, 0.09, 4, [8, 4], 1, Default::default());
     assert_eq!(real_falls::rotation_counts(&drops, true), [4, 0, 0, 0]);
     assert_eq!(real_falls::rotation_counts(&drops, false), [0, 4, 0, 0]);
     for d in drops.iter().filter(|d| d.on_edge) {
