@@ -379,7 +379,7 @@ fn run() -> Result<(), String> {
         };
         let tumbling: Vec<_> = drops
             .iter()
-            .filter(|d| d.rotation() == real_falls::Rotation::Tumbling)
+            .filter(|d| d.rotation == real_falls::Rotation::Tumbling)
             .filter_map(|d| d.moving_label())
             .collect();
         let chaotic = tumbling

@@ -518,6 +518,19 @@ fn increment(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> Vector3<f64> {
     v * (2.0 * s.atan2(w) / s)
 }
 
+/// The features [`classify`] measures from a pose record, over the whole of
+/// `trajectory` (no start-up window, no sampling checks, no decision): for
+/// a caller that has cut its record already, such as the real-falls
+/// experiment's filmed fall (`crate::sim::real_falls::rotation_of`).
+/// Without an orientation per sample, the default (all zero).
+pub fn pose_features(trajectory: &Trajectory, size: f64) -> Features {
+    let n = trajectory.time.len();
+    if n < 2 || trajectory.orientation.len() != n || trajectory.position.len() != n {
+        return Features::default();
+    }
+    extract(trajectory, 0, size)
+}
+
 /// Computes every feature except the sampling rate and margins over samples
 /// `i0..n`.
 fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {

@@ -24,8 +24,10 @@
 
 use crate::leaf::AeroSpec;
 use crate::leaf::plates::{PlateShape, plate_meshed};
+use crate::motion::trajectory::Trajectory;
 use crate::physics::model::{Model, STANDARD_GRAVITY};
 use crate::physics::params::{Integrator, TimeStep};
+use crate::physics::pose::PoseTracker;
 use crate::physics::run::{StepError, resolve_step, run_sampled};
 use crate::physics::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
@@ -1306,10 +1308,8 @@ pub struct SimulatedDrop {
     /// How far its moving segment's path turns ([`Film::path_turn`]),
     /// degrees; `None` without one or without a heading.
     pub turn: Option<f64>,
-    /// Net turns of the plate over the filmed fall ([`rotation_of`]).
-    pub turns: f64,
-    /// How many times it reversed its turning over the filmed fall.
-    pub reversals: usize,
+    /// What the plate's rotation did over the filmed fall ([`rotation_of`]).
+    pub rotation: Rotation,
 }
 
 /// Longest fall simulated, s: a drop that has not reached the floor by
@@ -1348,18 +1348,24 @@ pub fn simulate_drop(
     let mut state = State::released(model, release.rotation, start);
     let mut raw = Film::default();
     let mut normals = Vec::new();
-    let record = |x: &[V3], raw: &mut Film, normals: &mut Vec<V3>| {
+    // The plate's best-fit rotation per frame, for what its rotation did
+    // ([`rotation_of`]).
+    let mut poses = (PoseTracker::new(model, release.rotation), Vec::new());
+    type Poses = (PoseTracker, Vec<UnitQuaternion<f64>>);
+    let record = |x: &[V3], raw: &mut Film, normals: &mut Vec<f64>, poses: &mut Poses| {
         raw.position.push(centroid(model, x));
         for (k, cam) in CAMERAS.iter().enumerate() {
             raw.area[k].push(projected_area(model, x, cam));
         }
         let t = &model.triangles[0];
         let [a, b, c] = t.corners;
-        normals.push((x[b] - x[a]).cross(&(x[c] - x[a])).normalize());
+        normals.push((x[b] - x[a]).cross(&(x[c] - x[a])).z);
+        let (_, rotation) = poses.0.pose(model, x);
+        poses.1.push(rotation);
     };
     // In chunks of 0.5 s until the floor.
     let chunk = (0.5 * FPS).round() as u64;
-    record(&state.position, &mut raw, &mut normals);
+    record(&state.position, &mut raw, &mut normals, &mut poses);
     while raw.position.last().is_some_and(|p| p.z > 0.0) && state.time < MAX_SECONDS {
         run_sampled(
             model,
@@ -1370,7 +1376,7 @@ pub fn simulate_drop(
             chunk,
             |k, x| {
                 if k > 0 {
-                    record(x, &mut raw, &mut normals);
+                    record(x, &mut raw, &mut normals, &mut poses);
                 }
             },
         )?;
@@ -1392,12 +1398,19 @@ pub fn simulate_drop(
         .position(|p| p.z < 0.0)
         .unwrap_or(raw.len());
     let cut = raw.slice(first, last.max(first));
-    let filmed = &normals[first..last.max(first)];
-    let flips = filmed
+    let flips = normals[first..last.max(first)]
         .windows(2)
-        .filter(|w| w[0].z.signum() != w[1].z.signum())
+        .filter(|w| w[0].signum() != w[1].signum())
         .count();
-    let (turns, reversals) = rotation_of(filmed);
+    let rotation = rotation_of(
+        &Trajectory {
+            time: (first..last.max(first)).map(|k| k as f64 / FPS).collect(),
+            position: cut.position.clone(),
+            orientation: poses.1[first..last.max(first)].to_vec(),
+            areas: Vec::new(),
+        },
+        2.0 * radius,
+    );
     let coord = |k: usize| smooth5(&cut.position.iter().map(|p| p[k]).collect::<Vec<_>>());
     let (xs, ys, zs) = (coord(0), coord(1), coord(2));
     let mut film = Film {
@@ -1459,54 +1472,8 @@ pub fn simulate_drop(
         departs,
         fastest,
         turn,
-        turns,
-        reversals,
+        rotation,
     })
-}
-
-/// Smallest turning rate, rad per frame, at which [`rotation_of`] reads a
-/// direction of turning (1 rad/s at [`FPS`]): slower, a swing is at its
-/// turning point and its direction is not counted.
-pub const REVERSAL_RATE: f64 = 0.01;
-
-/// How a plate with unit normals `normals` (one per frame) turned: its net
-/// turns about its axis of turning, and how many times it reversed its
-/// turning about that axis (the signed angle per frame, averaged over 5
-/// frames, changing sign where it runs faster than [`REVERSAL_RATE`]). A
-/// plate tumbling end over end turns without reversing; a fluttering one
-/// swings back and forth. The axis is the sum of the per-frame turns
-/// nᵢ × nᵢ₊₁, each counted along the largest of them, so that a swing's
-/// turns back and forth add up instead of cancelling.
-pub fn rotation_of(normals: &[V3]) -> (f64, usize) {
-    let steps: Vec<V3> = normals.windows(2).map(|w| w[0].cross(&w[1])).collect();
-    let largest = steps
-        .iter()
-        .copied()
-        .max_by(|a, b| a.norm_squared().total_cmp(&b.norm_squared()))
-        .unwrap_or_else(V3::zeros);
-    let axis = steps
-        .iter()
-        .map(|c| if c.dot(&largest) < 0.0 { -c } else { *c })
-        .sum::<V3>()
-        .try_normalize(0.0)
-        .unwrap_or_else(V3::x);
-    let angles: Vec<f64> = normals
-        .windows(2)
-        .map(|w| w[0].cross(&w[1]).dot(&axis).atan2(w[0].dot(&w[1])))
-        .collect();
-    let turns = angles.iter().sum::<f64>() / TAU;
-    let mut direction = 0.0;
-    let mut reversals = 0;
-    for w in angles.windows(5) {
-        let rate = w.iter().sum::<f64>() / 5.0;
-        if rate.abs() > REVERSAL_RATE {
-            if direction != 0.0 && rate.signum() != direction {
-                reversals += 1;
-            }
-            direction = rate.signum();
-        }
-    }
-    (turns.abs(), reversals)
 }
 
 /// What a simulated fall did, read from its rotation rather than from the
@@ -1526,12 +1493,30 @@ pub enum Rotation {
     Steady,
 }
 
+/// What a fall did by its plate's rotation over the whole of `trajectory`
+/// (`size` its chord, m), read with the motion classifier's own kinematics
+/// ([`crate::motion::classify::pose_features`]: a reversal is a turning
+/// point of a swing of at least 10° about the dominant axis, a flip the
+/// normal crossing the horizontal with ±30° hysteresis): tumbling with no
+/// reversal and at least two flips (a whole turn), fluttering with
+/// reversals and no flip, mixed with both, steady otherwise.
+pub fn rotation_of(trajectory: &Trajectory, size: f64) -> Rotation {
+    let f = crate::motion::classify::pose_features(trajectory, size);
+    match (f.reversals > 0, f.normal_flips) {
+        (false, flips) if flips >= 2 => Rotation::Tumbling,
+        (true, 0) => Rotation::Fluttering,
+        (true, _) => Rotation::Mixed,
+        (false, _) => Rotation::Steady,
+    }
+}
+
 /// How many of `drops` let go on edge (`on_edge`) or flat fell each way
-/// ([`SimulatedDrop::rotation`]): tumbling, fluttering, mixed, steady.
+/// ([`SimulatedDrop::rotation`]), in the order of [`Rotation`]'s variants:
+/// tumbling, fluttering, mixed, steady.
 pub fn rotation_counts(drops: &[SimulatedDrop], on_edge: bool) -> [usize; 4] {
     let mut counts = [0; 4];
     for d in drops.iter().filter(|d| d.on_edge == on_edge) {
-        counts[d.rotation() as usize] += 1;
+        counts[d.rotation as usize] += 1;
     }
     counts
 }
@@ -1544,18 +1529,6 @@ impl SimulatedDrop {
             .iter()
             .map(|s| s.label)
             .find(|&l| l != Label::Steady)
-    }
-
-    /// [`Rotation`] of the filmed fall: tumbling with no reversal and at
-    /// least two flips (a whole turn), fluttering with reversals and no
-    /// flip, mixed with both.
-    pub fn rotation(&self) -> Rotation {
-        match (self.reversals > 0, self.flips) {
-            (false, f) if f >= 2 => Rotation::Tumbling,
-            (true, 0) => Rotation::Fluttering,
-            (true, _) => Rotation::Mixed,
-            (false, _) => Rotation::Steady,
-        }
     }
 }
 

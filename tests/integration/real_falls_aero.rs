@@ -1140,57 +1140,53 @@ fn a_draught_turns_the_small_squares_paths() {
     assert!(draught > 16.0, "{draught}");
 }
 
-/// `rotation_of` reads a plate's turning from its normals alone: a steady
-/// rotation at 20 rad/s for 1 s turns 20/2π times without reversing (to
-/// 1e-9), a pendulum swing of ±0.8 rad at 2 Hz for 2 s reverses at every
-/// turning point (8 ± 1) and never flips, also about another axis, a swing
-/// of ±2 rad flips as well, and a plate at rest neither turns nor reverses.
+/// `rotation_of` names a fall from its orientations with the motion
+/// classifier's kinematics: a steady turn end over end at 20 rad/s for 1 s
+/// is tumbling, a swing of ±0.8 rad at 2 Hz for 2 s fluttering (about
+/// either horizontal axis), a swing of ±2.5 rad, which turns the plate over
+/// and back past the flip's ±30° hysteresis, mixed, and a plate falling
+/// flat at rest steady.
 #[test]
 fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
-    use nalgebra::Vector3;
+    use leafmagic::motion::trajectory::Trajectory;
+    use nalgebra::{UnitQuaternion, Vector3};
+    use real_falls::Rotation;
     let fps = real_falls::FPS;
-    let frames = |seconds: f64, angle: &dyn Fn(f64) -> f64| -> Vec<Vector3<f64>> {
-        (0..=(seconds * fps) as usize)
-            .map(|k| {
-                let a = angle(k as f64 / fps);
-                Vector3::new(0.0, a.sin(), a.cos())
-            })
-            .collect()
+    let fall = |seconds: f64, axis: Vector3<f64>, angle: &dyn Fn(f64) -> f64| {
+        let time: Vec<f64> = (0..=(seconds * fps) as usize)
+            .map(|k| k as f64 / fps)
+            .collect();
+        Trajectory {
+            position: time.iter().map(|t| Vector3::new(0.0, 0.0, -t)).collect(),
+            orientation: time
+                .iter()
+                .map(|&t| UnitQuaternion::from_scaled_axis(axis * angle(t)))
+                .collect(),
+            time,
+            areas: Vec::new(),
+        }
     };
-    let flips = |n: &[Vector3<f64>]| {
-        n.windows(2)
-            .filter(|w| w[0].z.signum() != w[1].z.signum())
-            .count()
-    };
-    let spin = frames(1.0, &|t| 20.0 * t);
-    let (turns, reversals) = real_falls::rotation_of(&spin);
-    assert!(
-        (turns - 20.0 / std::f64::consts::TAU).abs() < 1e-9,
-        "{turns}"
+    let size = 0.05;
+    let swing = |amplitude: f64| move |t: f64| amplitude * (std::f64::consts::TAU * 2.0 * t).sin();
+    let x = Vector3::x();
+    assert_eq!(
+        real_falls::rotation_of(&fall(1.0, x, &|t| 20.0 * t), size),
+        Rotation::Tumbling
     );
-    assert_eq!(reversals, 0);
-    let swing = |amplitude: f64| {
-        frames(2.0, &move |t| {
-            amplitude * (std::f64::consts::TAU * 2.0 * t).sin()
-        })
-    };
-    let small = swing(0.8);
-    let (turns, reversals) = real_falls::rotation_of(&small);
-    assert!(turns < 0.05, "{turns}");
-    assert!((7..=9).contains(&reversals), "{reversals}");
-    assert_eq!(flips(&small), 0);
-    let large = swing(2.0);
-    let (_, reversals) = real_falls::rotation_of(&large);
-    assert!((7..=9).contains(&reversals), "{reversals}");
-    assert!(flips(&large) >= 8, "{}", flips(&large));
-    // A swing about another axis, exactly symmetric: its turns back and
-    // forth cancel, and the axis must still be found.
-    let about_y: Vec<Vector3<f64>> = small.iter().map(|n| Vector3::new(n.y, 0.0, n.z)).collect();
-    let (turns, reversals) = real_falls::rotation_of(&about_y);
-    assert!(turns < 0.05, "{turns}");
-    assert!((7..=9).contains(&reversals), "{reversals}");
-    let rest = vec![Vector3::z(); 50];
-    assert_eq!(real_falls::rotation_of(&rest), (0.0, 0));
+    for axis in [x, Vector3::y()] {
+        assert_eq!(
+            real_falls::rotation_of(&fall(2.0, axis, &swing(0.8)), size),
+            Rotation::Fluttering
+        );
+        assert_eq!(
+            real_falls::rotation_of(&fall(2.0, axis, &swing(2.5)), size),
+            Rotation::Mixed
+        );
+    }
+    assert_eq!(
+        real_falls::rotation_of(&fall(1.0, x, &|_| 0.0), size),
+        Rotation::Steady
+    );
 }
 
 /// What the law's 9 cm squares do in the experiment, read from their
