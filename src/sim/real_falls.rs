@@ -1055,6 +1055,13 @@ pub struct Draught {
 /// variation well above what the interpolation smooths away.
 pub const DRAUGHT_KEYS_PER_CORRELATION: f64 = 4.0;
 
+/// The random stream of release `k` of bin `bin` at `seed`: what
+/// [`release`] draws its attitude from, and (offset) what
+/// [`draught_field`] draws its wind from.
+fn release_stream(seed: u64, bin: usize, k: usize) -> u64 {
+    seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64
+}
+
 /// The draught `draught` of release `k` of bin `bin` at `seed`, laid down
 /// for `seconds` (and one correlation time more): for each horizontal axis
 /// a uniform wind primitive keyframed every τ/[`DRAUGHT_KEYS_PER_CORRELATION`]
@@ -1072,8 +1079,7 @@ pub fn draught_field(
     use crate::physics::field::{Interpolation, Keyframes, Primitive, WindField};
     use rand_distr::{Distribution, StandardNormal};
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(
-        (seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64)
-            .wrapping_add(0xD1B5_4A32_D192_ED03),
+        release_stream(seed, bin, k).wrapping_add(0xD1B5_4A32_D192_ED03),
     );
     let (sigma, tau) = (draught.speed, draught.correlation);
     let h = tau / DRAUGHT_KEYS_PER_CORRELATION;
@@ -1204,9 +1210,7 @@ pub fn flat_releases(mix: ReleaseMix, releases: usize, flat_share: f64) -> usize
 /// the other), each at a random in-plane angle and turned by a random yaw.
 pub fn release(protocol: &Protocol, seed: u64, bin: usize, k: usize, flat: usize) -> Release {
     let on_edge = k >= flat;
-    let mut rng = Xoshiro256PlusPlus::seed_from_u64(
-        seed.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ ((bin as u64) << 32) ^ k as u64,
-    );
+    let mut rng = Xoshiro256PlusPlus::seed_from_u64(release_stream(seed, bin, k));
     let tau = std::f64::consts::TAU;
     let psi = rng.random_range(0.0..tau);
     let yaw = rng.random_range(0.0..tau);
