@@ -428,6 +428,12 @@ impl Model {
         best
     }
 
+    /// How many plates (triangles joined through shared edges,
+    /// [`plates`]) the model has.
+    pub fn plate_count(&self) -> usize {
+        self.surfaces.iter().map(|g| g.plate + 1).max().unwrap_or(0)
+    }
+
     /// Total triangle area of the rest shape, m².
     pub fn surface_area(&self) -> f64 {
         self.triangles
