@@ -7,7 +7,10 @@
 //! With `--shape circle|hexagon`, plates of that shape at
 //! the squares' bin sizes: the simulated side only, a prediction for the
 //! study's held-out shapes (docs/real-falls.md, "Predictions for the
-//! held-out shapes").
+//! held-out shapes"). `--films DIR` compares with the films in DIR instead
+//! of the squares, in the squares' format (`real_falls::read_films`), with
+//! plates of the films' own shape: the held-out shapes' check, once their
+//! films are given.
 //! A third table splits each bin by release (flat, on edge): the pooled
 //! medians mix the two in each side's own proportion. `--mix filmed` lets
 //! each bin go flat and on edge in its real proportion instead of half and
@@ -32,18 +35,18 @@
 //! in its own random draught ("Paper that bends, and a draught in the
 //! room").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N --draught SPEED,TIME KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --films DIR --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N --draught SPEED,TIME KEY=VALUE ...]
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::physics::forces::unsteady;
 use leafmagic::physics::model::AeroLaw;
 use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--films DIR] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
@@ -98,7 +101,8 @@ fn pair(
 fn run() -> Result<(), String> {
     let mut releases: usize = 12;
     let mut seed: u64 = 1;
-    let mut shape = PlateShape::Square;
+    let mut shape: Option<PlateShape> = None;
+    let mut films: Option<PathBuf> = None;
     let mut aero = AeroSpec::unsteady();
     let mut protocol = Protocol::default();
     let mut args = std::env::args().skip(1);
@@ -108,8 +112,13 @@ fn run() -> Result<(), String> {
             "--releases" => releases = value(&mut args, "--releases", "a count")?,
             "--seed" => seed = value(&mut args, "--seed", "a whole number")?,
             "--shape" => {
-                shape = value(&mut args, "--shape", "square, circle, hexagon or rectangle")?
+                shape = Some(value(
+                    &mut args,
+                    "--shape",
+                    "square, circle, hexagon or rectangle",
+                )?)
             }
+            "--films" => films = Some(value(&mut args, "--films", "a folder of films")?),
             "--law" => {
                 let law: AeroLawName = value(&mut args, "--law", "a law's name")?;
                 aero = if law == AeroLawName::Linear {
@@ -158,10 +167,35 @@ fn run() -> Result<(), String> {
     let aero = aero
         .with_lines(&extra)
         .map_err(|e| format!("bad [aero] key: {e}"))?;
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
-    let real = real_falls::read_squares(&dir).map_err(|e| e.to_string())?;
-    if shape != PlateShape::Square {
-        return predict(shape, &real, &aero, releases, seed, &protocol);
+    let real = match &films {
+        Some(dir) => real_falls::read_films(dir, None).map_err(|e| e.to_string())?,
+        None => {
+            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
+            real_falls::read_squares(&dir).map_err(|e| e.to_string())?
+        }
+    };
+    // The films' shape is the plates' (every row of one shape: the reader).
+    let filmed = real.first().map_or(PlateShape::Square, |s| s.shape);
+    // What the first column holds: a square's side, another shape's size
+    // as `leafmagic plate --size` takes it.
+    let size_col = if filmed == PlateShape::Square {
+        "side cm"
+    } else {
+        "size cm"
+    };
+    match (shape, &films) {
+        (Some(shape), None) if shape != PlateShape::Square => {
+            return predict(shape, &real, &aero, releases, seed, &protocol);
+        }
+        (Some(shape), Some(dir)) if shape != filmed => {
+            return Err(format!(
+                "--shape {} but the films in {} are {}s: the plates are cut to the films' shape",
+                shape.as_str(),
+                dir.display(),
+                filmed.as_str()
+            ));
+        }
+        _ => {}
     }
     let t0 = std::time::Instant::now();
     // A law whose keys pass one by one can still be refused as a whole
@@ -173,13 +207,14 @@ fn run() -> Result<(), String> {
         .map_err(|e| format!("the law cannot be written: {e}"))?
         .replace('\n', " ");
     println!(
-        "real falls of 70 g/m² paper squares against leafmagic plates ({releases} releases per bin, seed {seed}; [aero] {law})"
+        "real falls of 70 g/m² paper {}s against leafmagic plates ({releases} releases per bin, seed {seed}; [aero] {law})",
+        filmed.as_str()
     );
     print_protocol(&protocol);
     println!();
     println!(
         "{:<9} {:>12} {:>12} {:>15} {:>15} {:>15} {:>15} {:>6}",
-        "side cm",
+        size_col,
         "real T:C:S",
         "sim T:C:S",
         "fT real/sim",
@@ -211,7 +246,7 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "{:<9} {:>13} {:>15} {:>13} {:>13}",
-        "side cm", "fT", "v m/s", "drift", "Ω rad/s"
+        size_col, "fT", "v m/s", "drift", "Ω rad/s"
     );
     let intervals = real_falls::real_intervals(&real, BOOTSTRAP_RESAMPLES, seed);
     for ((r, s), i) in cmp.real.iter().zip(&cmp.sim).zip(&intervals) {
@@ -235,7 +270,7 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "{:<9} {:>7} {:>11} {:>13} {:>19}   {:>7} {:>11} {:>13}",
-        "side cm", "flat", "drift", "Ω", "departs s", "edge", "drift", "Ω"
+        size_col, "flat", "drift", "Ω", "departs s", "edge", "drift", "Ω"
     );
     let by_real = real_falls::real_by_release(&real);
     let mut mismatch: [Vec<f64>; 4] = Default::default();
@@ -288,7 +323,7 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "{:<9} {:>13} {:>15} {:>15} {:>15} {:>15} {:>6}",
-        "side cm",
+        size_col,
         "flat real→sim",
         "fT real/sim",
         "v m/s real/sim",
@@ -346,12 +381,12 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "{:<9} {:>11} {:>11} {:>9}   {:>11} {:>11}",
-        "side cm", "flat", "edge", "edge-on", "turn flat", "turn edge"
+        size_col, "flat", "edge", "edge-on", "turn flat", "turn edge"
     );
     for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
         let bs = real_falls::sim_by_release(drops);
         let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
-        let edge_on = edge_on_speed(shape, r.side, &aero)
+        let edge_on = edge_on_speed(filmed, r.side, &aero)
             .map_or_else(|| "-".to_string(), |v| format!("{v:.2}"));
         let turn = |a: f64, b: f64| format!("{a:.0}/{b:.0}");
         println!(
@@ -370,7 +405,7 @@ fn run() -> Result<(), String> {
     println!();
     println!(
         "{:<9} {:>12} {:>12}   {:>22}",
-        "side cm", "flat T:F:M:S", "edge T:F:M:S", "tumbling called chaotic"
+        size_col, "flat T:F:M:S", "edge T:F:M:S", "tumbling called chaotic"
     );
     for (r, drops) in cmp.real.iter().zip(&cmp.drops) {
         let counts = |on_edge| {

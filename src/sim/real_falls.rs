@@ -23,7 +23,7 @@
 //! no smallest blob.
 //!
 //! Its files, one job each: `films` (the rig and what a filmed fall
-//! gives), `squares` (the films' data and the authors' labelling rule),
+//! gives), `segments` (the films' segments read from their files, their size bins and the authors' labelling rule),
 //! `protocol` (how plates are let go), `experiment` (the simulated falls),
 //! `table` (the statistics per bin), `departure` (when a flat release
 //! leaves its flat fall); this file scores and compares.
@@ -32,13 +32,13 @@ pub mod departure;
 mod experiment;
 mod films;
 mod protocol;
-mod squares;
+mod segments;
 mod table;
 
 pub use experiment::*;
 pub use films::*;
 pub use protocol::*;
-pub use squares::*;
+pub use segments::*;
 pub use table::*;
 
 use crate::leaf::AeroSpec;
@@ -148,8 +148,8 @@ impl Comparison {
 }
 
 /// Simulates the experiment for every bin of the real table (`releases`
-/// per bin) under `aero` and compares, releasing as the cross-check does
-/// ([`Protocol::default`]).
+/// per bin) under `aero`, with plates of the films' own shape, and
+/// compares, releasing as the cross-check does ([`Protocol::default`]).
 pub fn compare(
     real_segments: &[RealSegment],
     aero: &AeroSpec,
@@ -160,6 +160,10 @@ pub fn compare(
 }
 
 /// [`compare`] with the plates let go as `protocol` says.
+///
+/// # Errors
+/// [`ExperimentError::Films`] if there are no films or they are not all of
+/// one shape; the simulation's own errors.
 pub fn compare_with(
     real_segments: &[RealSegment],
     aero: &AeroSpec,
@@ -167,18 +171,12 @@ pub fn compare_with(
     seed: u64,
     protocol: &Protocol,
 ) -> Result<Comparison, ExperimentError> {
+    let shape = films_shape(real_segments)?;
     let real = real_table(real_segments);
-    let (sim, drops): (Vec<BinStats>, Vec<Vec<SimulatedDrop>>) = simulate_table(
-        PlateShape::Square,
-        &real,
-        real_segments,
-        aero,
-        releases,
-        seed,
-        protocol,
-    )?
-    .into_iter()
-    .unzip();
+    let (sim, drops): (Vec<BinStats>, Vec<Vec<SimulatedDrop>>) =
+        simulate_table(shape, &real, real_segments, aero, releases, seed, protocol)?
+            .into_iter()
+            .unzip();
     let parts = real
         .iter()
         .zip(&sim)
@@ -190,6 +188,23 @@ pub fn compare_with(
         parts,
         drops,
     })
+}
+
+/// The one shape of `real_segments`' paper.
+fn films_shape(real_segments: &[RealSegment]) -> Result<PlateShape, ExperimentError> {
+    let first = real_segments
+        .first()
+        .ok_or_else(|| ExperimentError::Films("there are none to compare with".into()))?;
+    match real_segments.iter().find(|s| s.shape != first.shape) {
+        Some(other) => Err(ExperimentError::Films(format!(
+            "{} is a {} and {} a {}: compare one shape at a time",
+            first.name,
+            first.shape.as_str(),
+            other.name,
+            other.shape.as_str()
+        ))),
+        None => Ok(first.shape),
+    }
 }
 
 /// The experiment simulated for plates of another `shape` at the squares'

@@ -646,6 +646,112 @@ fn bad_real_fall_files_are_refused_with_file_line_and_reason() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
+/// Another shape's films, in the squares' format, are compared with
+/// plates of that shape: the squares' own films relabelled as circles give
+/// the squares' real table to the bit, and a simulated side that is the
+/// circles' prediction to the bit (`predict`: the same bins, centres,
+/// releases and seed) and not the squares'.
+#[test]
+fn another_shapes_films_are_compared_with_plates_of_that_shape() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-circle-films-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        let text = if path.file_name().unwrap() == "labels.csv" {
+            text.replace(",square,", ",circle,")
+        } else {
+            text
+        };
+        std::fs::write(dir.join(path.file_name().unwrap()), text).unwrap();
+    }
+    let films = real_falls::read_films(&dir, None).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    let squares = squares();
+    assert_eq!(films.len(), squares.len());
+    assert!(films.iter().all(|f| f.shape == PlateShape::Circle));
+    let aero = AeroSpec::unsteady();
+    let protocol = real_falls::Protocol::default();
+    let circles = real_falls::compare_with(&films, &aero, 4, 1, &protocol).unwrap();
+    let predicted =
+        real_falls::predict(PlateShape::Circle, &squares, &aero, 4, 1, &protocol).unwrap();
+    let as_squares = real_falls::compare_with(&squares, &aero, 4, 1, &protocol).unwrap();
+    assert_eq!(
+        circles.real, as_squares.real,
+        "the same films, the same table"
+    );
+    assert_eq!(circles.sim, predicted, "plates of the films' shape");
+    assert_ne!(circles.sim, as_squares.sim, "not squares");
+    println!(
+        "circles against the squares' films: score {:.2} (squares {:.2})",
+        circles.score(),
+        as_squares.score()
+    );
+}
+
+/// Films of a shape the experiment has no plate for, of two shapes, of the
+/// wrong shape for the reader, or of no size are refused with the file,
+/// the line, the column and the reason; segments of two shapes handed to
+/// the comparison are refused by name.
+#[test]
+fn films_of_no_one_shape_are_refused_by_line_and_name() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-shaped-films-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let film = "t,x,y,z,area1,area2\n0.0,0.0,0.0,1.0,10.0,10.0\n0.0102,0.0,0.0,0.99,10.0,10.0\n";
+    for name in ["a", "b"] {
+        std::fs::write(dir.join(format!("{name}.csv")), film).unwrap();
+    }
+    let head = "name,shape,radius_m,width_px,release_vertical,human,auto,rows\n";
+    let refused = |rows: &str, only: Option<PlateShape>| {
+        std::fs::write(dir.join("labels.csv"), format!("{head}{rows}")).unwrap();
+        real_falls::read_films(&dir, only).unwrap_err().to_string()
+    };
+    let err = refused("a,star,0.02,100,0,1,1,2\n", None);
+    assert!(
+        err.contains("labels.csv") && err.contains("line 2") && err.contains("column 2 (shape)"),
+        "{err}"
+    );
+    let err = refused(
+        "a,circle,0.02,100,0,1,1,2\nb,hexagon,0.02,100,0,1,1,2\n",
+        None,
+    );
+    assert!(
+        err.contains("line 3") && err.contains("hexagon") && err.contains("rows above are circle"),
+        "{err}"
+    );
+    let err = refused("a,circle,0.02,100,0,1,1,2\n", Some(PlateShape::Square));
+    assert!(
+        err.contains("line 2") && err.contains("wants square"),
+        "{err}"
+    );
+    let err = refused("a,circle,0,100,0,1,1,2\n", None);
+    assert!(
+        err.contains("line 2") && err.contains("column 3 (radius_m)"),
+        "{err}"
+    );
+    std::fs::write(
+        dir.join("labels.csv"),
+        format!("{head}a,circle,0.02,100,0,1,1,2\nb,circle,0.02,100,0,1,1,2\n"),
+    )
+    .unwrap();
+    let mut films = real_falls::read_films(&dir, None).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    films[1].shape = PlateShape::Hexagon;
+    let aero = AeroSpec::unsteady();
+    let err = real_falls::compare(&films, &aero, 1, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("a is a circle") && err.contains("b a hexagon"),
+        "{err}"
+    );
+    let err = real_falls::compare(&[], &aero, 1, 1)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("none to compare"), "{err}");
+}
+
 /// With the wake's couple on (`wake_couple = 1.25`, docs/real-falls.md,
 /// "A wake that rocks the face-on fall"), a 5.6 cm square let go flat at
 /// the cross-check's 1–5° departs within half to one and a half times the

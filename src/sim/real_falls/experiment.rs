@@ -7,7 +7,7 @@ use super::protocol::{
     AIR_DENSITY, AIR_VISCOSITY, EDGE_HEIGHT, EDGE_SEEN, FLAT_HEIGHT, PAPER, Protocol, Release,
     draught_field, release,
 };
-use super::squares::label_of;
+use super::segments::label_of;
 use super::table::{BinStats, Measured, stats};
 use crate::leaf::AeroSpec;
 use crate::leaf::plates::{PlateShape, plate_meshed};
@@ -40,6 +40,9 @@ pub enum ExperimentError {
     /// The release protocol is out of range ([`Protocol::check`]).
     #[error("release protocol: {0}")]
     Protocol(String),
+    /// The films to compare with are not of one shape.
+    #[error("films: {0}")]
+    Films(String),
 }
 
 /// The camera's projected area of every triangle of `model` at `x`, px.

@@ -1,7 +1,7 @@
 //! How the simulated experiment lets its plates go: heights, tilts, the
 //! release mix and the optional draught in the room.
 
-use super::squares::RealSegment;
+use super::segments::RealSegment;
 use super::table::{ByRelease, real_by_release};
 use nalgebra::{UnitQuaternion, Vector3};
 use rand::rngs::Xoshiro256PlusPlus;

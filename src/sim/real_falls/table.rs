@@ -4,7 +4,7 @@
 use super::departure;
 use super::experiment::SimulatedDrop;
 use super::films::{Features, Label};
-use super::squares::{RealSegment, SQUARE_BINS, bin_of};
+use super::segments::{RealSegment, SQUARE_BINS, bin_of};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
 

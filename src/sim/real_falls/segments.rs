@@ -1,7 +1,10 @@
-//! The films' paper squares: reading the tracked segments, their size
-//! bins, and the authors' labelling rule (two cluster centres) fitted on them.
+//! The films' segments: reading them from their files (the squares in
+//! `tests/data/real-falls/squares/`, or another shape's films in the same
+//! format), their size bins, and the authors' labelling rule (two cluster
+//! centres) fitted on them.
 
 use super::films::{Features, Film, Label};
+use crate::leaf::plates::PlateShape;
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -16,12 +19,17 @@ pub const SQUARE_BINS: [(f64, f64); 5] = [
     (0.040, 0.0505),
 ];
 
-/// One real segment of `tests/data/real-falls/squares/`.
+/// One real segment of `tests/data/real-falls/squares/` (or of another
+/// shape's films, [`read_films`]).
 #[derive(Clone, Debug, PartialEq)]
 pub struct RealSegment {
     /// File name without extension.
     pub name: String,
-    /// Half the side, m.
+    /// The paper's shape.
+    pub shape: PlateShape,
+    /// Half the plate's size as `leafmagic plate --size` takes it (twice
+    /// the inradius): a square's half-side, a circle's radius, a hexagon's
+    /// inradius, m.
     pub radius: f64,
     /// Released on edge (else flat).
     pub on_edge: bool,
@@ -43,8 +51,25 @@ pub struct RealFallsError {
     pub reason: String,
 }
 
-/// Reads `labels.csv` and every segment it lists from `dir`.
+/// Reads `labels.csv` and every segment it lists from `dir`, all squares
+/// (`tests/data/real-falls/squares/`): a segment of another shape is an
+/// error naming its line.
 pub fn read_squares(dir: &Path) -> Result<Vec<RealSegment>, RealFallsError> {
+    read_films(dir, Some(PlateShape::Square))
+}
+
+/// Reads `labels.csv` (`name,shape,radius_m,width_px,release_vertical,
+/// human,auto[,rows]`; labels 1 tumbling, 2 chaotic, 3 steady) and every
+/// segment it lists from `dir` (`NAME.csv`: `t,x,y,z,area1,area2`), the
+/// squares' format: the study's held-out shapes, once given in it, are
+/// read and compared as the squares are. `shape` is `square`, `circle` or
+/// `hexagon`, every row the same one, and `radius_m` half the size that
+/// `leafmagic plate --size` takes (so a hexagon's inradius, not its
+/// circumradius). With `only`, a segment of another shape is an error.
+pub fn read_films(
+    dir: &Path,
+    only: Option<PlateShape>,
+) -> Result<Vec<RealSegment>, RealFallsError> {
     let fail = |file: &Path, reason: String| RealFallsError {
         file: file.display().to_string(),
         reason,
@@ -73,6 +98,28 @@ pub fn read_squares(dir: &Path) -> Result<Vec<RealSegment>, RealFallsError> {
                 .and_then(Label::from_code)
                 .ok_or_else(|| bad(&format!("column {} is not a label 1, 2 or 3", k + 1)))
         };
+        let shape = match f[1].trim().parse::<PlateShape>() {
+            Ok(shape) if shape != PlateShape::Rectangle => shape,
+            _ => {
+                return Err(bad(&format!(
+                    "column 2 (shape) is {:?}: expected square, circle or hexagon",
+                    f[1].trim()
+                )));
+            }
+        };
+        let first = out.first().map(|s: &RealSegment| s.shape);
+        if let Some(want) = only.or(first).filter(|&want| want != shape) {
+            return Err(bad(&format!(
+                "column 2 (shape) is {}, where {} {}",
+                shape.as_str(),
+                if only.is_some() {
+                    "the reader wants"
+                } else {
+                    "the rows above are"
+                },
+                want.as_str()
+            )));
+        }
         let name = f[0].trim().to_string();
         let path = dir.join(format!("{name}.csv"));
         let data =
@@ -105,9 +152,16 @@ pub fn read_squares(dir: &Path) -> Result<Vec<RealSegment>, RealFallsError> {
             film.area[0].push(v[4]);
             film.area[1].push(v[5]);
         }
+        let radius = num(2)?;
+        if !(radius > 0.0 && radius.is_finite()) {
+            return Err(bad(&format!(
+                "column 3 (radius_m) is {radius}: expected a size > 0 m"
+            )));
+        }
         out.push(RealSegment {
             name,
-            radius: num(2)?,
+            shape,
+            radius,
             on_edge: num(4)? != 0.0,
             human: label(5)?,
             auto: label(6)?,
