@@ -205,6 +205,7 @@ fn table() {
 }
 
 fn main() {
+    leafmagic::util::pipe::quiet_broken_pipe();
     let start = std::time::Instant::now();
     card_sweep();
     recipes();

@@ -16,6 +16,7 @@ use rand::rngs::Xoshiro256PlusPlus;
 use rayon::prelude::*;
 
 fn main() {
+    leafmagic::util::pipe::quiet_broken_pipe();
     let mut falls: Vec<Descriptors> = Vec::new();
     for (p, seed) in [("a", 11u64), ("b", 12)] {
         let proto = LeafSpec::load(p).unwrap();

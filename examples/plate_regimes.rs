@@ -48,6 +48,7 @@ fn fall(size: f64, sigma: f64, tilt: [f64; 2], aero: &AeroSpec) -> Fall {
 }
 
 fn main() -> ExitCode {
+    leafmagic::util::pipe::quiet_broken_pipe();
     let extra: Vec<String> = std::env::args().skip(1).filter(|a| a != "--").collect();
     // Keys that read one by one can still make a law that is refused as a
     // whole (translational lift above half the normal drag): build a plate

@@ -53,6 +53,7 @@ const USAGE: &str = "usage: cargo run --release --example real_falls -- [--relea
 const BOOTSTRAP_RESAMPLES: usize = 2000;
 
 fn main() -> ExitCode {
+    leafmagic::util::pipe::quiet_broken_pipe();
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

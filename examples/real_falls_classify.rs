@@ -287,6 +287,7 @@ fn cuts(f: &Fall, i: usize, areas: bool) -> Vec<Trajectory> {
 }
 
 fn main() {
+    leafmagic::util::pipe::quiet_broken_pipe();
     squares_report();
     let t = Instant::now();
     let falls = corpus::falls();

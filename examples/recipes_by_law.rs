@@ -35,6 +35,7 @@ fn under(mut spec: LeafSpec, law: AeroLawName, extra: &[String]) -> Result<Model
 }
 
 fn main() -> ExitCode {
+    leafmagic::util::pipe::quiet_broken_pipe();
     match run() {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {

@@ -1,6 +1,7 @@
-//! Utilities beneath every layer: atomic writes, numbers in messages and
-//! plot helpers. Imports nothing of leafmagic.
+//! Utilities beneath every layer: atomic writes, numbers in messages, plot
+//! helpers and a quiet exit when stdout's reader goes away. Imports nothing of leafmagic.
 
 pub mod io;
 pub mod number;
+pub mod pipe;
 pub mod svg;
