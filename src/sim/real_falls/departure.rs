@@ -13,7 +13,8 @@
 //! drop departs when it is 0.2 r sideways from there, the experiment's own
 //! threshold: 0.13–0.37 s after the first frame, longer for larger squares.
 
-use super::{FPS, Film, RealSegment, SQUARE_BINS, bin_of};
+use super::films::{FPS, Film};
+use super::segments::{RealSegment, SQUARE_BINS, bin_of};
 
 /// Frames at the start of a flat drop within which the end of the first
 /// frames' artefact is sought: 0.15 s, twice the longest the silhouettes
