@@ -302,17 +302,31 @@ fn the_model_imports_nothing_of_the_engine() {
     }
 }
 
-/// Layers whose files form no import cycle. Not yet among them:
-/// `sim/accuracy`, `sim/scene` and `output/export`, whose files still use
-/// their folder module's types while it uses theirs.
-const ACYCLIC: [&str; 5] = ["util", "physics", "motion", "leaf", "breed"];
+/// Layers, and folders of the others, whose files form no import cycle.
+/// Not yet among them: `sim/accuracy`, `sim/scene` and `output/export`,
+/// whose files still use their folder module's types while it uses theirs.
+const ACYCLIC: [&str; 6] = [
+    "util",
+    "physics",
+    "motion",
+    "leaf",
+    "breed",
+    "sim::real_falls",
+];
+
+/// Whether module `m` is in one of the [`ACYCLIC`] layers or folders.
+fn acyclic(m: &str) -> bool {
+    ACYCLIC
+        .iter()
+        .any(|p| m == *p || m.strip_prefix(p).is_some_and(|rest| rest.starts_with("::")))
+}
 
 #[test]
 fn no_file_imports_a_file_that_imports_it_back() {
     let mut edges = imports(&library_files());
-    edges.retain(|m, _| ACYCLIC.contains(&layer(m)));
+    edges.retain(|m, _| acyclic(m));
     for targets in edges.values_mut() {
-        targets.retain(|t| ACYCLIC.contains(&layer(t)));
+        targets.retain(|t| acyclic(t));
     }
     // Depth-first search for a cycle, reporting its path.
     fn visit(

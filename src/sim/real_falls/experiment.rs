@@ -8,7 +8,7 @@ use super::protocol::{
     draught_field, release,
 };
 use super::segments::label_of;
-use super::table::{BinStats, Measured, stats};
+use super::table::{BinStats, ByRelease, Measured, MovingDrop, release_stats, stats};
 use crate::leaf::AeroSpec;
 use crate::leaf::plates::{PlateShape, plate_meshed};
 use crate::motion::trajectory::Trajectory;
@@ -407,4 +407,44 @@ pub fn experiment_air(mut aero: AeroSpec) -> AeroSpec {
         aero.kinematic_viscosity.get_or_insert(AIR_VISCOSITY);
     }
     aero
+}
+
+/// The share of one simulated bin's moving drops (`drops`, as
+/// [`sim_by_release`] splits them) that were let go flat: the share to
+/// re-weight the films to ([`real_table_at_mix`](super::real_table_at_mix)); NaN without any.
+pub fn sim_flat_share(drops: &[SimulatedDrop]) -> f64 {
+    sim_by_release(drops).flat_share()
+}
+
+/// One bin's simulated drops split by release.
+pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
+    let side = |on_edge: bool| {
+        let mine = drops.iter().filter(|d| d.on_edge == on_edge);
+        let moving: Vec<MovingDrop> = mine
+            .clone()
+            .flat_map(|d| {
+                d.segments
+                    .iter()
+                    .filter(|m| m.label != Label::Steady)
+                    .map(|m| MovingDrop {
+                        features: m.features,
+                        omega: d.omega,
+                        fastest: d.fastest,
+                        turn: d.turn,
+                    })
+            })
+            .collect();
+        let steady: Vec<f64> = mine
+            .clone()
+            .flat_map(|d| d.segments.iter())
+            .filter(|m| m.label == Label::Steady)
+            .map(|m| m.features.time)
+            .collect();
+        let departs: Vec<f64> = mine.filter_map(|d| d.departs).collect();
+        release_stats(&moving, &steady, &departs)
+    };
+    ByRelease {
+        flat: side(false),
+        edge: side(true),
+    }
 }

@@ -1,8 +1,6 @@
 //! How the simulated experiment lets its plates go: heights, tilts, the
 //! release mix and the optional draught in the room.
 
-use super::segments::RealSegment;
-use super::table::{ByRelease, real_by_release};
 use nalgebra::{UnitQuaternion, Vector3};
 use rand::rngs::Xoshiro256PlusPlus;
 use rand::{RngExt, SeedableRng};
@@ -200,7 +198,7 @@ pub enum ReleaseMix {
     /// cross-check's protocol.
     Halves,
     /// Each bin's share of on-edge drops among its real tumbling and
-    /// chaotic drops ([`real_flat_share`]), rounded to whole releases.
+    /// chaotic drops ([`real_flat_share`](super::real_flat_share)), rounded to whole releases.
     AsFilmed,
 }
 
@@ -215,15 +213,6 @@ impl std::str::FromStr for ReleaseMix {
             )),
         }
     }
-}
-
-/// Per bin of [`SQUARE_BINS`](super::SQUARE_BINS), the share of the real tumbling and chaotic
-/// drops that were let go flat (NaN for a bin without any).
-pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
-    real_by_release(real)
-        .iter()
-        .map(ByRelease::flat_share)
-        .collect()
 }
 
 /// How many of `releases` are flat under `mix`, given the bin's real flat

@@ -2,7 +2,6 @@
 //! score compares, the split by release and the films' bootstrap intervals.
 
 use super::departure;
-use super::experiment::SimulatedDrop;
 use super::films::{Features, Label};
 use super::segments::{RealSegment, SQUARE_BINS, bin_of};
 use rand::rngs::Xoshiro256PlusPlus;
@@ -120,13 +119,6 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
         .collect()
 }
 
-/// The share of one simulated bin's moving drops (`drops`, as
-/// [`sim_by_release`] splits them) that were let go flat: the share to
-/// re-weight the films to ([`real_table_at_mix`]); NaN without any.
-pub fn sim_flat_share(drops: &[SimulatedDrop]) -> f64 {
-    sim_by_release(drops).flat_share()
-}
-
 /// The real table with each bin's flat and on-edge drops re-weighted so
 /// that flat ones carry the share `flat_share[b]` of bin b's tumbling and
 /// chaotic drops (each kind's drops equally), as if the films had let go
@@ -202,19 +194,23 @@ impl ByRelease {
 
 /// One moving segment as [`release_stats`] reads it.
 #[derive(Clone, Copy, Debug)]
-struct MovingDrop {
-    features: Features,
+pub(super) struct MovingDrop {
+    pub(super) features: Features,
     /// Its drop's tumbling rate.
-    omega: Option<f64>,
+    pub(super) omega: Option<f64>,
     /// Its fastest descent, m/s.
-    fastest: Option<f64>,
+    pub(super) fastest: Option<f64>,
     /// How far its path turns, degrees.
-    turn: Option<f64>,
+    pub(super) turn: Option<f64>,
 }
 
 /// The statistics of one kind of release from its moving segments (with
 /// the tumbling rate of each one's drop) and its steady starts.
-fn release_stats(moving: &[MovingDrop], steady: &[f64], departs: &[f64]) -> ReleaseStats {
+pub(super) fn release_stats(
+    moving: &[MovingDrop],
+    steady: &[f64],
+    departs: &[f64],
+) -> ReleaseStats {
     ReleaseStats {
         drops: moving.len(),
         descent: median(moving.iter().map(|m| m.features.descent())),
@@ -283,39 +279,6 @@ pub fn release_mismatch(real: &ByRelease, sim: &ByRelease) -> [Option<f64>; 4] {
         log_ratio(real.edge.drift, sim.edge.drift),
         log_ratio(real.edge.omega, sim.edge.omega),
     ]
-}
-
-/// One bin's simulated drops split by release.
-pub fn sim_by_release(drops: &[SimulatedDrop]) -> ByRelease {
-    let side = |on_edge: bool| {
-        let mine = drops.iter().filter(|d| d.on_edge == on_edge);
-        let moving: Vec<MovingDrop> = mine
-            .clone()
-            .flat_map(|d| {
-                d.segments
-                    .iter()
-                    .filter(|m| m.label != Label::Steady)
-                    .map(|m| MovingDrop {
-                        features: m.features,
-                        omega: d.omega,
-                        fastest: d.fastest,
-                        turn: d.turn,
-                    })
-            })
-            .collect();
-        let steady: Vec<f64> = mine
-            .clone()
-            .flat_map(|d| d.segments.iter())
-            .filter(|m| m.label == Label::Steady)
-            .map(|m| m.features.time)
-            .collect();
-        let departs: Vec<f64> = mine.filter_map(|d| d.departs).collect();
-        release_stats(&moving, &steady, &departs)
-    };
-    ByRelease {
-        flat: side(false),
-        edge: side(true),
-    }
 }
 
 /// Confidence level of [`real_intervals`]: the 5th to the 95th percentile.
@@ -510,6 +473,15 @@ fn real_bins(real: &[RealSegment]) -> Vec<RealBin> {
                 })
                 .collect(),
         })
+        .collect()
+}
+
+/// Per bin of [`SQUARE_BINS`], the share of the real tumbling and chaotic
+/// drops that were let go flat (NaN for a bin without any).
+pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
+    real_by_release(real)
+        .iter()
+        .map(ByRelease::flat_share)
         .collect()
 }
 
