@@ -4,7 +4,8 @@
 //! (under the unsteady law that measures the air's rates by some thousand
 //! force evaluations, [`leafmagic::physics::forces::unsteady::drag_rate`]).
 //! The bound: the unsteady law at most 2× the linear law's cost.
-//! `stepping` pairs time the same drops at the step fixed beforehand.
+//! `stepping` pairs time the same drops at the step fixed beforehand, and
+//! `choose_step` pairs the choice of the step alone (what `drop` adds).
 //! Run with `cargo bench --bench aero_laws`; all are timed in the same run.
 
 use criterion::{Criterion, criterion_group, criterion_main};
@@ -46,6 +47,19 @@ fn aero_laws(c: &mut Criterion) {
             dt: TimeStep::Fixed(dt),
             ..auto
         };
+        group.bench_function(format!("{name}_choose_step"), |b| {
+            b.iter(|| {
+                black_box(
+                    run::resolve_step(
+                        &model,
+                        defaults.integrator,
+                        TimeStep::Auto,
+                        1.0 / drop::FRAME_RATE,
+                    )
+                    .unwrap(),
+                )
+            })
+        });
         group.bench_function(name, |b| {
             b.iter(|| black_box(drop_leaf(&model, &auto).unwrap()))
         });
