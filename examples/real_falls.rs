@@ -175,8 +175,8 @@ fn run() -> Result<(), String> {
             real_falls::read_squares(&dir).map_err(|e| e.to_string())?
         }
     };
-    // The films' shape is the plates' (every row of one shape: the reader).
-    let filmed = real.first().map_or(PlateShape::Square, |s| s.shape);
+    // The films' shape is the plates' (`compare_with`).
+    let filmed = real_falls::films_shape(&real).map_err(|e| e.to_string())?;
     // What the first column holds: a square's side, another shape's size
     // as `leafmagic plate --size` takes it.
     let size_col = if filmed == PlateShape::Square {

@@ -190,8 +190,12 @@ pub fn compare_with(
     })
 }
 
-/// The one shape of `real_segments`' paper.
-fn films_shape(real_segments: &[RealSegment]) -> Result<PlateShape, ExperimentError> {
+/// The one shape of `real_segments`' paper, which [`compare_with`] cuts
+/// its plates to.
+///
+/// # Errors
+/// [`ExperimentError::Films`] if there are none or they are of two shapes.
+pub fn films_shape(real_segments: &[RealSegment]) -> Result<PlateShape, ExperimentError> {
     let first = real_segments
         .first()
         .ok_or_else(|| ExperimentError::Films("there are none to compare with".into()))?;
