@@ -58,7 +58,9 @@ impl RunStats {
 }
 
 /// Resolves a [`TimeStep`] for `model` to a step that divides `frame_dt`.
-/// Errors when `Auto` finds no stable step (forward Euler on undamped springs).
+/// Errors when `Auto` finds no stable step (forward Euler on undamped
+/// springs, a rate that overflows), and at any step when a particle's mass
+/// is lost beside its added mass ([`StepError::MassLostToAddedMass`]).
 pub fn resolve_dt(
     model: &Model,
     integrator: Integrator,
@@ -70,7 +72,7 @@ pub fn resolve_dt(
 
 /// Resolves a [`TimeStep`] for a run sampled by [`run_sampled`]: a fixed
 /// step is used as given, `Auto` is [`stability::StabilityEstimate::auto_step`]
-/// (not snapped to the frame grid).
+/// (not snapped to the frame grid). Errors as [`resolve_dt`].
 pub fn resolve_step(
     model: &Model,
     integrator: Integrator,
@@ -88,11 +90,20 @@ fn resolve(
     onto_frames: bool,
 ) -> Result<f64, StepError> {
     match dt {
-        TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => Ok(if onto_frames {
-            stability::snap_to_frame(h, frame_dt)
-        } else {
-            h
-        }),
+        TimeStep::Fixed(h) if h > 0.0 && h.is_finite() => {
+            // No step is safe for a mass the solve cannot see, fixed or not.
+            if let Some((particle, added_mass)) = stability::mass_lost_to_added_mass(model) {
+                return Err(StepError::MassLostToAddedMass {
+                    particle,
+                    added_mass,
+                });
+            }
+            Ok(if onto_frames {
+                stability::snap_to_frame(h, frame_dt)
+            } else {
+                h
+            })
+        }
         TimeStep::Fixed(h) => Err(StepError::NotPositive(h)),
         TimeStep::Auto => {
             let estimate = stability::estimate(model);
@@ -108,15 +119,23 @@ fn resolve(
 }
 
 /// Refuses a stability estimate with a rate that overflows f64 (a stiffness,
-/// damping or drag coefficient too large, or a mass too small): no step can
-/// be chosen from it. What `drop` refuses, `check` refuses with the same
+/// damping or drag coefficient, gravity or a mass too large, or a mass too
+/// small), or a particle whose mass is lost beside its added mass: no step
+/// can be chosen from it. What `drop` refuses, `check` refuses with the same
 /// message.
 ///
 /// # Errors
+/// [`StepError::MassLostToAddedMass`], naming the particle, or
 /// [`StepError::Overflow`], naming the rates and the stiffest spring.
 pub fn check_estimate(estimate: &stability::StabilityEstimate) -> Result<(), StepError> {
     if estimate.is_finite() {
         return Ok(());
+    }
+    if let Some((particle, added_mass)) = estimate.mass_lost_to_added_mass {
+        return Err(StepError::MassLostToAddedMass {
+            particle,
+            added_mass,
+        });
     }
     let rates = [
         ("ω_max", estimate.omega_max, "rad/s"),
@@ -236,8 +255,9 @@ pub enum StepError {
     Duration(f64),
     /// A rate of the model overflows f64, so the auto step has nothing to go on.
     #[error(
-        "no time step can be chosen: {rates} (a stiffness, damping or drag coefficient \
-         too large, or a mass too small, for f64: k/m, c/m or α/m overflows{})",
+        "no time step can be chosen: {rates} (a stiffness, damping or drag coefficient, \
+         gravity or a mass too large, or a mass too small, for f64: k/m, c/m or α/m overflows, \
+         or the speeds the unsteady law's rates are read at{})",
         .stiffest_spring.map_or(String::new(), |k| format!("; the stiffest is spring[{k}]"))
     )]
     Overflow {
@@ -245,6 +265,22 @@ pub enum StepError {
         rates: String,
         /// The stiffest spring, when a spring rate overflows.
         stiffest_spring: Option<usize>,
+    },
+    /// A particle's added mass under the unsteady law is so far beyond its
+    /// own mass that the mass is lost to round-off
+    /// ([`stability::MAX_ADDED_MASS_RATIO`]).
+    #[error(
+        "no time step can be chosen: particle[{particle}]'s added mass is {added_mass:.3e} kg, \
+         over {:.0e} times its own mass, which round-off then loses in every step's solve \
+         ([aero] added_mass scales the potential flow's, 1 by default; or the particle is \
+         far too light)",
+        stability::MAX_ADDED_MASS_RATIO
+    )]
+    MassLostToAddedMass {
+        /// The particle, the one of largest ratio of those beyond it.
+        particle: usize,
+        /// Its added mass (the largest eigenvalue of its tensor), kg.
+        added_mass: f64,
     },
     /// Forward Euler on an undamped spring mode: unstable at any step.
     #[error(

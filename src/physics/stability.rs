@@ -25,6 +25,15 @@ pub const AUTO_SAFETY: f64 = 0.7;
 /// strip of 280 g/m² card diverged at 0.23).
 pub const MAX_TURN_PER_STEP: f64 = 0.2;
 
+/// Most added mass a free particle may carry under the unsteady law, in
+/// multiples of its own mass. (m I + M) has condition number about 1 + M/m,
+/// and its solve keeps about 16 − log₁₀(1 + M/m) digits: at 10⁹ still 7, a
+/// few ulps of M beyond it as large as m itself. Real paper is far below:
+/// 10 g/m² paper's added mass is 2.6 times its own (docs/real-falls.md,
+/// "The law"); only a coefficient such as `added_mass = 1e30`, or a particle
+/// of 10⁻³⁰⁰ kg, comes near.
+pub const MAX_ADDED_MASS_RATIO: f64 = 1e9;
+
 /// Mass ratios above this make a network ill-conditioned (docs/numerics.md,
 /// "Conditioning warnings").
 pub const WARN_MASS_RATIO: f64 = 1e4;
@@ -81,6 +90,13 @@ pub struct StabilityEstimate {
     pub tumbling_rate: f64,
     /// The spring with the largest k (1/mᵢ + 1/mⱼ).
     pub stiffest_spring: Option<usize>,
+    /// A free particle whose added mass under the unsteady law (the largest
+    /// eigenvalue of its tensor M_i), kg, given here, is over
+    /// [`MAX_ADDED_MASS_RATIO`] times its own mass: its own mass is then
+    /// lost to round-off in the 3 × 3 solve of every step
+    /// ([`crate::physics::forces::Forces::acceleration`]) and in every rate
+    /// read through it, and no step can be chosen.
+    pub mass_lost_to_added_mass: Option<(usize, f64)>,
     /// The lightest free particle.
     pub lightest_particle: usize,
     /// Heaviest mass over lightest mass.
@@ -91,19 +107,22 @@ pub struct StabilityEstimate {
 
 impl StabilityEstimate {
     /// Whether every rate is finite: false when a stiffness, drag or 1/m is
-    /// so extreme that k/m or α/m overflows f64, and no step can be chosen.
+    /// so extreme that k/m or α/m overflows f64, or a particle's mass is lost
+    /// beside its added mass ([`Self::mass_lost_to_added_mass`]), and no step
+    /// can be chosen.
     pub fn is_finite(&self) -> bool {
-        [
-            self.omega_max,
-            self.omega_lower,
-            self.omega_upper,
-            self.mode_damping_rate,
-            self.damping_rate_max,
-            self.drag_rate,
-            self.tumbling_rate,
-        ]
-        .iter()
-        .all(|v| v.is_finite())
+        self.mass_lost_to_added_mass.is_none()
+            && [
+                self.omega_max,
+                self.omega_lower,
+                self.omega_upper,
+                self.mode_damping_rate,
+                self.damping_rate_max,
+                self.drag_rate,
+                self.tumbling_rate,
+            ]
+            .iter()
+            .all(|v| v.is_finite())
     }
 
     /// The drag time constant 1/γ of the particle that reacts fastest to air, s
@@ -269,6 +288,41 @@ fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>
         })
         .collect();
     Some(roots)
+}
+
+/// The free particle, if any, whose added mass at rest under the unsteady
+/// law (the largest eigenvalue of its tensor M_i) is over
+/// [`MAX_ADDED_MASS_RATIO`] times its own mass, the one of largest ratio,
+/// with that added mass, kg ([`StabilityEstimate::mass_lost_to_added_mass`]).
+/// Breakable springs or not: every step solves (m_i I + M_i) a_i = f_i.
+/// A member of a rigid body is left out: its body's 6 × 6 solve sums the
+/// members' masses, and its rates, which grow with the added mass, meet the
+/// step's work bound instead.
+pub fn mass_lost_to_added_mass(model: &Model) -> Option<(usize, f64)> {
+    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
+        return None;
+    };
+    if law.air_density * law.added_mass <= 0.0 {
+        return None;
+    }
+    let tensors = crate::physics::forces::unsteady::rest_added_mass_tensors(law, model);
+    let body_of = model.body_of();
+    let mut lost: Option<(usize, f64)> = None;
+    for i in (0..model.len()).filter(|&i| !model.fixed[i] && body_of[i].is_none()) {
+        // The eigenvalue iteration never settles on inf or NaN.
+        let added = if tensors[i].iter().all(|v| v.is_finite()) {
+            tensors[i].symmetric_eigenvalues().max()
+        } else {
+            f64::INFINITY
+        };
+        let m = model.mass[i];
+        if added > MAX_ADDED_MASS_RATIO * m
+            && lost.is_none_or(|(j, a)| added / m > a / model.mass[j])
+        {
+            lost = Some((i, added));
+        }
+    }
+    lost
 }
 
 /// Computes the estimate at the rest shape.
@@ -477,8 +531,12 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     };
     let omega2 = if converged {
         lambda.min(omega2_upper)
-    } else {
+    } else if omega2_lower <= omega2_upper {
         (UNCONVERGED_MARGIN * lambda).clamp(omega2_lower, omega2_upper)
+    } else {
+        // A bound overflowed (or is NaN: inf − inf through an infinite root
+        // above): the mode is unbounded, and `check_estimate` refuses it.
+        f64::INFINITY
     };
 
     // Damping of that mode: c_eff = qᵀ C q / qᵀ M q with q = M^-1/2 y.
@@ -552,6 +610,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         explicit_drag_rate: quadratic_rate,
         tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
         stiffest_spring: stiffest,
+        mass_lost_to_added_mass: mass_lost_to_added_mass(model),
         lightest_particle: lightest,
         mass_ratio,
         warnings,

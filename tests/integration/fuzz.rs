@@ -1,6 +1,7 @@
-//! A seeded fuzz harness: leaf, scene and fall files of the repository,
-//! mutated (bytes flipped, lines cut, duplicated or swapped, numbers replaced
-//! by extremes, text that is not UTF-8, truncation), are handed to the
+//! A seeded fuzz harness: leaf, scene and fall files of the repository
+//! (and a plate as `leafmagic plate` writes it), mutated (bytes flipped,
+//! lines cut, duplicated or swapped, numbers replaced by extremes, text that
+//! is not UTF-8, truncation), are handed to the
 //! binary; every case must end within a few seconds, without a panic, either
 //! successfully or with an error that names the file. The cases of issue 22
 //! live in tests/data/hardening and each is checked for its own outcome.
@@ -226,8 +227,26 @@ fn seeds(dir: &str, ext: &str) -> Vec<PathBuf> {
 fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
     let dir = scratch("cases");
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(22);
+    // A rigid plate as `leafmagic plate` writes it, under the unsteady law.
+    let plate = dir.join("plate-seed.toml");
+    let made = leafmagic()
+        .args(["plate", "--shape", "square", "--size", "0.05", "--out"])
+        .arg(&plate)
+        .output()
+        .unwrap();
+    assert!(made.status.success(), "{made:?}");
     let kinds: [(&str, Vec<PathBuf>); 3] = [
-        ("leaf", seeds("prototypes", "toml")),
+        (
+            "leaf",
+            [
+                seeds("prototypes", "toml"),
+                vec![
+                    repo().join("tests/data/hardening/unsteady-leaf.toml"),
+                    plate,
+                ],
+            ]
+            .concat(),
+        ),
         ("scene", seeds("scenes", "toml")),
         (
             "fall",
@@ -320,13 +339,34 @@ type Expect = (
 fn the_cases_of_issue_22_end_as_they_should() {
     let data = repo().join("tests/data/hardening");
     let out = scratch("regressions");
-    let cases: [Expect; 14] = [
+    let lost_mass: &[&str] = &[
+        "no time step can be chosen",
+        "particle[0]'s added mass is 3.064e24 kg",
+        "[aero] added_mass",
+    ];
+    let overflowed: &[&str] = &[
+        "no time step can be chosen",
+        "the drag rate = inf",
+        "gravity",
+    ];
+    let cases: [Expect; 19] = [
         (
             "check",
             "overflowing-spring.toml",
             &[],
             false,
             &["no time step can be chosen", "spring[0]"],
+        ),
+        ("check", "huge-added-mass.toml", &[], false, lost_mass),
+        ("check", "rigid-huge-gravity.toml", &[], false, overflowed),
+        ("drop", "rigid-huge-gravity.toml", &[], false, overflowed),
+        ("drop", "huge-added-mass.toml", &[], false, lost_mass),
+        (
+            "drop",
+            "huge-added-mass.toml",
+            &["--dt", "1e-4"],
+            false,
+            lost_mass,
         ),
         (
             "drop",

@@ -526,7 +526,15 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
                 jac[(row + 3, col)] = (tp[row] - t0[row]) / e[col];
             }
         }
-        let rate = (inverse * jac)
+        let map = inverse * jac;
+        // A force that overflowed (gravity or a mass near f64's limit makes
+        // the reference speeds infinite) leaves inf or NaN here, on which
+        // the Schur iteration never settles: the rate is unbounded, and the
+        // estimate's check refuses it.
+        if !map.iter().all(|v| v.is_finite()) {
+            return f64::INFINITY;
+        }
+        let rate = map
             .complex_eigenvalues()
             .iter()
             .map(|z| z.norm())
