@@ -298,6 +298,12 @@ pub const PAPER_AREAL_DENSITY: f64 = 0.070;
 /// plate's moment of inertia to 1/n² (1.6 %; a test holds ≤ 2 %).
 pub const PLATE_CELLS: usize = 8;
 
+/// Most particles `plate` meshes a plate into (a rectangle's grow with its
+/// aspect): the most a scene may hold, `sim::scene::MAX_PARTICLES`, beyond
+/// which a plate is no use to any run here (a rectangle takes about 68
+/// per unit of aspect, so up to an aspect of about 14 700).
+pub const MAX_PLATE_PARTICLES: usize = 1_000_000;
+
 /// Rings of a hexagonal or circular plate's triangular mesh (the same
 /// bound: a test holds ≤ 2 %).
 pub const PLATE_RINGS: usize = 8;
@@ -385,13 +391,30 @@ pub fn plate_meshed(
         });
     }
     let (cells, rings) = (PLATE_CELLS * refine, PLATE_RINGS * refine);
+    // Counted before anything is allocated: a long rectangle's cells grow
+    // with its aspect (grid_mesh: (nx + 1)(ny + 1) corners and nx ny centres).
+    let along = (cells as f64 * aspect / 2.0).ceil().max(cells as f64);
+    let particles = match shape {
+        PlateShape::Square | PlateShape::Rectangle => {
+            let (nx, ny) = (along, cells as f64);
+            (nx + 1.0) * (ny + 1.0) + nx * ny
+        }
+        // ring_mesh: the centre and 6k points on ring k.
+        PlateShape::Hexagon | PlateShape::Circle => 1.0 + 3.0 * rings as f64 * (rings as f64 + 1.0),
+    };
+    if particles > MAX_PLATE_PARTICLES as f64 {
+        return Err(PlateError {
+            field: if refine > 1 { "refine" } else { "--aspect" }.to_string(),
+            reason: format!(
+                "the plate would be meshed into {particles:.3e} particles, more than the \
+                 {MAX_PLATE_PARTICLES} a plate may hold"
+            ),
+        });
+    }
     let (points, triangles) = match shape {
         PlateShape::Square => grid_mesh(size, size, cells, cells),
-        PlateShape::Rectangle => {
-            // Cells at most twice as long as wide along the plate.
-            let along = ((cells as f64 * aspect / 2.0).ceil() as usize).max(cells);
-            grid_mesh(aspect * size, size, along, cells)
-        }
+        // Cells at most twice as long as wide along the plate.
+        PlateShape::Rectangle => grid_mesh(aspect * size, size, along as usize, cells),
         PlateShape::Hexagon => ring_mesh(size / 3f64.sqrt(), rings, false),
         PlateShape::Circle => ring_mesh(0.5 * size, rings, true),
     };
@@ -402,6 +425,21 @@ pub fn plate_meshed(
         for &i in t {
             mass[i] += share;
         }
+    }
+    let (lightest, heaviest) = mass.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &m| {
+        (lo.min(m), hi.max(m))
+    });
+    // 1/m must be finite too: no subnormal mass.
+    if !(heaviest.is_finite() && lightest >= f64::MIN_POSITIVE) {
+        return Err(PlateError {
+            field: "--size and --areal-density".to_string(),
+            reason: format!(
+                "a {} of {size:e} m at {sigma:e} kg/m² has particles of {lightest:.3e} to \
+                 {heaviest:.3e} kg, which f64 cannot hold (from {:.3e} kg to finite)",
+                shape.as_str(),
+                f64::MIN_POSITIVE
+            ),
+        });
     }
     let particles = points
         .iter()

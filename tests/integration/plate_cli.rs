@@ -148,6 +148,39 @@ fn bad_plate_flags_are_refused_by_name_and_write_nothing() {
             "--aspect",
         ),
         (vec!["--shape", "triangle", "--size", "0.05"], "--shape"),
+        // Finite, but f64 holds no mass for their particles (inf or 0 kg).
+        (vec!["--shape", "square", "--size", "1e308"], "--size"),
+        (vec!["--shape", "hexagon", "--size", "1e-300"], "--size"),
+        // Masses of 1e-306 kg: a moment of inertia among the subnormals,
+        // which once read as "the particles lie on one line".
+        (
+            vec![
+                "--shape",
+                "square",
+                "--size",
+                "0.05",
+                "--areal-density",
+                "1e-300",
+            ],
+            "moment of inertia",
+        ),
+        // 6.8e10 particles: refused before anything is allocated (it was
+        // an abort on a terabyte's allocation; 1e308, a panic).
+        (
+            vec!["--shape", "rectangle", "--size", "0.05", "--aspect", "1e9"],
+            "--aspect",
+        ),
+        (
+            vec![
+                "--shape",
+                "rectangle",
+                "--size",
+                "0.05",
+                "--aspect",
+                "1e308",
+            ],
+            "--aspect",
+        ),
         (
             vec!["--shape", "square", "--size", "0.05", "--law", "magic"],
             "--law",

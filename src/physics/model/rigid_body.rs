@@ -103,6 +103,19 @@ impl RigidBody {
         let inertia = inertia_tensor(&member_mass, &offsets);
         let eig = inertia.symmetric_eigenvalues();
         let (lo, hi) = (eig.min(), eig.max());
+        // Below this a flat body's smallest moment would fall among f64's
+        // subnormals, where the ratio test cannot tell a line from a plate.
+        if hi < f64::MIN_POSITIVE / MIN_INERTIA_RATIO {
+            return Err(fail(
+                "members",
+                format!(
+                    "the body's largest moment of inertia, {hi:.3e} kg m², is too small for \
+                     f64 to resolve its rotation (under {:.3e}): its masses or its size are too \
+                     small",
+                    f64::MIN_POSITIVE / MIN_INERTIA_RATIO
+                ),
+            ));
+        }
         let inertia_inv = inertia
             .try_inverse()
             .filter(|_| lo > MIN_INERTIA_RATIO * hi);
