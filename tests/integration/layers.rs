@@ -303,15 +303,16 @@ fn the_model_imports_nothing_of_the_engine() {
 }
 
 /// Layers, and folders of the others, whose files form no import cycle.
-/// Not yet among them: `sim/accuracy`, `sim/scene` and `output/export`,
-/// whose files still use their folder module's types while it uses theirs.
-const ACYCLIC: [&str; 6] = [
+/// Not yet among them: `sim/scene` and `output/export`, whose files still
+/// use their folder module's types while it uses theirs.
+const ACYCLIC: [&str; 7] = [
     "util",
     "physics",
     "motion",
     "leaf",
     "breed",
     "sim::real_falls",
+    "sim::accuracy",
 ];
 
 /// Whether module `m` is in one of the [`ACYCLIC`] layers or folders.

@@ -15,7 +15,8 @@
 //! [`super::long`]) the number is still correct but describes one
 //! realisation: pointwise error there means nothing.
 
-use super::{AccuracyError, default_release, rms_difference, run_steps, smooth_model};
+use super::error::AccuracyError;
+use super::run::{default_release, rms_difference, run_steps, smooth_model};
 use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::stability;
@@ -99,7 +100,7 @@ pub fn compute(
         let fine = reference_run(&smooth, initial, seconds, j + 1)?;
         let self_difference = rms_difference(&coarse, &fine, chord);
         let error = rms_difference(&run.state.position, &fine, chord);
-        let valid = self_difference < super::REFERENCE_FACTOR * error;
+        let valid = self_difference < super::run::REFERENCE_FACTOR * error;
         // Once the reference agrees with itself to round-off, halving again
         // only adds round-off (a fall the run itself gets exact, such as a
         // leaf without air, never validates): stop rather than run on to

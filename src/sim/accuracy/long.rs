@@ -11,7 +11,7 @@
 //! released [`TWIN_SEPARATION`] chords apart: it is the time at which their
 //! RMS particle separation first exceeds [`HORIZON_SEPARATION`] chords.
 
-use super::AccuracyError;
+use super::error::AccuracyError;
 use crate::motion::classify::{self, MotionClass};
 use crate::physics::model::Model;
 use crate::physics::params::Integrator;
@@ -327,6 +327,6 @@ fn horizon(
     Ok(a.iter()
         .zip(b)
         .zip(time)
-        .find(|((x, y), _)| super::rms_difference(x, y, chord) > HORIZON_SEPARATION)
+        .find(|((x, y), _)| super::run::rms_difference(x, y, chord) > HORIZON_SEPARATION)
         .map(|(_, &t)| t))
 }
