@@ -16,8 +16,8 @@ pub const PILOT_STEPS: u64 = 256;
 /// alone doubled the estimate.
 pub const PILOT_MIN_S: f64 = 0.02;
 
-/// Bisection runs [`super::locate_limit`] takes to 1 % (log₂ 100 ≈ 7),
-/// counted at twice the first point's steps.
+/// Bisection runs [`super::sweep::locate_limit`] takes to 1 %
+/// (log₂ 100 ≈ 7), counted at twice the first point's steps.
 const BISECTION_RUNS: f64 = 7.0;
 
 /// What a sweep will cost, from a pilot run of each integrator at its

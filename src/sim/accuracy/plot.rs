@@ -1,6 +1,6 @@
 //! The work-precision plot of an accuracy sweep.
 
-use super::{SweepReport, TOLERANCES};
+use super::sweep::{SweepReport, TOLERANCES};
 use crate::physics::params::Integrator;
 use crate::util::svg::{PlotError, SIZE, min_max};
 use plotters::prelude::*;
