@@ -14,6 +14,7 @@
 //! a body frame and carry a pose per frame; deforming objects (mass-spring
 //! leaves, sheets, ropes) carry every vertex's position per frame.
 
+mod error;
 pub mod frame;
 pub mod glb;
 pub mod pc2;
@@ -21,6 +22,7 @@ mod read;
 pub mod render_mesh;
 pub mod usd;
 
+pub use error::ExportError;
 pub use frame::{Body, Framed};
 pub use read::{from_glb, from_glb_bytes, from_scene_dir};
 pub use render_mesh::RenderMesh;
@@ -35,7 +37,6 @@ use crate::sim::scene::{ObjectKind, Scene, SceneRun};
 use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::fmt;
-use std::path::PathBuf;
 use std::str::FromStr;
 
 type V3 = Vector3<f64>;
@@ -89,48 +90,6 @@ impl fmt::Display for Format {
             Format::Pc2 => "pc2",
             Format::Usd => "usd",
         })
-    }
-}
-
-/// Why an export or a preview could not be made. Every message names the
-/// file or directory at fault.
-#[derive(Debug, thiserror::Error)]
-pub enum ExportError {
-    /// Reading or writing a file failed.
-    #[error("{path}: {error}")]
-    Io {
-        /// The file.
-        path: PathBuf,
-        /// What the system said.
-        #[source]
-        error: std::io::Error,
-    },
-    /// The input is not what it should be.
-    #[error("{path}: {reason}")]
-    Input {
-        /// The file or directory.
-        path: PathBuf,
-        /// What is wrong.
-        reason: String,
-    },
-    /// The data cannot be exported (e.g. no frames, a simulation failed).
-    #[error("{0}")]
-    Data(String),
-}
-
-impl ExportError {
-    pub(crate) fn io(path: impl Into<PathBuf>, error: std::io::Error) -> ExportError {
-        ExportError::Io {
-            path: path.into(),
-            error,
-        }
-    }
-
-    pub(crate) fn input(path: impl Into<PathBuf>, reason: impl Into<String>) -> ExportError {
-        ExportError::Input {
-            path: path.into(),
-            reason: reason.into(),
-        }
     }
 }
 

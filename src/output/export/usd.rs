@@ -32,9 +32,10 @@
 //! For `.usdc`, Pixar's library converts the text losslessly (see
 //! [`USDC_HINT`]).
 
+use super::error::ExportError;
 use super::frame::vertex_normals;
 use super::glb::{colour, material_name, shown};
-use super::{Clip, ClipObject, ExportError};
+use super::{Clip, ClipObject};
 use nalgebra::Vector3;
 use std::collections::BTreeSet;
 use std::path::Path;
