@@ -1,8 +1,9 @@
 //! An object's motion split into a moving frame and a shape in it: the
 //! rigid part (origin and rotation per frame, what a glTF node's TRS or a
 //! USD Xform carries, so the object's origin follows it) and the deformation
-//! relative to it (the local shape per frame). Also what dressing a mesh
-//! needs from its rest shape: smooth vertex normals and UVs.
+//! relative to it (the local shape per frame). What dressing a mesh needs
+//! from its rest shape, smooth vertex normals and UVs, is re-exported here
+//! from the folder's `dress.rs`.
 //!
 //! The frame of a deforming object is fitted like the pose of a leaf
 //! ([`crate::physics::pose`]): its origin is the mass-weighted centre of the
@@ -11,6 +12,8 @@
 //! chosen (the local shape is Rᵀ(x − c)); the fit only keeps the local
 //! deformation small, so that what clients interpolate between keys is
 //! mostly the rigid motion.
+
+pub use super::dress::{outline_uvs, triangle_normals, vertex_normals};
 
 use super::{ClipObject, Motion};
 use crate::physics::pose::best_rotation;
@@ -157,54 +160,6 @@ impl ClipObject {
     }
 }
 
-/// Unit normals of triangles (zero for a degenerate one).
-pub fn triangle_normals(points: &[V3], triangles: &[[u32; 3]]) -> Vec<V3> {
-    triangles
-        .iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| points[i as usize]);
-            (b - a)
-                .cross(&(c - a))
-                .try_normalize(0.0)
-                .unwrap_or_default()
-        })
-        .collect()
-}
-
-/// Smooth vertex normals: the area-weighted mean of the normals of the
-/// triangles around each vertex (the sum of their cross products),
-/// normalised; +z of the frame for a vertex on no triangle.
-pub fn vertex_normals(points: &[V3], triangles: &[[u32; 3]]) -> Vec<V3> {
-    let mut sum = vec![V3::zeros(); points.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| points[i as usize]);
-        let n = (b - a).cross(&(c - a));
-        for &i in t {
-            sum[i as usize] += n;
-        }
-    }
-    sum.into_iter()
-        .map(|n| n.try_normalize(1e-30).unwrap_or_else(V3::z))
-        .collect()
-}
-
-/// UVs over the bounding box of the rest shape seen along its body z (for a
-/// leaf, its outline seen from above): u = (x − x_min) / (x_max − x_min),
-/// v = (y − y_min) / (y_max − y_min), both in 0 … 1. A flat extent (a rope)
-/// maps to 0.
-pub fn outline_uvs(rest: &[V3]) -> Vec<[f64; 2]> {
-    let range = |d: usize| {
-        let lo = rest.iter().map(|p| p[d]).fold(f64::INFINITY, f64::min);
-        let hi = rest.iter().map(|p| p[d]).fold(f64::NEG_INFINITY, f64::max);
-        (lo, hi - lo)
-    };
-    let ((x0, dx), (y0, dy)) = (range(0), range(1));
-    let unit = |x: f64, lo: f64, d: f64| if d > 0.0 { (x - lo) / d } else { 0.0 };
-    rest.iter()
-        .map(|p| [unit(p.x, x0, dx), unit(p.y, y0, dy)])
-        .collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -281,30 +236,5 @@ mod tests {
         let f = o.framed();
         assert_eq!(f.rotation[1], UnitQuaternion::identity());
         assert!((f.local_at(1)[3].x - 0.18).abs() < 1e-12);
-    }
-
-    #[test]
-    fn normals_and_uvs_of_a_flat_square() {
-        let p = vec![
-            V3::new(0.0, 0.0, 0.0),
-            V3::new(2.0, 0.0, 0.0),
-            V3::new(2.0, 1.0, 0.0),
-            V3::new(0.0, 1.0, 0.0),
-        ];
-        let n = vertex_normals(&p, &[[0, 1, 2], [0, 2, 3]]);
-        assert!(n.iter().all(|n| (n - V3::z()).norm() < 1e-15));
-        assert_eq!(
-            outline_uvs(&p),
-            vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]
-        );
-        // A fold: the vertex on the crease gets the mean of both sides.
-        let q = vec![
-            V3::new(0.0, 0.0, 0.0),
-            V3::new(1.0, 0.0, 0.0),
-            V3::new(0.0, 1.0, 1.0),
-            V3::new(0.0, -1.0, 1.0),
-        ];
-        let n = vertex_normals(&q, &[[0, 1, 2], [0, 3, 1]]);
-        assert!((n[0] - V3::z()).norm() < 1e-12, "{:?}", n[0]);
     }
 }

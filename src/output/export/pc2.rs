@@ -89,7 +89,7 @@ pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
         Some(r) => (r.triangles.clone(), r.uvs.clone()),
         None => {
             let body = o.body_or_first_frame();
-            (o.triangles.clone(), super::frame::outline_uvs(&body.rest))
+            (o.triangles.clone(), super::dress::outline_uvs(&body.rest))
         }
     };
     if !triangles.is_empty() {

@@ -266,7 +266,7 @@ impl RenderMesh {
     /// The render vertices on the simulated mesh `points` + `triangles`:
     /// Σ bᵢ pᵢ + h n for each vertex's triangle.
     pub fn place(&self, points: &[V3], triangles: &[[u32; 3]]) -> Vec<V3> {
-        let normals = super::frame::triangle_normals(points, triangles);
+        let normals = super::dress::triangle_normals(points, triangles);
         self.bindings
             .iter()
             .map(|b| {

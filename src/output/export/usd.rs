@@ -32,8 +32,8 @@
 //! For `.usdc`, Pixar's library converts the text losslessly (see
 //! [`USDC_HINT`]).
 
+use super::dress::vertex_normals;
 use super::error::ExportError;
-use super::frame::vertex_normals;
 use super::glb::{colour, material_name, shown};
 use super::{Clip, ClipObject};
 use nalgebra::Vector3;
