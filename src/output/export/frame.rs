@@ -13,23 +13,14 @@
 //! deformation small, so that what clients interpolate between keys is
 //! mostly the rigid motion.
 
+pub use super::clip::Body;
 pub use super::dress::{outline_uvs, triangle_normals, vertex_normals};
 
-use super::{ClipObject, Motion};
+use super::clip::{ClipObject, Motion};
 use crate::physics::pose::best_rotation;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 type V3 = Vector3<f64>;
-
-/// The rest shape of an object in its own body frame.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Body {
-    /// Vertices in the body frame (for a leaf: z the plate normal, x the
-    /// long axis), with the origin at their mass-weighted centre, m.
-    pub rest: Vec<V3>,
-    /// The weight of each vertex in the frame fit (its mass, kg).
-    pub mass: Vec<f64>,
-}
 
 /// An object's motion as a moving frame and a shape in it.
 #[derive(Clone, Debug, PartialEq)]

@@ -24,10 +24,10 @@
 //! ground height, the wind glyphs, the frame rate), node `extras` the
 //! object's kind and label; the previewer reads them back.
 
+use super::clip::{Clip, ClipObject};
 use super::dress::{outline_uvs, triangle_normals, vertex_normals};
 use super::error::ExportError;
 use super::frame::Framed;
-use super::{Clip, ClipObject};
 use gltf::json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};

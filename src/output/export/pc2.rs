@@ -19,8 +19,8 @@
 //! keep the simulator's axes (z up), so import the OBJ into Blender with
 //! Up = Z, Forward = Y, and keep the Mesh Cache modifier's default axes.
 
+use super::clip::{Clip, ClipObject};
 use super::error::ExportError;
-use super::{Clip, ClipObject};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 

@@ -3,9 +3,10 @@
 //! the shapes) and `.glb` files (ours, or any glTF 2.0 binary whose animated
 //! nodes are roots of the scene).
 
+use super::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count};
 use super::error::ExportError;
 use super::glb::from_gltf;
-use super::{Clip, ClipObject, DEFAULT_FPS, Motion, WindGlyph, frame_count};
+use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::Scene;
 use gltf::animation::util::ReadOutputs;

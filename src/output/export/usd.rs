@@ -32,10 +32,10 @@
 //! For `.usdc`, Pixar's library converts the text losslessly (see
 //! [`USDC_HINT`]).
 
+use super::clip::{Clip, ClipObject};
 use super::dress::vertex_normals;
 use super::error::ExportError;
 use super::glb::{colour, material_name, shown};
-use super::{Clip, ClipObject};
 use nalgebra::Vector3;
 use std::collections::BTreeSet;
 use std::path::Path;
