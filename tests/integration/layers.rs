@@ -303,9 +303,9 @@ fn the_model_imports_nothing_of_the_engine() {
 }
 
 /// Layers, and folders of the others, whose files form no import cycle.
-/// Not yet among them: `sim/scene` and `output/export`, whose files still
-/// use their folder module's types while it uses theirs.
-const ACYCLIC: [&str; 7] = [
+/// Not yet among them: `sim/scene`, whose files still use their folder
+/// module's types while it uses theirs.
+const ACYCLIC: [&str; 8] = [
     "util",
     "physics",
     "motion",
@@ -313,6 +313,7 @@ const ACYCLIC: [&str; 7] = [
     "breed",
     "sim::real_falls",
     "sim::accuracy",
+    "output::export",
 ];
 
 /// Whether module `m` is in one of the [`ACYCLIC`] layers or folders.

@@ -282,6 +282,10 @@ pub fn resample_positions(
         .collect()
 }
 
+pub(super) fn to_u32(t: &[usize; 3]) -> [u32; 3] {
+    t.map(|i| i as u32)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,6 +6,7 @@
 use super::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count};
 use super::error::ExportError;
 use super::glb::from_gltf;
+use super::scene::build_scene_clip;
 use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::Scene;
@@ -169,7 +170,7 @@ pub fn from_scene_dir(dir: &Path, fps: f64) -> Result<Clip, ExportError> {
         .iter()
         .map(|p| p.as_ref().map(|(_, f)| f.as_slice()))
         .collect();
-    super::build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)
+    build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)
 }
 
 /// Reads a `.glb` file as a clip (see [`from_glb_bytes`]).
