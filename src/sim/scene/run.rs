@@ -1,7 +1,7 @@
 //! Running a compiled scene frame by frame, recording each object, and
 //! writing the per-object trajectories and the summary.
 
-use super::{ObjectKind, Scene};
+use super::compiled::{ObjectKind, Scene};
 use crate::motion::trajectory::Trajectory;
 use crate::physics::integrate::SimError;
 use crate::physics::params::Integrator;

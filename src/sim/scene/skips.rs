@@ -1,7 +1,7 @@
 //! What exact skipping ([`crate::physics::skip`]) leaves out for each object
 //! of a scene at a given time, for `scene --explain`.
 
-use super::Scene;
+use super::compiled::Scene;
 use crate::physics::skip::{WindSkip, bounding_box, feels_wind, groups};
 use crate::physics::terms::Terms;
 
