@@ -17,6 +17,7 @@
 //! [`Terms::needed`]: crate::physics::terms::Terms::needed
 
 mod compiled;
+mod error;
 mod locate;
 mod run;
 mod shapes;
@@ -24,6 +25,7 @@ mod skips;
 mod spec;
 
 pub use compiled::{MAX_MEMORY, ObjectKind, PoseFrame, Scene, SceneObject};
+pub use error::SceneError;
 pub use run::{OutputError, RunError, RunStats, SceneRun, Staged};
 pub use skips::GroupSkips;
 pub use spec::{
@@ -38,6 +40,7 @@ use crate::physics::model::RigidGroup;
 use crate::physics::model::{AeroLaw, Model, ModelError, ModelParts, Spring, Triangle};
 use crate::physics::params::TimeStep;
 use crate::physics::state::State;
+use error::{Ctx, check_name};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use shapes::Part;
 use std::collections::HashMap;
@@ -53,20 +56,6 @@ type V3 = Vector3<f64>;
 pub const MAX_PARTICLES: usize = 1_000_000;
 /// Most springs a scene may hold (a sheet has about four per particle).
 pub const MAX_SPRINGS: usize = 4_000_000;
-
-/// A scene file that could not be read, parsed or compiled.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{}{}: {}: {}", .file, .line.map_or(String::new(), |l| format!(":{l}")), .field, .message)]
-pub struct SceneError {
-    /// The scene file.
-    pub file: String,
-    /// 1-based line of the field, when known.
-    pub line: Option<usize>,
-    /// The field, as a path in the file (`rope[1].stiffness`).
-    pub field: String,
-    /// What is wrong.
-    pub message: String,
-}
 
 impl Scene {
     /// Reads and compiles a scene file; leaf paths are relative to its
@@ -123,56 +112,6 @@ impl Scene {
                 base,
             },
         )
-    }
-}
-
-/// Where errors are reported.
-struct Ctx<'a> {
-    text: &'a str,
-    file: &'a str,
-    base: &'a Path,
-}
-
-impl Ctx<'_> {
-    fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
-        let field = field.into();
-        SceneError {
-            file: self.file.to_string(),
-            line: locate::line_of_path(self.text, &field),
-            field,
-            message: message.into(),
-        }
-    }
-
-    fn finite(&self, field: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() {
-            Ok(())
-        } else {
-            Err(self.err(field, format!("must be a finite number, got {v}")))
-        }
-    }
-
-    fn positive(&self, field: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() && v > 0.0 {
-            Ok(())
-        } else {
-            Err(self.err(field, format!("must be a finite number > 0, got {v}")))
-        }
-    }
-
-    fn non_negative(&self, field: &str, v: f64) -> Result<(), SceneError> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(())
-        } else {
-            Err(self.err(field, format!("must be a finite number ≥ 0, got {v}")))
-        }
-    }
-
-    fn vector(&self, field: &str, v: &[f64]) -> Result<(), SceneError> {
-        match v.iter().find(|c| !c.is_finite()) {
-            Some(c) => Err(self.err(field, format!("must be finite, got {c}"))),
-            None => Ok(()),
-        }
     }
 }
 
@@ -400,24 +339,6 @@ impl Builder {
             .iter()
             .find_map(|(prefix, owners)| index(prefix).and_then(|i| owners.get(i).cloned()))
     }
-}
-
-fn check_name(
-    ctx: &Ctx<'_>,
-    field: &str,
-    name: &str,
-    seen: &mut HashMap<String, String>,
-) -> Result<(), SceneError> {
-    if name.is_empty() || name.contains(['/', '\\', ':']) || name.starts_with('.') {
-        return Err(ctx.err(
-            field,
-            format!("'{name}' is not a usable name (empty, or contains '/', '\\\\', ':' or starts with '.')"),
-        ));
-    }
-    if let Some(other) = seen.insert(name.to_string(), field.to_string()) {
-        return Err(ctx.err(field, format!("name '{name}' is already used by {other}")));
-    }
-    Ok(())
 }
 
 fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {

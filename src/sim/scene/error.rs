@@ -1,0 +1,89 @@
+//! A scene file's errors: [`SceneError`] names the file, the line and the
+//! field, and the checks of the compiler's numbers and names raise it with
+//! the line found from the field's path (`locate`).
+
+use super::locate;
+use std::collections::HashMap;
+use std::path::Path;
+
+/// A scene file that could not be read, parsed or compiled.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{}{}: {}: {}", .file, .line.map_or(String::new(), |l| format!(":{l}")), .field, .message)]
+pub struct SceneError {
+    /// The scene file.
+    pub file: String,
+    /// 1-based line of the field, when known.
+    pub line: Option<usize>,
+    /// The field, as a path in the file (`rope[1].stiffness`).
+    pub field: String,
+    /// What is wrong.
+    pub message: String,
+}
+
+/// Where errors are reported.
+pub(super) struct Ctx<'a> {
+    pub(super) text: &'a str,
+    pub(super) file: &'a str,
+    pub(super) base: &'a Path,
+}
+
+impl Ctx<'_> {
+    pub(super) fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
+        let field = field.into();
+        SceneError {
+            file: self.file.to_string(),
+            line: locate::line_of_path(self.text, &field),
+            field,
+            message: message.into(),
+        }
+    }
+
+    pub(super) fn finite(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number, got {v}")))
+        }
+    }
+
+    pub(super) fn positive(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() && v > 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number > 0, got {v}")))
+        }
+    }
+
+    pub(super) fn non_negative(&self, field: &str, v: f64) -> Result<(), SceneError> {
+        if v.is_finite() && v >= 0.0 {
+            Ok(())
+        } else {
+            Err(self.err(field, format!("must be a finite number ≥ 0, got {v}")))
+        }
+    }
+
+    pub(super) fn vector(&self, field: &str, v: &[f64]) -> Result<(), SceneError> {
+        match v.iter().find(|c| !c.is_finite()) {
+            Some(c) => Err(self.err(field, format!("must be finite, got {c}"))),
+            None => Ok(()),
+        }
+    }
+}
+
+pub(super) fn check_name(
+    ctx: &Ctx<'_>,
+    field: &str,
+    name: &str,
+    seen: &mut HashMap<String, String>,
+) -> Result<(), SceneError> {
+    if name.is_empty() || name.contains(['/', '\\', ':']) || name.starts_with('.') {
+        return Err(ctx.err(
+            field,
+            format!("'{name}' is not a usable name (empty, or contains '/', '\\\\', ':' or starts with '.')"),
+        ));
+    }
+    if let Some(other) = seen.insert(name.to_string(), field.to_string()) {
+        return Err(ctx.err(field, format!("name '{name}' is already used by {other}")));
+    }
+    Ok(())
+}
