@@ -14,9 +14,19 @@
 //!
 //! Errors name the file, the line and the field (`scene.toml:12: leaf[0].count: ...`).
 //!
+//! Its files, one job each: `spec` (the file as written), `compile` (reading
+//! and compiling it), `objects` (placing each kind of object), `shapes` (the
+//! built-in shapes' particles), `builder` (the model's parts as they
+//! accumulate, with each item's owner), `error` (errors and the checks that
+//! raise them), `locate` (their line numbers), `compiled` (the compiled
+//! scene), `run` (running and writing it), `skips` (what exact skipping
+//! leaves out, for `--explain`); this file re-exports what they make public.
+//!
+//! [`Model`]: crate::physics::model::Model
 //! [`Terms::needed`]: crate::physics::terms::Terms::needed
 
 mod builder;
+mod compile;
 mod compiled;
 mod error;
 mod locate;
@@ -29,244 +39,8 @@ mod spec;
 pub use builder::{MAX_PARTICLES, MAX_SPRINGS};
 pub use compiled::{MAX_MEMORY, ObjectKind, PoseFrame, Scene, SceneObject};
 pub use error::SceneError;
-pub use run::{OutputError, RunError, RunStats, SceneRun, Staged};
+pub use run::{OutputError, RunError, RunStats, SceneRun, Staged, default_out_dir};
 pub use skips::GroupSkips;
 pub use spec::{
     DtSpec, FixedPoint, LeafObject, Pin, RigidObject, RopeObject, SceneSpec, Shape, SheetObject,
 };
-
-use crate::physics::field::{
-    Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
-};
-use crate::physics::model::{AeroLaw, Model, ModelError};
-use crate::physics::params::TimeStep;
-use crate::physics::state::State;
-use builder::Builder;
-use error::{Ctx, check_name};
-use nalgebra::{UnitQuaternion, Vector3};
-use objects::{SplitMix, add_leaf, add_rigid, add_rope, add_sheet};
-use shapes::Part;
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
-
-type V3 = Vector3<f64>;
-
-impl Scene {
-    /// Reads and compiles a scene file; leaf paths are relative to its
-    /// directory.
-    pub fn load(path: &Path) -> Result<Scene, SceneError> {
-        let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: file.clone(),
-            line: None,
-            field: "file".to_string(),
-            message: format!("cannot read: {e}"),
-        })?;
-        let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::from_toml(&text, &file, &base)
-    }
-
-    /// Parses and compiles scene text; `file` names it in errors and leaf
-    /// paths are relative to `base`.
-    pub fn from_toml(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| {
-            let (mut line, mut field) = match e.span() {
-                Some(span) => (
-                    Some(locate::line_of_offset(text, span.start)),
-                    locate::path_at(text, span.start).unwrap_or_else(|| "(document)".into()),
-                ),
-                None => (None, "(document)".to_string()),
-            };
-            // Errors raised for a whole table (a key that does not apply to
-            // its kind) name the key in backticks: point at that key.
-            if let Some(key) = e.message().split('`').nth(1) {
-                let path = format!("{field}.{key}");
-                if let Some(l) = locate::line_of_present(text, &path) {
-                    (line, field) = (Some(l), path);
-                }
-            }
-            SceneError {
-                file: file.to_string(),
-                line,
-                field,
-                message: e.message().trim_end().to_string(),
-            }
-        })?;
-        compile(&spec, &Ctx { text, file, base })
-    }
-
-    /// Compiles an already parsed scene (for programs that build or edit
-    /// one); errors name the field but no line.
-    pub fn from_spec(spec: &SceneSpec, file: &str, base: &Path) -> Result<Scene, SceneError> {
-        compile(
-            spec,
-            &Ctx {
-                text: "",
-                file,
-                base,
-            },
-        )
-    }
-}
-
-/// Whether a wind primitive can never contribute (zero strength or all keys 0).
-fn inert(p: &crate::physics::field::Primitive) -> Option<&'static str> {
-    if p.keys().is_some_and(|k| k.max_abs() == 0.0) {
-        return Some("all strength keys are 0");
-    }
-    let zero = match p.flow() {
-        Flow::Uniform(Uniform { velocity }) => *velocity == V3::zeros(),
-        Flow::PointSource(PointSource { flux, .. })
-        | Flow::PointSink(PointSink { flux, .. })
-        | Flow::LineSource(LineSource { flux, .. })
-        | Flow::LineSink(LineSink { flux, .. }) => *flux == 0.0,
-        Flow::LineVortex(LineVortex { circulation, .. }) => *circulation == 0.0,
-    };
-    zero.then_some("zero strength")
-}
-
-fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
-    // The scene's name becomes a directory name.
-    check_name(ctx, "name", &spec.name, &mut HashMap::new())?;
-    ctx.positive("duration", spec.duration)?;
-    ctx.positive("frame_rate", spec.frame_rate)?;
-    crate::physics::run::check_frames(spec.duration, spec.frame_rate)
-        .map_err(|e| ctx.err("frame_rate", e.to_string()))?;
-    if let DtSpec::Seconds(h) = spec.dt {
-        ctx.positive("dt", h)?;
-        // The step as written (the run snaps it to divide the frame, which
-        // at most doubles the count; far below the limit it changes nothing).
-        crate::physics::run::check_steps(spec.duration, h, spec.integrator)
-            .map_err(|e| ctx.err("dt", e.to_string()))?;
-    }
-    ctx.vector("gravity", &spec.gravity)?;
-    if let Some(ground) = &spec.ground {
-        ground
-            .validate()
-            .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
-    }
-    spec.wind
-        .validate()
-        .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
-
-    let mut b = Builder::default();
-    let mut names: HashMap<String, String> = HashMap::new();
-    let mut primitives = Vec::new();
-    for (i, p) in spec.wind.primitives().iter().enumerate() {
-        match inert(p) {
-            Some(why) => b.pruned.push(format!("wind[{i}]: {why}")),
-            None => primitives.push(p.clone()),
-        }
-    }
-    let mut rng = SplitMix(spec.seed);
-
-    for (k, obj) in spec.leaves.iter().enumerate() {
-        add_leaf(ctx, &mut b, &mut names, &mut rng, k, obj)?;
-    }
-    for (k, obj) in spec.rigid.iter().enumerate() {
-        add_rigid(ctx, &mut b, &mut names, k, obj)?;
-    }
-    for (k, obj) in spec.sheets.iter().enumerate() {
-        add_sheet(ctx, &mut b, &mut names, k, obj)?;
-    }
-    for (k, obj) in spec.fixed.iter().enumerate() {
-        let path = format!("fixed[{k}]");
-        check_name(ctx, &format!("{path}.name"), &obj.name, &mut names)?;
-        ctx.vector(&format!("{path}.position"), &obj.position)?;
-        let part = Part {
-            mass: vec![1.0],
-            position: vec![V3::zeros()],
-            fixed: vec![true],
-            ..Default::default()
-        };
-        let ids = b.add_part(
-            &path,
-            &part,
-            &[],
-            (0.0, 0.0),
-            V3::zeros(),
-            UnitQuaternion::identity(),
-            V3::from(obj.position),
-            V3::zeros(),
-            V3::zeros(),
-        );
-        b.push_object(obj.name.clone(), ObjectKind::Fixed, ids, None, false, &path);
-    }
-    for (k, obj) in spec.ropes.iter().enumerate() {
-        add_rope(ctx, &mut b, &mut names, k, obj)?;
-    }
-    if b.parts.mass.is_empty() {
-        return Err(ctx.err("(document)", "the scene has no objects"));
-    }
-
-    if let (AeroLaw::Quadratic(_) | AeroLaw::Unsteady(_), Some(first)) =
-        (&b.parts.aero, &b.aero_from)
-    {
-        // Rigid bodies and sheets carry linear-law coefficients; under the
-        // quadratic or unsteady law they would be silently ignored, so say
-        // so instead.
-        if let Some(t) = b
-            .parts
-            .triangles
-            .iter()
-            .position(|t| t.alpha_n != 0.0 || t.alpha_t != 0.0)
-        {
-            return Err(ctx.err(
-                b.triangle_owner[t].clone(),
-                format!(
-                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the {} law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)",
-                    b.parts.aero.name()
-                ),
-            ));
-        }
-    }
-    b.parts.gravity = V3::from(spec.gravity);
-    b.parts.wind = WindField::new(primitives);
-    b.parts.ground = spec.ground;
-    let velocity = std::mem::take(&mut b.velocity);
-    let model = Model::new(std::mem::take(&mut b.parts)).map_err(|e: ModelError| {
-        let owner = b
-            .owner_of(&e.item)
-            .unwrap_or_else(|| "(document)".to_string());
-        ctx.err(owner, format!("{} (model item {})", e.reason, e.item))
-    })?;
-    let mut initial = State::at_rest(&model);
-    initial.velocity = velocity;
-    let dt = match spec.dt {
-        DtSpec::Auto => TimeStep::Auto,
-        DtSpec::Seconds(h) => TimeStep::Fixed(h),
-    };
-    if dt == TimeStep::Auto {
-        // dt = auto on a model too stiff or light for the integrator: the
-        // error names the object of the stiffest spring (else `dt`).
-        crate::physics::run::resolve_dt(&model, spec.integrator, dt, 1.0 / spec.frame_rate)
-            .and_then(|h| crate::physics::run::check_steps(spec.duration, h, spec.integrator))
-            .map_err(|e| {
-                let stiffest = crate::physics::stability::estimate(&model)
-                    .stiffest_spring
-                    .and_then(|k| b.owner_of(&format!("spring[{k}]")))
-                    .unwrap_or_else(|| "dt".to_string());
-                ctx.err(stiffest, format!("dt = auto: {e}"))
-            })?;
-    }
-    Ok(Scene {
-        name: spec.name.clone(),
-        description: spec.description.clone(),
-        source: ctx.file.to_string(),
-        model,
-        initial,
-        objects: b.objects,
-        integrator: spec.integrator,
-        dt,
-        duration: spec.duration,
-        frame_rate: spec.frame_rate,
-        pruned: b.pruned,
-        max_work: crate::physics::run::MAX_WORK,
-        max_memory: MAX_MEMORY,
-    })
-}
-
-/// The default output directory of a scene: `runs/scene-<name>`.
-pub fn default_out_dir(scene: &Scene) -> PathBuf {
-    PathBuf::from("runs").join(format!("scene-{}", scene.name))
-}

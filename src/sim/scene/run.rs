@@ -293,6 +293,11 @@ struct Summary<'a> {
     objects: Vec<ObjectSummary>,
 }
 
+/// The default output directory of a scene: `runs/scene-<name>`.
+pub fn default_out_dir(scene: &Scene) -> PathBuf {
+    PathBuf::from("runs").join(format!("scene-{}", scene.name))
+}
+
 /// A file of a scene's output that could not be written, named as it
 /// would have been in the output directory (which is left as it was).
 #[derive(Debug, thiserror::Error)]
