@@ -1,7 +1,7 @@
-//! Export of recorded motion for other tools: binary glTF ([`glb`]) and PC2
-//! point caches with rest-pose OBJ meshes ([`pc2`]), plus the common,
-//! format-free form both (and the HTML previewer, [`crate::output::preview`]) start
-//! from: a [`Clip`].
+//! Export of recorded motion for other tools: binary glTF ([`glb`]), USD
+//! text ([`usd`]) and PC2 point caches with rest-pose OBJ meshes ([`pc2`]),
+//! plus the common, format-free form all three (and the HTML previewer,
+//! [`crate::output::preview`]) start from: a [`Clip`].
 //!
 //! A clip is a set of objects sampled on one uniform time grid at the output
 //! frame rate ([`DEFAULT_FPS`] unless asked otherwise). Recorded frames
