@@ -581,3 +581,51 @@ fn scene_explain_names_what_sets_the_step() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A leaf file that is one rigid body, as every plate `leafmagic plate`
+/// writes (no springs), stays one in a scene: its `[[leaf]]` copies were
+/// once compiled as loose particles, and the first breath of wind tore
+/// them apart (3 disks in the shockwave diverged at 0.14 s). Each copy is
+/// a rigid body, its particles keep their distances through a second of
+/// fall, and the scene's own `rigid = false` still overrides the file.
+#[test]
+fn a_rigid_leaf_file_stays_rigid_in_a_scene() {
+    use leafmagic::leaf::plates::{PlateShape, plate};
+    use leafmagic::leaf::spec::{AeroLawName, AeroSpec};
+    let dir = std::env::temp_dir().join(format!("leafmagic-rigid-leaf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let disk = plate(
+        PlateShape::Circle,
+        0.05,
+        1.0,
+        0.07,
+        AeroSpec::named(AeroLawName::Unsteady),
+    )
+    .unwrap();
+    assert!(disk.rigid && disk.springs.is_empty());
+    std::fs::write(dir.join("disk.toml"), disk.to_toml()).unwrap();
+    let text = MINIMAL.replace(
+        "leaf = \"a\"",
+        "leaf = \"disk.toml\"\ncount = 3\nspread = [0.5, 0.5, 0.0]\ntilt_deg = 30.0",
+    ) + "\n[[wind]]\nkind = \"uniform\"\nvelocity = [0.3, 0.0, 0.6]\n";
+    let compile_in = |text: &str| Scene::from_toml(text, "test.toml", &dir).unwrap();
+    let scene = compile_in(&text);
+    assert_eq!(scene.model.rigid.len(), 3);
+    assert!(scene.objects.iter().all(|o| o.rigid_body.is_some()));
+    let run = scene.run(None).unwrap();
+    let x0 = &scene.model.rest_position;
+    let x1 = &run.final_state.position;
+    for o in &scene.objects {
+        let (a, b) = (o.particles[0], o.particles[o.particles.len() / 2]);
+        let (rest, now) = ((x0[a] - x0[b]).norm(), (x1[a] - x1[b]).norm());
+        assert!(
+            (now - rest).abs() < 1e-9 * rest,
+            "{}: {rest} → {now}",
+            o.name
+        );
+        assert!(x1[a].z < x0[a].z, "{} did not fall", o.name);
+    }
+    let loose = compile_in(&text.replace("count = 3", "count = 3\nrigid = false"));
+    assert!(loose.model.rigid.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -107,6 +107,10 @@ pub(super) fn add_leaf(
         }
         Some(_) => {}
     }
+    // A leaf file that is one rigid body (`rigid = true`: every plate of
+    // `leafmagic plate`, which has no springs) stays one unless the scene
+    // says otherwise; its particles would otherwise fly apart.
+    let rigid = obj.rigid.unwrap_or(spec.rigid);
     let com = leaf.centre_of_mass(&leaf.rest_position);
     let part = Part {
         mass: leaf.mass.clone(),
@@ -114,7 +118,7 @@ pub(super) fn add_leaf(
         fixed: leaf.fixed.clone(),
         ..Default::default()
     };
-    if leaf.fixed.iter().any(|&f| f) && obj.rigid {
+    if leaf.fixed.iter().any(|&f| f) && rigid {
         return Err(ctx.err(
             field("rigid"),
             "a leaf with fixed particles cannot be rigid",
@@ -130,7 +134,7 @@ pub(super) fn add_leaf(
             leaf.len()
         ),
         copies * leaf.len() as f64,
-        if obj.rigid {
+        if rigid {
             0.0
         } else {
             copies * leaf.springs.len() as f64
@@ -181,7 +185,7 @@ pub(super) fn add_leaf(
             });
             b.triangle_owner.push(path.clone());
         }
-        if obj.rigid {
+        if rigid {
             if copy == 0 && (!leaf.springs.is_empty() || !leaf.hinges.is_empty()) {
                 b.pruned.push(format!(
                     "{path} ({}): {} springs and {} hinges per copy inside a rigid body (internal forces cancel)",
@@ -211,7 +215,7 @@ pub(super) fn add_leaf(
             model: leaf.clone(),
             initial: rotation,
         };
-        b.push_object(name, ObjectKind::Leaf, ids, Some(pose), obj.rigid, &path);
+        b.push_object(name, ObjectKind::Leaf, ids, Some(pose), rigid, &path);
         b.set_surface(leaf.triangles.iter().map(|t| t.corners).collect());
     }
     Ok(())

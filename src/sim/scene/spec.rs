@@ -154,9 +154,10 @@ pub struct LeafObject {
     /// Initial angular velocity about the centre of mass, rad/s.
     #[serde(default)]
     pub angular_velocity: [f64; 3],
-    /// Move the leaf as one rigid body.
+    /// Move the leaf as one rigid body; unset, as the leaf file says (its
+    /// `rigid`: a plate from `leafmagic plate` is rigid, with no springs).
     #[serde(default)]
-    pub rigid: bool,
+    pub rigid: Option<bool>,
     /// Number of copies.
     #[serde(default = "one")]
     pub count: usize,
