@@ -239,6 +239,11 @@ fn extreme_numbers_are_refused_before_stepping() {
         (set("mass", "1e-320"), "1/m must be finite"),
         // k/m overflows.
         (set("stiffness", "1e308"), "k/m, c/m or α/m overflows"),
+        // Placed where the simulator would call it run away at step 0.
+        (
+            set("position", "[0.0, 1e12, 1.5]"),
+            "sheet[0].position: starts a particle 1.000e12 m from the origin",
+        ),
         // So stiff that dt = auto needs billions of steps.
         (
             set("stiffness", "1e21"),
@@ -580,6 +585,23 @@ fn scene_explain_names_what_sets_the_step() {
         Some(unsteady.trim_start_matches("step").trim())
     );
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A leaf launched past the runaway speed is refused at its `velocity`,
+/// with its line, not stopped as diverging at step 0.
+#[test]
+fn a_launch_past_the_runaway_speed_is_refused_by_its_field() {
+    let text = MINIMAL.replace(
+        "position = [0.0, 0.0, 1.0]",
+        "position = [0.0, 0.0, 1.0]\nvelocity = [2e4, 0.0, 0.0]",
+    );
+    let e = error(&text);
+    assert_eq!(e.line, Some(line_of(&text, "velocity")), "{e}");
+    let text = e.to_string();
+    assert!(
+        text.contains("leaf[0].velocity: starts a particle 2.000e4 m/s fast"),
+        "{text}"
+    );
 }
 
 /// A leaf file that is one rigid body, as every plate `leafmagic plate`

@@ -14,6 +14,7 @@ use super::spec::{DtSpec, SceneSpec};
 use crate::physics::field::{
     Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
 };
+use crate::physics::integrate::{RUNAWAY_DISTANCE, RUNAWAY_SPEED};
 use crate::physics::model::{AeroLaw, Model, ModelError};
 use crate::physics::params::TimeStep;
 use crate::physics::state::State;
@@ -204,6 +205,35 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     })?;
     let mut initial = State::at_rest(&model);
     initial.velocity = velocity;
+    // Past these the simulator counts a particle as run away: one placed
+    // or launched there would be reported as diverging at step 0.
+    let speed_limit = RUNAWAY_SPEED + 10.0 * model.wind.speed_bound();
+    for (i, (x, v)) in initial.position.iter().zip(&initial.velocity).enumerate() {
+        let (key, value, limit, unit, what) = if x.norm() > RUNAWAY_DISTANCE {
+            (
+                "position",
+                x.norm(),
+                RUNAWAY_DISTANCE,
+                "m",
+                "from the origin",
+            )
+        } else if v.norm() > speed_limit {
+            let what = "fast (with what its angular velocity adds)";
+            ("velocity", v.norm(), speed_limit, "m/s", what)
+        } else {
+            continue;
+        };
+        let owner = b
+            .owner_of(&format!("particle[{i}]"))
+            .unwrap_or_else(|| "(document)".to_string());
+        return Err(ctx.err(
+            format!("{owner}.{key}"),
+            format!(
+                "starts a particle {value:.3e} {unit} {what}, past the {limit:.3e} {unit} at which \
+                 the simulator stops a run as run away"
+            ),
+        ));
+    }
     let dt = match spec.dt {
         DtSpec::Auto => TimeStep::Auto,
         DtSpec::Seconds(h) => TimeStep::Fixed(h),
