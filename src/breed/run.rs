@@ -166,6 +166,14 @@ fn check_run_work(
     settings: &BreedSettings,
     limit: f64,
 ) -> Result<(), BreedError> {
+    let (model, work) = run_work(proto, settings)?;
+    work.check(&model, 1.0 / FRAME_RATE, limit, RunCommand::Breed)
+        .map_err(|e| BreedError::Refused(format!("--prototype {}: {e}", settings.prototype)))
+}
+
+/// The prototype's model and the work of every drop of the run
+/// ([`check_run_work`]).
+fn run_work(proto: &LeafSpec, settings: &BreedSettings) -> Result<(Model, Work), BreedError> {
     let source = &settings.prototype;
     let (model, dt) = prototype_step(proto, source, settings.seconds.max(ERROR_ESTIMATE_SECONDS))?;
     let frame_dt = 1.0 / FRAME_RATE;
@@ -173,8 +181,7 @@ fn check_run_work(
     let mut work = Work::of(&model, integrator, dt, true, settings.seconds, frame_dt);
     // Every leaf is dropped once per release attitude.
     work.runs = (settings.population * settings.generations * settings.releases) as f64;
-    work.check(&model, frame_dt, limit, RunCommand::Breed)
-        .map_err(|e| BreedError::Refused(format!("--prototype {source}: {e}")))
+    Ok((model, work))
 }
 
 /// The prototype's integration error over about [`ERROR_ESTIMATE_SECONDS`]
@@ -198,6 +205,17 @@ impl Run {
     /// left untouched.
     pub fn create(dir: &Path, settings: BreedSettings) -> Result<Run, BreedError> {
         Run::create_within(dir, settings, MAX_BREED_WORK)
+    }
+
+    /// The estimated work of every drop of the run, with why its step is
+    /// what it is ([`Work::describe`], [`Work::why`]): what `breed` says
+    /// before a long run starts.
+    ///
+    /// # Errors
+    /// As [`Run::create`] for a prototype with no usable step.
+    pub fn work(&self) -> Result<Work, BreedError> {
+        run_work(&self.proto, &self.settings)
+            .map(|(model, work)| work.explained(&model, 1.0 / FRAME_RATE))
     }
 
     /// [`Run::create`], refusing a new run whose estimated work (every drop

@@ -76,7 +76,20 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 .out
                 .clone()
                 .unwrap_or_else(|| default_run_dir(&settings));
-            Run::create_within(&dir, settings, args.max_work)?
+            let run = Run::create_within(&dir, settings, args.max_work)?;
+            // A breed prints nothing until its first generation is done:
+            // one that will take minutes says so before it starts.
+            let work = run.work()?;
+            if work.core_seconds() > BREED_NOTE_SECONDS {
+                let why = work.why();
+                let why = if why.is_empty() {
+                    String::new()
+                } else {
+                    format!(" ({why})")
+                };
+                eprintln!("note: this breed needs about {}{why}", work.describe());
+            }
+            run
         }
     };
     if args.create_only {
@@ -106,6 +119,10 @@ pub fn breed(args: BreedArgs) -> Result<()> {
     println!("{}", report::breed::run_directory(&run.dir));
     Ok(())
 }
+
+/// A new breed estimated to take longer than this (s of one core, every
+/// drop of every generation) says so before it starts.
+const BREED_NOTE_SECONDS: f64 = 60.0;
 
 /// The example's (or the target's) descriptors beside the best leaf's.
 fn print_like(run: &Run, target: &MotionTarget) -> Result<()> {

@@ -361,6 +361,23 @@ pub const MAX_BREED_WORK: f64 = 1e11;
 /// slower on the drop. Machines differ by 2×: a guide, not a promise.
 pub const REFERENCE_RATE: f64 = 9e7;
 
+/// What one triangle costs a step under `law`, in elements of
+/// [`REFERENCE_RATE`]: the linear law's is one element's; the quadratic
+/// law's measured at 4.7 (prototype A) and 5.1 (a rigid 5 cm plate), the
+/// unsteady law's at 10 and 10.6 (drops at a fixed step on this machine:
+/// A at dt = 1.6e-7 s, 2.1, 3.5 and 5.8 s under the three laws, against
+/// 2.0 s quoted for all three before; the plate, 0.037, 0.078 and 0.152 s
+/// for 20 s of fall). Without it a run under the unsteady law took three
+/// to seven times the time its note quoted.
+fn triangle_cost(law: &crate::physics::model::AeroLaw) -> usize {
+    use crate::physics::model::AeroLaw;
+    match law {
+        AeroLaw::Linear => 1,
+        AeroLaw::Quadratic(_) => 5,
+        AeroLaw::Unsteady(_) => 10,
+    }
+}
+
 /// What a run will cost before it starts: particles × steps (× runs), the
 /// step and why it is that small.
 #[derive(Clone, Debug, PartialEq)]
@@ -368,7 +385,8 @@ pub struct Work {
     /// Particles stepped.
     pub particles: usize,
     /// Particles, springs, triangles and hinges: what a step touches, for
-    /// the time estimate.
+    /// the time estimate (a triangle under the quadratic or unsteady law
+    /// counts as several, `triangle_cost`).
     pub elements: usize,
     /// Steps of one run.
     pub steps: f64,
@@ -432,7 +450,7 @@ impl Work {
             particles: model.len(),
             elements: model.len()
                 + model.springs.len()
-                + model.triangles.len()
+                + model.triangles.len() * triangle_cost(&model.aero)
                 + model.hinges.len(),
             steps: seconds / dt,
             frames: (seconds / frame_dt).round(),
@@ -513,8 +531,14 @@ impl Work {
             step_count(self.steps),
             self.integrator,
             self.dt,
-            duration_phrase(self.elements as f64 * self.steps * self.runs / REFERENCE_RATE)
+            duration_phrase(self.core_seconds())
         )
+    }
+
+    /// Seconds of one core the run should take at [`REFERENCE_RATE`] (a
+    /// guide: machines differ by 2×).
+    pub fn core_seconds(&self) -> f64 {
+        self.elements as f64 * self.steps * self.runs / REFERENCE_RATE
     }
 
     /// Why the step is that small, as a phrase (empty for a fixed step or

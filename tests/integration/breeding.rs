@@ -473,3 +473,53 @@ fn a_run_started_from_another_begins_with_its_archive() {
         "no completed generation",
     );
 }
+
+/// A breed that will take minutes says so before its first drop, with the
+/// estimate and why its step is small; the default breed, seconds long,
+/// does not. The unsteady law's triangles are counted at their cost (ten
+/// of the linear law's), so the estimate of this prototype A with a
+/// swollen added mass (48 drops at dt = 1.6e-7 s) reads minutes, as it
+/// takes, not the 2 minutes the linear law's rate gave.
+#[test]
+fn a_long_breed_says_so_before_it_starts() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-long-breed-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/hardening/unsteady-leaf.toml"),
+    )
+    .unwrap()
+    .replace("added_mass = 1.0", "added_mass = 1e9");
+    let proto = dir.join("heavy-air.toml");
+    std::fs::write(&proto, text).unwrap();
+    let create = |args: &[&str], out: &str| {
+        let out = leafmagic()
+            .args(["breed", "--create-only", "--out"])
+            .arg(dir.join(out))
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let long = create(
+        &[
+            "--prototype",
+            proto.to_str().unwrap(),
+            "--population",
+            "6",
+            "--generations",
+            "2",
+            "--seconds",
+            "1",
+        ],
+        "long",
+    );
+    assert!(long.contains("note: this breed needs about"), "{long}");
+    assert!(long.contains("minutes of one core"), "{long}");
+    assert!(long.contains("drag rate"), "{long}");
+    let default = create(&[], "default");
+    assert!(!default.contains("note: this breed"), "{default}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
