@@ -219,34 +219,10 @@ impl Film {
     }
 }
 
-/// Local maxima of `y` strictly above both neighbours (a flat top counts
-/// once), the ends excluded: MATLAB's `findpeaks` without options.
-pub fn count_peaks(y: &[f64]) -> usize {
-    let n = y.len();
-    let mut count = 0;
-    let mut i = 1;
-    while i + 1 < n {
-        if y[i] > y[i - 1] {
-            let mut j = i;
-            while j + 1 < n && y[j + 1] == y[i] {
-                j += 1;
-            }
-            if j + 1 < n && y[j + 1] < y[i] {
-                count += 1;
-            }
-            i = j + 1;
-        } else {
-            i += 1;
-        }
-    }
-    count
-}
-
-/// Indices of the local maxima of `y` (a flat top at its middle, rounded
-/// down) with prominence at least `min_prominence`: the height above the
-/// higher of the lowest points between it and the nearest higher sample on
-/// either side (or the signal's end), as SciPy's `find_peaks` defines it.
-pub fn prominent_peaks(y: &[f64], min_prominence: f64) -> Vec<usize> {
+/// The local maxima of `y` strictly above both neighbours, each as the
+/// first and last index of its flat top, the ends excluded: the scan both
+/// peak finders below share.
+fn plateau_maxima(y: &[f64]) -> Vec<(usize, usize)> {
     let n = y.len();
     let mut out = Vec::new();
     let mut i = 1;
@@ -257,33 +233,52 @@ pub fn prominent_peaks(y: &[f64], min_prominence: f64) -> Vec<usize> {
                 j += 1;
             }
             if j + 1 < n && y[j + 1] < y[i] {
-                let peak = (i + j) / 2;
-                let h = y[peak];
-                let mut left_min = h;
-                let mut k = i;
-                while k > 0 {
-                    k -= 1;
-                    if y[k] > h {
-                        break;
-                    }
-                    left_min = left_min.min(y[k]);
-                }
-                let mut right_min = h;
-                let mut k = j;
-                while k + 1 < n {
-                    k += 1;
-                    if y[k] > h {
-                        break;
-                    }
-                    right_min = right_min.min(y[k]);
-                }
-                if h - left_min.max(right_min) >= min_prominence {
-                    out.push(peak);
-                }
+                out.push((i, j));
             }
             i = j + 1;
         } else {
             i += 1;
+        }
+    }
+    out
+}
+
+/// Local maxima of `y` strictly above both neighbours (a flat top counts
+/// once), the ends excluded: MATLAB's `findpeaks` without options.
+pub fn count_peaks(y: &[f64]) -> usize {
+    plateau_maxima(y).len()
+}
+
+/// Indices of the local maxima of `y` (a flat top at its middle, rounded
+/// down) with prominence at least `min_prominence`: the height above the
+/// higher of the lowest points between it and the nearest higher sample on
+/// either side (or the signal's end), as SciPy's `find_peaks` defines it.
+pub fn prominent_peaks(y: &[f64], min_prominence: f64) -> Vec<usize> {
+    let n = y.len();
+    let mut out = Vec::new();
+    for (i, j) in plateau_maxima(y) {
+        let peak = (i + j) / 2;
+        let h = y[peak];
+        let mut left_min = h;
+        let mut k = i;
+        while k > 0 {
+            k -= 1;
+            if y[k] > h {
+                break;
+            }
+            left_min = left_min.min(y[k]);
+        }
+        let mut right_min = h;
+        let mut k = j;
+        while k + 1 < n {
+            k += 1;
+            if y[k] > h {
+                break;
+            }
+            right_min = right_min.min(y[k]);
+        }
+        if h - left_min.max(right_min) >= min_prominence {
+            out.push(peak);
         }
     }
     out
@@ -299,4 +294,24 @@ pub fn smooth5(y: &[f64]) -> Vec<f64> {
             y[i - k..=i + k].iter().sum::<f64>() / (2 * k + 1) as f64
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Both peak finders read the same maxima: a single sample, a flat top
+    /// (its middle, rounded down) and a shoulder, never an end; and the
+    /// prominences SciPy's definition gives by hand (1, 3 and 0.5).
+    #[test]
+    fn peaks_flat_tops_and_prominences() {
+        let y = [0.0, 2.0, 1.0, 3.0, 3.0, 1.0, 1.5, 0.0];
+        assert_eq!(count_peaks(&y), 3);
+        assert_eq!(prominent_peaks(&y, 0.5), vec![1, 3, 6]);
+        assert_eq!(prominent_peaks(&y, 0.6), vec![1, 3]);
+        assert_eq!(prominent_peaks(&y, 1.5), vec![3]);
+        // Rising to the end, or a plateau at the end: no peak.
+        assert_eq!(count_peaks(&[0.0, 1.0, 2.0, 2.0]), 0);
+        assert_eq!(count_peaks(&[3.0, 1.0, 2.0]), 0);
+    }
 }
