@@ -19,7 +19,7 @@
 //! [`Simulator`]: crate::physics::integrate::Simulator
 
 use crate::physics::forces::hinge_rest;
-use crate::physics::integrate::{RUNAWAY_DISTANCE, RUNAWAY_SPEED};
+use crate::physics::integrate::{RUNAWAY_DISTANCE, runaway_speed};
 use crate::physics::model::{AeroLaw, Model};
 use crate::physics::state::State;
 use crate::physics::terms::Terms;
@@ -207,7 +207,7 @@ impl<const L: usize> Batch<L> {
             law,
             dt,
             speed_limit2: lanes(|k| {
-                let limit = RUNAWAY_SPEED + 10.0 * models[k].wind.speed_bound();
+                let limit = runaway_speed(models[k]);
                 limit * limit
             }),
             x: vectors(&|k, i| states[k].position[i]),

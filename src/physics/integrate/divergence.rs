@@ -166,3 +166,9 @@ impl fmt::Display for Divergence {
 pub const RUNAWAY_SPEED: f64 = 1e4;
 /// Positions farther than this from the origin (m) count as a runaway.
 pub const RUNAWAY_DISTANCE: f64 = 1e7;
+
+/// The speed past which a particle of `model` counts as run away, m/s:
+/// [`RUNAWAY_SPEED`] plus ten times its wind's bound.
+pub fn runaway_speed(model: &crate::physics::model::Model) -> f64 {
+    RUNAWAY_SPEED + 10.0 * model.wind.speed_bound()
+}

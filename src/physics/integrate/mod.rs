@@ -7,7 +7,9 @@ mod divergence;
 mod implicit;
 
 pub use breaking::{BreakLimit, break_limits, break_springs};
-pub use divergence::{Divergence, RUNAWAY_DISTANCE, RUNAWAY_SPEED, SimError, WIND_NOT_FINITE};
+pub use divergence::{
+    Divergence, RUNAWAY_DISTANCE, RUNAWAY_SPEED, SimError, WIND_NOT_FINITE, runaway_speed,
+};
 
 use crate::physics::contact::ContactSolver;
 use crate::physics::forces::{ForceTerms, Forces};
@@ -71,7 +73,7 @@ impl Simulator {
         } else {
             Vec::new()
         };
-        let speed_limit = RUNAWAY_SPEED + 10.0 * model.wind.speed_bound();
+        let speed_limit = runaway_speed(model);
         Simulator {
             integrator,
             forces: Forces::with_terms(model, terms),

@@ -14,7 +14,7 @@ use super::spec::{DtSpec, SceneSpec};
 use crate::physics::field::{
     Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
 };
-use crate::physics::integrate::{RUNAWAY_DISTANCE, RUNAWAY_SPEED};
+use crate::physics::integrate::{RUNAWAY_DISTANCE, runaway_speed};
 use crate::physics::model::{AeroLaw, Model, ModelError};
 use crate::physics::params::TimeStep;
 use crate::physics::state::State;
@@ -207,7 +207,7 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     initial.velocity = velocity;
     // Past these the simulator counts a particle as run away: one placed
     // or launched there would be reported as diverging at step 0.
-    let speed_limit = RUNAWAY_SPEED + 10.0 * model.wind.speed_bound();
+    let speed_limit = runaway_speed(&model);
     for (i, (x, v)) in initial.position.iter().zip(&initial.velocity).enumerate() {
         let (key, value, limit, unit, what) = if x.norm() > RUNAWAY_DISTANCE {
             (
