@@ -214,8 +214,11 @@ impl Run {
     /// # Errors
     /// As [`Run::create`] for a prototype with no usable step.
     pub fn work(&self) -> Result<Work, BreedError> {
-        run_work(&self.proto, &self.settings)
-            .map(|(model, work)| work.explained(&model, 1.0 / FRAME_RATE))
+        run_work(&self.proto, &self.settings).map(|(model, work)| Work {
+            // A breed drops with Verlet alone: no implicit step to offer.
+            implicit_steps: None,
+            ..work.explained(&model, 1.0 / FRAME_RATE)
+        })
     }
 
     /// [`Run::create`], refusing a new run whose estimated work (every drop

@@ -81,13 +81,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
             // one that will take minutes says so before it starts.
             let work = run.work()?;
             if work.core_seconds() > BREED_NOTE_SECONDS {
-                let why = work.why();
-                let why = if why.is_empty() {
-                    String::new()
-                } else {
-                    format!(" ({why})")
-                };
-                eprintln!("note: this breed needs about {}{why}", work.describe());
+                eprintln!("{}", super::progress::note(&work, "breed"));
             }
             run
         }

@@ -76,6 +76,25 @@ impl breed::Progress for Bar {
     }
 }
 
+/// The note a long run prints before it starts: "note: this {what} needs
+/// about" the estimate, why its step is small, and the implicit
+/// integrator's step count where it is fewer (`work` explained).
+pub fn note(work: &Work, what: &str) -> String {
+    let implicit = work.implicit_steps.map_or(String::new(), |n| {
+        format!("; the implicit integrator would take {n:.0} steps")
+    });
+    let why = work.why();
+    let why = if why.is_empty() {
+        String::new()
+    } else {
+        format!(" ({why})")
+    };
+    format!(
+        "note: this {what} needs about {}{why}{implicit}",
+        work.describe()
+    )
+}
+
 /// For a run whose estimated work is long ([`Work::is_long`]) but within
 /// `limit`: a note on stderr with the estimate (and the implicit
 /// integrator's step count where it is fewer), and a bar over its frames
@@ -91,20 +110,7 @@ pub fn long_run(
     if !work.is_long() || work.particle_steps() > limit {
         return None;
     }
-    let work = &work.clone().explained(model, frame_dt);
-    let implicit = work.implicit_steps.map_or(String::new(), |n| {
-        format!("; the implicit integrator would take {n:.0} steps")
-    });
-    let why = work.why();
-    let why = if why.is_empty() {
-        String::new()
-    } else {
-        format!(" ({why})")
-    };
-    eprintln!(
-        "note: this {what} needs about {}{why}{implicit}",
-        work.describe()
-    );
+    eprintln!("{}", note(&work.clone().explained(model, frame_dt), what));
     if !std::io::stderr().is_terminal() {
         return None;
     }
