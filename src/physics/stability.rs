@@ -249,11 +249,12 @@ pub fn snap_to_frame(dt: f64, frame_dt: f64) -> f64 {
 }
 
 /// (m_i I + M_i)^(-1/2) for every particle, M_i its rest added-mass tensor
-/// under the unsteady law (zero for a fixed particle, m_i^(-1/2) I for a
-/// member of a rigid body), or `None` where the spring modes see the
-/// particles' own masses only: under the other laws, without added mass,
-/// and where a spring can break (a torn triangle takes its added mass
-/// with it, and its corners are then as light as their own mass).
+/// under the unsteady law ([`rest_tensors`]; zero for a fixed particle,
+/// m_i^(-1/2) I for a member of a rigid body), or `None` where the spring
+/// modes see the particles' own masses only: where a spring can break (a
+/// torn triangle takes its added mass with it, and its corners are then as
+/// light as their own mass), as under the other laws and without added
+/// mass, where there are no tensors.
 ///
 /// Why: an explicit step solves (m_i I + M_i) a_i = f_i
 /// ([`crate::physics::forces::Forces::acceleration`]), so its spring
@@ -262,16 +263,14 @@ pub fn snap_to_frame(dt: f64, frame_dt: f64) -> f64 {
 /// stretching modes (prototype A: ω_max 636 against 743 rad/s). At rest
 /// as the springs' stiffness is: a leaf turning as a whole turns its
 /// tensors with its springs and keeps the spectrum.
-fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>>> {
-    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
-        return None;
-    };
-    if law.air_density * law.added_mass <= 0.0
-        || model.springs.iter().any(|s| s.break_strain.is_some())
-    {
+fn effective_mass_roots(
+    model: &Model,
+    free: &[bool],
+    tensors: &[Matrix3<f64>],
+) -> Option<Vec<Matrix3<f64>>> {
+    if model.springs.iter().any(|s| s.break_strain.is_some()) {
         return None;
     }
-    let tensors = crate::physics::forces::unsteady::rest_added_mass_tensors(law, model);
     let body_of = model.body_of();
     let roots = (0..model.len())
         .map(|i| {
@@ -290,6 +289,16 @@ fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>
     Some(roots)
 }
 
+/// The unsteady law's rest added-mass tensors of every particle, `None`
+/// under the other laws and without added mass.
+fn rest_tensors(model: &Model) -> Option<Vec<Matrix3<f64>>> {
+    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
+        return None;
+    };
+    (law.air_density * law.added_mass > 0.0)
+        .then(|| crate::physics::forces::unsteady::rest_added_mass_tensors(law, model))
+}
+
 /// The free particle, if any, whose added mass at rest under the unsteady
 /// law (the largest eigenvalue of its tensor M_i) is over
 /// [`MAX_ADDED_MASS_RATIO`] times its own mass, the one of largest ratio,
@@ -299,15 +308,17 @@ fn effective_mass_roots(model: &Model, free: &[bool]) -> Option<Vec<Matrix3<f64>
 /// members' masses, and its rates, which grow with the added mass, meet the
 /// step's work bound instead.
 pub fn mass_lost_to_added_mass(model: &Model) -> Option<(usize, f64)> {
-    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
-        return None;
-    };
-    if law.air_density * law.added_mass <= 0.0 {
-        return None;
-    }
-    let tensors = crate::physics::forces::unsteady::rest_added_mass_tensors(law, model);
+    rest_tensors(model).and_then(|tensors| lost_mass(model, &tensors))
+}
+
+/// A particle and its added mass, kg
+/// ([`StabilityEstimate::mass_lost_to_added_mass`]).
+type LostMass = (usize, f64);
+
+/// [`mass_lost_to_added_mass`] from the rest tensors.
+fn lost_mass(model: &Model, tensors: &[Matrix3<f64>]) -> Option<LostMass> {
     let body_of = model.body_of();
-    let mut lost: Option<(usize, f64)> = None;
+    let mut lost: Option<LostMass> = None;
     for i in (0..model.len()).filter(|&i| !model.fixed[i] && body_of[i].is_none()) {
         // The eigenvalue iteration never settles on inf or NaN.
         let added = if tensors[i].iter().all(|v| v.is_finite()) {
@@ -330,7 +341,14 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     let n = model.len();
     let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();
     let mut warnings = Vec::new();
-    let roots = effective_mass_roots(model, &free);
+    let tensors = rest_tensors(model);
+    let mass_lost_to_added_mass = tensors.as_deref().and_then(|t| lost_mass(model, t));
+    // A particle whose mass is lost makes the estimate refused: its roots
+    // are not worth taking (nor safe: an eigen-solve on inf never settles).
+    let roots = tensors
+        .as_deref()
+        .filter(|_| mass_lost_to_added_mass.is_none())
+        .and_then(|t| effective_mass_roots(model, &free, t));
     let with_added_mass = roots.is_some();
     // |(m_i I + M_i)^(-1/2) v|² = vᵀ (m_i I + M_i)⁻¹ v: particle i's inverse
     // mass along v, times |v|².
@@ -610,7 +628,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         explicit_drag_rate: quadratic_rate,
         tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
         stiffest_spring: stiffest,
-        mass_lost_to_added_mass: mass_lost_to_added_mass(model),
+        mass_lost_to_added_mass,
         lightest_particle: lightest,
         mass_ratio,
         warnings,
