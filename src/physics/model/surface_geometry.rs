@@ -414,18 +414,19 @@ impl TriangleGrid {
         let minor = 1 - major;
         scratch.seen.resize(self.triangles, false);
         scratch.found.clear();
+        // Where the line crosses the boundary between columns (or rows).
+        let at = |edge: usize| {
+            let m = self.origin[major] + edge as f64 * self.cell[major];
+            p[minor] + (m - p[major]) * e[minor] / e[major]
+        };
+        // Past the grid by a cell or more, the line meets no triangle there
+        // (the clamped index would offer the edge row's).
+        let (first, last) = (
+            self.origin[minor] - self.cell[minor],
+            self.origin[minor] + (self.size[minor] + 1) as f64 * self.cell[minor],
+        );
         for k in 0..self.size[major] {
-            let at = |edge: usize| {
-                let m = self.origin[major] + edge as f64 * self.cell[major];
-                p[minor] + (m - p[major]) * e[minor] / e[major]
-            };
             let (u, w) = (at(k), at(k + 1));
-            // Past the grid by a cell or more, the line meets no triangle
-            // there (the clamped index would offer the edge row's).
-            let (first, last) = (
-                self.origin[minor] - self.cell[minor],
-                self.origin[minor] + (self.size[minor] + 1) as f64 * self.cell[minor],
-            );
             if u.max(w) < first || u.min(w) > last {
                 continue;
             }
