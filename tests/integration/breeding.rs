@@ -479,7 +479,8 @@ fn a_run_started_from_another_begins_with_its_archive() {
 /// does not. The unsteady law's triangles are counted at their cost (ten
 /// of the linear law's), so the estimate of this prototype A with a
 /// swollen added mass (48 drops at dt = 1.6e-7 s) reads minutes, as it
-/// takes, not the 2 minutes the linear law's rate gave.
+/// takes (one of its drops took 5.8 s here, where the linear law's rate
+/// had quoted 2).
 #[test]
 fn a_long_breed_says_so_before_it_starts() {
     let dir = std::env::temp_dir().join(format!("leafmagic-long-breed-{}", std::process::id()));
