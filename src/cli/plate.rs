@@ -12,6 +12,17 @@ use leafmagic::leaf::plates::{flexible, plate as build_plate};
 /// prototypes' values (prototypes/leaf-a.toml).
 const LINEAR_ALPHA: (f64, f64) = (0.47, 0.047);
 
+/// A plate's mass for the report: grams, as paper is weighed, or
+/// kilograms in scientific notation from a kilogram up (grams of a huge
+/// --areal-density would overflow to "inf").
+fn mass_text(kg: f64) -> String {
+    if kg < 1.0 {
+        format!("{:.3} g", kg * 1e3)
+    } else {
+        format!("{kg:.3e} kg")
+    }
+}
+
 /// `plate`: builds the plate, checks it makes a valid model and writes it
 /// (to `--out`, atomically, or to standard output).
 pub fn plate(args: PlateArgs) -> Result<()> {
@@ -32,12 +43,12 @@ pub fn plate(args: PlateArgs) -> Result<()> {
                 .with_context(|| format!("cannot write {}", path.display()))?;
             let model = spec.model()?;
             eprintln!(
-                "wrote {} ({}: {} particles, {} triangles, {:.3} g)",
+                "wrote {} ({}: {} particles, {} triangles, {})",
                 path.display(),
                 spec.name,
                 model.len(),
                 model.triangles.len(),
-                model.total_mass() * 1e3
+                mass_text(model.total_mass())
             );
         }
         None => print!("{text}"),

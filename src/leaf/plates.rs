@@ -101,7 +101,7 @@ pub fn square_card(side: f64, sigma: f64, aero: AeroSpec) -> LeafSpec {
     // A hinge's rate is k_b |∇θ|²/m with |∇θ| ~ 1/h at the apex.
     let k_b = m_mean * (CARD_FREQUENCY * h).powi(2);
     LeafSpec {
-        name: format!("card-{:.0}mm-{:.0}gsm", side * 1e3, sigma * 1e3),
+        name: format!("card-{:.0}mm-{}", side * 1e3, density_tag(sigma)),
         aero,
         bounds: Default::default(),
         bending: Some(BendingSpec {
@@ -318,6 +318,18 @@ pub struct PlateError {
     pub reason: String,
 }
 
+/// The areal density `sigma` (kg/m²) as a name's tag: grams per square
+/// metre ("70gsm", paper's unit), or kilograms per square metre in
+/// scientific notation past a tonne per square metre, where grams would
+/// print as digits without end or overflow to "inf".
+fn density_tag(sigma: f64) -> String {
+    if sigma * 1e3 < 1e6 {
+        format!("{:.0}gsm", sigma * 1e3)
+    } else {
+        format!("{sigma:.2e}kgm2")
+    }
+}
+
 /// A flat plate of `shape`, `size` (m; see [`PlateShape`]), `aspect`
 /// (length over width; rectangles only) and areal density `sigma` (kg/m²)
 /// in the x-y plane, centred on the origin, normal +z: a fine triangle mesh
@@ -467,10 +479,10 @@ pub fn plate_meshed(
     };
     Ok(LeafSpec {
         name: format!(
-            "plate-{}-{:.1}mm{aspect_tag}-{:.0}gsm",
+            "plate-{}-{:.1}mm{aspect_tag}-{}",
             shape.as_str(),
             size * 1e3,
-            sigma * 1e3
+            density_tag(sigma)
         ),
         aero,
         bounds: Default::default(),

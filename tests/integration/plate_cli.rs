@@ -214,3 +214,36 @@ fn bad_plate_flags_are_refused_by_name_and_write_nothing() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The report and the plate's name give its mass and density in numbers,
+/// at paper's weight and at a density whose grams overflow f64: a
+/// 5 cm square of 1e308 kg/m² weighs 2.5e305 kg, which is finite, but
+/// 2.5e308 g is not, and the report used to print "inf g" and name the
+/// plate "…-infgsm".
+#[test]
+fn a_plate_reports_its_mass_and_density_in_numbers() {
+    let dir = dir("report");
+    for (sigma, name_tag, mass_text) in [
+        ("0.07", "-70gsm", "0.175 g"),
+        ("1e308", "-1.00e308kgm2", "2.500e305 kg"),
+    ] {
+        let out = dir.join("p.toml");
+        let run = plate(&[
+            "--shape",
+            "square",
+            "--size",
+            "0.05",
+            "--areal-density",
+            sigma,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let report = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "{report}");
+        assert!(!report.contains("inf"), "{report}");
+        assert!(report.contains(mass_text), "{sigma}: {report}");
+        let spec = LeafSpec::read(&out).unwrap();
+        assert!(spec.name.ends_with(name_tag), "{sigma}: {}", spec.name);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
