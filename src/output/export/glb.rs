@@ -25,9 +25,10 @@
 //! object's kind and label; the previewer reads them back.
 
 use super::clip::{Clip, ClipObject};
-use super::dress::{outline_uvs, triangle_normals, vertex_normals};
+use super::dress::{triangle_normals, vertex_normals};
 use super::error::ExportError;
 use super::frame::Framed;
+pub use super::look::{Shown, colour, material_name, shown};
 use gltf::json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};
@@ -56,22 +57,6 @@ pub fn quat_to_gltf(q: &UnitQuaternion<f64>) -> [f32; 4] {
     let c = [q.i, q.k, -q.j, q.w];
     let n = c.iter().map(|x| x * x).sum::<f64>().sqrt();
     c.map(|x| (x / n) as f32)
-}
-
-/// Colour of an object by its label (motion class) or kind, linear RGB.
-pub fn colour(o: &ClipObject) -> [f32; 3] {
-    match (o.label.as_str(), o.kind.as_str()) {
-        ("floater", _) => [0.22, 0.62, 0.16],
-        ("spinner", _) => [0.90, 0.50, 0.08],
-        ("lilter", _) => [0.72, 0.74, 0.10],
-        ("diverged", _) => [0.85, 0.12, 0.10],
-        ("undetermined", _) => [0.62, 0.45, 0.25],
-        (_, "leaf") => [0.30, 0.66, 0.18],
-        (_, "rigid") => [0.52, 0.58, 0.68],
-        (_, "sheet") => [0.86, 0.72, 0.46],
-        (_, "rope") => [0.45, 0.30, 0.18],
-        _ => [0.6, 0.6, 0.6],
-    }
 }
 
 /// The binary chunk under construction: every view starts on a 4-byte
@@ -447,42 +432,6 @@ fn rig(o: &ClipObject, framed: &Framed) -> Rig {
 /// simulated mesh's.
 fn base_count(o: &ClipObject, n: usize) -> usize {
     o.render.as_ref().map_or(n, |r| r.vertex_count())
-}
-
-/// The mesh a client sees of an object, in its body frame at rest: the
-/// simulated vertices, or the render mesh placed on them.
-pub struct Shown {
-    /// Rest positions, body frame (simulator axes), m.
-    pub rest: Vec<V3>,
-    /// Triangles.
-    pub triangles: Vec<[u32; 3]>,
-    /// UVs (v up, as in OBJ and USD).
-    pub uvs: Vec<[f64; 2]>,
-}
-
-/// What is shown of `o` at rest (see [`Shown`]).
-pub fn shown(o: &ClipObject, framed: &Framed) -> Shown {
-    match &o.render {
-        Some(r) => Shown {
-            rest: r.place(&framed.rest, &o.triangles),
-            triangles: r.triangles.clone(),
-            uvs: r.uvs.clone(),
-        },
-        None => Shown {
-            rest: framed.rest.clone(),
-            triangles: o.triangles.clone(),
-            uvs: outline_uvs(&framed.rest),
-        },
-    }
-}
-
-/// The material name of an object's class (or kind): `<kind>-<label>`.
-pub fn material_name(o: &ClipObject) -> String {
-    if o.label.is_empty() {
-        o.kind.clone()
-    } else {
-        format!("{}-{}", o.kind, o.label)
-    }
 }
 
 /// The `.glb` bytes of `clip`.

@@ -21,6 +21,7 @@ mod error;
 mod format;
 pub mod frame;
 pub mod glb;
+mod look;
 pub mod pc2;
 mod read;
 pub mod render_mesh;

@@ -35,7 +35,7 @@
 use super::clip::{Clip, ClipObject};
 use super::dress::vertex_normals;
 use super::error::ExportError;
-use super::glb::{colour, material_name, shown};
+use super::look::{colour, material_name, shown};
 use nalgebra::Vector3;
 use std::collections::BTreeSet;
 use std::path::Path;
