@@ -27,7 +27,7 @@ type V3 = Vector3<f64>;
 /// `wind` holds G at every particle, or is `None` in still air. A model
 /// with [`AeroLaw::Quadratic`] gets that law instead
 /// ([`quadratic_forces`]); with [`AeroLaw::Unsteady`], that law's
-/// velocity-dependent forces ([`unsteady_forces`](super::unsteady::unsteady_forces); its added mass is not a
+/// velocity-dependent forces ([`unsteady_forces`]; its added mass is not a
 /// force but a term of Newton's law, see [`triangle_aero_solved`]).
 pub fn triangle_aero(model: &Model, x: &[V3], v: &[V3], wind: Option<&[V3]>, force: &mut [V3]) {
     triangle_aero_intact(model, x, v, wind, &[], force);

@@ -16,7 +16,7 @@ pub const PILOT_STEPS: u64 = 256;
 /// alone doubled the estimate.
 pub const PILOT_MIN_S: f64 = 0.02;
 
-/// Bisection runs [`super::sweep::locate_limit`] takes to 1 %
+/// Bisection runs `locate_limit` (sweep.rs) takes to 1 %
 /// (log₂ 100 ≈ 7), counted at twice the first point's steps.
 const BISECTION_RUNS: f64 = 7.0;
 

@@ -123,7 +123,7 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
 /// that flat ones carry the share `flat_share[b]` of bin b's tumbling and
 /// chaotic drops (each kind's drops equally), as if the films had let go
 /// that mix: weighted medians of descent, drift and Ω, and the weighted
-/// fraction tumbling. With the films' own shares ([`real_flat_share`](super::real_flat_share)) it
+/// fraction tumbling. With the films' own shares ([`real_flat_share`]) it
 /// is [`real_table`]. Pooled medians mix the two kinds of release, which
 /// fall differently (the smallest squares drift 0.26 let go flat and 0.72
 /// on edge), so a simulation that lets go half and half is compared like
@@ -377,9 +377,9 @@ struct RealDrop {
     moving: bool,
     /// Let go on edge.
     on_edge: bool,
-    /// Its segment's fastest descent ([`Film::fastest_descent`]), m/s.
+    /// Its segment's fastest descent ([`Film::fastest_descent`](super::films::Film::fastest_descent)), m/s.
     fastest: Option<f64>,
-    /// How far its segment's path turns ([`Film::path_turn`]), degrees.
+    /// How far its segment's path turns ([`Film::path_turn`](super::films::Film::path_turn)), degrees.
     turn: Option<f64>,
 }
 

@@ -216,7 +216,7 @@ pub fn pressure_offset(alpha: f64) -> f64 {
 }
 
 /// What the lagged centre of pressure does on a triangle in an evaluation
-/// ([`lagged_pressure`]'s passes).
+/// (the passes of `lagged_pressure` in triangle_forces.rs).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(super) enum LagCouple {
     /// No flow over it, or broadside: no lag rate, no couple.
