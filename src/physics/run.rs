@@ -12,6 +12,7 @@ use crate::physics::stability;
 use crate::physics::state::State;
 use nalgebra::Vector3;
 use serde::Serialize;
+use std::fmt::Write as _;
 use std::time::Instant;
 
 /// What a run did and what it cost.
@@ -394,6 +395,10 @@ pub struct Work {
     pub frames: f64,
     /// Runs of this size (1 but for a breed: population × generations).
     pub runs: f64,
+    /// For a breed, how many times the prototype's steps its variants take
+    /// on average (their masses, stiffnesses and sizes move the auto step;
+    /// measured on the first generation); 1 otherwise.
+    pub variant_steps: f64,
     /// The integrator.
     pub integrator: Integrator,
     /// The step, s.
@@ -455,6 +460,7 @@ impl Work {
             steps: seconds / dt,
             frames: (seconds / frame_dt).round(),
             runs: 1.0,
+            variant_steps: 1.0,
             integrator,
             dt,
             reason: if auto {
@@ -508,7 +514,7 @@ impl Work {
 
     /// Particle-steps in all.
     pub fn particle_steps(&self) -> f64 {
-        self.particles as f64 * self.steps * self.runs
+        self.particles as f64 * self.steps * self.runs * self.variant_steps
     }
 
     /// Whether the run is long enough to show its progress ([`LONG_WORK`]).
@@ -519,11 +525,14 @@ impl Work {
     /// The estimate as a phrase: "2.8e8 particle-steps (7 particles × 3.96e7
     /// steps of verlet at dt = 2.527e-7 s), about 12 s of one core".
     pub fn describe(&self) -> String {
-        let runs = if self.runs > 1.0 {
+        let mut runs = if self.runs > 1.0 {
             format!(" × {} runs", quantity(self.runs))
         } else {
             String::new()
         };
+        if self.variant_steps != 1.0 {
+            let _ = write!(runs, " × {:.2} for the variants' steps", self.variant_steps);
+        }
         format!(
             "{:.2e} particle-steps ({} particles × {} steps of {} at dt = {:.3e} s{runs}), {}",
             self.particle_steps(),
@@ -538,7 +547,7 @@ impl Work {
     /// Seconds of one core the run should take at [`REFERENCE_RATE`] (a
     /// guide: machines differ by 2×).
     pub fn core_seconds(&self) -> f64 {
-        self.elements as f64 * self.steps * self.runs / REFERENCE_RATE
+        self.elements as f64 * self.steps * self.runs * self.variant_steps / REFERENCE_RATE
     }
 
     /// Why the step is that small, as a phrase (empty for a fixed step or

@@ -524,3 +524,59 @@ fn a_long_breed_says_so_before_it_starts() {
     assert!(!default.contains("note: this breed"), "{default}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A breed's work estimate (its note before a long run, and `--max-work`)
+/// counts the steps its variants take, not the prototype's: measured on
+/// generation 0, whose genomes are known before the run starts. Prototype A
+/// with every bound pinned to the prototype breeds copies of it, which take
+/// its steps exactly; let its springs grow up to 4× stiffer and the variants'
+/// steps, which the stiffest spring mode bounds (dt ∝ 1/ω ∝ 1/√k), shorten
+/// by up to 2×, so they take between 1 and 2 times the prototype's steps
+/// (1.25 at this seed).
+#[test]
+fn a_breeds_estimate_counts_its_variants_steps() {
+    use leafmagic::breed::{BreedSettings, Run};
+    let dir = std::env::temp_dir().join(format!("leafmagic-variant-steps-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let pinned = |stiffness: &str| {
+        let a = leafmagic::leaf::PROTOTYPE_A;
+        let start = a.find("[bounds]").unwrap();
+        let end = start + a[start..].find("\n\n").unwrap();
+        format!(
+            "{}[bounds]\nfold_deg = [20.0, 20.0]\nmass_factor = [1.0, 1.0]\n\
+             total_mass_factor = [1.0, 1.0]\nstiffness_factor = {stiffness}\n\
+             size_factor = [1.0, 1.0]\naspect_ratio = [1.0, 1.0]\ndrag_ratio = [1.0, 1.0]\n\
+             camber = [0.0, 0.0]\npetiole_mass = [0.0, 0.0]{}",
+            &a[..start],
+            &a[end..]
+        )
+    };
+    let factor = |name: &str, stiffness: &str| {
+        let proto = dir.join(format!("{name}.toml"));
+        std::fs::write(&proto, pinned(stiffness)).unwrap();
+        let settings = BreedSettings {
+            prototype: proto.to_str().unwrap().into(),
+            population: 24,
+            generations: 2,
+            seconds: 2.0,
+            ..BreedSettings::default_run()
+        };
+        let run = Run::create(&dir.join(name), settings).unwrap();
+        let work = run.work().unwrap();
+        assert!(work.describe().contains("for the variants' steps") == (work.variant_steps != 1.0));
+        work.variant_steps
+    };
+    assert_eq!(factor("copies", "[1.0, 1.0]"), 1.0);
+    let stiffer = factor("stiffer", "[1.0, 4.0]");
+    println!("springs up to 4x stiffer: the variants take {stiffer:.3}x the prototype's steps");
+    // At most 2 (the auto step is rounded to 1/64 of a frame's steps); the
+    // uniform half alone, √k with k uniform on [1, 4], averages 1.56, so
+    // the mean over the generation is near 1.28 if the copies took the
+    // prototype's steps: well above 1.1.
+    assert!(
+        stiffer > 1.1 && stiffer <= 2.0 * (1.0 + 1.0 / 64.0),
+        "{stiffer}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
