@@ -3,6 +3,15 @@
 //! falls: positions, maybe silhouettes, no rotation, a second or two,
 //! noise, gaps.
 //!
+//! Its files, one job each: `features` (step 3: velocities and the path
+//! features, [`PathFeatures`]), `areas` (step 4: the area features),
+//! `signal` (the tools both measure with: local-fit slopes, noise,
+//! detrending, periodicity) and `rules` (step 5: the rules and their
+//! thresholds, [`Calibration`], and the verdict); this file keeps the
+//! checks and the window (steps 1–2) with their thresholds and the entry
+//! points, and re-exports what the others make public, so every
+//! `motion::path::…` path is unchanged.
+//!
 //! # Method
 //!
 //! 1. **Checks**: ≥ [`MIN_PATH_SAMPLE_RATE_HZ`] sampling, ≥
@@ -50,15 +59,6 @@
 //! | 7 | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`PLUNGE_MIN_FROUDE`] (modulated: not caught by 4) |
 //! | 7b | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`STEADY_MAX_FROUDE`], modulation < [`HELIX_MAX_MODULATION`], the horizontal velocity turned ≥ [`HELIX_MIN_TURNS`] net (a helix too irregular for 1) |
 //! | 8 | lilter / chaotic | otherwise: swings, reverses and wanders |
-//!
-//! Its files, one job each: `features` (step 3: velocities and the path
-//! features, [`PathFeatures`]), `areas` (step 4: the area features),
-//! `signal` (the tools both measure with: local-fit slopes, noise,
-//! detrending, periodicity) and `rules` (step 5: the rules and their
-//! thresholds, [`Calibration`], and the verdict); this file keeps the
-//! checks and the window (steps 1–2) and the entry points, and
-//! re-exports what the others make public, so every `motion::path::…`
-//! path is unchanged.
 
 mod areas;
 mod features;
