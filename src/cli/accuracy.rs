@@ -32,6 +32,12 @@ pub fn accuracy(args: AccuracyArgs) -> Result<()> {
         bail!("--runs must be at least 1");
     }
     let mut settings = SweepSettings::for_model(&model, seconds);
+    // The reference was chosen from RK4's range, swept or not.
+    if !args.integrators.is_empty() {
+        settings
+            .ranges
+            .retain(|r| args.integrators.contains(&r.integrator));
+    }
     settings.runs = args.runs;
     if let Some(j) = args.reference_j {
         settings.reference_j = j;
@@ -54,7 +60,7 @@ pub fn accuracy(args: AccuracyArgs) -> Result<()> {
         eprintln!(
             "note: this sweep needs {} of one core ({}; from a short run of each), up to \
              twice that if the reference must be refined; --seconds shortens every run, \
-             --runs 1 times each point once",
+             --runs 1 times each point once, --integrators sweeps only those named",
             approximate_duration(cost.total_s()),
             parts.join(", "),
         );
@@ -93,9 +99,20 @@ fn accuracy_long(
     seconds: f64,
     started: Instant,
 ) -> Result<()> {
+    let defaults = LongSettings::default();
     let settings = LongSettings {
         seconds,
-        ..LongSettings::default()
+        integrators: if args.integrators.is_empty() {
+            defaults.integrators.clone()
+        } else {
+            defaults
+                .integrators
+                .iter()
+                .copied()
+                .filter(|i| args.integrators.contains(i))
+                .collect()
+        },
+        ..defaults
     };
     let report = accuracy::long::long_sweep(model, &settings)
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.leaf))?;

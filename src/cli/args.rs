@@ -288,6 +288,9 @@ pub struct AccuracyArgs {
     /// Use RK4 at T/2^J as the reference, exactly (by default the reference starts three halvings below RK4's smallest step and is halved until it validates; it is checked either way).
     #[arg(long, value_name = "J")]
     pub reference_j: Option<u32>,
+    /// The integrators to sweep or compare, comma-separated [default: all five]. The reference is RK4's either way.
+    #[arg(long, value_delimiter = ',', num_args = 1..)]
+    pub integrators: Vec<Integrator>,
 }
 
 /// Arguments of `scene`.

@@ -793,3 +793,83 @@ fn accuracy_rejects_a_bad_duration() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("above RK4's stable step"), "{err}");
 }
+
+/// `--integrators` sweeps only the integrators named (a plate's implicit
+/// sweep under the unsteady law takes most of 23 minutes; its explicit ones,
+/// seconds), and what it sweeps is what the full sweep gives for them: the
+/// same steps, errors and force evaluations, against the same RK4
+/// reference. The long comparison takes the flag too; an unknown name is
+/// refused naming the flag.
+#[test]
+fn accuracy_sweeps_only_the_integrators_named() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-accuracy-some-{}", std::process::id()));
+    let sweep = |sub: &str, extra: &[&str]| {
+        let out_dir = dir.join(sub);
+        let out = binary()
+            .args(["accuracy", "a", "--seconds", "0.05", "--runs", "1", "--out"])
+            .arg(&out_dir)
+            .args(extra)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // Every column but the wall time.
+        std::fs::read_to_string(out_dir.join("accuracy.csv"))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                let c: Vec<&str> = l.split(',').collect();
+                format!("{},{},{},{},{},{}", c[0], c[1], c[2], c[4], c[5], c[6])
+            })
+            .collect::<Vec<String>>()
+    };
+    let all = sweep("all", &[]);
+    let some = sweep("some", &["--integrators", "verlet,implicit"]);
+    let expected: Vec<String> = all
+        .iter()
+        .filter(|r| r.starts_with("verlet,") || r.starts_with("implicit,"))
+        .cloned()
+        .collect();
+    assert!(expected.len() >= 4);
+    assert_eq!(some, expected);
+    let out = binary()
+        .args([
+            "accuracy",
+            "a",
+            "--long",
+            "--seconds",
+            "0.3",
+            "--integrators",
+            "rk4",
+            "--out",
+        ])
+        .arg(dir.join("long"))
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let long = std::fs::read_to_string(dir.join("long/accuracy-long.csv")).unwrap();
+    let rows: Vec<&str> = long.lines().skip(1).collect();
+    assert!(
+        !rows.is_empty() && rows.iter().all(|r| r.starts_with("rk4,")),
+        "{long}"
+    );
+    let out = binary()
+        .args(["accuracy", "a", "--integrators", "verlet,leapfrog"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--integrators") && err.contains("leapfrog"),
+        "{err}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
