@@ -1403,3 +1403,82 @@ fn export_dresses_bred_leaves_with_a_render_mesh_at_a_start_height() {
         .collect();
     assert!(strays.is_empty(), "no temporary left: {strays:?}");
 }
+
+/// A leaf that is one rigid body (a plate from `leafmagic plate`) is
+/// exported from its drop as a rigid object, a pose per frame, not as every
+/// vertex per frame: the vertices it places are where the particles fell
+/// (to 1e-9 m on a 5 cm plate released at a tilt, at output frames that fall
+/// on recorded ones), and its .glb carries no morph targets and is a
+/// fraction of the size. A mass-spring leaf stays deforming.
+#[test]
+fn a_rigid_plate_is_exported_as_a_rigid_object() {
+    use leafmagic::leaf::AeroSpec;
+    use leafmagic::leaf::plates::{PlateShape, plate};
+    use leafmagic::sim::drop::{DropParams, drop_leaf};
+    let model = plate(PlateShape::Square, 0.05, 1.0, 0.07, AeroSpec::unsteady())
+        .unwrap()
+        .model()
+        .unwrap();
+    let tilt = [20.0, 5.0];
+    let fps = 30.0;
+    let object = export::drop_clip_released("plate", "", &model, 2.0, fps, tilt).unwrap();
+    let Motion::Rigid { translation, .. } = &object.motion else {
+        panic!("a rigid plate was exported as deforming");
+    };
+    let frames = translation.len();
+    let fall = drop_leaf(
+        &model,
+        &DropParams {
+            seconds: 2.0,
+            record_particles: true,
+            tilt_deg: tilt,
+            ..DropParams::default()
+        },
+    )
+    .unwrap();
+    let particles = export::resample_positions(
+        &fall.trajectory.time,
+        fall.particles.as_ref().unwrap(),
+        fps,
+        frames,
+    );
+    let mut worst: f64 = 0.0;
+    for (k, expected) in particles.iter().enumerate() {
+        for (a, b) in object.positions(k).iter().zip(expected) {
+            worst = worst.max((a - b).norm());
+        }
+    }
+    assert!(worst < 1e-9, "rigid placement off by {worst:.3e} m");
+    let deforming = ClipObject {
+        motion: Motion::Deforming { frames: particles },
+        ..object.clone()
+    };
+    let bytes = |o: ClipObject| {
+        glb::glb_bytes(&Clip {
+            name: "plate".into(),
+            fps,
+            frames,
+            objects: vec![o],
+            ground: None,
+            wind: Vec::new(),
+        })
+        .unwrap()
+    };
+    let (rigid, morphed) = (bytes(object), bytes(deforming));
+    let json = String::from_utf8_lossy(&rigid);
+    assert!(!json.contains("\"targets\""));
+    assert!(String::from_utf8_lossy(&morphed).contains("\"targets\""));
+    println!(
+        "glb: {} bytes rigid, {} deforming",
+        rigid.len(),
+        morphed.len()
+    );
+    assert!(rigid.len() * 5 < morphed.len());
+    // Prototype A bends: it stays deforming.
+    let a = LeafSpec::from_toml(leafmagic::leaf::PROTOTYPE_A, "a")
+        .unwrap()
+        .model()
+        .unwrap();
+    let leaf = export::drop_clip("a", "", &a, 1.0, fps).unwrap();
+    assert!(matches!(leaf.motion, Motion::Deforming { .. }));
+}

@@ -12,8 +12,9 @@ type V3 = Vector3<f64>;
 
 /// Drops `model` as breeding and `drop` do ([`DropParams`] defaults, for
 /// `seconds`) and returns its fall as a one-object clip on the grid at
-/// `fps`: the leaf's triangles, every particle per frame (a mass-spring leaf
-/// deforms, so it is exported as a deforming object).
+/// `fps`: the leaf's triangles and every particle per frame (a mass-spring
+/// leaf deforms, so it is exported as a deforming object), or for a leaf
+/// that is one rigid body, its pose per frame ([`Motion::Rigid`]).
 pub fn drop_clip(
     name: &str,
     label: &str,
@@ -42,9 +43,13 @@ pub fn drop_clip_released(
     fps: f64,
     tilt_deg: [f64; 2],
 ) -> Result<ClipObject, ExportError> {
+    // A leaf that is one rigid body (every plate of `leafmagic plate`)
+    // moves as one: its pose is its exact motion, and a client gets one
+    // transform per frame instead of every vertex.
+    let rigid = model.rigid.len() == 1 && model.rigid[0].members.len() == model.len();
     let params = DropParams {
         seconds,
-        record_particles: true,
+        record_particles: !rigid,
         tilt_deg,
         ..DropParams::default()
     };
@@ -70,8 +75,30 @@ pub fn drop_clip_released(
             mass: model.mass.clone(),
         }),
         render: None,
-        motion: Motion::Deforming {
-            frames: resample_positions(time, &frames, fps, count),
+        motion: if rigid {
+            let r = result.trajectory.resampled(fps);
+            let take = count.min(r.len());
+            let (Some(&last_x), Some(&last_q)) = (
+                r.position.get(take.wrapping_sub(1)),
+                r.orientation.get(take.wrapping_sub(1)),
+            ) else {
+                return Err(ExportError::Data(format!("{name}: no frames recorded")));
+            };
+            // The resampled record may end a frame short of the grid: hold
+            // its last pose, as scenes' rigid bodies do.
+            let mut translation = r.position[..take].to_vec();
+            let mut rotation = r.orientation[..take].to_vec();
+            translation.resize(count, last_x);
+            rotation.resize(count, last_q);
+            Motion::Rigid {
+                local: model.rest_position.iter().map(|x| x - com).collect(),
+                translation,
+                rotation,
+            }
+        } else {
+            Motion::Deforming {
+                frames: resample_positions(time, &frames, fps, count),
+            }
         },
     })
 }
