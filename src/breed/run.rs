@@ -50,6 +50,9 @@ pub struct Run {
     /// also made the directory. A run that fails before generation 0 is
     /// recorded takes back what it wrote, so nothing half-started is left.
     created: Option<bool>,
+    /// The work estimate a new run was checked against ([`Run::create_within`]),
+    /// kept for [`Run::work`]: it measures generation 0's variants' steps.
+    estimated: Option<(Model, Work)>,
 }
 
 /// The example fall of a `--like` run.
@@ -165,10 +168,11 @@ fn check_run_work(
     proto: &LeafSpec,
     settings: &BreedSettings,
     limit: f64,
-) -> Result<(), BreedError> {
+) -> Result<(Model, Work), BreedError> {
     let (model, work) = run_work(proto, settings)?;
     work.check(&model, 1.0 / FRAME_RATE, limit, RunCommand::Breed)
-        .map_err(|e| BreedError::Refused(format!("--prototype {}: {e}", settings.prototype)))
+        .map_err(|e| BreedError::Refused(format!("--prototype {}: {e}", settings.prototype)))?;
+    Ok((model, work))
 }
 
 /// The prototype's model and the work of every drop of the run
@@ -253,7 +257,11 @@ impl Run {
     /// # Errors
     /// As [`Run::create`] for a prototype with no usable step.
     pub fn work(&self) -> Result<Work, BreedError> {
-        run_work(&self.proto, &self.settings).map(|(model, work)| Work {
+        let (model, work) = match &self.estimated {
+            Some(known) => known.clone(),
+            None => run_work(&self.proto, &self.settings)?,
+        };
+        Ok(Work {
             // A breed drops with Verlet alone: no implicit step to offer.
             implicit_steps: None,
             ..work.explained(&model, 1.0 / FRAME_RATE)
@@ -321,7 +329,7 @@ impl Run {
             &settings.prototype,
             settings.seconds.max(ERROR_ESTIMATE_SECONDS),
         )?;
-        check_run_work(&proto, &settings, max_work)?;
+        let estimated = check_run_work(&proto, &settings, max_work)?;
         let created_dir = !dir.exists();
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
@@ -360,6 +368,7 @@ impl Run {
             timing: Vec::new(),
             best_fall: None,
             created: Some(created_dir),
+            estimated: Some(estimated),
         })
     }
 
@@ -524,6 +533,7 @@ impl Run {
             timing,
             best_fall: None,
             created: None,
+            estimated: None,
         };
         Ok((run, finding))
     }
