@@ -127,6 +127,48 @@ pub struct ContactSolver {
     warm_list: Vec<usize>,
 }
 
+/// [`ContactSolver::velocity_iterations`] on one body and its contacts:
+/// sweeps until every contact meets its conditions to within `tolerance`
+/// (m/s): a pushing contact reaches its target normal velocity, a free one
+/// does not approach faster than it, a sticking one does not slip.
+/// Impulses of redundant contacts (a ring resting on the ground) may still
+/// wander; velocities not.
+fn solve_body(sb: &mut Body, contacts: &mut [Contact], tolerance: f64) {
+    let ez = V3::z();
+    for _ in 0..VELOCITY_ITERATIONS {
+        for c in contacts.iter_mut() {
+            let u = sb.point_velocity(&c.arm);
+            let p_n = (c.p_n + c.mass_n * (c.bounce - u.z)).max(0.0);
+            sb.apply(&(ez * (p_n - c.p_n)), &c.arm);
+            c.p_n = p_n;
+            let u = sb.point_velocity(&c.arm);
+            let candidate = [c.p_t[0] - c.mass_t[0] * u.x, c.p_t[1] - c.mass_t[1] * u.y];
+            let p_t = clamp_disc(candidate, sb.mu, c.p_n);
+            sb.apply(&V3::new(p_t[0] - c.p_t[0], p_t[1] - c.p_t[1], 0.0), &c.arm);
+            c.p_t = p_t;
+        }
+        let residual = contacts.iter().fold(0.0f64, |worst, c| {
+            let u = sb.point_velocity(&c.arm);
+            let normal = if c.p_n > 0.0 {
+                (u.z - c.bounce).abs()
+            } else {
+                (c.bounce - u.z).max(0.0)
+            };
+            let inside = c.p_t[0] * c.p_t[0] + c.p_t[1] * c.p_t[1]
+                < (sb.mu * c.p_n) * (sb.mu * c.p_n) * (1.0 - 1e-9);
+            let slip = if inside {
+                (u.x * u.x + u.y * u.y).sqrt()
+            } else {
+                0.0
+            };
+            worst.max(normal).max(slip)
+        });
+        if residual <= tolerance {
+            break;
+        }
+    }
+}
+
 /// Projects a tangential impulse onto the friction disc of radius μ p_n.
 fn clamp_disc(candidate: [f64; 2], mu: f64, p_n: f64) -> [f64; 2] {
     // Impulses are far from overflow: sqrt of the sum, not the slower hypot.
@@ -227,47 +269,25 @@ impl ContactSolver {
 
     /// Projected Gauss–Seidel on the velocity constraints: normal impulses
     /// ≥ 0 reaching each contact's target normal velocity, friction within
-    /// each body's disc μ p_n.
-    fn velocity_iterations(&mut self, tolerance: f64) {
-        let ez = V3::z();
-        for _ in 0..VELOCITY_ITERATIONS {
-            for c in &mut self.contacts {
-                let sb = &mut self.bodies[c.body];
-                let u = sb.point_velocity(&c.arm);
-                let p_n = (c.p_n + c.mass_n * (c.bounce - u.z)).max(0.0);
-                sb.apply(&(ez * (p_n - c.p_n)), &c.arm);
-                c.p_n = p_n;
-                let u = sb.point_velocity(&c.arm);
-                let candidate = [c.p_t[0] - c.mass_t[0] * u.x, c.p_t[1] - c.mass_t[1] * u.y];
-                let p_t = clamp_disc(candidate, sb.mu, c.p_n);
-                sb.apply(&V3::new(p_t[0] - c.p_t[0], p_t[1] - c.p_t[1], 0.0), &c.arm);
-                c.p_t = p_t;
+    /// each body's disc μ p_n. Bodies touch only the ground, so each body's
+    /// contacts (contiguous: they are listed body by body) are solved on
+    /// their own and stop when they have converged: one body still settling
+    /// does not keep every other iterating (16 plates resting on the ground
+    /// ran all sweeps where each alone needed about a dozen). With
+    /// `slid_only`, only the bodies that slid are solved again.
+    fn velocity_iterations(&mut self, tolerance: f64, slid_only: bool) {
+        let mut start = 0;
+        while start < self.contacts.len() {
+            let b = self.contacts[start].body;
+            let count = self.contacts[start..]
+                .iter()
+                .take_while(|c| c.body == b)
+                .count();
+            let body = &mut self.bodies[b];
+            if !slid_only || body.slid {
+                solve_body(body, &mut self.contacts[start..start + count], tolerance);
             }
-            // Converged when every contact meets its conditions to within
-            // `tolerance` (m/s): a pushing contact reaches its target normal
-            // velocity, a free one does not approach faster than it, a
-            // sticking one does not slip. Impulses of redundant contacts (a
-            // ring resting on the ground) may still wander; velocities not.
-            let residual = self.contacts.iter().fold(0.0f64, |worst, c| {
-                let sb = &self.bodies[c.body];
-                let u = sb.point_velocity(&c.arm);
-                let normal = if c.p_n > 0.0 {
-                    (u.z - c.bounce).abs()
-                } else {
-                    (c.bounce - u.z).max(0.0)
-                };
-                let inside = c.p_t[0] * c.p_t[0] + c.p_t[1] * c.p_t[1]
-                    < (sb.mu * c.p_n) * (sb.mu * c.p_n) * (1.0 - 1e-9);
-                let slip = if inside {
-                    (u.x * u.x + u.y * u.y).sqrt()
-                } else {
-                    0.0
-                };
-                worst.max(normal).max(slip)
-            });
-            if residual <= tolerance {
-                break;
-            }
+            start += count;
         }
     }
 
@@ -365,7 +385,7 @@ impl ContactSolver {
             b.mu = ground.static_friction;
         }
         let tolerance = CONVERGED * resting;
-        self.velocity_iterations(tolerance);
+        self.velocity_iterations(tolerance, false);
         let stuck = STICK_TOLERANCE * resting.max(f64::MIN_POSITIVE);
         let mut rerun = false;
         for c in &self.contacts {
@@ -388,7 +408,7 @@ impl ContactSolver {
                     (b.velocity, b.omega) = (b.velocity0, b.omega0);
                 }
             }
-            self.velocity_iterations(tolerance);
+            self.velocity_iterations(tolerance, true);
         }
         for c in &self.contacts {
             self.warm[c.particle] = (c.p_n, c.p_t);
