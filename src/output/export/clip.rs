@@ -6,6 +6,8 @@
 use super::error::ExportError;
 use super::render_mesh::RenderMesh;
 use super::wind::WindGlyph;
+use crate::motion::trajectory::Trajectory;
+use crate::physics::model::Model;
 use nalgebra::{UnitQuaternion, Vector3};
 
 type V3 = Vector3<f64>;
@@ -236,6 +238,29 @@ impl Clip {
 
 fn finite(v: &V3) -> bool {
     v.iter().all(|x| x.is_finite())
+}
+
+/// A rigid object's motion on the grid t0 + k / fps (k < `count`): the rest
+/// shape of `model` about its centre of mass, placed by `trajectory` (the
+/// pose of that model) resampled onto the grid.
+pub fn rigid_motion(model: &Model, trajectory: &Trajectory, fps: f64, count: usize) -> Motion {
+    let com = model.centre_of_mass(&model.rest_position);
+    let r = trajectory.resampled(fps);
+    let take = count.min(r.len());
+    Motion::Rigid {
+        local: model.rest_position.iter().map(|x| x - com).collect(),
+        translation: pad(r.position[..take].to_vec(), count),
+        rotation: pad(r.orientation[..take].to_vec(), count),
+    }
+}
+
+/// Pads a per-frame list to `count` by repeating its last entry (a pose
+/// recording may end a round-off short of the last grid time).
+fn pad<T: Clone>(mut v: Vec<T>, count: usize) -> Vec<T> {
+    if let Some(last) = v.last().cloned() {
+        v.resize(count, last);
+    }
+    v
 }
 
 /// The uniform output grid over a recording from `t0` to `t1`:

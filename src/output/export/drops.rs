@@ -2,7 +2,9 @@
 //! dropped again as breeding dropped them (neither a run nor a leaf file
 //! keeps a motion), and falls laid side by side as one clip.
 
-use super::clip::{Body, Clip, ClipObject, Motion, frame_count, resample_positions, to_u32};
+use super::clip::{
+    Body, Clip, ClipObject, Motion, frame_count, resample_positions, rigid_motion, to_u32,
+};
 use super::error::ExportError;
 use crate::physics::model::Model;
 use crate::sim::drop::{DropParams, drop_leaf};
@@ -76,25 +78,7 @@ pub fn drop_clip_released(
         }),
         render: None,
         motion: if rigid {
-            let r = result.trajectory.resampled(fps);
-            let take = count.min(r.len());
-            let (Some(&last_x), Some(&last_q)) = (
-                r.position.get(take.wrapping_sub(1)),
-                r.orientation.get(take.wrapping_sub(1)),
-            ) else {
-                return Err(ExportError::Data(format!("{name}: no frames recorded")));
-            };
-            // The resampled record may end a frame short of the grid: hold
-            // its last pose, as scenes' rigid bodies do.
-            let mut translation = r.position[..take].to_vec();
-            let mut rotation = r.orientation[..take].to_vec();
-            translation.resize(count, last_x);
-            rotation.resize(count, last_q);
-            Motion::Rigid {
-                local: model.rest_position.iter().map(|x| x - com).collect(),
-                translation,
-                rotation,
-            }
+            rigid_motion(model, &result.trajectory, fps, count)
         } else {
             Motion::Deforming {
                 frames: resample_positions(time, &frames, fps, count),

@@ -2,7 +2,9 @@
 //! their pose and everything else by its particles, from a run in memory or
 //! from the frames the scene-directory reader gives back.
 
-use super::clip::{Body, Clip, ClipObject, Motion, frame_count, resample_positions, to_u32};
+use super::clip::{
+    Body, Clip, ClipObject, Motion, frame_count, resample_positions, rigid_motion, to_u32,
+};
 use super::error::ExportError;
 use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
@@ -69,17 +71,7 @@ pub(crate) fn build_scene_clip(
             }
         });
         let motion = match (obj.rigid_body, &obj.pose, poses.get(o).copied().flatten()) {
-            (Some(_), Some(frame), Some(traj)) => {
-                let m = &frame.model;
-                let com = m.centre_of_mass(&m.rest_position);
-                let r = traj.resampled(fps);
-                let take = count.min(r.len());
-                Motion::Rigid {
-                    local: m.rest_position.iter().map(|x| x - com).collect(),
-                    translation: pad(r.position[..take].to_vec(), count),
-                    rotation: pad(r.orientation[..take].to_vec(), count),
-                }
-            }
+            (Some(_), Some(frame), Some(traj)) => rigid_motion(&frame.model, traj, fps, count),
             _ => match particles.get(o).copied().flatten() {
                 Some(frames) => Motion::Deforming {
                     frames: resample_positions(time, frames, fps, count),
@@ -121,13 +113,4 @@ pub(crate) fn build_scene_clip(
     };
     clip.validate()?;
     Ok(clip)
-}
-
-/// Pads a per-frame list to `count` by repeating its last entry (a pose
-/// recording may end a round-off short of the last grid time).
-fn pad<T: Clone>(mut v: Vec<T>, count: usize) -> Vec<T> {
-    if let Some(last) = v.last().cloned() {
-        v.resize(count, last);
-    }
-    v
 }
