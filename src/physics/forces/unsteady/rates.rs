@@ -257,8 +257,9 @@ pub fn drag_rate_parts(model: &Model) -> (f64, f64) {
     } else {
         bound
     };
+    let index = PlateIndex::of(model);
     let bodies = (0..model.rigid.len())
-        .map(|b| rigid_body_rate(law, model, b, v_ref, q_ref))
+        .map(|b| body_rate(law, &body_alone(model, &index, b), v_ref, q_ref))
         .fold(0.0, f64::max);
     (particles, bodies)
 }
@@ -462,56 +463,82 @@ pub fn rigid_body_rate(law: &UnsteadyAero, model: &Model, b: usize, v_ref: f64, 
     // measure every triangle of the model, when only the body's plates act
     // on its members: a scene of N plates paid N² (400 rigid 5 cm squares
     // did not finish `scene --explain` in 10 minutes).
-    let alone = body_alone(model, b);
+    let alone = body_alone(model, &PlateIndex::of(model), b);
     body_rate(law, &alone, v_ref, q_ref)
 }
 
+/// The triangles that touch each particle and the triangles of each plate,
+/// built once per model so that taking each rigid body out alone
+/// ([`body_alone`]) costs the body's size, not the model's: a scene of N
+/// plates would otherwise pay N² again, in bookkeeping.
+struct PlateIndex {
+    /// `touching[i]`: the triangles with particle i as a corner.
+    touching: Vec<Vec<usize>>,
+    /// `plate_triangles[p]`: plate p's triangles, in the model's order.
+    plate_triangles: Vec<Vec<usize>>,
+}
+
+impl PlateIndex {
+    fn of(model: &Model) -> PlateIndex {
+        let mut touching = vec![Vec::new(); model.len()];
+        let mut plate_triangles = vec![Vec::new(); model.plate_count()];
+        for (t, (tri, geom)) in model.triangles.iter().zip(&model.surfaces).enumerate() {
+            for &i in &tri.corners {
+                touching[i].push(t);
+            }
+            plate_triangles[geom.plate].push(t);
+        }
+        PlateIndex {
+            touching,
+            plate_triangles,
+        }
+    }
+}
+
 /// Rigid body `b` of `model` as a model of its own (body 0 there): the
-/// triangles of every plate that one of its members lies on, the particles
-/// they and the members use (in the model's order, at their rest positions
-/// and masses), no springs, hinges, ground or wind, and the triangles'
-/// surface geometry with their plates renumbered in order. Under the
-/// unsteady law the forces on the members come from those triangles alone
-/// (a plate's sums run over its own triangles, and a triangle touches no
-/// particle outside its plate), so with the other particles at rest the
-/// members' forces and added mass are the same, to the bit, as in the
-/// whole model: the same triangles, in the same order.
-fn body_alone(model: &Model, b: usize) -> Model {
+/// triangles of every plate that one of its members is a corner of, the
+/// particles they and the members use (in the model's order, at their rest
+/// positions and masses), no springs, hinges, ground or wind, and the
+/// triangles' surface geometry with their plates renumbered in order. Under
+/// the unsteady law the forces on the members come from the triangles that
+/// touch them, all kept with the whole of their plates, whose sums run over
+/// their own triangles; so with the other particles at rest the members'
+/// forces and added mass are the same, to the bit, as in the whole model:
+/// the same triangles, in the same order.
+fn body_alone(model: &Model, index: &PlateIndex, b: usize) -> Model {
     let body = &model.rigid[b];
-    let n = model.len();
-    let mut member = vec![false; n];
-    for &i in &body.members {
-        member[i] = true;
-    }
-    let mut plate_kept = vec![false; model.plate_count()];
-    for (tri, geom) in model.triangles.iter().zip(&model.surfaces) {
-        if tri.corners.iter().any(|&i| member[i]) {
-            plate_kept[geom.plate] = true;
-        }
-    }
-    let kept: Vec<usize> = (0..model.triangles.len())
-        .filter(|&t| plate_kept[model.surfaces[t].plate])
+    let mut plates: Vec<usize> = body
+        .members
+        .iter()
+        .flat_map(|&i| &index.touching[i])
+        .map(|&t| model.surfaces[t].plate)
         .collect();
-    let mut used = member;
+    plates.sort_unstable();
+    plates.dedup();
+    let mut kept: Vec<usize> = plates
+        .iter()
+        .flat_map(|&p| index.plate_triangles[p].iter().copied())
+        .collect();
+    kept.sort_unstable();
+    let mut old = body.members.clone();
+    old.extend(kept.iter().flat_map(|&t| model.triangles[t].corners));
+    old.sort_unstable();
+    old.dedup();
+    // `old` is sorted: a particle's new index is its place in it.
+    let new_index = |i: usize| old.binary_search(&i).expect("a kept particle");
+    // Plates numbered as their first triangle comes in the model's order.
+    let mut plate_index = vec![usize::MAX; plates.len()];
+    let mut count = 0;
     for &t in &kept {
-        for &i in &model.triangles[t].corners {
-            used[i] = true;
+        let slot = plates
+            .binary_search(&model.surfaces[t].plate)
+            .expect("a kept plate");
+        if plate_index[slot] == usize::MAX {
+            plate_index[slot] = count;
+            count += 1;
         }
     }
-    let old: Vec<usize> = (0..n).filter(|&i| used[i]).collect();
-    let mut new_index = vec![usize::MAX; n];
-    for (k, &i) in old.iter().enumerate() {
-        new_index[i] = k;
-    }
-    let mut plate_index = vec![usize::MAX; plate_kept.len()];
-    let mut plates = 0;
-    for &t in &kept {
-        let p = &mut plate_index[model.surfaces[t].plate];
-        if *p == usize::MAX {
-            *p = plates;
-            plates += 1;
-        }
-    }
+    let renumbered = |p: usize| plate_index[plates.binary_search(&p).expect("a kept plate")];
     let pick = |values: &[f64]| old.iter().map(|&i| values[i]).collect::<Vec<f64>>();
     Model {
         mass: pick(&model.mass),
@@ -524,7 +551,7 @@ fn body_alone(model: &Model, b: usize) -> Model {
             .iter()
             .map(|&t| {
                 let mut tri = model.triangles[t];
-                tri.corners = tri.corners.map(|i| new_index[i]);
+                tri.corners = tri.corners.map(new_index);
                 tri
             })
             .collect(),
@@ -534,13 +561,13 @@ fn body_alone(model: &Model, b: usize) -> Model {
         gravity: model.gravity,
         ground: None,
         rigid: vec![crate::physics::model::RigidBody {
-            members: body.members.iter().map(|&i| new_index[i]).collect(),
+            members: body.members.iter().map(|&i| new_index(i)).collect(),
             ..body.clone()
         }],
         surfaces: kept
             .iter()
             .map(|&t| SurfaceGeometry {
-                plate: plate_index[model.surfaces[t].plate],
+                plate: renumbered(model.surfaces[t].plate),
                 ..model.surfaces[t]
             })
             .collect(),
