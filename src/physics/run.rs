@@ -565,9 +565,10 @@ impl Work {
         if self.variant_steps != 1.0 {
             let _ = write!(runs, " × {:.2} for the variants' steps", self.variant_steps);
         }
-        let mut phrase = duration_phrase(self.core_seconds());
+        let base = approximate_duration(self.core_seconds());
+        let mut phrase = format!("{base} of one core");
         let resting = approximate_duration(self.core_seconds_resting());
-        if resting != approximate_duration(self.core_seconds()) {
+        if resting != base {
             let _ = write!(
                 phrase,
                 ", up to {resting} while its objects rest on the ground"
@@ -586,14 +587,19 @@ impl Work {
     /// Seconds of one core the run should take at [`REFERENCE_RATE`] (a
     /// guide: machines differ by 2×).
     pub fn core_seconds(&self) -> f64 {
-        self.elements as f64 * self.steps * self.runs * self.variant_steps / REFERENCE_RATE
+        self.seconds_of(self.elements)
     }
 
     /// [`Work::core_seconds`] with every object resting on the ground
     /// ([`Work::resting_elements`]): what the run costs at most.
     pub fn core_seconds_resting(&self) -> f64 {
-        (self.elements + self.resting_elements) as f64 * self.steps * self.runs * self.variant_steps
-            / REFERENCE_RATE
+        self.seconds_of(self.elements + self.resting_elements)
+    }
+
+    /// Seconds of one core for `elements` per step over every step of
+    /// every run.
+    fn seconds_of(&self, elements: usize) -> f64 {
+        elements as f64 * self.steps * self.runs * self.variant_steps / REFERENCE_RATE
     }
 
     /// Why the step is that small, as a phrase (empty for a fixed step or
@@ -672,12 +678,6 @@ impl Work {
             command,
         })))
     }
-}
-
-/// Seconds as a rough phrase ("about 12 s", "about 7 minutes", "about 3
-/// hours").
-fn duration_phrase(seconds: f64) -> String {
-    format!("{} of one core", approximate_duration(seconds))
 }
 
 /// A duration in words: "under a second", "about 40 s", "about 12
