@@ -803,12 +803,13 @@ fn accuracy_rejects_a_bad_duration() {
 #[test]
 fn accuracy_sweeps_only_the_integrators_named() {
     let dir = std::env::temp_dir().join(format!("leafmagic-accuracy-some-{}", std::process::id()));
-    let sweep = |sub: &str, extra: &[&str]| {
-        let out_dir = dir.join(sub);
+    // `accuracy a ARGS --out DIR/SUB`, which must succeed.
+    let run = |args: &[&str], sub: &str| {
         let out = binary()
-            .args(["accuracy", "a", "--seconds", "0.05", "--runs", "1", "--out"])
-            .arg(&out_dir)
-            .args(extra)
+            .args(["accuracy", "a"])
+            .args(args)
+            .arg("--out")
+            .arg(dir.join(sub))
             .output()
             .unwrap();
         assert!(
@@ -816,6 +817,12 @@ fn accuracy_sweeps_only_the_integrators_named() {
             "{}",
             String::from_utf8_lossy(&out.stderr)
         );
+        dir.join(sub)
+    };
+    let sweep = |sub: &str, extra: &[&str]| {
+        let mut args = vec!["--seconds", "0.05", "--runs", "1"];
+        args.extend(extra);
+        let out_dir = run(&args, sub);
         // Every column but the wall time.
         std::fs::read_to_string(out_dir.join("accuracy.csv"))
             .unwrap()
@@ -836,26 +843,11 @@ fn accuracy_sweeps_only_the_integrators_named() {
         .collect();
     assert!(expected.len() >= 4);
     assert_eq!(some, expected);
-    let out = binary()
-        .args([
-            "accuracy",
-            "a",
-            "--long",
-            "--seconds",
-            "0.3",
-            "--integrators",
-            "rk4",
-            "--out",
-        ])
-        .arg(dir.join("long"))
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let long_dir = run(
+        &["--long", "--seconds", "0.3", "--integrators", "rk4"],
+        "long",
     );
-    let long = std::fs::read_to_string(dir.join("long/accuracy-long.csv")).unwrap();
+    let long = std::fs::read_to_string(long_dir.join("accuracy-long.csv")).unwrap();
     let rows: Vec<&str> = long.lines().skip(1).collect();
     assert!(
         !rows.is_empty() && rows.iter().all(|r| r.starts_with("rk4,")),
