@@ -4,7 +4,10 @@
 //! orientation) on leafmagic's own falls and the MuJoCo falls when it is
 //! given what video of them would give.
 //!
-//! `cargo run --release --example real_falls_classify` (about 10 s).
+//! And how each classifier holds at the frame rates video and animation
+//! come in (60, 30, 25 and film's 24 frames per second).
+//!
+//! `cargo run --release --example real_falls_classify` (about 15 s).
 
 #[path = "../tests/integration/corpus.rs"]
 #[allow(dead_code)]
@@ -184,9 +187,11 @@ fn consistency(title: &str, falls: &[Fall]) {
         }),
         (
             "video: 98 Hz, 1 mm noise, the last 1.5 s and 5.0–6.5 s",
-            |f, i| cuts(f, i, false),
+            |f, i| corpus::video_cuts(f, i, 98.0, false),
         ),
-        ("video + two cameras' areas", |f, i| cuts(f, i, true)),
+        ("video + two cameras' areas", |f, i| {
+            corpus::video_cuts(f, i, 98.0, true)
+        }),
         (
             "full classifier on the same 1.5 s cuts, with orientation",
             |f, _| clean_cuts(f),
@@ -238,7 +243,10 @@ fn consistency(title: &str, falls: &[Fall]) {
     ] {
         let mut pairs = Vec::new();
         for (i, f) in falls.iter().enumerate() {
-            for (clean, video) in clean_cuts(f).iter().zip(cuts(f, i, areas)) {
+            for (clean, video) in clean_cuts(f)
+                .iter()
+                .zip(corpus::video_cuts(f, i, 98.0, areas))
+            {
                 let reference = classify(clean, f.chord).class;
                 pairs.push((reference, classify(&video, f.chord).class));
             }
@@ -265,25 +273,91 @@ fn clean_cuts(f: &Fall) -> Vec<Trajectory> {
         .collect()
 }
 
-/// The two video cuts of a fall (the last 1.5 s, and 5.0–6.5 s), as
-/// [`corpus::video`] gives them.
-fn cuts(f: &Fall, i: usize, areas: bool) -> Vec<Trajectory> {
-    let end = *f.trajectory.time.last().unwrap();
-    [end - 1.5, 5.0]
+/// Every `k`-th sample of a record (a camera running at 1/k the rate).
+fn decimated(tr: &Trajectory, k: usize) -> Trajectory {
+    let keep: Vec<usize> = (0..tr.len()).step_by(k).collect();
+    let mut out = tr.clone();
+    out.time = keep.iter().map(|&i| tr.time[i]).collect();
+    out.position = keep.iter().map(|&i| tr.position[i]).collect();
+    if !tr.orientation.is_empty() {
+        out.orientation = keep.iter().map(|&i| tr.orientation[i]).collect();
+    }
+    for (a, b) in out.areas.iter_mut().zip(&tr.areas) {
+        a.values = keep.iter().map(|&i| b.values[i]).collect();
+    }
+    out
+}
+
+/// docs/classification.md, "Frame rates": the full classifier on pose
+/// records resampled to video and animation rates, against its own verdict
+/// at 240 Hz; the real squares' films decimated, against people; and
+/// video cuts of the corpus at those rates, against the full classifier.
+fn frame_rates(falls: &[Fall]) {
+    println!("## Frame rates\n");
+    let full: Vec<MotionClass> = falls
         .iter()
-        .enumerate()
-        .map(|(k, &t0)| {
-            corpus::video(
-                &f.trajectory,
-                t0,
-                1.5,
-                98.0,
-                0.001,
-                areas,
-                (2 * i + k) as u64,
-            )
-        })
-        .collect()
+        .map(|f| classify(&f.trajectory, f.chord).class)
+        .collect();
+    let named: Vec<usize> = (0..falls.len())
+        .filter(|&i| full[i] != MotionClass::Undetermined)
+        .collect();
+    println!("| pose record (with orientation) at | same class as at 240 Hz | undetermined |");
+    println!("|---|---|---|");
+    for rate in [60.0, 30.0, 25.0, 24.0] {
+        let (mut same, mut undetermined) = (0, 0);
+        for &i in &named {
+            let f = &falls[i];
+            let c = classify(&f.trajectory.resampled(rate), f.chord);
+            same += usize::from(c.class == full[i] && c.inputs == Inputs::Orientation);
+            undetermined += usize::from(c.class == MotionClass::Undetermined);
+        }
+        println!(
+            "| {rate} Hz | {} | {undetermined} |",
+            pct(same, named.len())
+        );
+    }
+    println!();
+
+    let squares = corpus::squares();
+    let named_squares: Vec<&Square> = squares.iter().filter(|s| s.human != 3).collect();
+    println!("| real squares' films, every k-th frame | path + areas | path only |");
+    println!("|---|---|---|");
+    for k in [1, 2, 3, 4] {
+        let agree = |use_: ClassifyOptions| {
+            let ok = named_squares
+                .iter()
+                .filter(|s| {
+                    let c = classify_with(&decimated(&s.trajectory, k), s.chord, use_).class;
+                    c == corpus::human_class(s.human)
+                })
+                .count();
+            pct(ok, named_squares.len())
+        };
+        println!(
+            "| {:.1} fps (k = {k}) | {} | {} |",
+            98.0 / k as f64,
+            agree(PATH_AND_AREAS),
+            agree(PATH_ONLY)
+        );
+    }
+    println!();
+
+    println!("| video cuts (1.5 s, 1 mm noise) at | path only | path + areas |");
+    println!("|---|---|---|");
+    for rate in [98.0, 60.0, 30.0, 25.0, 24.0] {
+        let agree = |areas: bool| {
+            let mut ok = 0;
+            for &i in &named {
+                let f = &falls[i];
+                for v in corpus::video_cuts(f, i, rate, areas) {
+                    ok += usize::from(classify(&v, f.chord).class == full[i]);
+                }
+            }
+            pct(ok, 2 * named.len())
+        };
+        println!("| {rate} fps | {} | {} |", agree(false), agree(true));
+    }
+    println!();
 }
 
 fn main() {
@@ -306,4 +380,7 @@ fn main() {
         "Consistency on held-out falls (recipe variants 17–32, prototype A varied with seeds 40–79)",
         &held_out,
     );
+    let mut all = falls;
+    all.extend(held_out);
+    frame_rates(&all);
 }

@@ -50,8 +50,33 @@ pub fn classify_file(
             notes.ignored_columns.join(", ")
         );
     }
+    if let Some(note) = implausible_units(&traj) {
+        eprintln!("note: {}: {note}", path.display());
+    }
     let c = classify::classify(&traj, size);
     Ok((traj, notes, c))
+}
+
+/// Fastest mean descent through air a leaf-like fall is taken to have,
+/// m/s: a paper card diving edge-on falls at a few metres per second,
+/// leafmagic's fastest divers at 8 (README, the archive), raindrops at 9.
+/// A record faster than this on average is more likely written in
+/// millimetres or centimetres than in metres (our choice, with room).
+const MAX_PLAUSIBLE_DESCENT_M_S: f64 = 25.0;
+
+/// Why a record's lengths look like they are not in metres, if they do: a
+/// fall in millimetres reads a thousand times too fast, and is still
+/// classified (the classes are scale-free) with nonsense speeds.
+fn implausible_units(traj: &Trajectory) -> Option<String> {
+    let (n, (t0, t1)) = (traj.len(), (traj.time.first()?, traj.time.last()?));
+    let fall = traj.position.first()?.z - traj.position.last()?.z;
+    let speed = fall / (t1 - t0);
+    (n > 1 && speed > MAX_PLAUSIBLE_DESCENT_M_S).then(|| {
+        format!(
+            "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres or centimetres?",
+            t1 - t0
+        )
+    })
 }
 
 /// Reads and describes a fall, or says why it cannot be described.

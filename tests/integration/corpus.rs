@@ -256,6 +256,28 @@ pub fn video(
     out
 }
 
+/// The two 1.5 s video cuts of the `i`-th fall of a list that the
+/// classifier's figures use (its last 1.5 s, and 5.0–6.5 s), as [`video`]
+/// gives them at `fps` with 1 mm of noise, seeded by `i` and the cut.
+pub fn video_cuts(fall: &Fall, i: usize, fps: f64, areas: bool) -> Vec<Trajectory> {
+    let end = *fall.trajectory.time.last().unwrap();
+    [end - 1.5, 5.0]
+        .into_iter()
+        .enumerate()
+        .map(|(k, t0)| {
+            video(
+                &fall.trajectory,
+                t0,
+                1.5,
+                fps,
+                0.001,
+                areas,
+                (2 * i + k) as u64,
+            )
+        })
+        .collect()
+}
+
 /// One labelled segment of a real paper square (tests/data/README.md).
 pub struct Square {
     /// `square_NNN`.

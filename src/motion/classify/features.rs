@@ -49,6 +49,10 @@ pub struct Features {
     pub sample_rate_hz: f64,
     /// Longest interval between samples in the window, s.
     pub max_gap_s: f64,
+    /// Largest rotation between two consecutive samples in the window,
+    /// degrees: how close the record comes to the half turn per sample at
+    /// which the direction of a rotation can no longer be told.
+    pub max_sample_turn_deg: f64,
     /// Fall over the window (z at start − z at end), m.
     pub descent_m: f64,
     /// [`Features::descent_m`] in chord lengths (leaf size).
@@ -193,6 +197,7 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
         let dt = tr.time[k + 1] - tr.time[k];
         f.max_gap_s = f.max_gap_s.max(dt);
         let r = increment(&tr.orientation[k], &tr.orientation[k + 1]);
+        f.max_sample_turn_deg = f.max_sample_turn_deg.max(r.norm().to_degrees());
         psi += r.z;
         abs_rz += r.z.abs();
         w2 += r.norm_squared() / dt;

@@ -335,15 +335,16 @@ fn too_short_slow_or_gappy_records_are_undetermined_with_a_reason() {
         |_| rx(0.0),
     );
     assert!(why(&short).contains("chord lengths"));
-    let few = synth(60.0, 0.8, |t| Vector3::new(0.0, 0.0, -5.0 * t), |_| rx(0.0));
-    assert!(why(&few).contains("too few samples"));
+    // Below both classifiers' floor (film's 24 frames per second).
     let slow = synth(
-        30.0,
+        20.0,
         10.0,
         |t| Vector3::new(0.0, 0.0, -0.5 * t),
         |_| rx(0.0),
     );
-    assert!(why(&slow).contains("Hz"));
+    let reason = why(&slow);
+    assert!(reason.contains("below the 24 Hz minimum"), "{reason}");
+    assert!(reason.contains("from the path alone"), "{reason}");
     let mut gappy = Trajectory::default();
     for (k, t) in steady().time.iter().enumerate() {
         if !(1800..1830).contains(&k) {
@@ -352,6 +353,20 @@ fn too_short_slow_or_gappy_records_are_undetermined_with_a_reason() {
     }
     assert!(why(&gappy).contains("gap"));
     assert!(why(&Trajectory::default()).contains("too few samples"));
+    // Too short for the orientation's rules (0.5 s of window at 60 Hz), long
+    // enough for the path's: named from the path, which says why.
+    let few = synth(60.0, 0.8, |t| Vector3::new(0.0, 0.0, -0.5 * t), |_| rx(0.0));
+    let c = classify(&few, CHORD);
+    assert_eq!(
+        (c.class, c.regime, c.inputs),
+        (MotionClass::Floater, Regime::Steady, Inputs::Path),
+        "{c:#?}"
+    );
+    let reason = c.reason.unwrap();
+    assert!(
+        reason.contains("the orientation is not used, too few samples"),
+        "{reason}"
+    );
     // One slow rock in the window: too transient to call a flutter.
     let slow_rock = synth(
         240.0,
@@ -373,6 +388,37 @@ fn too_short_slow_or_gappy_records_are_undetermined_with_a_reason() {
     );
     assert!(why(&rising).contains("not falling"));
     assert!(classify(&steady(), 0.0).reason.unwrap().contains("size"));
+}
+
+/// A tumble as fast as a record can follow is named from its orientation
+/// at film's frame rate; one turning more than [`MAX_SAMPLE_TURN_DEG`]
+/// between samples, whose direction the record cannot tell, is not.
+#[test]
+fn a_rotation_near_half_a_turn_per_sample_is_not_read_from_the_orientation() {
+    let tumbling = |deg_per_sample: f64| {
+        let rate = 24.0;
+        let w = deg_per_sample.to_radians() * rate;
+        synth(
+            rate,
+            10.0,
+            |t| Vector3::new(0.3 * t, 0.0, -0.8 * t),
+            move |t| rx(w * t),
+        )
+    };
+    let c = classify(&tumbling(120.0), CHORD);
+    assert_eq!(
+        (c.class, c.regime, c.inputs),
+        (MotionClass::Spinner, Regime::Tumble, Inputs::Orientation),
+        "{c:#?}"
+    );
+    assert!((c.features.max_sample_turn_deg - 120.0).abs() < 1e-6);
+    let c = classify(&tumbling(170.0), CHORD);
+    assert_eq!(c.inputs, Inputs::Path, "{c:#?}");
+    let reason = c.reason.unwrap();
+    assert!(
+        reason.contains("turns 170° between two samples") && reason.contains("sample at 51 Hz"),
+        "{reason}"
+    );
 }
 
 #[test]

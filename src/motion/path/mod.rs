@@ -85,10 +85,12 @@ use rules::decide;
 
 // ---------------------------------------------------------------- record checks
 
-/// Lowest accepted sampling rate, Hz (the floor: video at 25 frames
-/// per second; the fastest tumbling of paper squares, 26 rad/s, shows area
-/// maxima at 8 Hz, below that rate's Nyquist frequency of 12.5 Hz).
-pub const MIN_PATH_SAMPLE_RATE_HZ: f64 = 25.0;
+/// Lowest accepted sampling rate, Hz: film's 24 frames per second (NTSC's
+/// 23.976 with [`SAMPLE_RATE_TOLERANCE`]), as the full classifier's
+/// [`crate::motion::classify::MIN_SAMPLE_RATE_HZ`]. The fastest tumbling of
+/// paper squares, 26 rad/s, shows area maxima at 8 Hz, below that rate's
+/// Nyquist frequency of 12 Hz.
+pub const MIN_PATH_SAMPLE_RATE_HZ: f64 = 24.0;
 
 /// Relative slack on [`MIN_PATH_SAMPLE_RATE_HZ`] for time stamps printed
 /// with few decimals (as the full classifier's

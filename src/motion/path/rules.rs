@@ -363,7 +363,7 @@ fn reason(id: RuleId, f: &PathFeatures) -> String {
         (Some(m), Some(w)) => format!(", {m:.1} area maxima per second (≈ {w:.0} rad/s)"),
         _ => String::new(),
     };
-    match id {
+    let said = match id {
         RuleId::Helix => format!(
             "autorotation: the path is a helix, its horizontal velocity turned {:.1} times the same way (consistency {:.2}), descending steadily at {:.2} m/s",
             f.path_turns.abs(),
@@ -415,5 +415,18 @@ fn reason(id: RuleId, f: &PathFeatures) -> String {
             "chaotic: swings, reverses and wanders (straightness {:.2}, {} reversals, drift ratio {:.2}, modulation {:.2}){areas}",
             f.straightness, f.reversals, f.drift_ratio, f.descent_speed_cv
         ),
+    };
+    // A steady verdict the record's own resolution decided: its jitter
+    // (second differences, which at video rates also hold any motion
+    // faster than the frames follow) was larger than the modulation a
+    // steady fall may have.
+    let steady = matches!(id, RuleId::Steady | RuleId::Plunge | RuleId::Glide);
+    if steady && f.modulation_noise > STEADY_MAX_MODULATION {
+        format!(
+            "{said}; steady only as far as the record resolves: its jitter at {:.1} Hz would hide a modulation up to {:.2}",
+            f.sample_rate_hz, f.modulation_noise
+        )
+    } else {
+        said
     }
 }

@@ -134,7 +134,7 @@ fn decimate(tr: &Trajectory, step: usize) -> Trajectory {
 }
 
 #[test]
-fn mujoco_falls_get_the_readme_class_at_240_100_75_and_60_hz() {
+fn mujoco_falls_get_the_readme_class_from_240_down_to_24_hz() {
     let dir = mujoco_dir();
     for (name, class) in MUJOCO {
         let tr = Trajectory::read_csv(&dir.join(format!("{name}.csv"))).unwrap();
@@ -167,9 +167,15 @@ fn mujoco_falls_get_the_readme_class_at_240_100_75_and_60_hz() {
             ("slerp", 60.0, tr.resampled(60.0)),
             ("slerp", 75.0, tr.resampled(75.0)),
             ("slerp", 100.0, tr.resampled(100.0)),
+            // Video and animation frame rates: 30, 25 and film's 24 (every
+            // tenth sample).
+            ("slerp", 30.0, tr.resampled(30.0)),
+            ("slerp", 25.0, tr.resampled(25.0)),
+            ("decimated", 24.0, decimate(&tr, 10)),
         ] {
             let cl = classify(&low, MUJOCO_CHORD);
             assert!((cl.features.sample_rate_hz - rate).abs() < 0.1);
+            assert_eq!(cl.inputs, Inputs::Orientation, "{name} {how} {rate} Hz");
             assert_eq!(cl.class, class, "{name} {how} {rate} Hz: {cl:#?}");
             assert_eq!(cl.regime, c.regime, "{name} {how} {rate} Hz");
         }
