@@ -13,6 +13,15 @@ use crate::motion::trajectory::Trajectory;
 /// (calibrated, docs/classification.md).
 pub const AREA_MIN_SWING: f64 = 0.2;
 
+/// Smallest swing of an area signal counted as a maximum, as a fraction of
+/// the signal's mean level, whatever its range: a plate's projected area
+/// changes by a good part of itself as the plate turns (a tumbling plate's
+/// from edge-on to face-on), a steady plate's only by the silhouette's
+/// flicker, whose range alone would otherwise set the swing (our choice:
+/// five times the corpus cameras' 2 % flicker; no verdict at 98 fps
+/// changes, docs/classification.md, "Frame rates").
+pub const AREA_MIN_SWING_OF_LEVEL: f64 = 0.1;
+
 /// Half-width of the moving average applied to area signals before
 /// counting maxima, s (one frame at 98 fps: silhouette flicker).
 pub const AREA_SMOOTHING_S: f64 = 0.01;
@@ -79,8 +88,10 @@ pub(super) fn measure_areas(g: &Trajectory, dt: f64, f: &mut PathFeatures) {
                 (l.min(v), u.max(v))
             });
         let range = hi - lo;
+        let level = a.values.iter().sum::<f64>() / m as f64;
+        let swing = (AREA_MIN_SWING * range).max(AREA_MIN_SWING_OF_LEVEL * level.abs());
         if range > 0.0 {
-            rate_sum += maxima(&smooth, AREA_MIN_SWING * range) as f64 / duration;
+            rate_sum += maxima(&smooth, swing) as f64 / duration;
         }
         best_period = best_period.max(periodicity(&detrended));
         f.area_signals += 1;

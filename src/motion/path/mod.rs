@@ -35,7 +35,8 @@
 //!    the horizontal velocity along its dominant axis (a swing), and the
 //!    turning of the horizontal velocity's direction (a helix).
 //! 4. **Areas** (each signal detrended): maxima per second (swings of at
-//!    least [`AREA_MIN_SWING`] of the signal's range) — a plate turning
+//!    least [`AREA_MIN_SWING`] of the signal's range and
+//!    [`AREA_MIN_SWING_OF_LEVEL`] of its mean level) — a plate turning
 //!    about a horizontal axis shows two per turn, so the turn rate is π ×
 //!    maxima per second — and the periodicity of the signal (its
 //!    autocorrelation at the first peak after the first zero).
@@ -53,7 +54,7 @@
 //! | 2 | floater / flutter | ≥ [`FLUTTER_MIN_REVERSALS`] reversals of a swing with periodicity ≥ [`FLUTTER_MIN_PERIODICITY`] that comes to rest at each (horizontal speed spread ≥ [`FLUTTER_MIN_SPEED_SPREAD`]), drift < [`GLIDE_MIN_DRIFT`] |
 //! | 3 | floater / steady | steady, drift < [`GLIDE_MIN_DRIFT`], Fr < [`STEADY_MAX_FROUDE`] |
 //! | 4 | spinner / autorotation | steady, drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`STEADY_MAX_FROUDE`]: straight down, fast (or an edge-on dive: the path cannot tell) |
-//! | 5 | floater / glide | steady, drift ≥ [`GLIDE_MIN_DRIFT`] |
+//! | 5 | floater / glide | steady, drift ≥ [`GLIDE_MIN_DRIFT`]; with areas, if the record's jitter hides a modulation of [`STEADY_MAX_MODULATION`], < [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] area maxima per second (no plate turning at a tumble's rate) |
 //! | 6 | spinner / tumble | straightness ≥ [`TUMBLE_MIN_STRAIGHTNESS`], drift ≥ [`GLIDE_MIN_DRIFT`] (modulated); with areas, ≥ [`TUMBLE_MIN_AREA_MAXIMA_PER_S`] area maxima per second |
 //! | 6b | spinner / tumble | with areas only: as 6 but turning regularly instead of fast: area periodicity ≥ [`TUMBLE_MIN_AREA_PERIODICITY`] and ≥ [`TUMBLE_REGULAR_MIN_AREA_MAXIMA_PER_S`] maxima per second |
 //! | 7 | spinner / autorotation | drift < [`GLIDE_MIN_DRIFT`], Fr ≥ [`PLUNGE_MIN_FROUDE`] (modulated: not caught by 4) |
@@ -65,7 +66,7 @@ mod features;
 mod rules;
 mod signal;
 
-pub use areas::{AREA_MIN_SWING, AREA_SMOOTHING_S};
+pub use areas::{AREA_MIN_SWING, AREA_MIN_SWING_OF_LEVEL, AREA_SMOOTHING_S};
 pub use features::{
     HELIX_SPEED_FRACTION, NOISE_MULTIPLE, PathFeatures, REVERSAL_SPEED_FRACTION, SMOOTHING_S,
 };

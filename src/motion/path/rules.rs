@@ -222,6 +222,21 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
     } else {
         None
     };
+    // A glide turns no plate: where the record's jitter is too large to
+    // tell a steady descent from a modulated one (at video rates it holds
+    // a tumble's own modulation, docs/classification.md, "Frame rates"),
+    // the areas must not show a plate turning at a tumble's rate either.
+    let mut glide = vec![
+        steady(),
+        Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT).regime_only(),
+    ];
+    if inputs == Inputs::Areas && f.modulation_noise > STEADY_MAX_MODULATION {
+        glide.push(Cond::lt(
+            area_maxima,
+            cal.tumble_min_area_maxima_per_s,
+            0.5 * TUMBLE_MIN_AREA_MAXIMA_PER_S,
+        ));
+    }
     vec![
         rule(
             RuleId::Helix,
@@ -281,15 +296,7 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
                 Cond::ge(f.froude_number, STEADY_MAX_FROUDE, 0.5 * STEADY_MAX_FROUDE),
             ],
         ),
-        rule(
-            RuleId::Glide,
-            C::Floater,
-            Regime::Glide,
-            vec![
-                steady(),
-                Cond::ge(f.drift_ratio, GLIDE_MIN_DRIFT, GLIDE_MIN_DRIFT).regime_only(),
-            ],
-        ),
+        rule(RuleId::Glide, C::Floater, Regime::Glide, glide),
         rule(RuleId::Tumble, C::Spinner, Regime::Tumble, tumble),
     ]
     .into_iter()
