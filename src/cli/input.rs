@@ -50,7 +50,7 @@ pub fn classify_file(
             notes.ignored_columns.join(", ")
         );
     }
-    if let Some(note) = implausible_units(&traj) {
+    for note in implausible_units(&traj) {
         eprintln!("note: {}: {note}", path.display());
     }
     let c = classify::classify(&traj, size);
@@ -64,19 +64,48 @@ pub fn classify_file(
 /// millimetres or centimetres than in metres (our choice, with room).
 const MAX_PLAUSIBLE_DESCENT_M_S: f64 = 25.0;
 
-/// Why a record's lengths look like they are not in metres, if they do: a
-/// fall in millimetres reads a thousand times too fast, and is still
-/// classified (the classes are scale-free) with nonsense speeds.
-fn implausible_units(traj: &Trajectory) -> Option<String> {
-    let (n, (t0, t1)) = (traj.len(), (traj.time.first()?, traj.time.last()?));
-    let fall = traj.position.first()?.z - traj.position.last()?.z;
+/// Longest median interval between samples of a record whose time is in
+/// seconds, s: no camera or simulator records a fall at under 2 frames per
+/// second, while a time column in frames steps by 1 and one in
+/// milliseconds by 10 or more (our choice).
+const MAX_PLAUSIBLE_INTERVAL_S: f64 = 0.5;
+
+/// Why a record's units look wrong, if they do: lengths in millimetres read
+/// a thousand times too fast and are still classified (the classes are
+/// scale-free) with nonsense speeds; a time in frames or milliseconds reads
+/// as a record sampled at 1 Hz or less, refused for its rate without saying
+/// why it is so slow.
+fn implausible_units(traj: &Trajectory) -> Vec<String> {
+    let mut notes = Vec::new();
+    let (Some(&t0), Some(&t1), Some(p0), Some(p1)) = (
+        traj.time.first(),
+        traj.time.last(),
+        traj.position.first(),
+        traj.position.last(),
+    ) else {
+        return notes;
+    };
+    let n = traj.len();
+    if n < 2 {
+        return notes;
+    }
+    let mut steps: Vec<f64> = traj.time.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = steps.len() / 2;
+    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    if median > MAX_PLAUSIBLE_INTERVAL_S {
+        notes.push(format!(
+            "its samples are {median:.3} s apart (median), slower than any camera or simulator records a fall: t must be in seconds; is it in frames or milliseconds?"
+        ));
+    }
+    let fall = p0.z - p1.z;
     let speed = fall / (t1 - t0);
-    (n > 1 && speed > MAX_PLAUSIBLE_DESCENT_M_S).then(|| {
-        format!(
+    if speed > MAX_PLAUSIBLE_DESCENT_M_S {
+        notes.push(format!(
             "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres or centimetres?",
             t1 - t0
-        )
-    })
+        ));
+    }
+    notes
 }
 
 /// Reads and describes a fall, or says why it cannot be described.

@@ -421,9 +421,10 @@ fn a_pose_record_at_film_frame_rate_is_classified_from_its_orientation() {
 
 /// A record in millimetres is still read (the classes are scale-free), but
 /// its speeds are a thousand times too high: `classify` says so on stderr,
-/// naming the file; the same fall in metres gets no such note.
+/// naming the file; the same fall in metres gets no such note; nor a time
+/// in frames, which reads as a record at 1 Hz.
 #[test]
-fn a_record_in_millimetres_is_pointed_out() {
+fn a_record_in_millimetres_or_frames_is_pointed_out() {
     let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
     let mut text = String::from("t,x,y,z\n");
     for k in 0..tr.len() {
@@ -449,7 +450,25 @@ fn a_record_in_millimetres_is_pointed_out() {
         "{stderr}"
     );
     let stderr = run(&square_file("square_000"));
-    assert!(!stderr.contains("metres"), "{stderr}");
+    assert!(
+        !stderr.contains("metres") && !stderr.contains("seconds"),
+        "{stderr}"
+    );
+    // The time in frames: refused for its rate (1 Hz), and the note says why
+    // it may be so slow.
+    let mut text = String::from("t,x,y,z\n");
+    for k in 0..tr.len() {
+        let p = tr.position[k];
+        text.push_str(&format!("{k},{},{},{}\n", p.x, p.y, p.z));
+    }
+    let file = scratch("real-frames").join("frames.csv");
+    std::fs::write(&file, text).unwrap();
+    let stderr = run(&file);
+    assert!(
+        stderr.contains("frames.csv: its samples are 1.000 s apart (median)")
+            && stderr.contains("t must be in seconds; is it in frames or milliseconds?"),
+        "{stderr}"
+    );
 }
 
 /// A real square's record written as another tool might: columns
