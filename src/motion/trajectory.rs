@@ -41,11 +41,15 @@ pub const REQUIRED_COLUMNS: [&str; 4] = ["t", "x", "y", "z"];
 /// The orientation columns: all four or none.
 pub const QUATERNION_COLUMNS: [&str; 4] = ["qw", "qx", "qy", "qz"];
 
-/// Largest accepted |‖q‖ − 1| when reading. A quaternion printed with 7
-/// significant digits (the MuJoCo files) is off by at most ~1e-7; 1e-5 accepts
-/// anything with 6 or more digits and still rejects a quaternion that is not a
-/// rotation (e.g. a column mix-up).
-pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-5;
+/// Largest accepted |‖q‖ − 1| when reading; what is accepted is normalised.
+/// A quaternion printed with 7 significant digits (the MuJoCo files) is off
+/// by ~1e-7, one printed with 3 decimals (a spreadsheet, a quick export
+/// script) by up to ~2e-3 (0.9996–1.0004 on the MuJoCo falls so rounded);
+/// 1e-2 reads those and still refuses columns that do not hold a rotation's
+/// quaternion (Euler angles, another quantity), whose norm is not within 1 %
+/// of 1 row after row. Until 2026-12-05 this was 1e-5, which refused 3 and
+/// 4 decimals.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-2;
 
 /// Quaternions already unit to within this are kept bit for bit instead of
 /// being renormalised, so that write → read round-trips exactly (renormalising
@@ -963,8 +967,26 @@ mod tests {
             &["line 2", "data row 1", "`qz`", "not finite"],
         );
         assert_err(
-            &format!("{H}{ok}0.1,0,0,-1,1,0.1,0,0\n"),
+            &format!("{H}{ok}0.1,0,0,-1,1,0.2,0,0\n"),
             &["line 3", "data row 2", "quaternion norm"],
+        );
+    }
+
+    /// Quaternions printed with three decimals are read, normalised; a
+    /// quaternion 2 % off unit is refused.
+    #[test]
+    fn rounded_quaternions_are_read_and_normalised() {
+        let half = std::f64::consts::FRAC_1_SQRT_2;
+        let text = format!("t,x,y,z,qw,qx,qy,qz\n0,0,0,0,{half:.3},{half:.3},0,0\n");
+        let tr = read_str(&text).unwrap();
+        let q = tr.orientation[0];
+        assert!((q.coords.norm() - 1.0).abs() < 1e-15);
+        assert!((q.angle() - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
+        let off = "t,x,y,z,qw,qx,qy,qz\n0,0,0,0,1.02,0,0,0\n";
+        let err = read_str(off).unwrap_err().to_string();
+        assert!(
+            err.contains("quaternion norm 1.02 is not 1 (tolerance 0.01)"),
+            "{err}"
         );
     }
 
