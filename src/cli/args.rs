@@ -254,7 +254,7 @@ pub struct PlateArgs {
 /// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
 pub struct FallArgs {
-    /// Fall CSV, columns by header name in any order: t,x,y,z required; qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
+    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
     pub trajectory: PathBuf,
     /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
     #[arg(long, default_value_t = 0.05)]

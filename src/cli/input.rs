@@ -50,6 +50,12 @@ pub fn classify_file(
             notes.ignored_columns.join(", ")
         );
     }
+    if let Some(depth) = &notes.depth_missing {
+        eprintln!(
+            "note: {}: no column `{depth}`: read as a fall in a vertical plane (one camera's view), its `{depth}` 0; the drift is the plane's, and a helix about the vertical reads as a swing in it",
+            path.display()
+        );
+    }
     for note in implausible_units(&traj) {
         eprintln!("note: {}: {note}", path.display());
     }

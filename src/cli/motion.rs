@@ -18,10 +18,13 @@ pub fn classify(args: FallArgs) -> Result<()> {
             classification: &'a leafmagic::motion::classify::Classification,
             #[serde(skip_serializing_if = "<[String]>::is_empty")]
             ignored_columns: &'a [String],
+            #[serde(skip_serializing_if = "Option::is_none")]
+            depth_missing: Option<&'a str>,
         }
         let noted = Noted {
             classification: &c,
             ignored_columns: &notes.ignored_columns,
+            depth_missing: notes.depth_missing.as_deref(),
         };
         println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
@@ -81,6 +84,9 @@ pub fn describe(args: FallArgs) -> Result<()> {
         });
         if !notes.ignored_columns.is_empty() {
             out["ignored_columns"] = json!(notes.ignored_columns);
+        }
+        if let Some(depth) = &notes.depth_missing {
+            out["depth_missing"] = json!(depth);
         }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {

@@ -8,7 +8,7 @@
 //! | column | | meaning |
 //! |---|---|---|
 //! | `t` | required | time, s, strictly increasing |
-//! | `x`, `y`, `z` | required | centre position, m, world frame, z up (gravity along −z; `y` up with [`UpAxis::Y`]) |
+//! | `x`, `y`, `z` | required: the vertical and at least one other | centre position, m, world frame, z up (gravity along −z; `y` up with [`UpAxis::Y`]); without one horizontal column, a fall seen by one camera in a vertical plane, its depth read as 0 ([`ReadNotes::depth_missing`]) |
 //! | `qw`, `qx`, `qy`, `qz` | optional, all four or none | orientation quaternion taking body vectors to the world frame, scalar first; body z is the plate normal, body x the long axis |
 //! | `area`, `area1`, `area2`, `area_…` | optional, any number | projected area of the leaf seen by a camera, any unit (video tracking) |
 //!
@@ -256,6 +256,10 @@ pub struct ReadNotes {
     /// Columns the header names that are neither time, position,
     /// orientation nor an area: ignored.
     pub ignored_columns: Vec<String>,
+    /// The horizontal position column the header lacks, read as 0: a fall
+    /// tracked by one camera (`t,x,y` from a tracker with y up), whose
+    /// path lies in a vertical plane.
+    pub depth_missing: Option<String>,
 }
 
 /// The record of a falling leaf over time: one entry per sample in `time`
@@ -306,6 +310,9 @@ struct Layout {
     columns: Vec<Column>,
     areas: Vec<String>,
     ignored: Vec<String>,
+    /// The one position column the header lacks, if it lacks one (its
+    /// index among x, y, z).
+    missing_position: Option<usize>,
 }
 
 /// The layout of a header, or what is wrong with it.
@@ -340,14 +347,20 @@ fn layout(header: &[&str]) -> Result<Layout, String> {
         .copied()
         .filter(|c| !seen.iter().any(|s| s == c))
         .collect();
-    if !missing.is_empty() {
+    // One position column may be missing (a fall in a vertical plane; the
+    // reader checks that it is not the vertical).
+    let missing_position = match missing.as_slice() {
+        [one] if *one != "t" => REQUIRED_COLUMNS[1..].iter().position(|c| c == one),
+        _ => None,
+    };
+    if !missing.is_empty() && missing_position.is_none() {
         let list = missing
             .iter()
             .map(|c| format!("`{c}`"))
             .collect::<Vec<_>>()
             .join(", ");
         return Err(format!(
-            "no column {list} (required: t,x,y,z; optional: qw,qx,qy,qz and area columns)"
+            "no column {list} (required: t,x,y,z, or t, the vertical and one other for a fall in a vertical plane; optional: qw,qx,qy,qz and area columns)"
         ));
     }
     let quats = columns
@@ -368,6 +381,7 @@ fn layout(header: &[&str]) -> Result<Layout, String> {
         columns,
         areas,
         ignored,
+        missing_position,
     })
 }
 
@@ -512,11 +526,31 @@ impl Trajectory {
             columns,
             areas: area_names,
             ignored,
+            missing_position,
         } = layout(&names).map_err(|problem| TrajectoryError::WrongHeader {
             file: file(),
             found: found.clone(),
             problem,
         })?;
+        let vertical = match up {
+            UpAxis::Z => 2,
+            UpAxis::Y => 1,
+        };
+        if missing_position == Some(vertical) {
+            let name = REQUIRED_COLUMNS[1 + vertical];
+            return Err(TrajectoryError::WrongHeader {
+                file: file(),
+                found,
+                problem: format!(
+                    "no column `{name}`, the vertical (--up {name}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
+                    if up == UpAxis::Z {
+                        " (with --up y, `y` is the vertical)"
+                    } else {
+                        ""
+                    }
+                ),
+            });
+        }
         let quaternion = columns.iter().any(|c| matches!(c, Column::Quaternion(_)));
 
         let mut traj = Trajectory {
@@ -619,6 +653,7 @@ impl Trajectory {
             traj,
             ReadNotes {
                 ignored_columns: ignored,
+                depth_missing: missing_position.map(|k| REQUIRED_COLUMNS[1 + k].to_string()),
             },
         ))
     }
@@ -930,7 +965,11 @@ mod tests {
             "time,x,y,z,qw,qx,qy,qz\n0,0,0,0,1,0,0,0\n",
             &["line 1", "no column `t`", "required: t,x,y,z"],
         );
-        assert_err("t,x,z,area1\n0,0,0,1\n", &["line 1", "no column `y`"]);
+        assert_err(
+            "t,x,y,area1\n0,0,0,1\n",
+            &["line 1", "no column `z`, the vertical", "with --up y"],
+        );
+        assert_err("t,z\n0,1\n", &["line 1", "no column `x`, `y`"]);
         assert_err(
             "t,x,y,z,qw,qx\n0,0,0,0,1,0\n",
             &["line 1", "quaternion columns incomplete", "not qy,qz"],
@@ -970,6 +1009,36 @@ mod tests {
             &format!("{H}{ok}0.1,0,0,-1,1,0.2,0,0\n"),
             &["line 3", "data row 2", "quaternion norm"],
         );
+    }
+
+    /// A fall seen by one camera: t, the vertical and one horizontal
+    /// column, the depth read as 0 and named in the notes; z up or y up.
+    #[test]
+    fn a_record_in_a_vertical_plane_is_read_with_its_depth_zero() {
+        let (tr, notes) = Trajectory::from_csv_reader_with(
+            "t,x,z,area1\n0,0.1,1,5\n0.01,0.2,0.99,6\n".as_bytes(),
+            "xz.csv",
+            UpAxis::Z,
+        )
+        .unwrap();
+        assert_eq!(notes.depth_missing.as_deref(), Some("y"));
+        assert_eq!(tr.position[1], Vector3::new(0.2, 0.0, 0.99));
+        assert_eq!(tr.areas[0].values, vec![5.0, 6.0]);
+        // A tracker's export, y up: x across the image, y up it.
+        let (tr, notes) = Trajectory::from_csv_reader_with(
+            "t,x,y\n0,0.1,1\n0.01,0.2,0.99\n".as_bytes(),
+            "tracker.csv",
+            UpAxis::Y,
+        )
+        .unwrap();
+        assert_eq!(notes.depth_missing.as_deref(), Some("z"));
+        assert_eq!(tr.position[1], Vector3::new(0.2, 0.0, 0.99));
+        let (_, notes) = read_with_notes("t,x,y,z\n0,0,0,1\n");
+        assert_eq!(notes.depth_missing, None);
+    }
+
+    fn read_with_notes(s: &str) -> (Trajectory, ReadNotes) {
+        Trajectory::from_csv_reader_with(s.as_bytes(), "mem.csv", UpAxis::Z).unwrap()
     }
 
     /// Quaternions printed with three decimals are read, normalised; a
