@@ -167,6 +167,20 @@ fn square_000_features(areas: bool) -> PathFeatures {
     classify_with(&tr, 0.042, options).path.unwrap()
 }
 
+/// `leafmagic classify FILE --size SIZE --json EXTRA…`, which must succeed:
+/// its JSON and its stderr.
+fn classify_json(file: &Path, size: &str, extra: &[&str]) -> (serde_json::Value, String) {
+    let out = leafmagic()
+        .args(["classify", "--size", size, "--json"])
+        .args(extra)
+        .arg(file)
+        .output()
+        .unwrap();
+    crate::common::assert_succeeded(&out);
+    let json = serde_json::from_slice(&out.stdout).unwrap();
+    (json, String::from_utf8_lossy(&out.stderr).into_owned())
+}
+
 /// Rule 7b: a leaf falling straight down fast, nearly steadily, whose path
 /// turns the same way on the whole is autorotating even when its centre
 /// circles too irregularly for a helix; modulated like a rocking leaf, or
@@ -341,13 +355,7 @@ fn the_squares_at_video_frame_rates_agree_with_people() {
 /// --up y.
 #[test]
 fn classify_reads_real_records_by_header_and_says_what_it_used() {
-    let out = leafmagic()
-        .args(["classify", "--size", "0.042", "--json"])
-        .arg(square_file("square_000"))
-        .output()
-        .unwrap();
-    crate::common::assert_succeeded(&out);
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (json, _) = classify_json(&square_file("square_000"), "0.042", &[]);
     assert_eq!(json["class"], "spinner");
     assert_eq!(json["regime"], "tumble");
     assert_eq!(json["inputs"], "areas");
@@ -355,16 +363,9 @@ fn classify_reads_real_records_by_header_and_says_what_it_used() {
     assert!(json["features"]["area_maxima_per_s"].as_f64().unwrap() > 5.0);
 
     let file = square_y_up("real-yup", "square_000");
-    let out = leafmagic()
-        .args(["classify", "--size", "0.042", "--up", "y", "--json"])
-        .arg(&file)
-        .output()
-        .unwrap();
-    crate::common::assert_succeeded(&out);
-    let back: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (back, stderr) = classify_json(&file, "0.042", &["--up", "y"]);
     assert_eq!(back["class"], "spinner");
     assert_eq!(back["ignored_columns"], serde_json::json!(["frame"]));
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(stderr.contains("ignored column frame"), "{stderr}");
     let d = |j: &serde_json::Value, k: &str| j["features"][k].as_f64().unwrap();
     for k in ["straightness", "drift_ratio", "mean_descent_speed_m_s"] {
@@ -393,13 +394,7 @@ fn a_pose_record_at_film_frame_rate_is_classified_from_its_orientation() {
     let json_of = |name: &str, k: usize| {
         let file = dir.join(name);
         std::fs::write(&file, every(k)).unwrap();
-        let out = leafmagic()
-            .args(["classify", "--size", "0.04", "--json"])
-            .arg(&file)
-            .output()
-            .unwrap();
-        crate::common::assert_succeeded(&out);
-        serde_json::from_slice::<serde_json::Value>(&out.stdout).unwrap()
+        classify_json(&file, "0.04", &[]).0
     };
     let film = json_of("film.csv", 10);
     assert_eq!(
@@ -458,19 +453,12 @@ fn one_cameras_view_of_the_squares_mostly_agrees_with_people() {
     }
     let file = scratch("real-tracker").join("tracker.csv");
     std::fs::write(&file, text).unwrap();
-    let out = leafmagic()
-        .args(["classify", "--size", "0.042", "--up", "y", "--json"])
-        .arg(&file)
-        .output()
-        .unwrap();
-    crate::common::assert_succeeded(&out);
-    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (json, stderr) = classify_json(&file, "0.042", &["--up", "y"]);
     assert_eq!(
         (&json["class"], &json["regime"]),
         (&"spinner".into(), &"tumble".into())
     );
     assert_eq!(json["depth_missing"], "z");
-    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
         stderr.contains("read as a fall in a vertical plane"),
         "{stderr}"
