@@ -56,6 +56,16 @@ pub fn classify_file(
             path.display()
         );
     }
+    if let Some(lost) = &notes.lost_rows {
+        eprintln!(
+            "note: {}: left out {} row{} without a position (every position field empty or NaN: frames where the tracker lost the leaf), lines {}–{}",
+            path.display(),
+            lost.count,
+            if lost.count > 1 { "s" } else { "" },
+            lost.first_line,
+            lost.last_line
+        );
+    }
     for note in implausible_units(&traj) {
         eprintln!("note: {}: {note}", path.display());
     }

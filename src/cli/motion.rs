@@ -20,11 +20,14 @@ pub fn classify(args: FallArgs) -> Result<()> {
             ignored_columns: &'a [String],
             #[serde(skip_serializing_if = "Option::is_none")]
             depth_missing: Option<&'a str>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            lost_rows: Option<usize>,
         }
         let noted = Noted {
             classification: &c,
             ignored_columns: &notes.ignored_columns,
             depth_missing: notes.depth_missing.as_deref(),
+            lost_rows: notes.lost_rows.map(|l| l.count),
         };
         println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
@@ -87,6 +90,9 @@ pub fn describe(args: FallArgs) -> Result<()> {
         }
         if let Some(depth) = &notes.depth_missing {
             out["depth_missing"] = json!(depth);
+        }
+        if let Some(lost) = &notes.lost_rows {
+            out["lost_rows"] = json!(lost.count);
         }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {

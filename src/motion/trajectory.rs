@@ -260,6 +260,22 @@ pub struct ReadNotes {
     /// tracked by one camera (`t,x,y` from a tracker with y up), whose
     /// path lies in a vertical plane.
     pub depth_missing: Option<String>,
+    /// Data rows left out because every position field in them is empty
+    /// or NaN (frames where a tracker lost the leaf), and the file lines
+    /// of the first and the last of them: what remains has gaps there,
+    /// which the classifier bridges or refuses by their length.
+    pub lost_rows: Option<LostRows>,
+}
+
+/// Rows of a record without a position (see [`ReadNotes::lost_rows`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LostRows {
+    /// How many.
+    pub count: usize,
+    /// File line of the first.
+    pub first_line: u64,
+    /// File line of the last.
+    pub last_line: u64,
 }
 
 /// The record of a falling leaf over time: one entry per sample in `time`
@@ -313,6 +329,41 @@ struct Layout {
     /// The one position column the header lacks, if it lacks one (its
     /// index among x, y, z).
     missing_position: Option<usize>,
+}
+
+/// Line numbers (from 1) of the records of a text, from their byte
+/// offsets. `\r\n`, `\n` and a lone `\r` each end a line, as the csv
+/// reader takes them.
+struct LineCounter<'a> {
+    text: &'a [u8],
+    /// Byte offset at which each line after the first starts.
+    starts: Vec<usize>,
+}
+
+impl<'a> LineCounter<'a> {
+    fn new(text: &'a [u8]) -> Self {
+        let mut starts = Vec::new();
+        for (k, &b) in text.iter().enumerate() {
+            let crlf = b == b'\r' && text.get(k + 1) == Some(&b'\n');
+            if b == b'\n' || (b == b'\r' && !crlf) {
+                starts.push(k + 1);
+            }
+        }
+        LineCounter { text, starts }
+    }
+
+    /// The line of the record the csv reader says starts at `byte`. After
+    /// a CRLF it points at the `\n` it has not consumed yet (rust-csv issue
+    /// 395): the record starts past the line end.
+    fn line_at(&self, byte: u64) -> u64 {
+        let mut k = usize::try_from(byte)
+            .unwrap_or(usize::MAX)
+            .min(self.text.len());
+        while k < self.text.len() && matches!(self.text[k], b'\r' | b'\n') {
+            k += 1;
+        }
+        self.starts.partition_point(|&s| s <= k) as u64 + 1
+    }
 }
 
 /// The layout of a header, or what is wrong with it.
@@ -472,14 +523,27 @@ impl Trajectory {
         up: UpAxis,
     ) -> Result<(Self, ReadNotes), TrajectoryError> {
         let file = || source.to_string();
+        // The whole text is kept so that a line number is counted from a
+        // record's byte offset: the csv crate's own line count lags by one
+        // in files with CRLF line ends (rust-csv issue 395), which every
+        // file saved on Windows has, the real squares' included.
+        let mut text = Vec::new();
+        let mut reader = reader;
+        reader
+            .read_to_end(&mut text)
+            .map_err(|error| TrajectoryError::Io {
+                file: file(),
+                error,
+            })?;
+        let lines = LineCounter::new(&text);
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
             .trim(csv::Trim::All)
-            .from_reader(reader);
+            .from_reader(text.as_slice());
         let mut records = rdr.records();
         let csv_err = |e: csv::Error| -> TrajectoryError {
-            let line = e.position().map(|p| p.line()).unwrap_or(0);
+            let line = e.position().map_or(0, |p| lines.line_at(p.byte()));
             match e.into_kind() {
                 csv::ErrorKind::Io(error) => TrajectoryError::Io {
                     file: file(),
@@ -488,7 +552,7 @@ impl Trajectory {
                 // Said as a sentence, not the CSV reader's debug form.
                 csv::ErrorKind::Utf8 { pos, err } => TrajectoryError::Csv {
                     file: file(),
-                    line: pos.map_or(line, |p| p.line()),
+                    line: pos.map_or(line, |p| lines.line_at(p.byte())),
                     message: format!(
                         "field {} is not UTF-8 text (bad byte after {} valid bytes of the field); \
                          a trajectory CSV is plain text: save it as UTF-8 or ASCII",
@@ -564,9 +628,10 @@ impl Trajectory {
             ..Trajectory::default()
         };
         let mut row = 0usize;
+        let mut lost_rows: Option<LostRows> = None;
         for rec in records {
             let rec = rec.map_err(csv_err)?;
-            let line = rec.position().map(|p| p.line()).unwrap_or(0);
+            let line = rec.position().map_or(0, |p| lines.line_at(p.byte()));
             if rec.iter().all(|f| f.is_empty()) {
                 continue; // blank line (e.g. trailing): not a data row
             }
@@ -579,6 +644,24 @@ impl Trajectory {
                     found: rec.len(),
                     expected: columns.len(),
                 });
+            }
+            // A frame where a tracker lost the leaf: no position at all
+            // (empty or NaN in every position field). Left out, noted; a
+            // NaN beside numbers is still an error below.
+            let lost = columns
+                .iter()
+                .zip(rec.iter())
+                .filter(|(c, _)| matches!(c, Column::Position(_)))
+                .all(|(_, f)| f.is_empty() || f.eq_ignore_ascii_case("nan"));
+            if lost {
+                let l = lost_rows.get_or_insert(LostRows {
+                    count: 0,
+                    first_line: line,
+                    last_line: line,
+                });
+                l.count += 1;
+                l.last_line = line;
+                continue;
             }
             let (mut t, mut p, mut q) = (0.0f64, [0.0f64; 3], [0.0f64; 4]);
             for (k, field) in rec.iter().enumerate() {
@@ -654,6 +737,7 @@ impl Trajectory {
             ReadNotes {
                 ignored_columns: ignored,
                 depth_missing: missing_position.map(|k| REQUIRED_COLUMNS[1 + k].to_string()),
+                lost_rows,
             },
         ))
     }
@@ -1008,6 +1092,46 @@ mod tests {
         assert_err(
             &format!("{H}{ok}0.1,0,0,-1,1,0.2,0,0\n"),
             &["line 3", "data row 2", "quaternion norm"],
+        );
+    }
+
+    /// Errors name the file's own line whatever ends its lines: LF, CRLF
+    /// (where the csv crate's count lags by one), a lone CR; blank lines
+    /// count.
+    #[test]
+    fn errors_name_the_line_with_any_line_ends() {
+        for end in ["\n", "\r\n", "\r"] {
+            let text = ["t,x,y,z", "0,0,0,1", "", "0.1,0,0,0.9", "0.2,abc,0,0.8", ""].join(end);
+            let err = read_str(&text).unwrap_err().to_string();
+            assert!(err.contains("line 5 (data row 3)"), "{end:?}: {err}");
+        }
+    }
+
+    /// A row whose every position field is empty or NaN (the tracker lost
+    /// the leaf) is left out and counted with its lines; NaN beside numbers
+    /// is still refused.
+    #[test]
+    fn rows_without_a_position_are_left_out_and_noted() {
+        let text =
+            "t,x,y,z,area1\r\n0,0,0,1,5\r\n0.01,,,,6\r\n0.02,NaN,nan,NaN,7\r\n0.03,0,0,0.97,8\r\n";
+        let (tr, notes) = read_with_notes(text);
+        assert_eq!(tr.time, vec![0.0, 0.03]);
+        assert_eq!(tr.areas[0].values, vec![5.0, 8.0]);
+        assert_eq!(
+            notes.lost_rows,
+            Some(LostRows {
+                count: 2,
+                first_line: 3,
+                last_line: 4
+            })
+        );
+        assert_eq!(read_with_notes("t,x,y,z\n0,0,0,1\n").1.lost_rows, None);
+        let err = read_str("t,x,y,z\n0,0,0,1\n0.01,NaN,0,1\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("line 3 (data row 2)") && err.contains("NaN"),
+            "{err}"
         );
     }
 

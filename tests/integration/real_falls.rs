@@ -465,6 +465,55 @@ fn one_cameras_view_of_the_squares_mostly_agrees_with_people() {
     );
 }
 
+/// A tracker that loses the leaf writes rows without a position (empty or
+/// NaN): they are left out and noted with their lines (the squares' files
+/// end their lines with CRLF, where the csv crate's line count lags), and
+/// what remains is a record with a gap, bridged when short and refused
+/// when long.
+#[test]
+fn frames_where_the_tracker_lost_the_leaf_are_gaps() {
+    let text = std::fs::read_to_string(square_file("square_000")).unwrap();
+    assert!(
+        text.contains("\r\n"),
+        "the squares' files end lines with CRLF"
+    );
+    let blanked = |lines: std::ops::RangeInclusive<usize>, blank: &str| -> String {
+        text.split_inclusive('\n')
+            .enumerate()
+            .map(|(k, line)| {
+                if lines.contains(&(k + 1)) {
+                    let f: Vec<&str> = line.trim_end().split(',').collect();
+                    format!("{},{blank},{blank},{blank},{},{}\r\n", f[0], f[4], f[5])
+                } else {
+                    line.to_string()
+                }
+            })
+            .collect()
+    };
+    let dir = scratch("real-lost");
+    let short = dir.join("short.csv");
+    std::fs::write(&short, blanked(40..=42, "")).unwrap();
+    let (json, stderr) = classify_json(&short, "0.042", &[]);
+    assert_eq!(
+        (&json["class"], &json["lost_rows"]),
+        (&"spinner".into(), &3.into())
+    );
+    assert_eq!(json["features"]["gaps"], 1);
+    assert!(
+        stderr.contains("short.csv: left out 3 rows without a position")
+            && stderr.contains("lines 40–42"),
+        "{stderr}"
+    );
+    let long = dir.join("long.csv");
+    std::fs::write(&long, blanked(40..=60, "NaN")).unwrap();
+    let (json, _) = classify_json(&long, "0.042", &[]);
+    assert_eq!(json["class"], "undetermined");
+    assert!(
+        json["reason"].as_str().unwrap().contains("too gappy"),
+        "{json}"
+    );
+}
+
 /// A record in millimetres is still read (the classes are scale-free), but
 /// its speeds are a thousand times too high: `classify` says so on stderr,
 /// naming the file; the same fall in metres gets no such note; nor a time
