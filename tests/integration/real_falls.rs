@@ -514,6 +514,22 @@ fn frames_where_the_tracker_lost_the_leaf_are_gaps() {
     );
 }
 
+/// A record read with the wrong vertical (a z-up square read as y up:
+/// its y is its depth, its z rises), or a tracker's y pointing down as
+/// image rows do, rises instead of falling: the reason asks about the axis.
+#[test]
+fn a_record_read_with_the_wrong_vertical_says_it_rises() {
+    let (json, _) = classify_json(&square_file("square_000"), "0.042", &["--up", "y"]);
+    assert_eq!(json["class"], "undetermined");
+    let reason = json["reason"].as_str().unwrap();
+    assert!(
+        reason.contains("not falling") && reason.contains("it rises instead"),
+        "{reason}"
+    );
+    let (json, _) = classify_json(&square_file("square_000"), "0.042", &[]);
+    assert_eq!(json["class"], "spinner");
+}
+
 /// A record in millimetres is still read (the classes are scale-free), but
 /// its speeds are a thousand times too high: `classify` says so on stderr,
 /// naming the file; the same fall in metres gets no such note; nor a time

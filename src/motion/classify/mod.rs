@@ -350,8 +350,11 @@ fn classify_pose(
         return Ok(undetermined(
             f.clone(),
             format!(
-                "fell only {:.2} chord lengths in the analysis window {:.3}–{:.3} s (need {MIN_DESCENT_CHORDS}); record too short or not falling",
-                f.descent_chords, f.t_start_s, f.t_end_s
+                "fell only {:.2} chord lengths in the analysis window {:.3}–{:.3} s (need {MIN_DESCENT_CHORDS}); record too short or not falling{}",
+                f.descent_chords,
+                f.t_start_s,
+                f.t_end_s,
+                crate::motion::path::rising_hint(f.descent_chords, MIN_DESCENT_CHORDS)
             ),
         ));
     }

@@ -271,10 +271,24 @@ pub fn classify_path_with(
         return undetermined(
             f.clone(),
             format!(
-                "not falling: {:.2} chord lengths of descent in the window {:.3}–{:.3} s (need {MIN_PATH_DESCENT_CHORDS})",
-                f.descent_chords, f.t_start_s, f.t_end_s
+                "not falling: {:.2} chord lengths of descent in the window {:.3}–{:.3} s (need {MIN_PATH_DESCENT_CHORDS}){}",
+                f.descent_chords,
+                f.t_start_s,
+                f.t_end_s,
+                rising_hint(f.descent_chords, MIN_PATH_DESCENT_CHORDS)
             ),
         );
     }
     decide(f, inputs, calibration)
+}
+
+/// What to say of a record that rises at least as far as a fall must
+/// descend (`chords` of descent, negative): its vertical is most likely
+/// another axis, or points down (image rows count downward).
+pub(crate) fn rising_hint(chords: f64, min_chords: f64) -> &'static str {
+    if chords <= -min_chords {
+        "; it rises instead: is its vertical the right axis (--up y for y up; a y that points down, as image rows do, must be negated)?"
+    } else {
+        ""
+    }
 }
