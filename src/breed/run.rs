@@ -449,8 +449,10 @@ impl Run {
     fn inspect(dir: &Path) -> Result<(Run, Option<Finding>), BreedError> {
         let path = dir.join(RUN_FILE);
         if !dir.is_dir() {
+            // Said for every reader of a run (resume, --start-from,
+            // export, merge, shard, preview), not as a resume's.
             return Err(BreedError::Refused(format!(
-                "{}: {}; there is no run to resume there",
+                "{}: {}; a breeding run's directory (what `breed` wrote: its --out) is needed",
                 dir.display(),
                 if dir.exists() {
                     "is a file, not a run directory"

@@ -66,8 +66,8 @@ pub enum TrajectoryError {
     Io {
         /// Name of the source.
         file: String,
-        /// Underlying I/O error.
-        #[source]
+        /// Underlying I/O error (in the message, so not also a `source`:
+        /// an error chain would print it twice).
         error: std::io::Error,
     },
     /// The source holds no bytes (or only white space).

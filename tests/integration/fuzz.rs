@@ -643,3 +643,65 @@ fn mutated_run_directories_resume_to_the_same_bytes_or_are_refused_naming_the_fi
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Every command given a file or run directory that is not there fails
+/// naming it once, with what the system said once (an error chain printed
+/// the I/O error twice when the message also held it) and in its own
+/// words (a missing run directory read as "no run to resume there" for
+/// export, merge and --start-from).
+#[test]
+fn a_missing_input_is_named_once_in_the_commands_own_words() {
+    let dir = scratch("missing");
+    let gone = |name: &str| dir.join(name).to_string_lossy().into_owned();
+    let (csv, toml, run) = (gone("fall.csv"), gone("leaf.toml"), gone("run"));
+    let out = gone("out");
+    let cases: Vec<Vec<&str>> = vec![
+        vec!["classify", &csv],
+        vec!["describe", &csv],
+        vec!["compare", &csv, &csv],
+        vec!["drop", &toml, "--seconds", "0.1"],
+        vec!["check", &toml],
+        vec!["scene", &toml],
+        vec!["export", &run, "--top", "1", "--out", &out],
+        vec!["merge", &run, "--generation", "0", "--count", "1"],
+        vec!["breed", "--start-from", &run, "--out", &out],
+        vec!["breed", "--resume", &run],
+    ];
+    for args in cases {
+        let ended = run_args(&args);
+        let what = args.join(" ");
+        assert!(!ended.success, "{what}: succeeded");
+        let named = args
+            .iter()
+            .find(|a| a.starts_with(dir.to_str().unwrap()))
+            .unwrap();
+        assert!(ended.stderr.contains(*named), "{what}: {}", ended.stderr);
+        assert!(
+            ended.stderr.matches("No such file or directory").count() <= 1,
+            "{what}: said twice: {}",
+            ended.stderr
+        );
+        assert!(
+            !ended.stderr.contains(": file:"),
+            "{what}: {}",
+            ended.stderr
+        );
+        if !args.contains(&"--resume") {
+            assert!(!ended.stderr.contains("resume"), "{what}: {}", ended.stderr);
+        }
+    }
+}
+
+/// What a command ended with.
+struct CliEnd {
+    success: bool,
+    stderr: String,
+}
+
+fn run_args(args: &[&str]) -> CliEnd {
+    let out = leafmagic().args(args).output().unwrap();
+    CliEnd {
+        success: out.status.success(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}

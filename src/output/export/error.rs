@@ -13,8 +13,8 @@ pub enum ExportError {
     Io {
         /// The file.
         path: PathBuf,
-        /// What the system said.
-        #[source]
+        /// What the system said (in the message, so not also a `source`:
+        /// an error chain would print it twice).
         error: std::io::Error,
     },
     /// The input is not what it should be.

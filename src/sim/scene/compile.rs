@@ -32,7 +32,7 @@ impl Scene {
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
             file: file.clone(),
             line: None,
-            field: "file".to_string(),
+            field: String::new(),
             message: format!("cannot read: {e}"),
         })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();

@@ -8,13 +8,14 @@ use std::path::Path;
 
 /// A scene file that could not be read, parsed or compiled.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{}{}: {}: {}", .file, .line.map_or(String::new(), |l| format!(":{l}")), .field, .message)]
+#[error("{}{}: {}{}", .file, .line.map_or(String::new(), |l| format!(":{l}")), if .field.is_empty() { String::new() } else { format!("{}: ", .field) }, .message)]
 pub struct SceneError {
     /// The scene file.
     pub file: String,
     /// 1-based line of the field, when known.
     pub line: Option<usize>,
-    /// The field, as a path in the file (`rope[1].stiffness`).
+    /// The field, as a path in the file (`rope[1].stiffness`); empty for
+    /// the file as a whole (it cannot be read).
     pub field: String,
     /// What is wrong.
     pub message: String,
