@@ -335,15 +335,36 @@ pub struct CompareArgs {
     pub a: PathBuf,
     /// Second fall.
     pub b: PathBuf,
-    /// The leaves' chord, metres (both falls).
-    #[arg(long, default_value_t = 0.05)]
-    pub size: f64,
-    /// The files' vertical axis: z (leafmagic's) or y (turned to z up on reading).
+    /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05).
+    #[arg(long, default_value = "0.05")]
+    pub size: EachFile<f64>,
+    /// The files' vertical axis, z (leafmagic's) or y (turned to z up on reading): one for both, or A,B (a tracker's y-up record against a drop's: y,z).
     #[arg(long, default_value = "z")]
-    pub up: leafmagic::motion::trajectory::UpAxis,
+    pub up: EachFile<leafmagic::motion::trajectory::UpAxis>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+/// A flag's value for each of two files: `V` for both, or `A,B`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EachFile<T>(pub T, pub T);
+
+impl<T: std::str::FromStr + Copy> std::str::FromStr for EachFile<T>
+where
+    T::Err: std::fmt::Display,
+{
+    type Err = String;
+    fn from_str(s: &str) -> Result<Self, String> {
+        let one = |v: &str| v.trim().parse::<T>().map_err(|e| format!("`{v}`: {e}"));
+        match s.split(',').collect::<Vec<_>>().as_slice() {
+            [v] => one(v).map(|v| EachFile(v, v)),
+            [a, b] => Ok(EachFile(one(a)?, one(b)?)),
+            _ => Err(format!(
+                "`{s}`: one value for both files, or two separated by a comma"
+            )),
+        }
+    }
 }
 
 /// Arguments of `preview`.

@@ -106,8 +106,8 @@ pub fn describe(args: FallArgs) -> Result<()> {
 
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
-    let a = input::describe_file(&args.a, args.size, args.up)?;
-    let b = input::describe_file(&args.b, args.size, args.up)?;
+    let a = input::describe_file(&args.a, args.size.0, args.up.0)?;
+    let b = input::describe_file(&args.b, args.size.1, args.up.1)?;
     let d = describe::distance(&a, &b);
     if args.json {
         let side = descriptors_json;

@@ -582,6 +582,39 @@ fn a_record_in_millimetres_or_frames_is_pointed_out() {
     );
 }
 
+/// `compare` takes `--up` and `--size` per file (`A,B`): a real square
+/// written with y up is at distance 0 from itself with z up; one value for
+/// both reads the z-up file wrong, and a third value is refused.
+#[test]
+fn compare_reads_each_file_with_its_own_vertical_and_size() {
+    let yup = square_y_up("real-compare", "square_000");
+    let zup = square_file("square_000");
+    let compare = |extra: &[&str]| {
+        leafmagic()
+            .arg("compare")
+            .args([&yup, &zup])
+            .args(extra)
+            .arg("--json")
+            .output()
+            .unwrap()
+    };
+    let out = compare(&["--up", "y,z", "--size", "0.042,0.042"]);
+    crate::common::assert_succeeded(&out);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["distance"], 0.0, "{json}");
+    let out = compare(&["--up", "y", "--size", "0.042"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("square_000.csv") && err.contains("it rises instead"),
+        "{err}"
+    );
+    let out = compare(&["--up", "y,z,y"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("one value for both files, or two"), "{err}");
+}
+
 /// A real square's record written as another tool might: columns
 /// shuffled, y up, with a frame column. Returns the file.
 fn square_y_up(dir: &str, name: &str) -> std::path::PathBuf {
