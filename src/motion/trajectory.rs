@@ -475,6 +475,28 @@ impl Trajectory {
         !self.time.is_empty() && self.orientation.len() == self.time.len()
     }
 
+    /// Samples `first..=last` of the record, every column.
+    pub fn slice(&self, first: usize, last: usize) -> Trajectory {
+        let keep = first..last + 1;
+        Trajectory {
+            time: self.time[keep.clone()].to_vec(),
+            position: self.position[keep.clone()].to_vec(),
+            orientation: if self.orientation.is_empty() {
+                Vec::new()
+            } else {
+                self.orientation[keep.clone()].to_vec()
+            },
+            areas: self
+                .areas
+                .iter()
+                .map(|a| AreaSignal {
+                    name: a.name.clone(),
+                    values: a.values[keep.clone()].to_vec(),
+                })
+                .collect(),
+        }
+    }
+
     /// The same record without its orientation (what video tracking of
     /// this fall would give, areas apart).
     pub fn without_orientation(&self) -> Trajectory {

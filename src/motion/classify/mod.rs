@@ -85,6 +85,7 @@ pub use rules::{
     STEEP_TILT_DEG, TUMBLE_MIN_CONSISTENCY,
 };
 
+use crate::motion::at_rest;
 use crate::motion::path::{Inputs, classify_path};
 use crate::motion::trajectory::Trajectory;
 use features::extract;
@@ -169,6 +170,19 @@ pub fn classify(trajectory: &Trajectory, size: f64) -> Classification {
 /// [`classify`] with a choice of inputs: e.g. the path only of a pose
 /// record, to compare with what video of the same fall would say.
 pub fn classify_with(trajectory: &Trajectory, size: f64, use_: ClassifyOptions) -> Classification {
+    // The fall is what the leaf does in the air: a still start before
+    // release and a still end after landing are left out, and said.
+    if let Some((air, rest)) = at_rest::in_air(trajectory, size) {
+        let mut c = classify_in_air(&air, size, use_);
+        c.reason = c.reason.map(|r| format!("{r} ({})", rest.describe()));
+        c.at_rest = Some(rest);
+        return c;
+    }
+    classify_in_air(trajectory, size, use_)
+}
+
+/// [`classify_with`] of a record that is all in the air.
+fn classify_in_air(trajectory: &Trajectory, size: f64, use_: ClassifyOptions) -> Classification {
     let posed = !trajectory.orientation.is_empty() || trajectory.time.is_empty();
     if use_.orientation && posed {
         match classify_pose(trajectory, size) {
@@ -238,6 +252,7 @@ fn path_classification(trajectory: &Trajectory, size: f64, areas: bool) -> Class
         inputs: v.inputs,
         features,
         path: Some(v.features),
+        at_rest: None,
     }
 }
 
@@ -253,6 +268,7 @@ fn classify_pose(
         inputs: Inputs::Orientation,
         features,
         path: None,
+        at_rest: None,
     };
     let tr = trajectory;
     let n = tr.time.len();

@@ -2,6 +2,7 @@
 //! they test, and the [`Classification`] they give, with its margins and
 //! reason.
 
+use crate::motion::at_rest::AtRest;
 use serde::Serialize;
 
 use super::features::{FLIP_HYSTERESIS_DEG, Features};
@@ -92,6 +93,10 @@ pub struct Classification {
     /// The numbers behind a decision from the path (`None` when the
     /// orientation was used).
     pub path: Option<PathFeatures>,
+    /// What was left out of the record as rest before release and after
+    /// landing (`None`: the record was classified as it is;
+    /// [`crate::motion::at_rest`]).
+    pub at_rest: Option<AtRest>,
 }
 
 /// `class`, `regime`, `reason`, `inputs`, and as `features` the numbers
@@ -107,6 +112,9 @@ impl Serialize for Classification {
         match &self.path {
             Some(p) => s.serialize_field("features", p)?,
             None => s.serialize_field("features", &self.features)?,
+        }
+        if let Some(rest) = &self.at_rest {
+            s.serialize_field("at_rest", rest)?;
         }
         s.end()
     }
@@ -288,6 +296,7 @@ pub(super) fn decide(mut f: Features) -> Classification {
         inputs: Inputs::Orientation,
         features: f,
         path: None,
+        at_rest: None,
     }
 }
 
