@@ -117,7 +117,7 @@ fn implausible_units(traj: &Trajectory) -> Vec<String> {
     let speed = fall / (t1 - t0);
     if speed > MAX_PLAUSIBLE_DESCENT_M_S {
         notes.push(format!(
-            "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres or centimetres?",
+            "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres, centimetres or image pixels (a tracker calibrated to metres writes metres)?",
             t1 - t0
         ));
     }
