@@ -11,6 +11,8 @@
 //!
 //! # Method
 //!
+//! 0. **In the air**: a still start before release and a still end after
+//!    landing are left out ([`crate::motion::at_rest`]), and said.
 //! 1. **Checks**: ≥ [`MIN_SAMPLE_RATE_HZ`] sampling, no gap over 1.5
 //!    frames at that rate, no rotation between two samples past
 //!    [`MAX_SAMPLE_TURN_DEG`].
@@ -116,9 +118,10 @@ pub const MAX_GAP_S: f64 = 1.5 / MIN_SAMPLE_RATE_HZ;
 /// rotation from one sample to the next is read as the shortest one, so a
 /// leaf turning more than half a turn per sample reads as turning the
 /// other way, and near half a turn its direction flips from sample to
-/// sample (a spin would read as rocking). Our choice: a third of the way
-/// from the corpus's fastest (53 rad/s, 127° per sample at 24 Hz, 153° at
-/// 20 Hz, both classified as at 240 Hz) to the half turn.
+/// sample (a spin would read as rocking). Our choice, 20° short of the
+/// half turn: the corpus's fastest spinner (53 rad/s) turns 127° per
+/// sample at 24 Hz and 153° at 20 Hz, and is classified at both as at 240
+/// Hz.
 pub const MAX_SAMPLE_TURN_DEG: f64 = 160.0;
 
 /// Fraction of the record's duration discarded as start-up transient.
@@ -168,7 +171,10 @@ pub fn classify(trajectory: &Trajectory, size: f64) -> Classification {
 }
 
 /// [`classify`] with a choice of inputs: e.g. the path only of a pose
-/// record, to compare with what video of the same fall would say.
+/// record, to compare with what video of the same fall would say. Either
+/// way only the part of the record in the air is classified (step 0), and
+/// a pose record whose orientation the checks of step 1 refuse is named
+/// from its path instead.
 pub fn classify_with(trajectory: &Trajectory, size: f64, use_: ClassifyOptions) -> Classification {
     // The fall is what the leaf does in the air: a still start before
     // release and a still end after landing are left out, and said.
