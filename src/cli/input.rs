@@ -77,7 +77,8 @@ pub fn classify_file(
 /// m/s: a paper card diving edge-on falls at a few metres per second,
 /// leafmagic's fastest divers at 8 (README, the archive), raindrops at 9.
 /// A record faster than this on average is more likely written in
-/// millimetres or centimetres than in metres (our choice, with room).
+/// millimetres, centimetres or pixels than in metres (our choice, with
+/// room).
 const MAX_PLAUSIBLE_DESCENT_M_S: f64 = 25.0;
 
 /// Longest median interval between samples of a record whose time is in
