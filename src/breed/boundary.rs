@@ -32,9 +32,9 @@
 use crate::motion::classify::{
     AUTOROTATION_MIN_TILT_DEG, AUTOROTATION_MIN_VERTICAL_SHARE, AUTOROTATION_MIN_YAW_CONSISTENCY,
     AUTOROTATION_MIN_YAW_TURNS, DIVE_MIN_TILT_DEG, FLIP_HYSTERESIS_DEG, FLUTTER_MIN_AMPLITUDE_DEG,
-    Features, GLIDE_MIN_DRIFT_RATIO, LILT_MIN_REVERSALS, MAX_GAP_S, MIN_DESCENT_CHORDS,
-    MIN_OSCILLATION_PERIODS, MIN_WINDOW_SAMPLES, MotionClass, SPIN_MIN_NET_TURNS, STEEP_TILT_DEG,
-    TUMBLE_MIN_CONSISTENCY,
+    Features, GLIDE_MIN_DRIFT_RATIO, LILT_MIN_REVERSALS, MAX_GAP_S, MAX_SAMPLE_TURN_DEG,
+    MIN_DESCENT_CHORDS, MIN_OSCILLATION_PERIODS, MotionClass, SPIN_MIN_NET_TURNS, STEEP_TILT_DEG,
+    TUMBLE_MIN_CONSISTENCY, window_is_long_enough,
 };
 
 /// One condition: its slack in scale units (> 0 when it holds).
@@ -156,8 +156,9 @@ fn rules(f: &Features) -> [(MotionClass, Vec<Slack>); 11] {
 /// few samples, a gap or too little descent is undetermined before any rule
 /// (classifier, "Method", step 2), and has no distance to any class.
 pub fn decided(f: &Features) -> bool {
-    f.samples >= MIN_WINDOW_SAMPLES
+    window_is_long_enough(f)
         && f.max_gap_s <= MAX_GAP_S
+        && f.max_sample_turn_deg <= MAX_SAMPLE_TURN_DEG
         && f.descent_chords >= MIN_DESCENT_CHORDS
 }
 

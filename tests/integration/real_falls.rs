@@ -403,6 +403,27 @@ fn a_pose_record_at_film_frame_rate_is_classified_from_its_orientation() {
         "{film}"
     );
     assert!((film["features"]["sample_rate_hz"].as_f64().unwrap() - 24.0).abs() < 0.01);
+    // A 3 s clip of it (the last 3 s: 1.8 s of window, 43 samples) is
+    // named from its orientation too: the window needs 60 samples or 1 s.
+    let clip: String = {
+        let all = every(10);
+        let lines: Vec<&str> = all.lines().collect();
+        let keep = 3 * 24 + 1;
+        let mut out = format!("{}\n", lines[0]);
+        for line in &lines[lines.len() - keep..] {
+            out.push_str(line);
+            out.push('\n');
+        }
+        out
+    };
+    let file = dir.join("clip.csv");
+    std::fs::write(&file, clip).unwrap();
+    let (clip, _) = classify_json(&file, "0.04", &[]);
+    assert_eq!(
+        (&clip["class"], &clip["inputs"]),
+        (&"spinner".into(), &"orientation".into()),
+        "{clip}"
+    );
     let slow = json_of("slow.csv", 20);
     assert_eq!(slow["class"], "undetermined", "{slow}");
     let reason = slow["reason"].as_str().unwrap();

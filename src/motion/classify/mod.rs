@@ -18,7 +18,7 @@
 //!    [`MAX_SAMPLE_TURN_DEG`].
 //! 2. **Window**: the first [`TRANSIENT_FRACTION`] of the record's duration is
 //!    discarded as start-up transient; the rest must hold
-//!    ≥ [`MIN_WINDOW_SAMPLES`] samples and ≥ [`MIN_DESCENT_CHORDS`] chord
+//!    ≥ [`MIN_WINDOW_SAMPLES`] samples (or span [`MIN_WINDOW_S`]) and ≥ [`MIN_DESCENT_CHORDS`] chord
 //!    lengths of descent, else the result is `Undetermined` with a reason.
 //! 3. **Kinematics** (all rate independent): the world angular increment
 //!    between samples, r = log(q₁ q₀⁻¹) (shortest arc, so q ≡ −q is harmless),
@@ -129,10 +129,22 @@ pub const MAX_SAMPLE_TURN_DEG: f64 = 160.0;
 /// "Classifier rules", step 1); we keep 60 %.
 pub const TRANSIENT_FRACTION: f64 = 0.4;
 
-/// Fewest samples in the analysis window (our choice, so that rates and
-/// periods have support: 0.25 s at leafmagic's 240 Hz, 1 s at 60 Hz, 2.5 s
-/// at 24 Hz, a 4.2 s record once its transient is discarded).
+/// Fewest samples in the analysis window, unless it spans
+/// [`MIN_WINDOW_S`] (our choice, so that rates and periods have support:
+/// 0.25 s at leafmagic's 240 Hz, 1 s at 60 Hz).
 pub const MIN_WINDOW_SAMPLES: usize = 60;
+
+/// A window this long is enough whatever its sample count, s: what
+/// [`MIN_WINDOW_SAMPLES`] is at 60 Hz, so that from 24 to 60 Hz a record
+/// needs the same 1.67 s as at 60 (at 24 Hz, 60 samples would ask 4.2 s).
+/// At 60 Hz and faster the sample count decides, as before.
+pub const MIN_WINDOW_S: f64 = 1.0;
+
+/// Whether an analysis window holds enough to classify: at least
+/// [`MIN_WINDOW_SAMPLES`] samples, or [`MIN_WINDOW_S`] of record.
+pub fn window_is_long_enough(f: &Features) -> bool {
+    f.samples >= MIN_WINDOW_SAMPLES || f.t_end_s - f.t_start_s >= MIN_WINDOW_S
+}
 
 /// Fewest chord lengths of descent in the analysis window
 /// (docs/falling-plates.md, "Classifier rules", step 1; Howison & Iida 2020
@@ -340,11 +352,11 @@ fn classify_pose(
             format!("sampled at {rate:.1} Hz, below the {MIN_SAMPLE_RATE_HZ} Hz minimum"),
         )));
     }
-    if f.samples < MIN_WINDOW_SAMPLES {
+    if !window_is_long_enough(&f) {
         return Err(Box::new(undetermined(
             f.clone(),
             format!(
-                "too few samples: {} in the analysis window {:.3}–{:.3} s (need {MIN_WINDOW_SAMPLES}); record too short",
+                "too few samples: {} in the analysis window {:.3}–{:.3} s (need {MIN_WINDOW_SAMPLES}, or {MIN_WINDOW_S} s); record too short",
                 f.samples, f.t_start_s, f.t_end_s
             ),
         )));
