@@ -94,6 +94,9 @@ pub fn describe(args: FallArgs) -> Result<()> {
         if let Some(lost) = &notes.lost_rows {
             out["lost_rows"] = json!(lost.count);
         }
+        if let Some(rest) = &c.at_rest {
+            out["at_rest"] = json!(rest);
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         print!(

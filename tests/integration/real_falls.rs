@@ -583,6 +583,26 @@ fn a_fall_that_ends_at_rest_is_classified_by_its_time_in_the_air() {
     );
     assert!(c.reason.unwrap().contains("after landing: left out"));
     assert!(classify(&square, 0.042).at_rest.is_none());
+    // classify and describe --json say what was cut.
+    let file = scratch("real-landed").join("landed.csv");
+    landed.write_csv(&file).unwrap();
+    let (json, _) = classify_json(&file, "0.042", &[]);
+    assert!(
+        (json["at_rest"]["after_s"].as_f64().unwrap() - 1.0).abs() < 0.05,
+        "{json}"
+    );
+    let out = leafmagic()
+        .args(["describe", "--size", "0.042", "--json"])
+        .arg(&file)
+        .output()
+        .unwrap();
+    crate::common::assert_succeeded(&out);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["class"], "spinner");
+    assert!(
+        (json["at_rest"]["after_s"].as_f64().unwrap() - 1.0).abs() < 0.05,
+        "{json}"
+    );
 
     let card =
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mujoco-falls/tumble_thick.csv");
