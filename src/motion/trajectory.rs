@@ -3,7 +3,9 @@
 //! and its CSV form.
 //!
 //! File format: one header line naming the columns, then one line per
-//! sample. Columns are found by name, in any order:
+//! sample; fields separated by commas, or by tabs or semicolons when the
+//! header has no comma (with semicolons, a comma is the decimal mark).
+//! Columns are found by name, in any order:
 //!
 //! | column | | meaning |
 //! |---|---|---|
@@ -331,6 +333,25 @@ struct Layout {
     missing_position: Option<usize>,
 }
 
+/// The field separator of a record: a comma, or a tab or a semicolon when
+/// the header line has no comma but one of those (Tracker's default export
+/// is tab-separated; European spreadsheets write semicolons).
+fn field_separator(text: &[u8]) -> u8 {
+    let header = text
+        .split(|&b| b == b'\n' || b == b'\r')
+        .find(|line| line.iter().any(|b| !b.is_ascii_whitespace()))
+        .unwrap_or_default();
+    if header.contains(&b',') {
+        b','
+    } else if header.contains(&b'\t') {
+        b'\t'
+    } else if header.contains(&b';') {
+        b';'
+    } else {
+        b','
+    }
+}
+
 /// Line numbers (from 1) of the records of a text, from their byte
 /// offsets. `\r\n`, `\n` and a lone `\r` each end a line, as the csv
 /// reader takes them.
@@ -558,10 +579,15 @@ impl Trajectory {
                 error,
             })?;
         let lines = LineCounter::new(&text);
+        let separator = field_separator(&text);
+        // Semicolons separate fields where the comma is the decimal mark
+        // (spreadsheets and trackers in most of Europe write `0,01;0,52`).
+        let decimal_comma = separator == b';';
         let mut rdr = csv::ReaderBuilder::new()
             .has_headers(false)
             .flexible(true)
             .trim(csv::Trim::All)
+            .delimiter(separator)
             .from_reader(text.as_slice());
         let mut records = rdr.records();
         let csv_err = |e: csv::Error| -> TrajectoryError {
@@ -691,7 +717,12 @@ impl Trajectory {
                 if col == Column::Ignored {
                     continue;
                 }
-                let x: f64 = field.parse().map_err(|_| TrajectoryError::Number {
+                let decimal = if decimal_comma {
+                    std::borrow::Cow::Owned(field.replace(',', "."))
+                } else {
+                    std::borrow::Cow::Borrowed(field)
+                };
+                let x: f64 = decimal.parse().map_err(|_| TrajectoryError::Number {
                     file: file(),
                     line,
                     row,
@@ -1155,6 +1186,19 @@ mod tests {
             err.contains("line 3 (data row 2)") && err.contains("NaN"),
             "{err}"
         );
+    }
+
+    /// Tab- and semicolon-separated records are read as comma-separated
+    /// ones are; with semicolons, a comma is the decimal mark.
+    #[test]
+    fn tabs_and_semicolons_with_decimal_commas_are_read() {
+        let comma = read_str("t,x,y,z\n0,0.5,0,1.25\n0.01,0.5,0,1.2\n").unwrap();
+        let tab = read_str("t\tx\ty\tz\n0\t0.5\t0\t1.25\n0.01\t0.5\t0\t1.2\n").unwrap();
+        let semi = read_str("t;x;y;z\n0;0,5;0;1,25\n0,01;0,5;0;1,2\n").unwrap();
+        assert_eq!(tab, comma);
+        assert_eq!(semi, comma);
+        let err = read_str("t;x;y;z\n0;0,5;0;abc\n").unwrap_err().to_string();
+        assert!(err.contains("line 2") && err.contains("`z`"), "{err}");
     }
 
     /// A fall seen by one camera: t, the vertical and one horizontal
