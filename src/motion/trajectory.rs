@@ -354,36 +354,43 @@ fn field_separator(text: &[u8]) -> u8 {
 
 /// Line numbers (from 1) of the records of a text, from their byte
 /// offsets. `\r\n`, `\n` and a lone `\r` each end a line, as the csv
-/// reader takes them.
+/// reader takes them. Records are asked for in order, so the count goes on
+/// from the last one asked (a whole read counts each line end once).
 struct LineCounter<'a> {
     text: &'a [u8],
-    /// Byte offset at which each line after the first starts.
-    starts: Vec<usize>,
+    /// The byte offset last asked for and its line.
+    cursor: std::cell::Cell<(usize, u64)>,
 }
 
 impl<'a> LineCounter<'a> {
     fn new(text: &'a [u8]) -> Self {
-        let mut starts = Vec::new();
-        for (k, &b) in text.iter().enumerate() {
-            let crlf = b == b'\r' && text.get(k + 1) == Some(&b'\n');
-            if b == b'\n' || (b == b'\r' && !crlf) {
-                starts.push(k + 1);
-            }
+        LineCounter {
+            text,
+            cursor: std::cell::Cell::new((0, 1)),
         }
-        LineCounter { text, starts }
     }
 
     /// The line of the record the csv reader says starts at `byte`. After
     /// a CRLF it points at the `\n` it has not consumed yet (rust-csv issue
     /// 395): the record starts past the line end.
     fn line_at(&self, byte: u64) -> u64 {
-        let mut k = usize::try_from(byte)
-            .unwrap_or(usize::MAX)
-            .min(self.text.len());
-        while k < self.text.len() && matches!(self.text[k], b'\r' | b'\n') {
+        let text = self.text;
+        let mut k = usize::try_from(byte).unwrap_or(usize::MAX).min(text.len());
+        while k < text.len() && matches!(text[k], b'\r' | b'\n') {
             k += 1;
         }
-        self.starts.partition_point(|&s| s <= k) as u64 + 1
+        let (mut at, mut line) = self.cursor.get();
+        if k < at {
+            (at, line) = (0, 1);
+        }
+        for i in at..k {
+            let crlf = text[i] == b'\r' && text.get(i + 1) == Some(&b'\n');
+            if text[i] == b'\n' || (text[i] == b'\r' && !crlf) {
+                line += 1;
+            }
+        }
+        self.cursor.set((k, line));
+        line
     }
 }
 
@@ -1167,7 +1174,7 @@ mod tests {
     fn rows_without_a_position_are_left_out_and_noted() {
         let text =
             "t,x,y,z,area1\r\n0,0,0,1,5\r\n0.01,,,,6\r\n0.02,NaN,nan,NaN,7\r\n0.03,0,0,0.97,8\r\n";
-        let (tr, notes) = read_with_notes(text);
+        let (tr, notes) = read_with_notes(text, UpAxis::Z);
         assert_eq!(tr.time, vec![0.0, 0.03]);
         assert_eq!(tr.areas[0].values, vec![5.0, 8.0]);
         assert_eq!(
@@ -1178,7 +1185,10 @@ mod tests {
                 last_line: 4
             })
         );
-        assert_eq!(read_with_notes("t,x,y,z\n0,0,0,1\n").1.lost_rows, None);
+        assert_eq!(
+            read_with_notes("t,x,y,z\n0,0,0,1\n", UpAxis::Z).1.lost_rows,
+            None
+        );
         let err = read_str("t,x,y,z\n0,0,0,1\n0.01,NaN,0,1\n")
             .unwrap_err()
             .to_string();
@@ -1205,30 +1215,20 @@ mod tests {
     /// column, the depth read as 0 and named in the notes; z up or y up.
     #[test]
     fn a_record_in_a_vertical_plane_is_read_with_its_depth_zero() {
-        let (tr, notes) = Trajectory::from_csv_reader_with(
-            "t,x,z,area1\n0,0.1,1,5\n0.01,0.2,0.99,6\n".as_bytes(),
-            "xz.csv",
-            UpAxis::Z,
-        )
-        .unwrap();
+        let (tr, notes) = read_with_notes("t,x,z,area1\n0,0.1,1,5\n0.01,0.2,0.99,6\n", UpAxis::Z);
         assert_eq!(notes.depth_missing.as_deref(), Some("y"));
         assert_eq!(tr.position[1], Vector3::new(0.2, 0.0, 0.99));
         assert_eq!(tr.areas[0].values, vec![5.0, 6.0]);
         // A tracker's export, y up: x across the image, y up it.
-        let (tr, notes) = Trajectory::from_csv_reader_with(
-            "t,x,y\n0,0.1,1\n0.01,0.2,0.99\n".as_bytes(),
-            "tracker.csv",
-            UpAxis::Y,
-        )
-        .unwrap();
+        let (tr, notes) = read_with_notes("t,x,y\n0,0.1,1\n0.01,0.2,0.99\n", UpAxis::Y);
         assert_eq!(notes.depth_missing.as_deref(), Some("z"));
         assert_eq!(tr.position[1], Vector3::new(0.2, 0.0, 0.99));
-        let (_, notes) = read_with_notes("t,x,y,z\n0,0,0,1\n");
+        let (_, notes) = read_with_notes("t,x,y,z\n0,0,0,1\n", UpAxis::Z);
         assert_eq!(notes.depth_missing, None);
     }
 
-    fn read_with_notes(s: &str) -> (Trajectory, ReadNotes) {
-        Trajectory::from_csv_reader_with(s.as_bytes(), "mem.csv", UpAxis::Z).unwrap()
+    fn read_with_notes(s: &str, up: UpAxis) -> (Trajectory, ReadNotes) {
+        Trajectory::from_csv_reader_with(s.as_bytes(), "mem.csv", up).unwrap()
     }
 
     /// Quaternions printed with three decimals are read, normalised; a
