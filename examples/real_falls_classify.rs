@@ -273,21 +273,6 @@ fn clean_cuts(f: &Fall) -> Vec<Trajectory> {
         .collect()
 }
 
-/// Every `k`-th sample of a record (a camera running at 1/k the rate).
-fn decimated(tr: &Trajectory, k: usize) -> Trajectory {
-    let keep: Vec<usize> = (0..tr.len()).step_by(k).collect();
-    let mut out = tr.clone();
-    out.time = keep.iter().map(|&i| tr.time[i]).collect();
-    out.position = keep.iter().map(|&i| tr.position[i]).collect();
-    if !tr.orientation.is_empty() {
-        out.orientation = keep.iter().map(|&i| tr.orientation[i]).collect();
-    }
-    for (a, b) in out.areas.iter_mut().zip(&tr.areas) {
-        a.values = keep.iter().map(|&i| b.values[i]).collect();
-    }
-    out
-}
-
 /// docs/classification.md, "Frame rates": the full classifier on pose
 /// records resampled to video and animation rates, against its own verdict
 /// at 240 Hz; the real squares' films decimated, against people; and
@@ -327,7 +312,7 @@ fn frame_rates(falls: &[Fall]) {
             let ok = named_squares
                 .iter()
                 .filter(|s| {
-                    let c = classify_with(&decimated(&s.trajectory, k), s.chord, use_).class;
+                    let c = classify_with(&s.trajectory.every(k), s.chord, use_).class;
                     c == corpus::human_class(s.human)
                 })
                 .count();

@@ -505,21 +505,32 @@ impl Trajectory {
 
     /// Samples `first..=last` of the record, every column.
     pub fn slice(&self, first: usize, last: usize) -> Trajectory {
-        let keep = first..last + 1;
+        self.samples((first..=last).collect::<Vec<_>>())
+    }
+
+    /// Every `step`-th sample from the first, every column: what a camera
+    /// running `step` times slower would have recorded.
+    pub fn every(&self, step: usize) -> Trajectory {
+        self.samples((0..self.len()).step_by(step.max(1)).collect::<Vec<_>>())
+    }
+
+    /// The samples at `keep` (indices in order), every column.
+    fn samples(&self, keep: Vec<usize>) -> Trajectory {
+        let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
         Trajectory {
-            time: self.time[keep.clone()].to_vec(),
-            position: self.position[keep.clone()].to_vec(),
+            time: pick(&self.time),
+            position: keep.iter().map(|&k| self.position[k]).collect(),
             orientation: if self.orientation.is_empty() {
                 Vec::new()
             } else {
-                self.orientation[keep.clone()].to_vec()
+                keep.iter().map(|&k| self.orientation[k]).collect()
             },
             areas: self
                 .areas
                 .iter()
                 .map(|a| AreaSignal {
                     name: a.name.clone(),
-                    values: a.values[keep.clone()].to_vec(),
+                    values: pick(&a.values),
                 })
                 .collect(),
         }

@@ -341,9 +341,7 @@ fn the_squares_at_video_frame_rates_agree_with_people() {
         let agree = named
             .iter()
             .filter(|s| {
-                let keep: Vec<f64> = s.trajectory.time.iter().step_by(k).copied().collect();
-                let film = s.trajectory.sampled_at(&keep);
-                classify(&film, s.chord).class == corpus::human_class(s.human)
+                classify(&s.trajectory.every(k), s.chord).class == corpus::human_class(s.human)
             })
             .count();
         assert!(agree >= 85, "every {k}th frame: {agree}/92");

@@ -125,14 +125,6 @@ const MUJOCO: [(&str, MotionClass); 6] = [
 ];
 const MUJOCO_CHORD: f64 = 0.04;
 
-fn decimate(tr: &Trajectory, step: usize) -> Trajectory {
-    let mut out = Trajectory::default();
-    for k in (0..tr.len()).step_by(step) {
-        out.push(tr.time[k], tr.position[k], tr.orientation[k]);
-    }
-    out
-}
-
 #[test]
 fn mujoco_falls_get_the_readme_class_from_240_down_to_24_hz() {
     let dir = mujoco_dir();
@@ -163,7 +155,7 @@ fn mujoco_falls_get_the_readme_class_from_240_down_to_24_hz() {
         );
         assert_eq!(c.class, class, "{name}: {c:#?}");
         for (how, rate, low) in [
-            ("decimated", 60.0, decimate(&tr, 4)),
+            ("decimated", 60.0, tr.every(4)),
             ("slerp", 60.0, tr.resampled(60.0)),
             ("slerp", 75.0, tr.resampled(75.0)),
             ("slerp", 100.0, tr.resampled(100.0)),
@@ -171,7 +163,7 @@ fn mujoco_falls_get_the_readme_class_from_240_down_to_24_hz() {
             // tenth sample).
             ("slerp", 30.0, tr.resampled(30.0)),
             ("slerp", 25.0, tr.resampled(25.0)),
-            ("decimated", 24.0, decimate(&tr, 10)),
+            ("decimated", 24.0, tr.every(10)),
         ] {
             let cl = classify(&low, MUJOCO_CHORD);
             assert!((cl.features.sample_rate_hz - rate).abs() < 0.1);
