@@ -334,8 +334,9 @@ struct Layout {
 }
 
 /// The field separator of a record: a comma, or a tab or a semicolon when
-/// the header line has no comma but one of those (Tracker's default export
-/// is tab-separated; European spreadsheets write semicolons).
+/// the header line has no comma but one of those (video-analysis tools
+/// export delimited text, tabs among the choices; European spreadsheets
+/// write semicolons).
 fn field_separator(text: &[u8]) -> u8 {
     let header = text
         .split(|&b| b == b'\n' || b == b'\r')
