@@ -275,6 +275,29 @@ impl Run {
         settings: BreedSettings,
         max_work: f64,
     ) -> Result<Run, BreedError> {
+        Run::create_inner(dir, settings, max_work, None)
+    }
+
+    /// [`Run::create_within`] for a `--like` run whose example the caller
+    /// has read already (in any form: a CSV record with its vertical axis,
+    /// a glTF animation's fall), copied into the run as given. Without it,
+    /// the example is read again from `settings.like`'s source as a z-up
+    /// CSV record.
+    pub fn create_like(
+        dir: &Path,
+        settings: BreedSettings,
+        max_work: f64,
+        example: Trajectory,
+    ) -> Result<Run, BreedError> {
+        Run::create_inner(dir, settings, max_work, Some(example))
+    }
+
+    fn create_inner(
+        dir: &Path,
+        settings: BreedSettings,
+        max_work: f64,
+        given_example: Option<Trajectory>,
+    ) -> Result<Run, BreedError> {
         settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
             .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
@@ -334,6 +357,7 @@ impl Run {
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
         let example = match &settings.like {
+            Some(_) if given_example.is_some() => given_example,
             Some(t) if t.source != "features" => {
                 let path = Path::new(&t.source);
                 Some(Trajectory::read_csv(path).map_err(|e| io_err(path, e))?)

@@ -57,7 +57,7 @@ pub struct BreedArgs {
     /// positions only: descent, drift, and tumble from the areas).
     #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
     pub like: Option<PathBuf>,
-    /// The example's chord, metres, for --like [default: the prototype's chord].
+    /// The example's chord, metres, for --like [default: a glTF example's own, else the prototype's chord].
     #[arg(long, requires = "like")]
     pub size: Option<f64>,
     /// The --like file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
@@ -254,14 +254,17 @@ pub struct PlateArgs {
 /// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
 pub struct FallArgs {
-    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional.
+    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or a glTF animation (.glb, .gltf: leafmagic's export, a Blender or game-engine bake), read at its keys: the moving mesh's centre and principal axes.
     pub trajectory: PathBuf,
-    /// The leaf's chord (longest extent), metres; sets the length scale of the tests.
-    #[arg(long, default_value_t = 0.05)]
-    pub size: f64,
-    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
+    /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or a glTF mesh's own].
+    #[arg(long)]
+    pub size: Option<f64>,
+    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading); glTF is y up by its specification.
     #[arg(long, default_value = "z")]
     pub up: leafmagic::motion::trajectory::UpAxis,
+    /// The object to read from a glTF file that animates several (its node's name).
+    #[arg(long)]
+    pub object: Option<String>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -331,16 +334,19 @@ pub struct SceneArgs {
 /// Arguments of `compare`.
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
-    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns).
+    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns; or a glTF animation, .glb or .gltf).
     pub a: PathBuf,
     /// Second fall.
     pub b: PathBuf,
-    /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05).
-    #[arg(long, default_value = "0.05")]
-    pub size: EachFile<f64>,
+    /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05) [default: 0.05, or a glTF mesh's own].
+    #[arg(long)]
+    pub size: Option<EachFile<f64>>,
     /// The files' vertical axis, z (leafmagic's) or y (turned to z up on reading): one for both, or A,B (a tracker's y-up record against a drop's: y,z).
     #[arg(long, default_value = "z")]
     pub up: EachFile<leafmagic::motion::trajectory::UpAxis>,
+    /// The object to read from glTF files that animate several: one name for both, or A,B.
+    #[arg(long)]
+    pub object: Option<EachFile<String>>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -350,7 +356,7 @@ pub struct CompareArgs {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct EachFile<T>(pub T, pub T);
 
-impl<T: std::str::FromStr + Copy> std::str::FromStr for EachFile<T>
+impl<T: std::str::FromStr + Clone> std::str::FromStr for EachFile<T>
 where
     T::Err: std::fmt::Display,
 {
@@ -358,7 +364,7 @@ where
     fn from_str(s: &str) -> Result<Self, String> {
         let one = |v: &str| v.trim().parse::<T>().map_err(|e| format!("`{v}`: {e}"));
         match s.split(',').collect::<Vec<_>>().as_slice() {
-            [v] => one(v).map(|v| EachFile(v, v)),
+            [v] => one(v).map(|v| EachFile(v.clone(), v)),
             [a, b] => Ok(EachFile(one(a)?, one(b)?)),
             _ => Err(format!(
                 "`{s}`: one value for both files, or two separated by a comma"

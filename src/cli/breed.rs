@@ -27,7 +27,14 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 ),
                 None => None,
             };
-            let (prototype, like) = choose_prototype(&args, from.as_ref())?;
+            // The --like example, read once (notes printed once), in
+            // whatever form it came: it is described at the size the
+            // chosen prototype needs, and copied into the run as read.
+            let example = match &args.like {
+                Some(path) => Some(input::read_record(path, args.up, None)?),
+                None => None,
+            };
+            let (prototype, like) = choose_prototype(&args, from.as_ref(), example.as_ref())?;
             let settings = BreedSettings {
                 prototype,
                 initial_scale: args.initial_scale,
@@ -76,7 +83,12 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 .out
                 .clone()
                 .unwrap_or_else(|| default_run_dir(&settings));
-            let run = Run::create_within(&dir, settings, args.max_work)?;
+            let run = match example {
+                Some(example) => {
+                    Run::create_like(&dir, settings, args.max_work, example.trajectory)?
+                }
+                None => Run::create_within(&dir, settings, args.max_work)?,
+            };
             // A breed prints nothing until its first generation is done:
             // one that will take minutes says so before it starts.
             let work = run.work()?;
@@ -313,8 +325,6 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
     ))
 }
 
-/// The motion target of `breed --like` / `--target-features`, checked
-/// before anything is bred or written.
 /// The prototype to breed from and the motion target: `--prototype auto`
 /// chooses from the target's class ([`breed::auto::choose`]) and says which
 /// and why on stderr. An example without `--size` is described at the
@@ -323,6 +333,7 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
 fn choose_prototype(
     args: &BreedArgs,
     from: Option<&Run>,
+    example: Option<&input::Record>,
 ) -> Result<(String, Option<MotionTarget>)> {
     if let (Some(from), true) = (from, args.prototype == breed::auto::AUTO) {
         let name = from.settings().prototype.clone();
@@ -330,40 +341,53 @@ fn choose_prototype(
             "leafmagic: --prototype auto: {name} (the prototype of the run started from, {})",
             from.dir.display()
         );
-        return Ok((name.clone(), motion_target(args, &name)?));
+        return Ok((name.clone(), motion_target(args, &name, example)?));
     }
     if args.prototype != breed::auto::AUTO {
         return Ok((
             args.prototype.clone(),
-            motion_target(args, &args.prototype)?,
+            motion_target(args, &args.prototype, example)?,
         ));
     }
-    let first = motion_target(args, "a")?;
+    let first = motion_target(args, "a", example)?;
     let (class, regime) = match &first {
         Some(t) => (t.class, t.regime),
         None => (Some(args.target.unwrap_or(MotionClass::Floater)), None),
     };
     let (name, why) = breed::auto::choose(class, regime);
     eprintln!("leafmagic: --prototype auto: {name} ({why})");
-    let like = if name == "a" || args.size.is_some() {
+    let sized = args.size.is_some() || example.is_some_and(|e| e.chord.is_some());
+    let like = if name == "a" || sized {
         first
     } else {
-        motion_target(args, name)?
+        motion_target(args, name, example)?
     };
     Ok((name.to_string(), like))
 }
 
-fn motion_target(args: &BreedArgs, prototype: &str) -> Result<Option<MotionTarget>> {
-    if let Some(path) = &args.like {
-        let size = match args.size {
+/// The motion target of `breed --like` / `--target-features`, checked
+/// before anything is bred or written. The example is described at
+/// `--size`, else at its own chord (an animation's mesh), else at the
+/// prototype's chord.
+fn motion_target(
+    args: &BreedArgs,
+    prototype: &str,
+    example: Option<&input::Record>,
+) -> Result<Option<MotionTarget>> {
+    if let (Some(path), Some(record)) = (&args.like, example) {
+        let size = match args.size.or(record.chord) {
             Some(s) => s,
             None => LeafSpec::load_with_model(prototype)?.1.chord(),
         };
-        let example = input::describe_file(path, size, args.up)?;
+        if !(size > 0.0 && size.is_finite()) {
+            bail!("--size must be a positive number of metres, got {size}");
+        }
+        let c = classify::classify(&record.trajectory, size);
+        let described = input::describe(path, &c)?;
         return Ok(Some(MotionTarget::like(
             &path.to_string_lossy(),
             size,
-            &example,
+            &described,
         )));
     }
     match &args.target_features {

@@ -7,6 +7,7 @@ use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, Classification};
 use leafmagic::motion::describe::Descriptors;
 use leafmagic::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
+use leafmagic::output::export;
 use leafmagic::physics::model::Model;
 use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
@@ -26,17 +27,105 @@ pub fn problem(arg: &str) -> Result<(String, Model, State)> {
     Ok((spec.name, model, initial))
 }
 
-/// Reads and classifies a recorded fall of a leaf of chord `size`, whose
-/// file has `up` as its vertical axis; columns the reader ignored are noted
-/// on stderr.
-pub fn classify_file(
-    path: &Path,
-    size: f64,
-    up: UpAxis,
-) -> Result<(Trajectory, ReadNotes, Classification)> {
-    if !(size > 0.0 && size.is_finite()) {
-        bail!("--size must be a positive number of metres, got {size}");
+/// The chord `classify` assumes for a CSV record when no `--size` is
+/// given, m (an animation file gives its mesh's own).
+pub const DEFAULT_SIZE_M: f64 = 0.05;
+
+/// Whether `path` names an animation file (glTF: `.glb`, `.gltf`; USD:
+/// `.usda`, `.usd`, `.usdc`, `.usdz`; any case), read as one rather than as
+/// a CSV record.
+pub fn is_animation(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .is_some_and(|e| {
+            matches!(
+                e.as_str(),
+                "glb" | "gltf" | "usda" | "usd" | "usdc" | "usdz"
+            )
+        })
+}
+
+/// A recorded fall as read: the record, what reading it noted, and what
+/// an animation file told of it.
+pub struct Record {
+    /// The record.
+    pub trajectory: Trajectory,
+    /// What the CSV reader noted (empty for an animation file).
+    pub notes: ReadNotes,
+    /// For an animation file: the object read from it.
+    pub object: Option<String>,
+    /// For an animation file: the object's chord (longest extent), m.
+    pub chord: Option<f64>,
+}
+
+impl Record {
+    /// The chord to classify the record with: `size` if given, else the
+    /// animation's own, else [`DEFAULT_SIZE_M`] for a CSV record, which
+    /// does not say.
+    pub fn size_or(&self, size: Option<f64>) -> f64 {
+        size.or(self.chord).unwrap_or(DEFAULT_SIZE_M)
     }
+}
+
+/// A recorded fall, read and classified.
+pub struct Fall {
+    /// The record.
+    pub record: Record,
+    /// Its classification.
+    pub classification: Classification,
+    /// The chord it was classified with, m.
+    pub size: f64,
+}
+
+/// Checks a `--size` given on the command line.
+fn check_size(size: Option<f64>) -> Result<()> {
+    match size {
+        Some(s) if !(s > 0.0 && s.is_finite()) => {
+            bail!("--size must be a positive number of metres, got {s}")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Reads a recorded fall: a CSV record whose vertical axis is `up`, or a
+/// glTF animation (y up by its specification, read so), of which `object`
+/// names the one to read where several move. What the reading noticed
+/// goes to stderr.
+pub fn read_record(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Record> {
+    let record = if is_animation(path) {
+        read_animation(path, up, object)?
+    } else {
+        if let Some(object) = object {
+            bail!(
+                "--object {object}: {} is a CSV record, which holds one fall; --object picks an object of an animation file (.glb, .gltf, .usda)",
+                path.display()
+            );
+        }
+        read_csv_record(path, up)?
+    };
+    for note in implausible_units(&record.trajectory) {
+        eprintln!("note: {}: {note}", path.display());
+    }
+    Ok(record)
+}
+
+/// Reads and classifies a recorded fall ([`read_record`]) with chord `size`
+/// (default: an animation's own, [`DEFAULT_SIZE_M`] for a CSV record).
+pub fn read_fall(path: &Path, size: Option<f64>, up: UpAxis, object: Option<&str>) -> Result<Fall> {
+    check_size(size)?;
+    let record = read_record(path, up, object)?;
+    let size = record.size_or(size);
+    let classification = classify::classify(&record.trajectory, size);
+    Ok(Fall {
+        record,
+        classification,
+        size,
+    })
+}
+
+/// [`read_record`] of a CSV record.
+fn read_csv_record(path: &Path, up: UpAxis) -> Result<Record> {
     let (traj, notes) = Trajectory::read_csv_with(path, up)?;
     if !notes.ignored_columns.is_empty() {
         eprintln!(
@@ -66,11 +155,48 @@ pub fn classify_file(
             lost.last_line
         );
     }
-    for note in implausible_units(&traj) {
-        eprintln!("note: {}: {note}", path.display());
+    Ok(Record {
+        trajectory: traj,
+        notes,
+        object: None,
+        chord: None,
+    })
+}
+
+/// [`read_record`] of a glTF file: the fall of its moving object
+/// ([`export::fall`]).
+fn read_animation(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Record> {
+    let fall = export::fall::read_fall(path, object)?;
+    if up != UpAxis::Z {
+        eprintln!(
+            "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis): read as such",
+            path.display()
+        );
     }
-    let c = classify::classify(&traj, size);
-    Ok((traj, notes, c))
+    eprintln!(
+        "note: {}: object `{}`, {} keys at {} Hz, chord {:.4} m",
+        path.display(),
+        fall.object,
+        fall.trajectory.len(),
+        fall.rate_hz,
+        fall.chord,
+    );
+    if !fall.still.is_empty() {
+        eprintln!(
+            "note: {}: left out what does not move: {}",
+            path.display(),
+            fall.still.join(", ")
+        );
+    }
+    if let Some(why) = &fall.no_orientation {
+        eprintln!("note: {}: {why}", path.display());
+    }
+    Ok(Record {
+        trajectory: fall.trajectory,
+        notes: ReadNotes::default(),
+        object: Some(fall.object),
+        chord: Some(fall.chord),
+    })
 }
 
 /// Fastest mean descent through air a leaf-like fall is taken to have,
@@ -125,8 +251,21 @@ fn implausible_units(traj: &Trajectory) -> Vec<String> {
     notes
 }
 
-/// Reads and describes a fall, or says why it cannot be described.
-pub fn describe_file(path: &Path, size: f64, up: UpAxis) -> Result<Descriptors> {
-    let (_, _, c) = classify_file(path, size, up)?;
-    Descriptors::of(&c).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
+/// Reads and describes a fall (see [`read_fall`]), or says why it cannot
+/// be described.
+pub fn describe_fall(
+    path: &Path,
+    size: Option<f64>,
+    up: UpAxis,
+    object: Option<&str>,
+) -> Result<(Fall, Descriptors)> {
+    let fall = read_fall(path, size, up, object)?;
+    let d = describe(path, &fall.classification)?;
+    Ok((fall, d))
+}
+
+/// The descriptors of a classified fall read from `path`, or why it has
+/// none.
+pub fn describe(path: &Path, c: &Classification) -> Result<Descriptors> {
+    Descriptors::of(c).map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))
 }

@@ -1,7 +1,7 @@
 //! `classify`, `describe` and `compare`: what a recorded fall shows, the
 //! numbers `breed --like` steers by, and how far apart two falls are.
 
-use super::args::{CompareArgs, FallArgs};
+use super::args::{CompareArgs, EachFile, FallArgs};
 use super::{input, report};
 use anyhow::Result;
 use leafmagic::motion::describe::{self, Descriptors};
@@ -9,7 +9,12 @@ use serde_json::json;
 
 /// `classify`: names the motion of a recorded fall.
 pub fn classify(args: FallArgs) -> Result<()> {
-    let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
+    let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
+    let (traj, notes, c) = (
+        &fall.record.trajectory,
+        &fall.record.notes,
+        &fall.classification,
+    );
     if args.json {
         // The classification's own fields in their order, then the notes.
         #[derive(serde::Serialize)]
@@ -22,18 +27,26 @@ pub fn classify(args: FallArgs) -> Result<()> {
             depth_missing: Option<&'a str>,
             #[serde(skip_serializing_if = "Option::is_none")]
             lost_rows: Option<usize>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            object: Option<&'a str>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            size_m: Option<f64>,
         }
         let noted = Noted {
-            classification: &c,
+            classification: c,
             ignored_columns: &notes.ignored_columns,
             depth_missing: notes.depth_missing.as_deref(),
             lost_rows: notes.lost_rows.map(|l| l.count),
+            // What a glTF file gave that a CSV record's reader does not:
+            // the object read and the chord it was classified with.
+            object: fall.record.object.as_deref(),
+            size_m: fall.record.object.is_some().then_some(fall.size),
         };
         println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
         print!(
             "{}",
-            report::motion::classified(&args.trajectory, traj.len(), &c)
+            report::motion::classified(&args.trajectory, traj.len(), c)
         );
     }
     Ok(())
@@ -62,8 +75,13 @@ fn descriptors_json(d: &Descriptors) -> serde_json::Value {
 /// of them the record could not give. An undetermined fall has none; that
 /// is an answer (with its reason), not an error, as in `classify`.
 pub fn describe(args: FallArgs) -> Result<()> {
-    let (traj, notes, c) = input::classify_file(&args.trajectory, args.size, args.up)?;
-    let d = Descriptors::of(&c).ok();
+    let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
+    let (traj, notes, c) = (
+        &fall.record.trajectory,
+        &fall.record.notes,
+        &fall.classification,
+    );
+    let d = Descriptors::of(c).ok();
     if args.json {
         let not_measured: Vec<serde_json::Value> = match &d {
             Some(d) => (0..describe::NAMES.len())
@@ -97,11 +115,15 @@ pub fn describe(args: FallArgs) -> Result<()> {
         if let Some(rest) = &c.at_rest {
             out["at_rest"] = json!(rest);
         }
+        if let Some(object) = &fall.record.object {
+            out["object"] = json!(object);
+            out["size_m"] = json!(fall.size);
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         print!(
             "{}",
-            report::motion::described(&args.trajectory, traj.len(), &c, d.as_ref())
+            report::motion::described(&args.trajectory, traj.len(), c, d.as_ref())
         );
     }
     Ok(())
@@ -109,8 +131,13 @@ pub fn describe(args: FallArgs) -> Result<()> {
 
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
-    let a = input::describe_file(&args.a, args.size.0, args.up.0)?;
-    let b = input::describe_file(&args.b, args.size.1, args.up.1)?;
+    let size = |pick: fn(EachFile<f64>) -> f64| args.size.map(pick);
+    let (object_a, object_b) = match &args.object {
+        Some(EachFile(a, b)) => (Some(a.as_str()), Some(b.as_str())),
+        None => (None, None),
+    };
+    let (_, a) = input::describe_fall(&args.a, size(|s| s.0), args.up.0, object_a)?;
+    let (_, b) = input::describe_fall(&args.b, size(|s| s.1), args.up.1, object_b)?;
     let d = describe::distance(&a, &b);
     if args.json {
         let side = descriptors_json;

@@ -4,6 +4,7 @@
 mod accuracy;
 mod aero_law;
 mod alloc;
+mod animation_falls;
 mod batch;
 mod bending;
 mod breeding;

@@ -902,7 +902,8 @@ fn breeding_like_a_real_tumbling_square_reaches_its_class() {
 
 /// `breed --like FILE --up y` reads a y-up example as `classify --up y`
 /// does: the run it creates targets the same class and descriptors as the
-/// z-up original; `--up` without `--like` is refused.
+/// z-up original and keeps the same example; `--up` without `--like` is
+/// refused.
 #[test]
 fn breed_reads_a_y_up_example_with_up_y() {
     let dir = scratch("like-yup");
@@ -933,6 +934,13 @@ fn breed_reads_a_y_up_example_with_up_y() {
     let y = target(&square_y_up("like-yup-file", "square_000"), "y", "y");
     assert!(z.get("descriptors").is_some(), "{z}");
     assert_eq!(z, y, "{z}");
+    // The run keeps the example as read, z up: until 2026-12-05 it copied
+    // the file read again as z up, so a y-up example was stored (and
+    // plotted) lying on its side.
+    let example = |run: &str| Trajectory::read_csv(&dir.join(run).join("example.csv")).unwrap();
+    let (ez, ey) = (example("z"), example("y"));
+    assert_eq!(ez.time, ey.time);
+    assert_eq!(ez.position, ey.position, "example.csv's positions differ");
     // The y-up file read as z up is another fall.
     let wrong = target(&square_y_up("like-yup-file2", "square_000"), "z", "wrong");
     assert_ne!(z, wrong);

@@ -75,7 +75,7 @@ fn collinear(points: &[V3], tol: f64) -> bool {
 /// The rotation R maximising Σ mᵢ (R rᵢ)·(pᵢ − c) with no previous frame to
 /// start from: by the singular value decomposition of A (Kabsch), with the
 /// sign fixed so that R is a proper rotation.
-fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
+pub(super) fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
     let svd = a.svd(true, true);
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
         return UnitQuaternion::identity();

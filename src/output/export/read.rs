@@ -259,13 +259,109 @@ impl Track {
 /// targets move rigidly by their TRS channels; nodes with morph targets
 /// deform. Ground and wind glyphs come from leafmagic's scene `extras`.
 pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip, ExportError> {
+    read_gltf(bytes, name, None, Grid::From0(fps))
+}
+
+/// A clip from the bytes of a glTF file (`.glb`, or `.gltf` whose buffers
+/// are data URIs or files in `dir`), sampled at its own keys: from the
+/// first key to the last, one frame per shortest key interval (see
+/// `Grid::Keys`). What a fall is read from ([`super::fall`]).
+pub fn read_gltf_keys(bytes: &[u8], name: &str, dir: Option<&Path>) -> Result<Clip, ExportError> {
+    read_gltf(bytes, name, dir, Grid::Keys)
+}
+
+/// Where a clip read from glTF is sampled.
+#[derive(Clone, Copy, Debug)]
+enum Grid {
+    /// From t = 0 to the last key at this rate (default: the file's own if
+    /// leafmagic wrote it, else [`DEFAULT_FPS`]): what players show.
+    From0(Option<f64>),
+    /// From the first key to the last at the keys' own rate (one frame per
+    /// shortest key interval): what a fall's classification reads, with no
+    /// made-up hold before the first key (Blender's keys start at frame 1,
+    /// 1/24 s) and no interpolation between keys it does not need.
+    Keys,
+}
+
+/// Highest rate [`Grid::Keys`] samples at, Hz: keys closer than this (a
+/// duplicated key, a bake at a solver's substep) are not worth a frame each;
+/// ten times a 98 fps camera, twice the 240 Hz `drop` records at, still
+/// resolves every fall leafmagic classifies.
+pub const MAX_KEY_RATE_HZ: f64 = 1000.0;
+
+/// The rate of keys `times` (each channel's, seconds): one over the
+/// shortest interval between consecutive keys of any channel, at most
+/// [`MAX_KEY_RATE_HZ`]; keys stored as f32 are rounded to the microsecond
+/// first, so that 1/24 s read back from f32 gives 24 Hz.
+fn key_rate(channels: &[Vec<f32>]) -> Option<f64> {
+    let shortest = channels
+        .iter()
+        .flat_map(|t| t.windows(2).map(|w| w[1] as f64 - w[0] as f64))
+        .filter(|d| *d > 0.0)
+        .fold(f64::INFINITY, f64::min);
+    if !shortest.is_finite() {
+        return None;
+    }
+    let rate = (1.0 / shortest).min(MAX_KEY_RATE_HZ);
+    // f32 keeps 7 digits: 1/24 s reads back as 0.041666668, so the rate
+    // from its reciprocal is 23.99999..; round to the nearest 1e-3 Hz.
+    Some((rate * 1000.0).round() / 1000.0)
+}
+
+/// The bytes of each buffer of a glTF document: the binary chunk of a
+/// `.glb`, a `data:` URI (base64), or a file beside the `.gltf` (`dir`).
+fn buffer_data(gltf: &gltf::Gltf, dir: Option<&Path>) -> Result<Vec<Option<Vec<u8>>>, ExportError> {
+    use base64::Engine as _;
+    gltf.document
+        .buffers()
+        .map(|b| match b.source() {
+            gltf::buffer::Source::Bin => Ok(gltf.blob.clone()),
+            gltf::buffer::Source::Uri(uri) => {
+                if let Some(rest) = uri.strip_prefix("data:") {
+                    let (_, data) = rest.split_once(";base64,").ok_or_else(|| {
+                        ExportError::Data(format!(
+                            "buffer {}: a data URI that is not base64",
+                            b.index()
+                        ))
+                    })?;
+                    return base64::engine::general_purpose::STANDARD
+                        .decode(data)
+                        .map(Some)
+                        .map_err(|e| {
+                            ExportError::Data(format!(
+                                "buffer {}: its base64 data URI does not decode: {e}",
+                                b.index()
+                            ))
+                        });
+                }
+                let Some(dir) = dir else {
+                    return Ok(None);
+                };
+                let path = dir.join(uri);
+                std::fs::read(&path).map(Some).map_err(|e| {
+                    ExportError::Data(format!(
+                        "buffer {} is the file `{uri}`, which cannot be read ({}: {e})",
+                        b.index(),
+                        path.display()
+                    ))
+                })
+            }
+        })
+        .collect()
+}
+
+/// A clip from the bytes of a glTF file (binary, or JSON whose buffers are
+/// data URIs or files in `dir`), sampled on `grid`.
+fn read_gltf(
+    bytes: &[u8],
+    name: &str,
+    dir: Option<&Path>,
+    grid: Grid,
+) -> Result<Clip, ExportError> {
     let gltf = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| ExportError::Data(format!("not a valid glTF binary: {e}")))?;
-    let blob = gltf.blob.as_deref();
-    let get = |b: gltf::Buffer<'_>| match b.source() {
-        gltf::buffer::Source::Bin => blob,
-        gltf::buffer::Source::Uri(_) => None,
-    };
+        .map_err(|e| ExportError::Data(format!("not a valid glTF file: {e}")))?;
+    let buffers = buffer_data(&gltf, dir)?;
+    let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).and_then(|d| d.as_deref());
     let doc = &gltf.document;
     let scene = doc
         .default_scene()
@@ -277,10 +373,11 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
         .and_then(|r| serde_json::from_str::<SceneExtras>(r.get()).ok())
         .and_then(|e| e.leafmagic)
         .unwrap_or_default();
-    let fps = fps.or(extras.fps).unwrap_or(DEFAULT_FPS);
     // Tracks per (node, property).
     let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
     let mut t_end = 0.0f64;
+    let mut t_start = f64::INFINITY;
+    let mut key_times: Vec<Vec<f32>> = Vec::new();
     for anim in doc.animations() {
         for ch in anim.channels() {
             let reader = ch.reader(get);
@@ -312,9 +409,11 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
             } else {
                 values
             };
-            if let Some(&last) = times.last() {
+            if let (Some(&first), Some(&last)) = (times.first(), times.last()) {
+                t_start = t_start.min(first as f64);
                 t_end = t_end.max(last as f64);
             }
+            key_times.push(times.clone());
             tracks.push((
                 ch.target().node().index(),
                 ch.target().property(),
@@ -327,7 +426,15 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
             ));
         }
     }
-    let frames = frame_count(0.0, t_end, fps);
+    let (start, fps) = match grid {
+        Grid::From0(fps) => (0.0, fps.or(extras.fps).unwrap_or(DEFAULT_FPS)),
+        Grid::Keys => match key_rate(&key_times) {
+            Some(rate) => (t_start, rate),
+            // No animation, or one key: a single frame.
+            None => (t_start.min(t_end).max(0.0), DEFAULT_FPS),
+        },
+    };
+    let frames = frame_count(start, t_end, fps);
     let mut objects = Vec::new();
     for node in scene.nodes() {
         let Some(mesh) = node.mesh() else { continue };
@@ -389,7 +496,7 @@ pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip
         let mut scale = Vec::with_capacity(frames);
         let mut weights = Vec::with_capacity(frames);
         for k in 0..frames {
-            let t = k as f64 / fps;
+            let t = start + k as f64 / fps;
             let tr = track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
             let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
             let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));

@@ -1,0 +1,458 @@
+//! Falls read from animation files (glTF) as clients send them: Blender's
+//! own exports of the six MuJoCo falls (`tests/data/blender/`, made by its
+//! `make.py` with Blender's Python module), and leafmagic's own exports.
+//! The oracle is the fall the file was made from: the same keys, the same
+//! normal, the same class.
+
+use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::LeafSpec;
+use leafmagic::leaf::plates::{PlateShape, plate};
+use leafmagic::motion::classify::classify;
+use leafmagic::motion::trajectory::Trajectory;
+use leafmagic::output::export::{self, Clip, fall::read_fall, glb};
+use leafmagic::sim::drop::{DropParams, drop_leaf};
+use nalgebra::Vector3;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+type V3 = Vector3<f64>;
+
+const FALLS: [&str; 6] = [
+    "steady_fall",
+    "glide_ballast",
+    "wobble_card",
+    "flutter_strip",
+    "tumble_thick",
+    "tumble_cardscoef",
+];
+
+fn data(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(rel)
+}
+
+fn leafmagic() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("leafmagic-anim-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// How far apart two positions may be after a round through f32 (what
+/// glTF stores): a few units in the last place of the larger.
+fn f32_close(a: &V3, b: &V3) -> bool {
+    (a - b).norm() <= 4.0 * f32::EPSILON as f64 * a.norm().max(b.norm()) + 1e-7
+}
+
+/// Blender keyed every tenth row of each 240 Hz MuJoCo fall on its 24 fps
+/// frames, 2 m up, and exported glTF as it does by default (y up, keys from
+/// frame 1 at 1/24 s, the card's node carrying the pose). Read back, each
+/// key is the MuJoCo row it came from (to f32), the card's normal and long
+/// axis are MuJoCo's body z and x (up to sign: a mesh does not say which
+/// face is the top), and the class and regime are those of the 240 Hz CSV.
+#[test]
+fn blender_bakes_read_as_the_falls_they_were_made_from() {
+    for name in FALLS {
+        let fall = read_fall(&data(&format!("blender/{name}.glb")), None).unwrap();
+        let csv = Trajectory::read_csv(&data(&format!("mujoco-falls/{name}.csv"))).unwrap();
+        assert_eq!(fall.object, "card", "{name}");
+        assert_eq!(fall.rate_hz, 24.0, "{name}");
+        let t = &fall.trajectory;
+        assert_eq!(t.len(), 241, "{name}: a key per Blender frame");
+        let lift = V3::new(0.0, 0.0, 2.0);
+        for k in 0..t.len() {
+            assert!((t.time[k] - k as f64 / 24.0).abs() < 1e-12);
+            let want = csv.position[10 * k] + lift;
+            assert!(
+                f32_close(&t.position[k], &want),
+                "{name} key {k}: {} against {want}",
+                t.position[k]
+            );
+            for axis in [V3::z(), V3::x()] {
+                let got = t.orientation[k] * axis;
+                let want = csv.orientation[10 * k] * axis;
+                // Blender keys and evaluates its curves in f32: 1e-5 rad.
+                assert!(
+                    got.cross(&want).norm() < 1e-4 && got.dot(&want).abs() > 0.99,
+                    "{name} key {k}: body axis {axis:?} {got} against {want}"
+                );
+            }
+        }
+        let a = classify(t, 0.04);
+        let b = classify(&csv, 0.04);
+        assert_eq!(
+            (a.class, a.regime),
+            (b.class, b.regime),
+            "{name}: {:?} | {:?}",
+            a.reason,
+            b.reason
+        );
+    }
+}
+
+/// What a modeller may do differently gives the same fall: the card
+/// modelled standing in its local xz-plane (the node's frame is not the
+/// card's), a static ground beside it (left out), the file written as
+/// .gltf + .bin.
+#[test]
+fn the_modeller_s_frame_a_static_ground_and_separate_buffers_change_nothing() {
+    let base = read_fall(&data("blender/tumble_thick.glb"), None).unwrap();
+    for file in [
+        "blender/tumble_thick_modelled_upright.glb",
+        "blender/tumble_thick_with_ground.glb",
+        "blender/tumble_thick_separate.gltf",
+    ] {
+        let fall = read_fall(&data(file), None).unwrap();
+        assert_eq!(fall.trajectory.len(), base.trajectory.len(), "{file}");
+        assert_eq!(
+            fall.still,
+            if file.contains("ground") {
+                vec!["ground".to_string()]
+            } else {
+                Vec::<String>::new()
+            }
+        );
+        for k in 0..fall.trajectory.len() {
+            assert!(
+                f32_close(&fall.trajectory.position[k], &base.trajectory.position[k]),
+                "{file} key {k}"
+            );
+            let n = fall.trajectory.orientation[k] * V3::z();
+            let m = base.trajectory.orientation[k] * V3::z();
+            assert!(
+                n.cross(&m).norm() < 1e-5,
+                "{file} key {k}: normal {n} against {m}"
+            );
+        }
+    }
+}
+
+/// The same fall, in the CLI: `classify --json` of the .glb names the
+/// object and the chord it took from the mesh (the 4 × 1 cm card's
+/// diagonal), with the class of the CSV; `compare` of the two is close.
+#[test]
+fn the_cli_reads_a_glb_as_it_reads_a_csv() {
+    let glb = data("blender/tumble_thick.glb");
+    let o = leafmagic()
+        .args(["classify", "--json"])
+        .arg(&glb)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["class"], "spinner");
+    assert_eq!(v["regime"], "tumble");
+    assert_eq!(v["object"], "card");
+    let chord = v["size_m"].as_f64().unwrap();
+    assert!((chord - 0.04f64.hypot(0.01)).abs() < 1e-7, "{chord}");
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("241 keys at 24 Hz"), "{stderr}");
+    let o = leafmagic()
+        .args(["compare", "--json", "--size", "0.04"])
+        .arg(&glb)
+        .arg(data("mujoco-falls/tumble_thick.csv"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["same_class"], true);
+    let d = v["distance"].as_f64().unwrap();
+    assert!(d < 0.1, "a 24 fps bake of a fall is {d} from the fall");
+}
+
+/// leafmagic's own exports read back: a rigid plate (node poses) to f32 of
+/// the drop's 240 Hz record at the exported frames, its centre being the
+/// uniform plate's centroid; prototype A (a mass-spring leaf, morph
+/// targets) with the class of its drop.
+#[test]
+fn leafmagic_s_own_exports_read_back_as_their_drops() {
+    let dir = scratch("own");
+    let fps = 30.0;
+    // A 2 × 6 cm strip let go at a tilt: it turns, so the frame matters.
+    let model = plate(PlateShape::Rectangle, 0.02, 3.0, 0.07, AeroSpec::unsteady())
+        .unwrap()
+        .model()
+        .unwrap();
+    let tilt = [30.0, 10.0];
+    let object = export::drop_clip_released("strip", "", &model, 4.0, fps, tilt).unwrap();
+    let clip = Clip {
+        name: "strip".into(),
+        fps,
+        frames: 121,
+        objects: vec![object],
+        ground: None,
+        wind: vec![],
+    };
+    let path = dir.join("strip.glb");
+    glb::write_glb(&clip, &path).unwrap();
+    let fall = read_fall(&path, None).unwrap();
+    let drop = drop_leaf(
+        &model,
+        &DropParams {
+            seconds: 4.0,
+            tilt_deg: tilt,
+            ..DropParams::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(fall.rate_hz, fps);
+    for k in 0..fall.trajectory.len() {
+        let want = drop.trajectory.position[8 * k];
+        assert!(f32_close(&fall.trajectory.position[k], &want), "frame {k}");
+        let n = fall.trajectory.orientation[k] * V3::z();
+        let m = drop.trajectory.orientation[8 * k] * V3::z();
+        assert!(
+            n.cross(&m).norm() < 1e-5,
+            "frame {k}: normal {n} against {m}"
+        );
+        let x = fall.trajectory.orientation[k] * V3::x();
+        let l = drop.trajectory.orientation[8 * k] * V3::x();
+        assert!(
+            x.cross(&l).norm() < 1e-5,
+            "frame {k}: long axis {x} against {l}"
+        );
+    }
+    let a = classify(&fall.trajectory, fall.chord);
+    let b = classify(&drop.trajectory, model.chord());
+    assert_eq!(
+        (a.class, a.regime),
+        (b.class, b.regime),
+        "{:?} | {:?}",
+        a.reason,
+        b.reason
+    );
+    // The same clip as leafmagic's USD (an Xform per object, time-sampled
+    // translate and orient, the mesh's points in its frame): the same fall.
+    let usd_path = dir.join("strip.usda");
+    export::usd::write_usd(&clip, &usd_path).unwrap();
+    let from_usd = read_fall(&usd_path, None).unwrap();
+    assert_eq!(from_usd.object, "strip");
+    assert_eq!(from_usd.trajectory.len(), fall.trajectory.len());
+    for k in 0..fall.trajectory.len() {
+        assert!(
+            f32_close(
+                &from_usd.trajectory.position[k],
+                &fall.trajectory.position[k]
+            ),
+            "frame {k}"
+        );
+        let n = from_usd.trajectory.orientation[k] * V3::z();
+        let m = fall.trajectory.orientation[k] * V3::z();
+        assert!(
+            n.cross(&m).norm() < 1e-5,
+            "frame {k}: normal {n} against {m}"
+        );
+    }
+
+    let (_, leaf) = LeafSpec::load_with_model("a").unwrap();
+    let object = export::drop_clip("leaf-a", "", &leaf, 10.0, fps).unwrap();
+    let clip = Clip {
+        name: "a".into(),
+        fps,
+        frames: 301,
+        objects: vec![object],
+        ground: None,
+        wind: vec![],
+    };
+    let path = dir.join("a.glb");
+    glb::write_glb(&clip, &path).unwrap();
+    let fall = read_fall(&path, None).unwrap();
+    let drop = drop_leaf(&leaf, &DropParams::default()).unwrap();
+    let a = classify(&fall.trajectory, fall.chord);
+    let b = classify(&drop.trajectory, leaf.chord());
+    assert_eq!(
+        (a.class, a.regime),
+        (b.class, b.regime),
+        "{:?} | {:?}",
+        a.reason,
+        b.reason
+    );
+    let (da, db) = (
+        a.features.mean_descent_speed_m_s,
+        b.features.mean_descent_speed_m_s,
+    );
+    assert!((da / db - 1.0).abs() < 0.02, "descent {da} against {db}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Bad or ambiguous animation files are refused by name, with what to do.
+#[test]
+fn ambiguous_or_broken_animation_files_are_refused_clearly() {
+    let dir = scratch("bad");
+    let (_, leaf) = LeafSpec::load_with_model("a").unwrap();
+    let a = export::drop_clip("leaf-a", "", &leaf, 1.0, 30.0).unwrap();
+    let mut b = a.clone();
+    b.name = "leaf-b".into();
+    b.translate(V3::new(0.2, 0.0, 0.0));
+    let two = Clip {
+        name: "two".into(),
+        fps: 30.0,
+        frames: 31,
+        objects: vec![a, b],
+        ground: None,
+        wind: vec![],
+    };
+    let path = dir.join("two.glb");
+    glb::write_glb(&two, &path).unwrap();
+    let run = |args: &[&str]| {
+        let o = leafmagic().args(args).output().unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let p = path.to_str().unwrap();
+    let (ok, err) = run(&["classify", p]);
+    assert!(!ok);
+    assert!(
+        err.contains(p)
+            && err.contains("`leaf-a`")
+            && err.contains("`leaf-b`")
+            && err.contains("--object"),
+        "{err}"
+    );
+    let (ok, err) = run(&["classify", p, "--object", "leaf-b"]);
+    assert!(ok, "{err}");
+    let (ok, err) = run(&["classify", p, "--object", "leaf-c"]);
+    assert!(
+        !ok && err.contains("--object leaf-c") && err.contains("`leaf-a`"),
+        "{err}"
+    );
+    let csv = data("mujoco-falls/tumble_thick.csv");
+    let (ok, err) = run(&["classify", csv.to_str().unwrap(), "--object", "card"]);
+    assert!(!ok && err.contains("CSV record"), "{err}");
+    // Not glTF at all.
+    let junk = dir.join("junk.glb");
+    std::fs::write(&junk, b"t,x,y,z\n0,0,0,0\n").unwrap();
+    let (ok, err) = run(&["classify", junk.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("junk.glb") && err.contains("not a valid glTF"),
+        "{err}"
+    );
+    // A .gltf whose .bin did not come with it.
+    let gltf = dir.join("lonely.gltf");
+    std::fs::copy(data("blender/tumble_thick_separate.gltf"), &gltf).unwrap();
+    let (ok, err) = run(&["classify", gltf.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("lonely.gltf") && err.contains("tumble_thick_separate.bin"),
+        "{err}"
+    );
+    // USD's binary crate format, and a composed USD stage.
+    let crate_file = dir.join("bake.usdc");
+    std::fs::write(&crate_file, b"PXR-USDC\x00\x00\x00\x00").unwrap();
+    let (ok, err) = run(&["classify", crate_file.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("bake.usdc") && err.contains("usdcat"),
+        "{err}"
+    );
+    let composed = dir.join("shot.usda");
+    std::fs::write(
+        &composed,
+        "#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n",
+    )
+    .unwrap();
+    let (ok, err) = run(&["classify", composed.to_str().unwrap()]);
+    assert!(
+        !ok && err.contains("shot.usda") && err.contains("subLayers"),
+        "{err}"
+    );
+    // Nothing moves: every frame the first.
+    let mut held = two.objects[0].clone();
+    if let export::Motion::Deforming { frames } = &mut held.motion {
+        let first = frames[0].clone();
+        frames.iter_mut().for_each(|f| *f = first.clone());
+    }
+    let still = Clip {
+        objects: vec![held],
+        ..two
+    };
+    let path = dir.join("still.glb");
+    glb::write_glb(&still, &path).unwrap();
+    let (ok, err) = run(&["classify", path.to_str().unwrap()]);
+    assert!(!ok && err.contains("nothing in it moves"), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `breed --like` takes a glTF example: described at its mesh's chord
+/// (not the prototype's), its target the .glb's class, and the run keeps
+/// the fall read from it as its example.
+#[test]
+fn breed_like_takes_a_gltf_example() {
+    let dir = scratch("like");
+    let glb = data("blender/tumble_thick.glb");
+    let run = dir.join("run");
+    let o = leafmagic()
+        .args(["breed", "--create-only", "--like"])
+        .arg(&glb)
+        .arg("--out")
+        .arg(&run)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let toml: toml::Table =
+        toml::from_str(&std::fs::read_to_string(run.join("run.toml")).unwrap()).unwrap();
+    let like = &toml["settings"]["like"];
+    assert_eq!(like["class"].as_str(), Some("spinner"), "{like}");
+    let size = like["size_m"].as_float().unwrap();
+    assert!((size - 0.04f64.hypot(0.01)).abs() < 1e-7, "{size}");
+    let kept = Trajectory::read_csv(&run.join("example.csv")).unwrap();
+    let read = read_fall(&glb, None).unwrap().trajectory;
+    assert_eq!(kept.time, read.time);
+    assert_eq!(kept.position, read.position);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Blender's USD export of the same falls (`NAME.usda`: an Xform with
+/// `translate`, Euler `rotateXYZ` in degrees and `scale` time-sampled per
+/// frame, the card a Mesh under it) reads as its glTF export does: every
+/// vertex of every key within f32 of the .glb's, so the same fall.
+#[test]
+fn blender_usd_reads_as_its_gltf() {
+    for name in FALLS {
+        let usd = export::read_usda_keys(
+            &std::fs::read_to_string(data(&format!("blender/{name}.usda"))).unwrap(),
+            name,
+        )
+        .unwrap();
+        let glb = export::read_gltf_keys(
+            &std::fs::read(data(&format!("blender/{name}.glb"))).unwrap(),
+            name,
+            None,
+        )
+        .unwrap();
+        assert_eq!(usd.fps, 24.0);
+        assert_eq!(usd.frames, glb.frames, "{name}");
+        let (u, g) = (&usd.objects[0], &glb.objects[0]);
+        assert_eq!(u.name, "card");
+        for k in 0..usd.frames {
+            let (pu, pg) = (u.positions(k), g.positions(k));
+            // Same corners, maybe in another order.
+            for p in &pu {
+                let nearest = pg
+                    .iter()
+                    .map(|q| (p - q).norm())
+                    .fold(f64::INFINITY, f64::min);
+                assert!(
+                    nearest < 1e-5,
+                    "{name} key {k}: {p} is {nearest} m from the glb's corners"
+                );
+            }
+        }
+        let a = read_fall(&data(&format!("blender/{name}.usda")), None).unwrap();
+        let b = read_fall(&data(&format!("blender/{name}.glb")), None).unwrap();
+        let (ca, cb) = (classify(&a.trajectory, 0.04), classify(&b.trajectory, 0.04));
+        assert_eq!(
+            (ca.class, ca.regime),
+            (cb.class, cb.regime),
+            "{name}: {:?} | {:?}",
+            ca.reason,
+            cb.reason
+        );
+    }
+}
