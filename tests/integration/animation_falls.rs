@@ -7,7 +7,7 @@
 use leafmagic::leaf::AeroSpec;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::leaf::plates::{PlateShape, plate};
-use leafmagic::motion::classify::classify;
+use leafmagic::motion::classify::{Classification, classify};
 use leafmagic::motion::trajectory::Trajectory;
 use leafmagic::output::export::{self, Clip, fall::read_fall, glb};
 use leafmagic::sim::drop::{DropParams, drop_leaf};
@@ -18,14 +18,8 @@ use std::process::Command;
 
 type V3 = Vector3<f64>;
 
-const FALLS: [&str; 6] = [
-    "steady_fall",
-    "glide_ballast",
-    "wobble_card",
-    "flutter_strip",
-    "tumble_thick",
-    "tumble_cardscoef",
-];
+/// The MuJoCo falls Blender baked (one file each).
+use crate::corpus::MUJOCO as FALLS;
 
 fn data(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -42,6 +36,48 @@ fn scratch(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir
+}
+
+/// A one-object clip at `fps` (as many frames as the object has), written
+/// as `dir/file` (.glb or .usda by its extension).
+fn written(dir: &Path, file: &str, object: export::ClipObject, fps: f64) -> (Clip, PathBuf) {
+    let frames = match &object.motion {
+        export::Motion::Rigid { translation, .. } => translation.len(),
+        export::Motion::Deforming { frames } => frames.len(),
+    };
+    let clip = Clip {
+        name: file.to_string(),
+        fps,
+        frames,
+        objects: vec![object],
+        ground: None,
+        wind: vec![],
+    };
+    let path = dir.join(file);
+    if file.ends_with(".usda") {
+        export::usd::write_usd(&clip, &path).unwrap();
+    } else {
+        glb::write_glb(&clip, &path).unwrap();
+    }
+    (clip, path)
+}
+
+/// Classifies two falls (each with its chord) and asserts the same class
+/// and regime; returns both classifications.
+fn same_class(
+    what: &str,
+    (a, size_a): (&Trajectory, f64),
+    (b, size_b): (&Trajectory, f64),
+) -> (Classification, Classification) {
+    let (ca, cb) = (classify(a, size_a), classify(b, size_b));
+    assert_eq!(
+        (ca.class, ca.regime),
+        (cb.class, cb.regime),
+        "{what}: {:?} | {:?}",
+        ca.reason,
+        cb.reason
+    );
+    (ca, cb)
 }
 
 /// How far apart two positions may be after a round through f32 (what
@@ -84,15 +120,7 @@ fn blender_bakes_read_as_the_falls_they_were_made_from() {
                 );
             }
         }
-        let a = classify(t, 0.04);
-        let b = classify(&csv, 0.04);
-        assert_eq!(
-            (a.class, a.regime),
-            (b.class, b.regime),
-            "{name}: {:?} | {:?}",
-            a.reason,
-            b.reason
-        );
+        same_class(name, (t, 0.04), (&csv, 0.04));
     }
 }
 
@@ -181,16 +209,7 @@ fn leafmagic_s_own_exports_read_back_as_their_drops() {
         .unwrap();
     let tilt = [30.0, 10.0];
     let object = export::drop_clip_released("strip", "", &model, 4.0, fps, tilt).unwrap();
-    let clip = Clip {
-        name: "strip".into(),
-        fps,
-        frames: 121,
-        objects: vec![object],
-        ground: None,
-        wind: vec![],
-    };
-    let path = dir.join("strip.glb");
-    glb::write_glb(&clip, &path).unwrap();
+    let (clip, path) = written(&dir, "strip.glb", object, fps);
     let fall = read_fall(&path, None).unwrap();
     let drop = drop_leaf(
         &model,
@@ -218,19 +237,14 @@ fn leafmagic_s_own_exports_read_back_as_their_drops() {
             "frame {k}: long axis {x} against {l}"
         );
     }
-    let a = classify(&fall.trajectory, fall.chord);
-    let b = classify(&drop.trajectory, model.chord());
-    assert_eq!(
-        (a.class, a.regime),
-        (b.class, b.regime),
-        "{:?} | {:?}",
-        a.reason,
-        b.reason
+    same_class(
+        "strip",
+        (&fall.trajectory, fall.chord),
+        (&drop.trajectory, model.chord()),
     );
     // The same clip as leafmagic's USD (an Xform per object, time-sampled
     // translate and orient, the mesh's points in its frame): the same fall.
-    let usd_path = dir.join("strip.usda");
-    export::usd::write_usd(&clip, &usd_path).unwrap();
+    let (_, usd_path) = written(&dir, "strip.usda", clip.objects[0].clone(), fps);
     let from_usd = read_fall(&usd_path, None).unwrap();
     assert_eq!(from_usd.object, "strip");
     assert_eq!(from_usd.trajectory.len(), fall.trajectory.len());
@@ -252,26 +266,13 @@ fn leafmagic_s_own_exports_read_back_as_their_drops() {
 
     let (_, leaf) = LeafSpec::load_with_model("a").unwrap();
     let object = export::drop_clip("leaf-a", "", &leaf, 10.0, fps).unwrap();
-    let clip = Clip {
-        name: "a".into(),
-        fps,
-        frames: 301,
-        objects: vec![object],
-        ground: None,
-        wind: vec![],
-    };
-    let path = dir.join("a.glb");
-    glb::write_glb(&clip, &path).unwrap();
+    let (_, path) = written(&dir, "a.glb", object, fps);
     let fall = read_fall(&path, None).unwrap();
     let drop = drop_leaf(&leaf, &DropParams::default()).unwrap();
-    let a = classify(&fall.trajectory, fall.chord);
-    let b = classify(&drop.trajectory, leaf.chord());
-    assert_eq!(
-        (a.class, a.regime),
-        (b.class, b.regime),
-        "{:?} | {:?}",
-        a.reason,
-        b.reason
+    let (a, b) = same_class(
+        "prototype A",
+        (&fall.trajectory, fall.chord),
+        (&drop.trajectory, leaf.chord()),
     );
     let (da, db) = (
         a.features.mean_descent_speed_m_s,
@@ -327,41 +328,33 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     let csv = data("mujoco-falls/tumble_thick.csv");
     let (ok, err) = run(&["classify", csv.to_str().unwrap(), "--object", "card"]);
     assert!(!ok && err.contains("CSV record"), "{err}");
-    // Not glTF at all.
-    let junk = dir.join("junk.glb");
-    std::fs::write(&junk, b"t,x,y,z\n0,0,0,0\n").unwrap();
-    let (ok, err) = run(&["classify", junk.to_str().unwrap()]);
-    assert!(
-        !ok && err.contains("junk.glb") && err.contains("not a valid glTF"),
-        "{err}"
-    );
-    // A .gltf whose .bin did not come with it.
-    let gltf = dir.join("lonely.gltf");
-    std::fs::copy(data("blender/tumble_thick_separate.gltf"), &gltf).unwrap();
-    let (ok, err) = run(&["classify", gltf.to_str().unwrap()]);
-    assert!(
-        !ok && err.contains("lonely.gltf") && err.contains("tumble_thick_separate.bin"),
-        "{err}"
-    );
-    // USD's binary crate format, and a composed USD stage.
-    let crate_file = dir.join("bake.usdc");
-    std::fs::write(&crate_file, b"PXR-USDC\x00\x00\x00\x00").unwrap();
-    let (ok, err) = run(&["classify", crate_file.to_str().unwrap()]);
-    assert!(
-        !ok && err.contains("bake.usdc") && err.contains("usdcat"),
-        "{err}"
-    );
-    let composed = dir.join("shot.usda");
-    std::fs::write(
-        &composed,
-        "#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n",
-    )
-    .unwrap();
-    let (ok, err) = run(&["classify", composed.to_str().unwrap()]);
-    assert!(
-        !ok && err.contains("shot.usda") && err.contains("subLayers"),
-        "{err}"
-    );
+    // Files that are not what their name says, or need what is not here:
+    // (file, bytes, what the error must say besides the file's name).
+    let cases: [(&str, Vec<u8>, &str); 4] = [
+        (
+            "junk.glb",
+            b"t,x,y,z\n0,0,0,0\n".to_vec(),
+            "not a valid glTF",
+        ),
+        (
+            // A .gltf whose .bin did not come with it.
+            "lonely.gltf",
+            std::fs::read(data("blender/tumble_thick_separate.gltf")).unwrap(),
+            "tumble_thick_separate.bin",
+        ),
+        ("bake.usdc", b"PXR-USDC\x00\x00\x00\x00".to_vec(), "usdcat"),
+        (
+            "shot.usda",
+            b"#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n".to_vec(),
+            "subLayers",
+        ),
+    ];
+    for (file, bytes, want) in cases {
+        let path = dir.join(file);
+        std::fs::write(&path, bytes).unwrap();
+        let (ok, err) = run(&["classify", path.to_str().unwrap()]);
+        assert!(!ok && err.contains(file) && err.contains(want), "{err}");
+    }
     // Nothing moves: every frame the first.
     let mut held = two.objects[0].clone();
     if let export::Motion::Deforming { frames } = &mut held.motion {
@@ -446,13 +439,6 @@ fn blender_usd_reads_as_its_gltf() {
         }
         let a = read_fall(&data(&format!("blender/{name}.usda")), None).unwrap();
         let b = read_fall(&data(&format!("blender/{name}.glb")), None).unwrap();
-        let (ca, cb) = (classify(&a.trajectory, 0.04), classify(&b.trajectory, 0.04));
-        assert_eq!(
-            (ca.class, ca.regime),
-            (cb.class, cb.regime),
-            "{name}: {:?} | {:?}",
-            ca.reason,
-            cb.reason
-        );
+        same_class(name, (&a.trajectory, 0.04), (&b.trajectory, 0.04));
     }
 }
