@@ -356,9 +356,9 @@ impl Run {
         let created_dir = !dir.exists();
         // The example of a --like run is copied in, so the run keeps what it
         // bred toward even if the original moves.
-        let example = match &settings.like {
-            Some(_) if given_example.is_some() => given_example,
-            Some(t) if t.source != "features" => {
+        let example = match (given_example, &settings.like) {
+            (Some(example), _) => Some(example),
+            (None, Some(t)) if t.source != "features" => {
                 let path = Path::new(&t.source);
                 Some(Trajectory::read_csv(path).map_err(|e| io_err(path, e))?)
             }

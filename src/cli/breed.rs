@@ -356,13 +356,18 @@ fn choose_prototype(
     };
     let (name, why) = breed::auto::choose(class, regime);
     eprintln!("leafmagic: --prototype auto: {name} ({why})");
-    let sized = args.size.is_some() || example.is_some_and(|e| e.chord.is_some());
-    let like = if name == "a" || sized {
+    let like = if name == "a" || given_size(args, example).is_some() {
         first
     } else {
         motion_target(args, name, example)?
     };
     Ok((name.to_string(), like))
+}
+
+/// The example's chord when something gives it: `--size`, else an
+/// animation's own mesh; else it is described at the prototype's.
+fn given_size(args: &BreedArgs, example: Option<&input::Record>) -> Option<f64> {
+    args.size.or(example.and_then(|e| e.chord))
 }
 
 /// The motion target of `breed --like` / `--target-features`, checked
@@ -375,13 +380,11 @@ fn motion_target(
     example: Option<&input::Record>,
 ) -> Result<Option<MotionTarget>> {
     if let (Some(path), Some(record)) = (&args.like, example) {
-        let size = match args.size.or(record.chord) {
+        input::check_size(args.size)?;
+        let size = match given_size(args, example) {
             Some(s) => s,
             None => LeafSpec::load_with_model(prototype)?.1.chord(),
         };
-        if !(size > 0.0 && size.is_finite()) {
-            bail!("--size must be a positive number of metres, got {size}");
-        }
         let c = classify::classify(&record.trajectory, size);
         let described = input::describe(path, &c)?;
         return Ok(Some(MotionTarget::like(

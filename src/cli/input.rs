@@ -31,21 +31,6 @@ pub fn problem(arg: &str) -> Result<(String, Model, State)> {
 /// given, m (an animation file gives its mesh's own).
 pub const DEFAULT_SIZE_M: f64 = 0.05;
 
-/// Whether `path` names an animation file (glTF: `.glb`, `.gltf`; USD:
-/// `.usda`, `.usd`, `.usdc`, `.usdz`; any case), read as one rather than as
-/// a CSV record.
-pub fn is_animation(path: &Path) -> bool {
-    path.extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .is_some_and(|e| {
-            matches!(
-                e.as_str(),
-                "glb" | "gltf" | "usda" | "usd" | "usdc" | "usdz"
-            )
-        })
-}
-
 /// A recorded fall as read: the record, what reading it noted, and what
 /// an animation file told of it.
 pub struct Record {
@@ -79,7 +64,7 @@ pub struct Fall {
 }
 
 /// Checks a `--size` given on the command line.
-fn check_size(size: Option<f64>) -> Result<()> {
+pub fn check_size(size: Option<f64>) -> Result<()> {
     match size {
         Some(s) if !(s > 0.0 && s.is_finite()) => {
             bail!("--size must be a positive number of metres, got {s}")
@@ -93,7 +78,7 @@ fn check_size(size: Option<f64>) -> Result<()> {
 /// names the one to read where several move. What the reading noticed
 /// goes to stderr.
 pub fn read_record(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Record> {
-    let record = if is_animation(path) {
+    let record = if export::fall::AnimationFormat::of(path).is_some() {
         read_animation(path, up, object)?
     } else {
         if let Some(object) = object {

@@ -10,37 +10,19 @@ use serde_json::json;
 /// `classify`: names the motion of a recorded fall.
 pub fn classify(args: FallArgs) -> Result<()> {
     let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
-    let (traj, notes, c) = (
-        &fall.record.trajectory,
-        &fall.record.notes,
-        &fall.classification,
-    );
+    let (traj, c) = (&fall.record.trajectory, &fall.classification);
     if args.json {
         // The classification's own fields in their order, then the notes.
         #[derive(serde::Serialize)]
         struct Noted<'a> {
             #[serde(flatten)]
             classification: &'a leafmagic::motion::classify::Classification,
-            #[serde(skip_serializing_if = "<[String]>::is_empty")]
-            ignored_columns: &'a [String],
-            #[serde(skip_serializing_if = "Option::is_none")]
-            depth_missing: Option<&'a str>,
-            #[serde(skip_serializing_if = "Option::is_none")]
-            lost_rows: Option<usize>,
-            #[serde(skip_serializing_if = "Option::is_none")]
-            object: Option<&'a str>,
-            #[serde(skip_serializing_if = "Option::is_none")]
-            size_m: Option<f64>,
+            #[serde(flatten)]
+            notes: ReadingNotes<'a>,
         }
         let noted = Noted {
             classification: c,
-            ignored_columns: &notes.ignored_columns,
-            depth_missing: notes.depth_missing.as_deref(),
-            lost_rows: notes.lost_rows.map(|l| l.count),
-            // What a glTF file gave that a CSV record's reader does not:
-            // the object read and the chord it was classified with.
-            object: fall.record.object.as_deref(),
-            size_m: fall.record.object.is_some().then_some(fall.size),
+            notes: ReadingNotes::of(&fall),
         };
         println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
@@ -50,6 +32,40 @@ pub fn classify(args: FallArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// What reading a fall noticed, as `classify --json` and `describe --json`
+/// report it beside the classification (each field only where it applies).
+#[derive(serde::Serialize)]
+struct ReadingNotes<'a> {
+    /// Columns of a CSV record that were not read.
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    ignored_columns: &'a [String],
+    /// The horizontal column a one-camera record lacks.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    depth_missing: Option<&'a str>,
+    /// Rows left out for having no position.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    lost_rows: Option<usize>,
+    /// The object read from an animation file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    object: Option<&'a str>,
+    /// The chord an animation file's fall was classified with, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    size_m: Option<f64>,
+}
+
+impl<'a> ReadingNotes<'a> {
+    fn of(fall: &'a input::Fall) -> ReadingNotes<'a> {
+        let notes = &fall.record.notes;
+        ReadingNotes {
+            ignored_columns: &notes.ignored_columns,
+            depth_missing: notes.depth_missing.as_deref(),
+            lost_rows: notes.lost_rows.map(|l| l.count),
+            object: fall.record.object.as_deref(),
+            size_m: fall.record.object.is_some().then_some(fall.size),
+        }
+    }
 }
 
 /// A fall's class, regime and measured descriptors as one JSON object (a
@@ -76,11 +92,7 @@ fn descriptors_json(d: &Descriptors) -> serde_json::Value {
 /// is an answer (with its reason), not an error, as in `classify`.
 pub fn describe(args: FallArgs) -> Result<()> {
     let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
-    let (traj, notes, c) = (
-        &fall.record.trajectory,
-        &fall.record.notes,
-        &fall.classification,
-    );
+    let (traj, c) = (&fall.record.trajectory, &fall.classification);
     let d = Descriptors::of(c).ok();
     if args.json {
         let not_measured: Vec<serde_json::Value> = match &d {
@@ -103,21 +115,13 @@ pub fn describe(args: FallArgs) -> Result<()> {
             "not_measured": not_measured,
             "scales": describe::NAMES.iter().zip(describe::SCALES).map(|(n, s)| ((*n).to_string(), json!(s))).collect::<serde_json::Map<_, _>>(),
         });
-        if !notes.ignored_columns.is_empty() {
-            out["ignored_columns"] = json!(notes.ignored_columns);
-        }
-        if let Some(depth) = &notes.depth_missing {
-            out["depth_missing"] = json!(depth);
-        }
-        if let Some(lost) = &notes.lost_rows {
-            out["lost_rows"] = json!(lost.count);
+        if let serde_json::Value::Object(noted) = serde_json::to_value(ReadingNotes::of(&fall))? {
+            for (key, value) in noted {
+                out[key] = value;
+            }
         }
         if let Some(rest) = &c.at_rest {
             out["at_rest"] = json!(rest);
-        }
-        if let Some(object) = &fall.record.object {
-            out["object"] = json!(object);
-            out["size_m"] = json!(fall.size);
         }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {

@@ -330,7 +330,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     assert!(!ok && err.contains("CSV record"), "{err}");
     // Files that are not what their name says, or need what is not here:
     // (file, bytes, what the error must say besides the file's name).
-    let cases: [(&str, Vec<u8>, &str); 4] = [
+    let cases: [(&str, Vec<u8>, &str); 5] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -343,6 +343,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
             "tumble_thick_separate.bin",
         ),
         ("bake.usdc", b"PXR-USDC\x00\x00\x00\x00".to_vec(), "usdcat"),
+        ("pack.usdz", b"PK\x03\x04\x00\x00".to_vec(), "USDZ package"),
         (
             "shot.usda",
             b"#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n".to_vec(),

@@ -14,9 +14,9 @@
 //!
 //! - each triangle's area is lumped a third to each of its corners, which
 //!   puts the weighted mean of the vertices exactly at the sheet's centroid;
-//! - the body axes are the principal axes of the lumped second moment about
-//!   it: x the direction of largest extent, z of the smallest (the normal of
-//!   a flat sheet), y = z × x;
+//! - the body axes are the principal axes of the triangles' exact second
+//!   moment of area about it: x the direction of largest extent, z of the
+//!   smallest (the normal of a flat sheet), y = z × x;
 //! - a rigid node's fall is its pose applied to that frame; a deforming
 //!   mesh's is the best-fitting rigid motion of its first frame onto each
 //!   frame (area-weighted least squares, solved by SVD: Kabsch 1976).
@@ -25,8 +25,9 @@
 //! path classifier reads. The axes of a square or a disk are arbitrary in
 //! its plane (equal moments); the classifier needs only the normal there.
 //!
-//! The file is sampled at its own keys ([`super::read_gltf_keys`]): from
-//! the first key to the last, at one frame per shortest key interval.
+//! The file is sampled at its own keys ([`super::read_gltf_keys`],
+//! [`super::read_usda_keys`]): from the first key to the last, at one frame
+//! per shortest key interval.
 
 use super::clip::{ClipObject, Motion};
 use super::error::ExportError;
@@ -48,6 +49,29 @@ const MAX_CHORD_VERTICES: usize = 4000;
 /// a prop is left out, float noise in a static key is not motion.
 const MOVING_FRACTION_OF_CHORD: f64 = 1e-6;
 
+/// The animation formats a fall is read from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AnimationFormat {
+    /// glTF 2.0: `.glb`, `.gltf`.
+    Gltf,
+    /// USD: `.usda` (read), `.usd`, `.usdc`, `.usdz` (read if text, else
+    /// refused by name).
+    Usd,
+}
+
+impl AnimationFormat {
+    /// The format `path` names by its extension (any case); `None` for any
+    /// other file (a CSV record).
+    pub fn of(path: &Path) -> Option<AnimationFormat> {
+        let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+        match ext.as_str() {
+            "glb" | "gltf" => Some(AnimationFormat::Gltf),
+            "usda" | "usd" | "usdc" | "usdz" => Some(AnimationFormat::Usd),
+            _ => None,
+        }
+    }
+}
+
 /// The fall of one object of an animation file.
 #[derive(Clone, Debug)]
 pub struct AnimationFall {
@@ -67,18 +91,15 @@ pub struct AnimationFall {
 }
 
 /// Reads the fall of `object` (or of the only object that moves) from a
-/// glTF file. Errors name the file and, when the file holds several moving
+/// glTF or USD file ([`AnimationFormat::of`] its name; glTF if it names
+/// none). Errors name the file and, when the file holds several moving
 /// objects and none is named, list them.
 pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, ExportError> {
     let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
     let name = path.file_stem().map_or("animation".to_string(), |s| {
         s.to_string_lossy().into_owned()
     });
-    let usd = path
-        .extension()
-        .and_then(|e| e.to_str())
-        .is_some_and(|e| e.to_ascii_lowercase().starts_with("usd"));
-    let clip = if usd {
+    let clip = if AnimationFormat::of(path) == Some(AnimationFormat::Usd) {
         let text = String::from_utf8_lossy(&bytes);
         read_usda_keys(&text, &name)
     } else {
@@ -88,22 +109,23 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
         ExportError::Data(reason) => ExportError::input(path, reason),
         e => e,
     })?;
-    let (moving, still): (Vec<&ClipObject>, Vec<&ClipObject>) =
-        clip.objects.iter().partition(|o| moves(o));
+    // Each object's chord, measured once: it sets what counts as moving,
+    // and the chosen one's is the fall's size.
+    let objects = &clip.objects;
+    let chords: Vec<f64> = objects.iter().map(|o| chord(&o.positions(0))).collect();
+    let (moving, still): (Vec<usize>, Vec<usize>) =
+        (0..objects.len()).partition(|&k| moves(&objects[k], chords[k]));
+    let named = |ks: &[usize]| listed(&ks.iter().map(|&k| &objects[k]).collect::<Vec<_>>());
     let chosen = match object {
-        Some(want) => clip
-            .objects
-            .iter()
-            .find(|o| o.name == want)
-            .ok_or_else(|| {
-                ExportError::input(
-                    path,
-                    format!(
-                        "--object {want}: no object of that name; it holds {}",
-                        listed(&clip.objects.iter().collect::<Vec<_>>())
-                    ),
-                )
-            })?,
+        Some(want) => objects.iter().position(|o| o.name == want).ok_or_else(|| {
+            ExportError::input(
+                path,
+                format!(
+                    "--object {want}: no object of that name; it holds {}",
+                    named(&(0..objects.len()).collect::<Vec<_>>())
+                ),
+            )
+        })?,
         None => match moving.as_slice() {
             [one] => *one,
             [] => {
@@ -111,7 +133,7 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
                     path,
                     format!(
                         "nothing in it moves ({}, over {} key{}): a fall needs an animated object",
-                        listed(&still),
+                        named(&still),
                         clip.frames,
                         if clip.frames == 1 { "" } else { "s" }
                     ),
@@ -123,22 +145,22 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
                     format!(
                         "{} objects move in it ({}): name the one to read with --object NAME",
                         many.len(),
-                        listed(many)
+                        named(many)
                     ),
                 ));
             }
         },
     };
-    let (trajectory, no_orientation) = fall_of(chosen, clip.fps);
+    let (trajectory, no_orientation) = fall_of(&objects[chosen], clip.fps);
     Ok(AnimationFall {
         trajectory,
-        object: chosen.name.clone(),
-        chord: chord(&chosen.positions(0)),
+        object: objects[chosen].name.clone(),
+        chord: chords[chosen],
         rate_hz: clip.fps,
         still: still
             .iter()
-            .filter(|o| o.name != chosen.name)
-            .map(|o| o.name.clone())
+            .filter(|&&k| k != chosen)
+            .map(|&k| objects[k].name.clone())
             .collect(),
         no_orientation,
     })
@@ -160,14 +182,14 @@ fn listed(objects: &[&ClipObject]) -> String {
 }
 
 /// Whether any vertex of `o` leaves its first position by more than
-/// [`MOVING_FRACTION_OF_CHORD`] of the object's chord.
-fn moves(o: &ClipObject) -> bool {
+/// [`MOVING_FRACTION_OF_CHORD`] of its `chord`.
+fn moves(o: &ClipObject, chord: f64) -> bool {
     let frames = match &o.motion {
         Motion::Rigid { translation, .. } => translation.len(),
         Motion::Deforming { frames } => frames.len(),
     };
     let first = o.positions(0);
-    let tol = MOVING_FRACTION_OF_CHORD * chord(&first).max(f64::MIN_POSITIVE);
+    let tol = MOVING_FRACTION_OF_CHORD * chord.max(f64::MIN_POSITIVE);
     (1..frames).any(|k| {
         o.positions(k)
             .iter()
@@ -277,31 +299,35 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
     let first = o.positions(0);
     let mass = lumped_area(&first, &o.triangles);
     let total: f64 = mass.iter().sum();
+    let centre = |f: &[V3]| f.iter().zip(&mass).map(|(x, m)| x * *m).sum::<V3>() / total;
+    // The shape about its centre, in the coordinates the motion's rotation
+    // acts on: the local mesh for a rigid node, the first frame for a
+    // deforming one.
+    let shape = match &o.motion {
+        Motion::Rigid { local, .. } => local.as_slice(),
+        Motion::Deforming { .. } => first.as_slice(),
+    };
+    let c_shape = centre(shape);
+    let rest: Vec<V3> = shape.iter().map(|x| x - c_shape).collect();
     let (centre, rotation): (Vec<V3>, Vec<UnitQuaternion<f64>>) = match &o.motion {
         Motion::Rigid {
-            local,
             translation,
             rotation,
-        } => {
-            let c = local.iter().zip(&mass).map(|(x, m)| x * *m).sum::<V3>() / total;
-            (
-                translation
-                    .iter()
-                    .zip(rotation)
-                    .map(|(t, q)| t + q * c)
-                    .collect(),
-                rotation.clone(),
-            )
-        }
+            ..
+        } => (
+            translation
+                .iter()
+                .zip(rotation)
+                .map(|(t, q)| t + q * c_shape)
+                .collect(),
+            rotation.clone(),
+        ),
         Motion::Deforming { frames } => {
             // Each frame's best rigid fit of the first by its own SVD
             // (Kabsch), the global optimum: a Newton iteration started
             // from the previous frame (what the exporters' frame uses, for
             // small steps) can settle on a saddle 180° away when a card
             // turns 20–30° between keys, as a 24 fps bake of a tumble does.
-            let centre = |f: &[V3]| f.iter().zip(&mass).map(|(x, m)| x * *m).sum::<V3>() / total;
-            let c0 = centre(&first);
-            let rest: Vec<V3> = first.iter().map(|x| x - c0).collect();
             let mut previous: Option<UnitQuaternion<f64>> = None;
             frames
                 .iter()
@@ -320,18 +346,6 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
                     (c, q)
                 })
                 .unzip()
-        }
-    };
-    // The principal frame in the coordinates the motion's rotation acts on:
-    // the local mesh for a rigid node, the first frame for a deforming one.
-    let rest: Vec<V3> = match &o.motion {
-        Motion::Rigid { local, .. } => {
-            let c = local.iter().zip(&mass).map(|(x, m)| x * *m).sum::<V3>() / total;
-            local.iter().map(|x| x - c).collect()
-        }
-        Motion::Deforming { .. } => {
-            let c = first.iter().zip(&mass).map(|(x, m)| x * *m).sum::<V3>() / total;
-            first.iter().map(|x| x - c).collect()
         }
     };
     let principal = principal_frame(&rest, &o.triangles, &mass);

@@ -289,22 +289,16 @@ enum Grid {
 /// resolves every fall leafmagic classifies.
 pub const MAX_KEY_RATE_HZ: f64 = 1000.0;
 
-/// The rate of keys `times` (each channel's, seconds): one over the
-/// shortest interval between consecutive keys of any channel, at most
-/// [`MAX_KEY_RATE_HZ`]; keys stored as f32 are rounded to the microsecond
-/// first, so that 1/24 s read back from f32 gives 24 Hz.
-fn key_rate(channels: &[Vec<f32>]) -> Option<f64> {
-    let shortest = channels
-        .iter()
-        .flat_map(|t| t.windows(2).map(|w| w[1] as f64 - w[0] as f64))
-        .filter(|d| *d > 0.0)
-        .fold(f64::INFINITY, f64::min);
-    if !shortest.is_finite() {
+/// The rate to sample keys at whose shortest interval (between consecutive
+/// keys of any channel) is `shortest` seconds: its reciprocal, at most
+/// [`MAX_KEY_RATE_HZ`], rounded to 1e-3 Hz (glTF stores times as f32, which
+/// keeps 7 digits: 1/24 s reads back as 0.041666668, whose reciprocal is
+/// 23.99999..); `None` without an interval (no key, or one).
+pub(super) fn key_rate(shortest: f64) -> Option<f64> {
+    if !(shortest.is_finite() && shortest > 0.0) {
         return None;
     }
     let rate = (1.0 / shortest).min(MAX_KEY_RATE_HZ);
-    // f32 keeps 7 digits: 1/24 s reads back as 0.041666668, so the rate
-    // from its reciprocal is 23.99999..; round to the nearest 1e-3 Hz.
     Some((rate * 1000.0).round() / 1000.0)
 }
 
@@ -377,7 +371,6 @@ fn read_gltf(
     let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
     let mut t_end = 0.0f64;
     let mut t_start = f64::INFINITY;
-    let mut key_times: Vec<Vec<f32>> = Vec::new();
     for anim in doc.animations() {
         for ch in anim.channels() {
             let reader = ch.reader(get);
@@ -413,7 +406,6 @@ fn read_gltf(
                 t_start = t_start.min(first as f64);
                 t_end = t_end.max(last as f64);
             }
-            key_times.push(times.clone());
             tracks.push((
                 ch.target().node().index(),
                 ch.target().property(),
@@ -428,7 +420,13 @@ fn read_gltf(
     }
     let (start, fps) = match grid {
         Grid::From0(fps) => (0.0, fps.or(extras.fps).unwrap_or(DEFAULT_FPS)),
-        Grid::Keys => match key_rate(&key_times) {
+        Grid::Keys => match key_rate(
+            tracks
+                .iter()
+                .flat_map(|(_, _, t)| t.times.windows(2).map(|w| w[1] as f64 - w[0] as f64))
+                .filter(|d| *d > 0.0)
+                .fold(f64::INFINITY, f64::min),
+        ) {
             Some(rate) => (t_start, rate),
             // No animation, or one key: a single frame.
             None => (t_start.min(t_end).max(0.0), DEFAULT_FPS),

@@ -14,13 +14,14 @@
 //! `faceVertexIndices`. Values between samples are interpolated linearly
 //! (quaternions by slerp) and held outside them, as USD does.
 //!
-//! What is refused, by name: the binary crate format, and layers that need
-//! composing (sublayers, references, payloads, inherits, specializes,
-//! variant sets, `over` and `class` prims): `usdcat --flatten` from Pixar's
-//! library writes such a stage as one text layer this reads.
+//! What is refused, by name: the binary crate format, USDZ packages, and
+//! layers that need composing (sublayers, references, payloads, inherits,
+//! specializes, variant sets, `over` and `class` prims): `usdcat --flatten`
+//! from Pixar's library writes such a stage as one text layer this reads.
 
 use super::clip::{Clip, ClipObject, Motion, frame_count};
 use super::error::ExportError;
+use super::read::key_rate;
 use nalgebra::{Matrix3, Matrix4, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
 type V3 = Vector3<f64>;
@@ -74,7 +75,7 @@ fn tokens(text: &str) -> Result<Vec<(Token, usize)>, String> {
                 if j >= b.len() {
                     return Err(format!("line {line}: a string that never ends"));
                 }
-                if b[j..].starts_with(&vec![c; quote]) {
+                if b[j..].starts_with(&[c, c, c][..quote]) {
                     break;
                 }
                 if b[j] == b'\\' && j + 1 < b.len() {
@@ -134,10 +135,10 @@ fn tokens(text: &str) -> Result<Vec<(Token, usize)>, String> {
                 .map_err(|_| format!("line {line}: `{word}` is not a number"))?;
             out.push((Token::Number(v), line));
             i = j;
-        } else if c.is_ascii_alphabetic() || c == b'_' || c == b'!' {
+        } else if c.is_ascii_alphabetic() || c == b'_' {
             let mut j = i + 1;
             while j < b.len()
-                && (b[j].is_ascii_alphanumeric() || matches!(b[j], b'_' | b':' | b'.' | b'!'))
+                && (b[j].is_ascii_alphanumeric() || matches!(b[j], b'_' | b':' | b'.'))
             {
                 j += 1;
             }
@@ -239,7 +240,11 @@ struct Parser {
     at: usize,
 }
 
-/// Composition arcs and prim kinds this single-layer reader cannot honour.
+/// The list-editing words that may precede a property (`prepend rel
+/// proxyPrim`) or a metadata key (`prepend apiSchemas = …`).
+const LIST_OPS: [&str; 5] = ["prepend", "append", "add", "delete", "reorder"];
+
+/// Composition arcs this single-layer reader cannot honour.
 const COMPOSED: [&str; 6] = [
     "subLayers",
     "references",
@@ -307,12 +312,13 @@ impl Parser {
                 // (a dictionary in metadata).
                 let mut entries = Vec::new();
                 while !self.is('}') {
-                    let key = self.value()?;
+                    let mut key = self.value()?;
                     if self.is(':') {
                         self.expect(':')?;
                     } else {
-                        // A typed dictionary entry: `type name = value`.
-                        let _name = self.value()?;
+                        // A typed dictionary entry: `type name = value`,
+                        // keyed by its name.
+                        key = self.value()?;
                         self.expect('=')?;
                     }
                     let v = self.value()?;
@@ -339,20 +345,12 @@ impl Parser {
             match self.next()? {
                 Token::Str(_) => {}
                 Token::Ident(mut key) => {
-                    if matches!(
-                        key.as_str(),
-                        "prepend" | "append" | "add" | "delete" | "reorder"
-                    ) {
-                        key = match self.next()? {
-                            Token::Ident(k) => k,
-                            t => return Err(format!("line {line}: expected a key, found {t:?}")),
-                        };
-                    }
-                    // `dictionary customData = { … }`-style typed entries.
-                    if let Some(Token::Ident(_)) = self.peek() {
-                        if let Token::Ident(k) = self.next()? {
-                            key = k;
-                        }
+                    // After a list-editing word (`prepend apiSchemas`) or
+                    // a type (`dictionary customData`), the last word is
+                    // the key.
+                    while let Some(Token::Ident(k)) = self.peek().cloned() {
+                        self.next()?;
+                        key = k;
                     }
                     self.expect('=')?;
                     out.push((key, self.value()?));
@@ -430,10 +428,9 @@ impl Parser {
     fn property(&mut self, prim: &mut Prim, first: String) -> Result<(), String> {
         let line = self.line();
         let mut word = first;
-        while matches!(
-            word.as_str(),
-            "custom" | "uniform" | "varying" | "prepend" | "append" | "add" | "delete" | "reorder"
-        ) {
+        while LIST_OPS.contains(&word.as_str())
+            || matches!(word.as_str(), "custom" | "uniform" | "varying")
+        {
             word = match self.next()? {
                 Token::Ident(w) => w,
                 t => return Err(format!("line {line}: expected a type, found {t:?}")),
@@ -513,6 +510,12 @@ fn parse(text: &str) -> Result<Layer, String> {
     if text.starts_with("PXR-USDC") {
         return Err(
             "a binary USD crate file; write it as text with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)"
+                .to_string(),
+        );
+    }
+    if text.starts_with("PK") {
+        return Err(
+            "a USDZ package (a zip archive): unzip it and read the .usda inside, or flatten it with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)"
                 .to_string(),
         );
     }
@@ -688,13 +691,12 @@ fn local_transform(prim: &Prim, t: f64) -> Result<(M4, bool), String> {
                 need(3)?;
                 // rotateXYZ turns about x first, then y, then z.
                 let mut r = Matrix3::identity();
-                for (i, axis) in k[6..].bytes().enumerate() {
-                    let a = (axis - b'X') as usize;
+                for axis in k[6..].bytes() {
+                    let a = axis.wrapping_sub(b'X') as usize;
                     if a > 2 {
                         return Err(format!("prim `{}`: unknown op `{op}`", prim.name));
                     }
                     r = about(a, v[a]) * r;
-                    let _ = i;
                 }
                 homogeneous(r, V3::zeros())
             }
@@ -748,15 +750,15 @@ fn read(text: &str, name: &str) -> Result<Clip, String> {
     }
     codes.sort_by(f64::total_cmp);
     codes.dedup();
-    let (start, step) = match (
-        codes.first(),
-        codes.windows(2).map(|w| w[1] - w[0]).reduce(f64::min),
-    ) {
-        (Some(&s), Some(d)) if d > 0.0 => (s, d),
-        (Some(&s), _) => (s, 1.0),
-        (None, _) => (0.0, 1.0),
-    };
-    let rate = layer.time_codes_per_second / step;
+    // The glTF reader's key grid (one frame per shortest interval, capped),
+    // in time codes.
+    let tcps = layer.time_codes_per_second;
+    let shortest = codes
+        .windows(2)
+        .map(|w| (w[1] - w[0]) / tcps)
+        .fold(f64::INFINITY, f64::min);
+    let rate = key_rate(shortest).unwrap_or(tcps);
+    let (start, step) = (codes.first().copied().unwrap_or(0.0), tcps / rate);
     let end = codes.last().copied().unwrap_or(start);
     let frames = frame_count(0.0, (end - start) / layer.time_codes_per_second, rate);
     let to_z_up = |p: V3| -> V3 {
@@ -955,6 +957,21 @@ def Xform "root"
         assert_eq!(sample(turn, 12.0), Some(vec![90.0]));
         let shift = card.attribute("xformOp:translate").unwrap();
         assert_eq!(sample(shift, 2.5), Some(vec![25.0, 0.0, 0.0]));
+    }
+
+    #[test]
+    fn keys_closer_than_the_cap_do_not_multiply_frames() {
+        // Two samples a thousandth of a time code apart, then one 10 codes
+        // on: sampled at glTF's cap of 1000 Hz, not at 24,000 Hz.
+        let text = CARD
+            .replace("timeCodesPerSecond = 10", "timeCodesPerSecond = 24")
+            .replace(
+                "0: (0, 0, 0),",
+                "0: (0, 0, 0),\n            0.001: (0, 0, 0),",
+            );
+        let clip = read(&text, "card").unwrap();
+        assert_eq!(clip.fps, super::super::read::MAX_KEY_RATE_HZ);
+        assert_eq!(clip.frames, (10.0 / 24.0 * 1000.0f64).floor() as usize + 1);
     }
 
     #[test]
