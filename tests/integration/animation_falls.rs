@@ -161,6 +161,217 @@ fn the_modeller_s_frame_a_static_ground_and_separate_buffers_change_nothing() {
     }
 }
 
+/// Every vertex of `got` within `tol` m of a vertex of `want` and every
+/// vertex of `want` within `tol` of one of `got`: the same points,
+/// whatever order and duplication an exporter gave them (Blender's glTF
+/// exporter splits vertices where face normals differ).
+fn same_points(what: &str, got: &[V3], want: &[V3], tol: f64) {
+    for (a, b, side) in [(got, want, "read"), (want, got, "expected")] {
+        for p in a {
+            let nearest = b
+                .iter()
+                .map(|q| (p - q).norm())
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                nearest < tol,
+                "{what}: {side} vertex {p} is {nearest} m from the other side's"
+            );
+        }
+    }
+}
+
+/// The clip a glTF or USD file reads as, at its own keys.
+fn keys_of(file: &str) -> Clip {
+    let path = data(file);
+    if file.ends_with(".usda") {
+        export::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
+    } else {
+        export::read_gltf_keys(&std::fs::read(&path).unwrap(), file, path.parent()).unwrap()
+    }
+}
+
+/// A card under an animated parent, as Blender writes an object parented
+/// to an empty: the keys are on the empty `carrier`, the card is its child
+/// shifted and turned in the carrier's frame, and the carrier's keys undo
+/// that. Both Blender's glTF (a child node) and its USD (nested Xforms)
+/// read as the unparented card's fall, vertex for vertex, under the card's
+/// name.
+#[test]
+fn a_card_under_an_animated_parent_reads_as_the_card_s_fall() {
+    let base = keys_of("blender/tumble_thick.glb");
+    for file in [
+        "blender/tumble_thick_parented.glb",
+        "blender/tumble_thick_parented.usda",
+    ] {
+        let clip = keys_of(file);
+        assert_eq!(clip.objects.len(), 1, "{file}: only the card has a mesh");
+        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.frames, base.frames, "{file}");
+        for k in 0..clip.frames {
+            same_points(
+                &format!("{file} key {k}"),
+                &clip.objects[0].positions(k),
+                &base.objects[0].positions(k),
+                1e-5,
+            );
+        }
+    }
+}
+
+/// A card bent by an armature, as an animator rigs a leaf: skinned to two
+/// bones along its length, the armature carrying the fall and the tip bone
+/// bending the card out of its plane. Blender's glTF (a skin: joints,
+/// inverse bind matrices, JOINTS_0/WEIGHTS_0) and its USD (UsdSkel: a
+/// Skeleton, a SkelAnimation, joint indices and weights) both read, at
+/// every key, as the vertices Blender itself evaluated (its depsgraph's,
+/// `blender/tumble_thick_rigged.vertices.csv`), to f32; the bend is there
+/// (the card is not flat at the bend's peaks), and the fall keeps the
+/// class of the unbent card's.
+#[test]
+fn a_card_bent_by_bones_reads_as_blender_poses_it() {
+    let mut blender: Vec<Vec<V3>> = Vec::new();
+    let mut r = csv::Reader::from_path(data("blender/tumble_thick_rigged.vertices.csv")).unwrap();
+    for row in r.records() {
+        let row = row.unwrap();
+        let f: usize = row[0].parse().unwrap();
+        let p = V3::new(
+            row[2].parse().unwrap(),
+            row[3].parse().unwrap(),
+            row[4].parse().unwrap(),
+        );
+        if blender.len() < f {
+            blender.push(Vec::new());
+        }
+        blender[f - 1].push(p);
+    }
+    assert_eq!(blender.len(), 241);
+    for file in [
+        "blender/tumble_thick_rigged.glb",
+        "blender/tumble_thick_rigged.usda",
+    ] {
+        let clip = keys_of(file);
+        assert_eq!(clip.objects.len(), 1, "{file}: the armature has no mesh");
+        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.frames, 241, "{file}");
+        let mut most_bent = 0.0f64;
+        for (k, want) in blender.iter().enumerate() {
+            let got = clip.objects[0].positions(k);
+            // The exported keys are Blender's f32 curves: 1e-5 m at 2 m.
+            same_points(&format!("{file} key {k}"), &got, want, 1e-5);
+            // How far the card is from flat: the largest distance of a
+            // vertex from the plane of the root half's first three.
+            let n = (want[1] - want[0]).cross(&(want[5] - want[0])).normalize();
+            most_bent = want
+                .iter()
+                .map(|p| (p - want[0]).dot(&n).abs())
+                .fold(most_bent, f64::max);
+        }
+        // 25° over the tip's 1.5 cm (the blend over the middle centimetre
+        // softens it): millimetres out of the plane.
+        assert!(
+            most_bent > 3e-3,
+            "{file}: the card bends only {most_bent} m"
+        );
+        let fall = read_fall(&data(file), None).unwrap();
+        let unbent = read_fall(&data("blender/tumble_thick.glb"), None).unwrap();
+        same_class(file, (&fall.trajectory, 0.04), (&unbent.trajectory, 0.04));
+    }
+}
+
+/// UsdSkel posed as Pixar's library poses it. `usd/skinned_leaf.usda` is
+/// written by hand to exercise what Blender's file does not: the skeleton
+/// under a moving Xform and turned by its own op, an animation of two of
+/// three joints in its own order (the third at rest), rotations slerped
+/// between samples, a mesh under an Xform that skinning ignores, with its
+/// own joint order, two influences a vertex and a geomBindTransform, and a
+/// mesh bound rigidly (constant interpolation). pxr's skinning query
+/// poses each mesh at every time code the reader samples; leafmagic's
+/// reading matches it to f32 (pxr skins in single precision), in metres
+/// and z up.
+#[test]
+fn usd_skinning_matches_pixar_s() {
+    let python = match crate::usd::pixar_python() {
+        Ok(p) => p,
+        Err(why) => {
+            eprintln!("SKIPPED usd_skinning_matches_pixar_s: {why}");
+            return;
+        }
+    };
+    let layer = data("usd/skinned_leaf.usda");
+    let clip = keys_of("usd/skinned_leaf.usda");
+    // Samples at time codes 0, 2.5, 5 and 10, 10 codes a second: a frame
+    // every 2.5 codes.
+    assert_eq!(clip.fps, 4.0);
+    assert_eq!(clip.frames, 5);
+    let codes: Vec<String> = (0..clip.frames)
+        .map(|k| format!("{}", 2.5 * k as f64))
+        .collect();
+    // Each skinned mesh's points posed by pxr's skinning query at each
+    // time code, in world space through the Skeleton's transform.
+    // (`UsdSkel.BakeSkinning` would do for keys of the animation itself,
+    // but bakes only at those: between them it interpolates the points.)
+    let pose = r#"
+import json, sys
+from pxr import Usd, UsdSkel, UsdGeom, Gf, Vt
+stage = Usd.Stage.Open(sys.argv[1])
+codes = [float(x) for x in sys.argv[2].split(",")]
+cache, out = UsdSkel.Cache(), {}
+for prim in stage.Traverse():
+    if not prim.IsA(UsdSkel.Root):
+        continue
+    root = UsdSkel.Root(prim)
+    cache.Populate(root, Usd.PrimDefaultPredicate)
+    for b in cache.ComputeSkelBindings(root, Usd.PrimDefaultPredicate):
+        skel = cache.GetSkelQuery(b.GetSkeleton())
+        for q in b.GetSkinningTargets():
+            frames = []
+            for t in codes:
+                points = Vt.Vec3fArray(UsdGeom.Mesh(q.GetPrim()).GetPointsAttr().Get(t))
+                assert q.ComputeSkinnedPoints(skel.ComputeSkinningTransforms(t), points, t)
+                world = UsdGeom.XformCache(t).GetLocalToWorldTransform(b.GetSkeleton().GetPrim())
+                frames.append([list(world.Transform(Gf.Vec3d(p))) for p in points])
+            out[q.GetPrim().GetName()] = frames
+print(json.dumps(out))
+"#;
+    let o = Command::new(python)
+        .args(["-c", pose])
+        .arg(&layer)
+        .arg(codes.join(","))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let pixar: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(clip.objects.len(), 2);
+    for object in &clip.objects {
+        // Objects are named by the Xform above a lone mesh: both meshes
+        // share one, so each keeps its own name.
+        let frames = pixar[&object.name]
+            .as_array()
+            .unwrap_or_else(|| panic!("{}", object.name));
+        for (k, want) in frames.iter().enumerate() {
+            let got = object.positions(k);
+            let want = want.as_array().unwrap();
+            assert_eq!(got.len(), want.len());
+            for (i, (g, w)) in got.iter().zip(want).enumerate() {
+                let w: Vec<f64> = w
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .map(|x| x.as_f64().unwrap())
+                    .collect();
+                // centimetres, y up → metres, z up.
+                let w = V3::new(w[0], -w[2], w[1]) * 0.01;
+                assert!(
+                    f32_close(g, &w) || (g - w).norm() < 2e-7,
+                    "{} code {} vertex {i}: {g} against pxr's {w}",
+                    object.name,
+                    codes[k]
+                );
+            }
+        }
+    }
+}
+
 /// The same fall, in the CLI: `classify --json` of the .glb names the
 /// object and the chord it took from the mesh (the 4 × 1 cm card's
 /// diagonal), with the class of the CSV; `compare` of the two is close.
@@ -330,7 +541,10 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     assert!(!ok && err.contains("CSV record"), "{err}");
     // Files that are not what their name says, or need what is not here:
     // (file, bytes, what the error must say besides the file's name).
-    let cases: [(&str, Vec<u8>, &str); 5] = [
+    let rigged = std::fs::read_to_string(data("blender/tumble_thick_rigged.usda")).unwrap();
+    let bound = "rel skel:skeleton = </root/rig/rig>";
+    assert!(rigged.contains(bound));
+    let cases: [(&str, Vec<u8>, &str); 7] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -348,6 +562,25 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
             "shot.usda",
             b"#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n".to_vec(),
             "subLayers",
+        ),
+        (
+            // Skinned to a skeleton the layer does not hold.
+            "unbound.usda",
+            rigged
+                .replace(bound, "rel skel:skeleton = </root/rig/gone>")
+                .into_bytes(),
+            "bound to the skeleton `/root/rig/gone`, which is not in the layer",
+        ),
+        (
+            // UsdSkel blend shapes, which would be read wrong if ignored.
+            "shapes.usda",
+            rigged
+                .replace(
+                    bound,
+                    &format!("uniform token[] skel:blendShapes = [\"cup\"]\n{bound}"),
+                )
+                .into_bytes(),
+            "blend shapes",
         ),
     ];
     for (file, bytes, want) in cases {

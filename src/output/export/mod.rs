@@ -27,7 +27,10 @@ pub mod pc2;
 mod read;
 pub mod render_mesh;
 mod scene;
+mod skin;
 pub mod usd;
+mod usd_layer;
+mod usd_skel;
 mod usda_read;
 mod wind;
 

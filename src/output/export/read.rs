@@ -7,16 +7,18 @@ use super::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count};
 use super::error::ExportError;
 use super::glb::from_gltf;
 use super::scene::build_scene_clip;
+use super::skin::{self, Influences};
 use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::Scene;
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 
 type V3 = Vector3<f64>;
+type M4 = Matrix4<f64>;
 
 #[derive(Deserialize)]
 struct SummaryFile {
@@ -433,118 +435,123 @@ fn read_gltf(
         },
     };
     let frames = frame_count(start, t_end, fps);
+    let parents = parents(doc);
+    let mut nodes = Vec::new();
+    for root in scene.nodes() {
+        mesh_nodes(root, &mut nodes);
+    }
+    // World transforms of every node per frame, for meshes below animated
+    // parents and for skins' joints (computed once, only if needed).
+    let composed = nodes
+        .iter()
+        .any(|n| parents[n.index()].is_some() || n.skin().is_some());
+    let worlds: Vec<Vec<M4>> = if composed {
+        (0..frames)
+            .map(|k| world_matrices(doc, &parents, &tracks, start + k as f64 / fps))
+            .collect()
+    } else {
+        Vec::new()
+    };
     let mut objects = Vec::new();
-    for node in scene.nodes() {
+    for node in nodes {
         let Some(mesh) = node.mesh() else { continue };
         let node_extras: NodeExtras = node
             .extras()
             .as_ref()
             .and_then(|r| serde_json::from_str(r.get()).ok())
             .unwrap_or_default();
-        let Some(prim) = mesh.primitives().next() else {
+        let Some(MeshData {
+            base,
+            triangles,
+            segments,
+            targets,
+            influences,
+        }) = mesh_data(&node, &mesh, get)?
+        else {
             continue;
         };
-        let reader = prim.reader(get);
-        let base: Vec<[f32; 3]> =
-            reader
-                .read_positions()
-                .map(|p| p.collect())
-                .ok_or_else(|| {
-                    ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
-                })?;
-        let indices: Vec<u32> = match reader.read_indices() {
-            Some(i) => i.into_u32().collect(),
-            None => (0..base.len() as u32).collect(),
-        };
-        let (triangles, segments) = match prim.mode() {
-            gltf::mesh::Mode::Triangles => (
-                indices
-                    .chunks_exact(3)
-                    .map(|c| [c[0], c[1], c[2]])
-                    .collect(),
-                Vec::new(),
-            ),
-            gltf::mesh::Mode::Lines => (
-                Vec::new(),
-                indices.chunks_exact(2).map(|c| [c[0], c[1]]).collect(),
-            ),
-            gltf::mesh::Mode::LineStrip => (
-                Vec::new(),
-                indices.windows(2).map(|c| [c[0], c[1]]).collect(),
-            ),
-            _ => (Vec::new(), Vec::new()),
-        };
-        let targets: Vec<Vec<[f32; 3]>> = reader
-            .read_morph_targets()
-            .map(|(p, _, _)| p.map(|p| p.collect()).unwrap_or_default())
-            .collect();
         let (t0, r0, s0) = node.transform().decomposed();
-        let track = |p: Property| {
-            tracks
-                .iter()
-                .find(|(n, q, _)| *n == node.index() && *q == p)
-                .map(|(_, _, t)| t)
-        };
+        let track = |p: Property| track_of(&tracks, node.index(), p);
         let default_weights: Vec<f64> = mesh
             .weights()
             .map(|w| w.iter().map(|&x| x as f64).collect())
             .unwrap_or_else(|| vec![0.0; targets.len()]);
-        let mut translation = Vec::with_capacity(frames);
-        let mut rotation = Vec::with_capacity(frames);
-        let mut scale = Vec::with_capacity(frames);
-        let mut weights = Vec::with_capacity(frames);
-        for k in 0..frames {
-            let t = start + k as f64 / fps;
-            let tr = track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
-            let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
-            let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
-            let w =
-                track(Property::MorphTargetWeights).map_or(default_weights.clone(), |x| x.at(t));
-            // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
-            let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
-            translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
-            rotation.push(q);
-            scale.push([s[0], s[1], s[2]]);
-            weights.push(w);
-        }
-        let scaled = |p: [f64; 3], s: [f64; 3]| -> V3 {
-            from_gltf([
-                (p[0] * s[0]) as f32,
-                (p[1] * s[1]) as f32,
-                (p[2] * s[2]) as f32,
-            ])
+        let weights_at = |t: f64| {
+            track(Property::MorphTargetWeights).map_or(default_weights.clone(), |x| x.at(t))
         };
-        let motion = if targets.is_empty() {
-            Motion::Rigid {
-                local: base
-                    .iter()
-                    .map(|p| scaled(p.map(f64::from), scale.first().copied().unwrap_or([1.0; 3])))
-                    .collect(),
-                translation,
-                rotation,
+        let morphed = |i: usize, b: &[f32; 3], weights: &[f64]| {
+            let mut p = b.map(f64::from);
+            for (target, w) in targets.iter().zip(weights) {
+                if *w != 0.0
+                    && let Some(d) = target.get(i)
+                {
+                    for c in 0..3 {
+                        p[c] += w * d[c] as f64;
+                    }
+                }
             }
+            p
+        };
+        let motion = if parents[node.index()].is_some() || node.skin().is_some() {
+            composed_motion(
+                &node,
+                &worlds,
+                &base,
+                influences.as_ref(),
+                |k| weights_at(start + k as f64 / fps),
+                &morphed,
+                get,
+            )?
         } else {
-            let frames_out = (0..frames)
-                .map(|k| {
-                    base.iter()
-                        .enumerate()
-                        .map(|(i, b)| {
-                            let mut p = b.map(f64::from);
-                            for (target, w) in targets.iter().zip(&weights[k]) {
-                                if *w != 0.0
-                                    && let Some(d) = target.get(i)
-                                {
-                                    for c in 0..3 {
-                                        p[c] += w * d[c] as f64;
-                                    }
-                                }
-                            }
-                            translation[k] + rotation[k] * scaled(p, scale[k])
+            let mut translation = Vec::with_capacity(frames);
+            let mut rotation = Vec::with_capacity(frames);
+            let mut scale = Vec::with_capacity(frames);
+            let mut weights = Vec::with_capacity(frames);
+            for k in 0..frames {
+                let t = start + k as f64 / fps;
+                let tr =
+                    track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
+                let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
+                let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
+                // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
+                let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
+                translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
+                rotation.push(q);
+                scale.push([s[0], s[1], s[2]]);
+                weights.push(weights_at(t));
+            }
+            let scaled = |p: [f64; 3], s: [f64; 3]| -> V3 {
+                from_gltf([
+                    (p[0] * s[0]) as f32,
+                    (p[1] * s[1]) as f32,
+                    (p[2] * s[2]) as f32,
+                ])
+            };
+            if targets.is_empty() {
+                Motion::Rigid {
+                    local: base
+                        .iter()
+                        .map(|p| {
+                            scaled(p.map(f64::from), scale.first().copied().unwrap_or([1.0; 3]))
                         })
-                        .collect()
-                })
-                .collect();
-            Motion::Deforming { frames: frames_out }
+                        .collect(),
+                    translation,
+                    rotation,
+                }
+            } else {
+                let frames_out = (0..frames)
+                    .map(|k| {
+                        base.iter()
+                            .enumerate()
+                            .map(|(i, b)| {
+                                translation[k]
+                                    + rotation[k] * scaled(morphed(i, b, &weights[k]), scale[k])
+                            })
+                            .collect()
+                    })
+                    .collect();
+                Motion::Deforming { frames: frames_out }
+            }
         };
         objects.push(ClipObject {
             name: node
@@ -580,4 +587,287 @@ fn read_gltf(
     };
     clip.validate()?;
     Ok(clip)
+}
+
+/// Each node's parent in the document's node tree (`None` for a root).
+fn parents(doc: &gltf::Document) -> Vec<Option<usize>> {
+    let mut parent = vec![None; doc.nodes().len()];
+    for node in doc.nodes() {
+        for child in node.children() {
+            parent[child.index()] = Some(node.index());
+        }
+    }
+    parent
+}
+
+/// The nodes at and below `node` that carry a mesh, depth first (glTF's
+/// node tree: a mesh under an animated parent, as Blender writes a leaf
+/// parented to an empty, or a skinned mesh under its armature).
+fn mesh_nodes<'a>(node: gltf::Node<'a>, out: &mut Vec<gltf::Node<'a>>) {
+    if node.mesh().is_some() {
+        out.push(node.clone());
+    }
+    for child in node.children() {
+        mesh_nodes(child, out);
+    }
+}
+
+/// The track animating `property` of node `node`, if any.
+fn track_of(
+    tracks: &[(usize, Property, Track)],
+    node: usize,
+    property: Property,
+) -> Option<&Track> {
+    tracks
+        .iter()
+        .find(|(n, p, _)| *n == node && *p == property)
+        .map(|(_, _, t)| t)
+}
+
+/// A node's local transform at time `t` (glTF axes, column vectors): its
+/// animated or default translation, rotation and scale as T·R·S, or its
+/// `matrix` where it has one and no channel moves it (glTF forbids
+/// animating a node given by a matrix).
+fn local_matrix(node: &gltf::Node<'_>, tracks: &[(usize, Property, Track)], t: f64) -> M4 {
+    let track = |p| track_of(tracks, node.index(), p);
+    let animated = [Property::Translation, Property::Rotation, Property::Scale]
+        .into_iter()
+        .any(|p| track(p).is_some());
+    if !animated {
+        let columns = node.transform().matrix();
+        return M4::from_fn(|r, c| columns[c][r] as f64);
+    }
+    let (t0, r0, s0) = node.transform().decomposed();
+    let tr = track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
+    let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
+    let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
+    let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], r[1], r[2]));
+    let mut m = q.to_homogeneous();
+    for c in 0..3 {
+        for row in 0..3 {
+            m[(row, c)] *= s[c];
+        }
+        m[(c, 3)] = tr[c];
+    }
+    m
+}
+
+/// Every node's world transform at time `t`: its parents' composed with
+/// its own, root first.
+fn world_matrices(
+    doc: &gltf::Document,
+    parents: &[Option<usize>],
+    tracks: &[(usize, Property, Track)],
+    t: f64,
+) -> Vec<M4> {
+    let local: Vec<M4> = doc.nodes().map(|n| local_matrix(&n, tracks, t)).collect();
+    let mut world: Vec<Option<M4>> = vec![None; local.len()];
+    fn resolve(i: usize, parents: &[Option<usize>], local: &[M4], world: &mut [Option<M4>]) -> M4 {
+        if let Some(m) = world[i] {
+            return m;
+        }
+        // A valid glTF node tree has no cycle; a parent chain longer than
+        // the node count would be one, and is cut there.
+        let m = match parents[i] {
+            Some(p) if p != i => resolve(p, parents, local, world) * local[i],
+            _ => local[i],
+        };
+        world[i] = Some(m);
+        m
+    }
+    (0..local.len())
+        .map(|i| resolve(i, parents, &local, &mut world))
+        .collect()
+}
+
+/// A point in glTF's axes (y up) in the simulator's (z up), in f64.
+fn z_up(p: V3) -> V3 {
+    V3::new(p.x, -p.z, p.y)
+}
+
+/// A mesh's geometry: every primitive's vertices in one list (Blender
+/// writes one primitive per material), with their triangles or segments,
+/// morph target displacements and skin influences.
+struct MeshData {
+    base: Vec<[f32; 3]>,
+    triangles: Vec<[u32; 3]>,
+    segments: Vec<[u32; 2]>,
+    targets: Vec<Vec<[f32; 3]>>,
+    influences: Option<Influences>,
+}
+
+/// The geometry of `node`'s `mesh` (`None` if it has no primitive).
+fn mesh_data<'a, 's, F>(
+    node: &gltf::Node<'a>,
+    mesh: &gltf::Mesh<'a>,
+    get: F,
+) -> Result<Option<MeshData>, ExportError>
+where
+    F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+{
+    let mut data = MeshData {
+        base: Vec::new(),
+        triangles: Vec::new(),
+        segments: Vec::new(),
+        targets: Vec::new(),
+        influences: None,
+    };
+    let mut joints: Vec<usize> = Vec::new();
+    let mut weights: Vec<f64> = Vec::new();
+    let mut sets = None;
+    let mut any = false;
+    for (k, prim) in mesh.primitives().enumerate() {
+        any = true;
+        let reader = prim.reader(get.clone());
+        let at = data.base.len() as u32;
+        let base: Vec<[f32; 3]> =
+            reader
+                .read_positions()
+                .map(|p| p.collect())
+                .ok_or_else(|| {
+                    ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
+                })?;
+        let n = base.len();
+        let indices: Vec<u32> = match reader.read_indices() {
+            Some(i) => i.into_u32().map(|i| i + at).collect(),
+            None => (at..at + n as u32).collect(),
+        };
+        match prim.mode() {
+            gltf::mesh::Mode::Triangles => data
+                .triangles
+                .extend(indices.chunks_exact(3).map(|c| [c[0], c[1], c[2]])),
+            gltf::mesh::Mode::Lines => data
+                .segments
+                .extend(indices.chunks_exact(2).map(|c| [c[0], c[1]])),
+            gltf::mesh::Mode::LineStrip => data
+                .segments
+                .extend(indices.windows(2).map(|c| [c[0], c[1]])),
+            _ => {}
+        }
+        let targets: Vec<Vec<[f32; 3]>> = reader
+            .read_morph_targets()
+            .map(|(p, _, _)| p.map(|p| p.collect()).unwrap_or_default())
+            .collect();
+        if k > 0 && targets.len() != data.targets.len() {
+            return Err(ExportError::Data(format!(
+                "mesh of node {}: its primitives have {} and {} morph targets (glTF asks for the same number)",
+                node.index(),
+                data.targets.len(),
+                targets.len()
+            )));
+        }
+        data.targets.resize(targets.len(), Vec::new());
+        for (all, t) in data.targets.iter_mut().zip(targets) {
+            // A target without positions moves nothing.
+            all.resize(at as usize, [0.0; 3]);
+            all.extend(t.iter().copied().chain(std::iter::repeat([0.0; 3])).take(n));
+        }
+        if node.skin().is_some() {
+            // Every JOINTS_n / WEIGHTS_n set, four influences each.
+            let mut set = 0;
+            let (mut j, mut w) = (vec![Vec::new(); n], vec![Vec::new(); n]);
+            while let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set)) {
+                for (v, (js, ws)) in js.into_u16().zip(ws.into_f32()).enumerate().take(n) {
+                    j[v].extend(js.map(usize::from));
+                    w[v].extend(ws.map(f64::from));
+                }
+                set += 1;
+            }
+            if set == 0 || sets.is_some_and(|s| s != set) {
+                return Err(ExportError::Data(format!(
+                    "mesh of node {} has a skin but primitive {k} has {set} JOINTS/WEIGHTS sets",
+                    node.index()
+                )));
+            }
+            sets = Some(set);
+            joints.extend(j.into_iter().flatten());
+            weights.extend(w.into_iter().flatten());
+        }
+        data.base.extend(base);
+    }
+    if !any {
+        return Ok(None);
+    }
+    if let (Some(sets), Some(skin)) = (sets, node.skin()) {
+        data.influences = Some(
+            Influences {
+                per_vertex: 4 * sets as usize,
+                joints,
+                weights,
+            }
+            .normalised(data.base.len(), skin.joints().count())
+            .map_err(|e| {
+                ExportError::Data(format!("skin of the mesh of node {}: {e}", node.index()))
+            })?,
+        );
+    }
+    Ok(Some(data))
+}
+
+/// The motion of a mesh below other nodes, or skinned: every vertex in
+/// world space per frame. A plain mesh takes its node's world transform;
+/// a skinned one is moved by its joints, Σ w_j (world_j · inverseBind_j) p,
+/// its own node's transform ignored as glTF says. Morph targets apply
+/// first, in the mesh's own space.
+fn composed_motion<'a, 's, F>(
+    node: &gltf::Node<'a>,
+    worlds: &[Vec<M4>],
+    base: &[[f32; 3]],
+    influences: Option<&Influences>,
+    weights_at: impl Fn(usize) -> Vec<f64>,
+    morphed: &impl Fn(usize, &[f32; 3], &[f64]) -> [f64; 3],
+    get: F,
+) -> Result<Motion, ExportError>
+where
+    F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+{
+    let skin = match (node.skin(), influences) {
+        (Some(skin), Some(inf)) => {
+            let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+            let inverse_bind: Vec<M4> = match skin.reader(get).read_inverse_bind_matrices() {
+                Some(m) => m
+                    .map(|columns| M4::from_fn(|r, c| columns[c][r] as f64))
+                    .collect(),
+                None => vec![M4::identity(); joints.len()],
+            };
+            if inverse_bind.len() < joints.len() {
+                return Err(ExportError::Data(format!(
+                    "skin {} has {} joints but {} inverse bind matrices",
+                    skin.index(),
+                    joints.len(),
+                    inverse_bind.len()
+                )));
+            }
+            Some((joints, inverse_bind, inf))
+        }
+        _ => None,
+    };
+    let frames = worlds
+        .iter()
+        .enumerate()
+        .map(|(k, world)| {
+            let weights = weights_at(k);
+            let points: Vec<V3> = base
+                .iter()
+                .enumerate()
+                .map(|(i, b)| V3::from(morphed(i, b, &weights)))
+                .collect();
+            let placed = match &skin {
+                Some((joints, inverse_bind, inf)) => {
+                    let matrices: Vec<M4> = joints
+                        .iter()
+                        .zip(inverse_bind)
+                        .map(|(j, ib)| world[*j] * ib)
+                        .collect();
+                    skin::blend(&points, inf, &matrices)
+                }
+                None => points
+                    .iter()
+                    .map(|p| world[node.index()].transform_point(&(*p).into()).coords)
+                    .collect(),
+            };
+            placed.into_iter().map(z_up).collect()
+        })
+        .collect();
+    Ok(Motion::Deforming { frames })
 }

@@ -18,9 +18,24 @@ check what a modeller may do differently:
   motion is the same but the node's frame is not the card's;
 - tumble_thick_with_ground: a static 1 m ground plane beside the card;
 - tumble_thick_separate: glTF written as .gltf + .bin (GLTF_SEPARATE).
+
+Two more put the card under other objects, as animators build a leaf:
+
+- tumble_thick_parented: the keys are on an empty, `carrier`; the card is
+  its child, shifted 1 cm along x and turned 30 degrees about z in the
+  carrier's frame, and the carrier's keys undo that, so the card's world
+  motion is tumble_thick's (.glb and .usda);
+- tumble_thick_rigged: a 4 x 1 cm card meshed 4 x 2, skinned to an
+  armature of two bones along its length (`root`, `tip`; weights blend
+  over the middle centimetre); the armature carries the fall's keys and
+  the tip bone bends the card out of its plane by 25 sin(2 pi 1.5 t)
+  degrees (.glb with a glTF skin, .usda with UsdSkel). Blender's own
+  evaluated vertices at each key, in world metres, go to
+  tumble_thick_rigged.vertices.csv (frame, vertex, x, y, z): what the
+  animator saw, for the readers to match.
 """
 import bpy, csv, math, os, sys
-from mathutils import Quaternion
+from mathutils import Quaternion, Vector
 
 src, out = sys.argv[-2], sys.argv[-1]
 os.makedirs(out, exist_ok=True)
@@ -70,3 +85,108 @@ for fall in ["steady_fall", "glide_ballast", "wobble_card", "flutter_strip", "tu
 bake("tumble_thick_modelled_upright", "tumble_thick", upright=True, usd=False)
 bake("tumble_thick_with_ground", "tumble_thick", ground=True, usd=False)
 bake("tumble_thick_separate", "tumble_thick", gltf_format="GLTF_SEPARATE", usd=False)
+
+
+def keyed(rows):
+    """(Blender frame, location, rotation) of every tenth row."""
+    for k in range(0, len(rows), 10):
+        r = rows[k]
+        q = Quaternion((float(r["qw"]), float(r["qx"]), float(r["qy"]), float(r["qz"])))
+        yield 1 + k // 10, Vector((float(r["x"]), float(r["y"]), 2.0 + float(r["z"]))), q
+
+
+def export(name):
+    bpy.ops.export_scene.gltf(filepath=os.path.join(out, name + ".glb"), export_format="GLB")
+    bpy.ops.wm.usd_export(filepath=os.path.join(out, name + ".usda"), export_animation=True)
+
+
+def parented():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps = 24
+    rows = list(csv.DictReader(open(os.path.join(src, "tumble_thick.csv"))))
+    me = bpy.data.meshes.new("card")
+    me.from_pydata([(-0.02, -0.005, 0), (0.02, -0.005, 0), (0.02, 0.005, 0), (-0.02, 0.005, 0)], [], [(0, 1, 2, 3)])
+    ob = bpy.data.objects.new("card", me)
+    carrier = bpy.data.objects.new("carrier", None)
+    sc.collection.objects.link(ob)
+    sc.collection.objects.link(carrier)
+    ob.parent = carrier
+    ob.rotation_mode = carrier.rotation_mode = "QUATERNION"
+    turn, shift = Quaternion((0, 0, 1), math.radians(30)), Vector((0.01, 0, 0))
+    ob.location, ob.rotation_quaternion = shift, turn
+    frame = 1
+    for frame, loc, q in keyed(rows):
+        # carrier * child = the fall's pose.
+        qc = q @ turn.inverted()
+        carrier.rotation_quaternion = qc
+        carrier.location = loc - qc @ shift
+        carrier.keyframe_insert("location", frame=frame)
+        carrier.keyframe_insert("rotation_quaternion", frame=frame)
+    sc.frame_start, sc.frame_end = 1, frame
+    export("tumble_thick_parented")
+
+
+def rigged():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps = 24
+    rows = list(csv.DictReader(open(os.path.join(src, "tumble_thick.csv"))))
+    nx, ny = 4, 2
+    verts = [(-0.02 + 0.04 * i / nx, -0.005 + 0.01 * j / ny, 0.0) for j in range(ny + 1) for i in range(nx + 1)]
+    faces = [(j * (nx + 1) + i, j * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i)
+             for j in range(ny) for i in range(nx)]
+    me = bpy.data.meshes.new("card")
+    me.from_pydata(verts, [], faces)
+    ob = bpy.data.objects.new("card", me)
+    arm = bpy.data.armatures.new("rig")
+    rig = bpy.data.objects.new("rig", arm)
+    sc.collection.objects.link(ob)
+    sc.collection.objects.link(rig)
+    bpy.context.view_layer.objects.active = rig
+    bpy.ops.object.mode_set(mode="EDIT")
+    root = arm.edit_bones.new("root")
+    root.head, root.tail = (-0.02, 0, 0), (0, 0, 0)
+    tip = arm.edit_bones.new("tip")
+    tip.head, tip.tail, tip.parent = (0, 0, 0), (0.02, 0, 0), root
+    bpy.ops.object.mode_set(mode="OBJECT")
+    ob.parent = rig
+    ob.modifiers.new("rig", "ARMATURE").object = rig
+    groups = ob.vertex_groups.new(name="root"), ob.vertex_groups.new(name="tip")
+    for v, (x, _, _) in enumerate(verts):
+        w = min(1.0, max(0.0, (x + 0.005) / 0.01))
+        if w < 1:
+            groups[0].add([v], 1 - w, "REPLACE")
+        if w > 0:
+            groups[1].add([v], w, "REPLACE")
+    rig.rotation_mode = "QUATERNION"
+    bend = rig.pose.bones["tip"]
+    bend.rotation_mode = "QUATERNION"
+    frame = 1
+    for frame, loc, q in keyed(rows):
+        rig.location, rig.rotation_quaternion = loc, q
+        rig.keyframe_insert("location", frame=frame)
+        rig.keyframe_insert("rotation_quaternion", frame=frame)
+        t = (frame - 1) / 24
+        # About the bone's own x, which for a bone along +x is world -y:
+        # the card bends out of its plane.
+        bend.rotation_quaternion = Quaternion((1, 0, 0), math.radians(25 * math.sin(2 * math.pi * 1.5 * t)))
+        bend.keyframe_insert("rotation_quaternion", frame=frame)
+    sc.frame_start, sc.frame_end = 1, frame
+    export("tumble_thick_rigged")
+    with open(os.path.join(out, "tumble_thick_rigged.vertices.csv"), "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(["frame", "vertex", "x", "y", "z"])
+        for k in range(1, frame + 1):
+            sc.frame_set(k)
+            dg = bpy.context.evaluated_depsgraph_get()
+            ev = ob.evaluated_get(dg)
+            m = ev.to_mesh()
+            for i, v in enumerate(m.vertices):
+                p = ev.matrix_world @ v.co
+                w.writerow([k, i] + ["%.7g" % c for c in p])
+            ev.to_mesh_clear()
+
+
+parented()
+rigged()
