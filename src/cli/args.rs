@@ -57,7 +57,7 @@ pub struct BreedArgs {
     /// positions only: descent, drift, and tumble from the areas).
     #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
     pub like: Option<PathBuf>,
-    /// The example's chord, metres, for --like [default: a glTF example's own, else the prototype's chord].
+    /// The example's chord, metres, for --like [default: an animation file's own, else the prototype's chord].
     #[arg(long, requires = "like")]
     pub size: Option<f64>,
     /// The --like file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
@@ -254,15 +254,15 @@ pub struct PlateArgs {
 /// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
 pub struct FallArgs {
-    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or a glTF animation (.glb, .gltf: leafmagic's export, a Blender or game-engine bake), read at its keys: the moving mesh's centre and principal axes.
+    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or an animation file (glTF .glb/.gltf, or one USD text layer .usda: leafmagic's export, a Blender or game-engine bake), read at its keys: the moving mesh's centre and principal axes, whether its own keys, parents, morph targets or bones move it.
     pub trajectory: PathBuf,
-    /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or a glTF mesh's own].
+    /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or an animation file's mesh's own].
     #[arg(long)]
     pub size: Option<f64>,
-    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading); glTF is y up by its specification.
+    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading); glTF is y up by its specification, USD says its own.
     #[arg(long, default_value = "z")]
     pub up: leafmagic::motion::trajectory::UpAxis,
-    /// The object to read from a glTF file that animates several (its node's name).
+    /// The object to read from an animation file that animates several (its glTF node's or USD Xform's name).
     #[arg(long)]
     pub object: Option<String>,
     /// Print one JSON object instead of a table.
@@ -334,17 +334,17 @@ pub struct SceneArgs {
 /// Arguments of `compare`.
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
-    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns; or a glTF animation, .glb or .gltf).
+    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf or .usda).
     pub a: PathBuf,
     /// Second fall.
     pub b: PathBuf,
-    /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05) [default: 0.05, or a glTF mesh's own].
+    /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05) [default: 0.05, or an animation file's mesh's own].
     #[arg(long)]
     pub size: Option<EachFile<f64>>,
     /// The files' vertical axis, z (leafmagic's) or y (turned to z up on reading): one for both, or A,B (a tracker's y-up record against a drop's: y,z).
     #[arg(long, default_value = "z")]
     pub up: EachFile<leafmagic::motion::trajectory::UpAxis>,
-    /// The object to read from glTF files that animate several: one name for both, or A,B.
+    /// The object to read from animation files that animate several: one name for both, or A,B.
     #[arg(long)]
     pub object: Option<EachFile<String>>,
     /// Print one JSON object instead of a table.

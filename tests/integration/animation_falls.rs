@@ -372,6 +372,43 @@ print(json.dumps(out))
     }
 }
 
+/// Blender's exports after gltfpack 0.25 (`tests/data/gltfpack/`, its
+/// defaults but keys at 24 Hz: KHR_mesh_quantization, positions as 16-bit
+/// integers moved into an unnamed child node whose scale dequantises
+/// them, rotations as normalised 16-bit integers, weights as 8-bit ones):
+/// the plain and the rigged card read as Blender's own files do, under the
+/// card's name, within what gltfpack's quantisation keeps (14-bit
+/// positions over the 4.1 cm card, 2.5 µm; 12-bit rotations, 2.4e-4 rad,
+/// 5 µm at the card's tip; so 2e-5 m), with the same class.
+#[test]
+fn gltfpack_s_quantised_files_read_as_blender_s() {
+    for (packed, original) in [
+        ("gltfpack/tumble_thick.glb", "blender/tumble_thick.glb"),
+        (
+            "gltfpack/tumble_thick_rigged.glb",
+            "blender/tumble_thick_rigged.glb",
+        ),
+    ] {
+        let (q, b) = (keys_of(packed), keys_of(original));
+        assert_eq!((q.fps, q.frames), (b.fps, b.frames), "{packed}");
+        assert_eq!(q.objects.len(), 1, "{packed}");
+        assert_eq!(q.objects[0].name, "card", "{packed}");
+        for k in 0..q.frames {
+            same_points(
+                &format!("{packed} key {k}"),
+                &q.objects[0].positions(k),
+                &b.objects[0].positions(k),
+                2e-5,
+            );
+        }
+        let (fq, fb) = (
+            read_fall(&data(packed), None).unwrap(),
+            read_fall(&data(original), None).unwrap(),
+        );
+        same_class(packed, (&fq.trajectory, 0.04), (&fb.trajectory, 0.04));
+    }
+}
+
 /// The same fall, in the CLI: `classify --json` of the .glb names the
 /// object and the chord it took from the mesh (the 4 × 1 cm card's
 /// diagonal), with the class of the CSV; `compare` of the two is close.
@@ -544,7 +581,22 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     let rigged = std::fs::read_to_string(data("blender/tumble_thick_rigged.usda")).unwrap();
     let bound = "rel skel:skeleton = </root/rig/rig>";
     assert!(rigged.contains(bound));
-    let cases: [(&str, Vec<u8>, &str); 7] = [
+    // The .gltf + .bin card, with a required extension added.
+    let requiring = |ext: &str| {
+        let text = std::fs::read_to_string(data("blender/tumble_thick_separate.gltf")).unwrap();
+        let mut json: Value = serde_json::from_str(&text).unwrap();
+        json["extensionsUsed"] = serde_json::json!([ext]);
+        json["extensionsRequired"] = serde_json::json!([ext]);
+        serde_json::to_vec(&json).unwrap()
+    };
+    // Beside its .bin, in a folder of its own (`lonely.gltf` must not find it).
+    std::fs::create_dir_all(dir.join("ext")).unwrap();
+    std::fs::copy(
+        data("blender/tumble_thick_separate.bin"),
+        dir.join("ext/tumble_thick_separate.bin"),
+    )
+    .unwrap();
+    let cases: [(&str, Vec<u8>, &str); 10] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -582,6 +634,23 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
                 .into_bytes(),
             "blend shapes",
         ),
+        (
+            // gltfpack -c: meshopt-compressed buffers.
+            "packed.glb",
+            std::fs::read(data("gltfpack/tumble_thick_meshopt.glb")).unwrap(),
+            "EXT_meshopt_compression (meshopt-compressed buffers), which leafmagic does not decode",
+        ),
+        (
+            "ext/draco.gltf",
+            requiring("KHR_draco_mesh_compression"),
+            "KHR_draco_mesh_compression (Draco-compressed geometry), which leafmagic does not decode",
+        ),
+        (
+            // Instancing would place copies this reader does not know of.
+            "ext/instanced.gltf",
+            requiring("EXT_mesh_gpu_instancing"),
+            "EXT_mesh_gpu_instancing, which leafmagic does not read",
+        ),
     ];
     for (file, bytes, want) in cases {
         let path = dir.join(file);
@@ -589,6 +658,11 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         let (ok, err) = run(&["classify", path.to_str().unwrap()]);
         assert!(!ok && err.contains(file) && err.contains(want), "{err}");
     }
+    // A required extension of looks alone (KTX2 textures) is left unread.
+    let path = dir.join("ext/ktx2.gltf");
+    std::fs::write(&path, requiring("KHR_texture_basisu")).unwrap();
+    let (ok, err) = run(&["classify", path.to_str().unwrap()]);
+    assert!(ok, "{err}");
     // Nothing moves: every frame the first.
     let mut held = two.objects[0].clone();
     if let export::Motion::Deforming { frames } = &mut held.motion {

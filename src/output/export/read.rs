@@ -354,8 +354,7 @@ fn read_gltf(
     dir: Option<&Path>,
     grid: Grid,
 ) -> Result<Clip, ExportError> {
-    let gltf = gltf::Gltf::from_slice(bytes)
-        .map_err(|e| ExportError::Data(format!("not a valid glTF file: {e}")))?;
+    let gltf = open_gltf(bytes)?;
     let buffers = buffer_data(&gltf, dir)?;
     let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).and_then(|d| d.as_deref());
     let doc = &gltf.document;
@@ -554,9 +553,7 @@ fn read_gltf(
             }
         };
         objects.push(ClipObject {
-            name: node
-                .name()
-                .map_or_else(|| format!("node-{}", node.index()), str::to_string),
+            name: object_name(doc, &parents, &node, &objects),
             kind: if node_extras.kind.is_empty() {
                 "mesh".to_string()
             } else {
@@ -720,13 +717,13 @@ where
         any = true;
         let reader = prim.reader(get.clone());
         let at = data.base.len() as u32;
-        let base: Vec<[f32; 3]> =
-            reader
-                .read_positions()
-                .map(|p| p.collect())
-                .ok_or_else(|| {
-                    ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
-                })?;
+        let base = prim
+            .get(&gltf::Semantic::Positions)
+            .map(|a| vec3s(a, get.clone()))
+            .transpose()?
+            .ok_or_else(|| {
+                ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
+            })?;
         let n = base.len();
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().map(|i| i + at).collect(),
@@ -744,10 +741,15 @@ where
                 .extend(indices.windows(2).map(|c| [c[0], c[1]])),
             _ => {}
         }
-        let targets: Vec<Vec<[f32; 3]>> = reader
-            .read_morph_targets()
-            .map(|(p, _, _)| p.map(|p| p.collect()).unwrap_or_default())
-            .collect();
+        let targets: Vec<Vec<[f32; 3]>> = prim
+            .morph_targets()
+            .map(|t| {
+                t.positions()
+                    .map(|a| vec3s(a, get.clone()))
+                    .transpose()
+                    .map(Option::unwrap_or_default)
+            })
+            .collect::<Result<_, _>>()?;
         if k > 0 && targets.len() != data.targets.len() {
             return Err(ExportError::Data(format!(
                 "mesh of node {}: its primitives have {} and {} morph targets (glTF asks for the same number)",
@@ -870,4 +872,155 @@ where
         })
         .collect();
     Ok(Motion::Deforming { frames })
+}
+
+/// Required extensions that change neither where a mesh's vertices are nor
+/// how it moves (materials, textures, lights, material variants): a reader
+/// of falls may leave them unread, as a viewer without them would draw the
+/// same motion with plainer looks.
+const LOOKS_ONLY: [&str; 5] = [
+    "KHR_materials_",
+    "KHR_texture_",
+    "EXT_texture_",
+    "MSFT_texture_",
+    "KHR_lights_punctual",
+];
+
+/// Parses a glTF document and checks it as the gltf crate does, except
+/// for the extensions it requires: KHR_mesh_quantization is decoded here
+/// ([`vec3s`]), extensions of looks alone ([`LOOKS_ONLY`]) are left
+/// unread, and any other is refused by name: compressed geometry (Draco,
+/// meshopt) with how to write the file without it.
+fn open_gltf(bytes: &[u8]) -> Result<gltf::Gltf, ExportError> {
+    use gltf::json::validation::Validate;
+    let invalid = |e: gltf::Error| ExportError::Data(format!("not a valid glTF file: {e}"));
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(invalid)?;
+    for ext in gltf.document.extensions_required() {
+        let refuse = |what: &str, fix: &str| {
+            Err(ExportError::Data(format!(
+                "the file requires the glTF extension {ext} ({what}), which leafmagic does not decode: {fix}"
+            )))
+        };
+        match ext {
+            "KHR_mesh_quantization" => {}
+            e if LOOKS_ONLY.iter().any(|p| e.starts_with(p)) => {}
+            "KHR_draco_mesh_compression" => {
+                return refuse(
+                    "Draco-compressed geometry",
+                    "write it without Draco compression (Blender's glTF export: Data › Compression off)",
+                );
+            }
+            "EXT_meshopt_compression" | "KHR_meshopt_compression" => {
+                return refuse(
+                    "meshopt-compressed buffers",
+                    "write it without them (gltfpack: leave out -c and -cc; its quantisation alone is read)",
+                );
+            }
+            _ => {
+                return Err(ExportError::Data(format!(
+                    "the file requires the glTF extension {ext}, which leafmagic does not read (it reads KHR_mesh_quantization, and leaves extensions of materials, textures and lights unread)"
+                )));
+            }
+        }
+    }
+    let root = gltf.document.as_json();
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, error| {
+        let path = path();
+        if !path.as_str().starts_with("extensionsRequired") {
+            errors.push((path, error));
+        }
+    });
+    if errors.is_empty() {
+        Ok(gltf)
+    } else {
+        Err(invalid(gltf::Error::Validation(errors)))
+    }
+}
+
+/// The three-component values of `accessor` (positions, morph target
+/// displacements) as f32: floats, or the 8- and 16-bit integers
+/// KHR_mesh_quantization allows, normalised where the accessor says so as
+/// glTF 2.0 defines it ("Animations", normalised integers: c/127 and
+/// c/32767 clamped at −1, c/255, c/65535) and taken as they are where not
+/// (the node's transform then scales them, as gltfpack writes them).
+fn vec3s<'a, 's, F>(accessor: gltf::Accessor<'a>, get: F) -> Result<Vec<[f32; 3]>, ExportError>
+where
+    F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+{
+    use gltf::accessor::{DataType, Dimensions, Iter};
+    let index = accessor.index();
+    let bad = |why: String| ExportError::Data(format!("accessor {index}: {why}"));
+    if accessor.dimensions() != Dimensions::Vec3 {
+        return Err(bad(format!(
+            "{:?} where a position needs VEC3",
+            accessor.dimensions()
+        )));
+    }
+    let size = accessor.data_type().size() * 3;
+    if let Some(stride) = accessor.view().and_then(|v| v.stride())
+        && stride < size
+    {
+        return Err(bad(format!(
+            "a byte stride of {stride}, less than its {size}-byte elements"
+        )));
+    }
+    let normalized = accessor.normalized();
+    fn read<'a, 's, T, F>(
+        accessor: gltf::Accessor<'a>,
+        get: F,
+        scale: impl Fn(T) -> f32,
+    ) -> Option<Vec<[f32; 3]>>
+    where
+        T: gltf::accessor::Item + Copy,
+        [T; 3]: gltf::accessor::Item,
+        F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
+    {
+        Iter::<[T; 3]>::new(accessor, get).map(|it| it.map(|v| v.map(&scale)).collect())
+    }
+    let values = match accessor.data_type() {
+        DataType::F32 => read(accessor, get, |c: f32| c),
+        DataType::I8 if normalized => read(accessor, get, |c: i8| (c as f32 / 127.0).max(-1.0)),
+        DataType::I8 => read(accessor, get, |c: i8| c as f32),
+        DataType::U8 if normalized => read(accessor, get, |c: u8| c as f32 / 255.0),
+        DataType::U8 => read(accessor, get, |c: u8| c as f32),
+        DataType::I16 if normalized => read(accessor, get, |c: i16| (c as f32 / 32767.0).max(-1.0)),
+        DataType::I16 => read(accessor, get, |c: i16| c as f32),
+        DataType::U16 if normalized => read(accessor, get, |c: u16| c as f32 / 65535.0),
+        DataType::U16 => read(accessor, get, |c: u16| c as f32),
+        DataType::U32 => return Err(bad("32-bit integers, which no position may be".into())),
+    };
+    values.ok_or_else(|| bad("its data lies outside its buffer".into()))
+}
+
+/// The name of the object a mesh node makes: the node's, or where it has
+/// none (gltfpack moves a mesh into an unnamed child that carries its
+/// dequantisation) the nearest named node's above it, unless an object
+/// already has that name; else `node-N`.
+fn object_name(
+    doc: &gltf::Document,
+    parents: &[Option<usize>],
+    node: &gltf::Node<'_>,
+    objects: &[ClipObject],
+) -> String {
+    if let Some(name) = node.name() {
+        return name.to_string();
+    }
+    let mut up = parents[node.index()];
+    let mut hops = 0;
+    while let Some(p) = up.filter(|_| hops < parents.len()) {
+        if let Some(name) = doc
+            .nodes()
+            .nth(p)
+            .and_then(|n| n.name().map(str::to_string))
+        {
+            if objects.iter().all(|o| o.name != name) {
+                return name;
+            }
+            break;
+        }
+        up = parents[p];
+        hops += 1;
+    }
+    format!("node-{}", node.index())
 }
