@@ -581,13 +581,24 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     let rigged = std::fs::read_to_string(data("blender/tumble_thick_rigged.usda")).unwrap();
     let bound = "rel skel:skeleton = </root/rig/rig>";
     assert!(rigged.contains(bound));
-    // The .gltf + .bin card, with a required extension added.
-    let requiring = |ext: &str| {
+    // The .gltf + .bin card, edited: a required extension added, or what
+    // the fuzz harness found that once panicked or hung the reader.
+    let edited = |edit: &dyn Fn(&mut Value)| {
         let text = std::fs::read_to_string(data("blender/tumble_thick_separate.gltf")).unwrap();
         let mut json: Value = serde_json::from_str(&text).unwrap();
-        json["extensionsUsed"] = serde_json::json!([ext]);
-        json["extensionsRequired"] = serde_json::json!([ext]);
+        edit(&mut json);
         serde_json::to_vec(&json).unwrap()
+    };
+    let requiring = |ext: &str| {
+        edited(&|json: &mut Value| {
+            json["extensionsUsed"] = serde_json::json!([ext]);
+            json["extensionsRequired"] = serde_json::json!([ext]);
+        })
+    };
+    let usd_edited = |from: &str, to: &str| {
+        let text = std::fs::read_to_string(data("blender/tumble_thick_parented.usda")).unwrap();
+        assert!(text.contains(from), "{from}");
+        text.replacen(from, to, 1).into_bytes()
     };
     // Beside its .bin, in a folder of its own (`lonely.gltf` must not find it).
     std::fs::create_dir_all(dir.join("ext")).unwrap();
@@ -596,7 +607,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         dir.join("ext/tumble_thick_separate.bin"),
     )
     .unwrap();
-    let cases: [(&str, Vec<u8>, &str); 10] = [
+    let cases: [(&str, Vec<u8>, &str); 17] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -650,6 +661,58 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
             "ext/instanced.gltf",
             requiring("EXT_mesh_gpu_instancing"),
             "EXT_mesh_gpu_instancing, which leafmagic does not read",
+        ),
+        // Found by the fuzz harness (tests/integration/fuzz.rs): each
+        // panicked inside the gltf crate, or hung an eigen-solver, before.
+        (
+            "ext/no-node.gltf",
+            edited(&|j: &mut Value| {
+                j["animations"][0]["channels"][0]["target"]["node"] = 99.into()
+            }),
+            "channels[0].target.node: Index out of bounds",
+        ),
+        (
+            "ext/no-path.gltf",
+            edited(&|j: &mut Value| {
+                j["animations"][0]["channels"][0]["target"]["path"] = "spin".into()
+            }),
+            "channels[0].target.path: Invalid value",
+        ),
+        (
+            "ext/no-position.gltf",
+            edited(&|j: &mut Value| {
+                j["meshes"][0]["primitives"][0]["attributes"]["POSITION"] = 99.into()
+            }),
+            "attributes[\"POSITION\"]: Index out of bounds",
+        ),
+        (
+            "ext/float-indices.gltf",
+            edited(&|j: &mut Value| {
+                let i = j["meshes"][0]["primitives"][0]["indices"].as_u64().unwrap() as usize;
+                j["accessors"][i]["componentType"] = 5126.into();
+            }),
+            "(indices): component type F32, where glTF allows [U8, U16, U32]",
+        ),
+        (
+            "ext/short-keys.gltf",
+            edited(&|j: &mut Value| {
+                let i = j["animations"][0]["samplers"][1]["output"]
+                    .as_u64()
+                    .unwrap() as usize;
+                j["accessors"][i]["count"] = 100.into();
+            }),
+            "sampler 1: 241 key times and 400 values, not 4 a key",
+        ),
+        (
+            "far.usda",
+            usd_edited("108: (-0.28798091411590576,", "108: (-1e308,"),
+            "more than 1e6 m from the origin",
+        ),
+        (
+            // Time codes a second so few that the keys span 1e32 s.
+            "forever.usda",
+            usd_edited("timeCodesPerSecond = 24", "timeCodesPerSecond = 1e-30"),
+            "more than the 1000000 this reader samples",
         ),
     ];
     for (file, bytes, want) in cases {

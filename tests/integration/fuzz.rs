@@ -1,4 +1,5 @@
 //! A seeded fuzz harness: leaf, scene and fall files of the repository
+//! (falls as CSV records and as glTF and USD animations)
 //! (and a plate as `leafmagic plate` writes it), mutated (bytes flipped,
 //! lines cut, duplicated or swapped, numbers replaced by extremes, text that
 //! is not UTF-8, truncation), are handed to the
@@ -235,7 +236,13 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
         .output()
         .unwrap();
     assert!(made.status.success(), "{made:?}");
-    let kinds: [(&str, Vec<PathBuf>); 3] = [
+    // A mutated .gltf still finds the buffer it names.
+    std::fs::copy(
+        repo().join("tests/data/blender/tumble_thick_separate.bin"),
+        dir.join("tumble_thick_separate.bin"),
+    )
+    .unwrap();
+    let kinds: [(&str, Vec<PathBuf>); 4] = [
         (
             "leaf",
             [
@@ -254,6 +261,22 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 repo().join("tests/data/mujoco-falls/steady_fall.csv"),
                 repo().join("tests/data/mujoco-falls/tumble_thick.csv"),
             ],
+        ),
+        (
+            // Falls in animation files: glTF (JSON and binary, skinned,
+            // quantised) and USD text (nested, UsdSkel).
+            "animation",
+            [
+                "blender/tumble_thick_separate.gltf",
+                "blender/tumble_thick_rigged.glb",
+                "gltfpack/tumble_thick_rigged.glb",
+                "blender/tumble_thick_rigged.usda",
+                "blender/tumble_thick_parented.usda",
+                "usd/skinned_leaf.usda",
+            ]
+            .iter()
+            .map(|f| repo().join("tests/data").join(f))
+            .collect(),
         ),
     ];
     let mut slowest = (Duration::ZERO, String::new());

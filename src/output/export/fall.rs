@@ -31,7 +31,7 @@
 
 use super::clip::{ClipObject, Motion};
 use super::error::ExportError;
-use super::frame::kabsch;
+use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
 use super::read::read_gltf_keys;
 use super::usda_read::read_usda_keys;
 use crate::motion::trajectory::Trajectory;
@@ -151,6 +151,7 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
             }
         },
     };
+    far_out(&objects[chosen], clip.frames).map_err(|e| ExportError::input(path, e))?;
     let (trajectory, no_orientation) = fall_of(&objects[chosen], clip.fps);
     Ok(AnimationFall {
         trajectory,
@@ -164,6 +165,31 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
             .collect(),
         no_orientation,
     })
+}
+
+/// Farthest a vertex may be from the origin, m: a thousand kilometres,
+/// beyond any fall, and small enough that the areas and moments of the
+/// shape stay finite (1e12 m², where a file with a coordinate of 1e308, a
+/// corrupt or mis-scaled one, made them infinite and the eigen-solver spin).
+pub const MAX_COORDINATE_M: f64 = 1e6;
+
+/// Why `o` cannot be a fall if a vertex of it is farther than
+/// [`MAX_COORDINATE_M`] from the origin at one of its `frames`.
+fn far_out(o: &ClipObject, frames: usize) -> Result<(), String> {
+    for k in 0..frames {
+        if let Some((i, p)) = o
+            .positions(k)
+            .iter()
+            .enumerate()
+            .find(|(_, p)| p.iter().any(|c| c.is_nan() || c.abs() > MAX_COORDINATE_M))
+        {
+            return Err(format!(
+                "object `{}`: vertex {i} at key {k} is at ({:.4e}, {:.4e}, {:.4e}) m, more than {MAX_COORDINATE_M:e} m from the origin: are its units or its keys right?",
+                o.name, p.x, p.y, p.z
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// `a (rigid), b (deforming)`: names with how they move.
@@ -261,7 +287,8 @@ fn area_moment(points: &[V3], triangles: &[[u32; 3]]) -> Matrix3<f64> {
 
 /// The principal frame of `rest` (about its centre): the rotation taking
 /// body axes (x largest extent, z smallest) to the axes `rest` is written
-/// in, or `None` if the shape spans no plane. From the triangles' second
+/// in, or `None` if the shape spans no plane (or its moments are not
+/// finite). From the triangles' second
 /// moment of area, or from the points weighted by `mass` where there are
 /// no triangles with area (a rope, points).
 pub fn principal_frame(
@@ -276,7 +303,8 @@ pub fn principal_frame(
             second += r * r.transpose() * *m;
         }
     }
-    let eig = SymmetricEigen::new(second);
+    // Bounded iterations: a matrix that is not finite would never converge.
+    let eig = SymmetricEigen::try_new(second, f64::EPSILON, MAX_SOLVER_ITERATIONS)?;
     let mut order = [0usize, 1, 2];
     order.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
     let (largest, middle) = (eig.eigenvalues[order[0]], eig.eigenvalues[order[1]]);

@@ -72,11 +72,19 @@ fn collinear(points: &[V3], tol: f64) -> bool {
     })
 }
 
+/// Sweeps the eigen and singular value solvers may take: they converge in
+/// a few dozen on any finite 3×3 matrix (nalgebra's default, 0, means no
+/// bound, and loops for ever on a matrix with an infinity in it).
+pub(super) const MAX_SOLVER_ITERATIONS: usize = 1000;
+
 /// The rotation R maximising Σ mᵢ (R rᵢ)·(pᵢ − c) with no previous frame to
 /// start from: by the singular value decomposition of A (Kabsch), with the
 /// sign fixed so that R is a proper rotation.
 pub(super) fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
-    let svd = a.svd(true, true);
+    // nalgebra's own tolerance for `svd` (5 ε), with a bound on sweeps.
+    let Some(svd) = a.try_svd(true, true, 5.0 * f64::EPSILON, MAX_SOLVER_ITERATIONS) else {
+        return UnitQuaternion::identity();
+    };
     let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
         return UnitQuaternion::identity();
     };

@@ -11,6 +11,8 @@ use super::skin::{self, Influences};
 use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::Scene;
+use gltf::accessor::DataType::{F32, I8, I16, U8, U16, U32};
+use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
 use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
@@ -291,17 +293,51 @@ enum Grid {
 /// resolves every fall leafmagic classifies.
 pub const MAX_KEY_RATE_HZ: f64 = 1000.0;
 
+/// Most frames a clip is read at: 1000 s of keys at [`MAX_KEY_RATE_HZ`],
+/// or 11 hours at 24 fps; key times past it are in the wrong unit or
+/// corrupt, and would otherwise ask for more memory than any machine has.
+pub const MAX_FRAMES: usize = 1_000_000;
+
+/// Most vertex positions a deforming clip is read with (its frames times
+/// its vertices): 1.2 GB of them.
+pub const MAX_SAMPLED_POINTS: usize = 50_000_000;
+
+/// How many frames sample `start..=end` (s) at `fps`, or why not: at most
+/// [`MAX_FRAMES`].
+pub(super) fn sampled_frames(start: f64, end: f64, fps: f64) -> Result<usize, String> {
+    let span = (end - start) * fps;
+    if !(span.is_finite() && span < MAX_FRAMES as f64) {
+        return Err(format!(
+            "its keys run from {start} s to {end} s, {span:.0} frames at {fps} Hz: more than the {MAX_FRAMES} this reader samples (are its times in seconds?)"
+        ));
+    }
+    Ok(frame_count(start, end, fps))
+}
+
+/// Checks that `frames` frames of `vertices` vertices each stay within
+/// [`MAX_SAMPLED_POINTS`].
+pub(super) fn check_points(object: &str, frames: usize, vertices: usize) -> Result<(), String> {
+    if frames.saturating_mul(vertices) > MAX_SAMPLED_POINTS {
+        return Err(format!(
+            "`{object}`: {vertices} vertices at {frames} frames are more than the {MAX_SAMPLED_POINTS} positions this reader holds"
+        ));
+    }
+    Ok(())
+}
+
 /// The rate to sample keys at whose shortest interval (between consecutive
 /// keys of any channel) is `shortest` seconds: its reciprocal, at most
 /// [`MAX_KEY_RATE_HZ`], rounded to 1e-3 Hz (glTF stores times as f32, which
 /// keeps 7 digits: 1/24 s reads back as 0.041666668, whose reciprocal is
-/// 23.99999..); `None` without an interval (no key, or one).
+/// 23.99999..), and at least 0.001 Hz; `None` without an interval (no key,
+/// or one).
 pub(super) fn key_rate(shortest: f64) -> Option<f64> {
     if !(shortest.is_finite() && shortest > 0.0) {
         return None;
     }
     let rate = (1.0 / shortest).min(MAX_KEY_RATE_HZ);
-    Some((rate * 1000.0).round() / 1000.0)
+    // Keys over 1000 s apart round to 0.001 Hz, not to 0.
+    Some(((rate * 1000.0).round() / 1000.0).max(1e-3))
 }
 
 /// The bytes of each buffer of a glTF document: the binary chunk of a
@@ -374,6 +410,7 @@ fn read_gltf(
     let mut t_start = f64::INFINITY;
     for anim in doc.animations() {
         for ch in anim.channels() {
+            check_sampler(&ch)?;
             let reader = ch.reader(get);
             let Some(times) = reader.read_inputs().map(|i| i.collect::<Vec<f32>>()) else {
                 continue;
@@ -393,6 +430,33 @@ fn read_gltf(
                 None => continue,
             };
             let cubic = ch.sampler().interpolation() == Interpolation::CubicSpline;
+            let per_key = width * if cubic { 3 } else { 1 };
+            let sampler = || {
+                format!(
+                    "animation {}, sampler {}",
+                    anim.index(),
+                    ch.sampler().index()
+                )
+            };
+            if times.is_empty() || per_key == 0 || values.len() != times.len() * per_key {
+                return Err(ExportError::Data(format!(
+                    "{}: {} key times and {} values, not {} a key",
+                    sampler(),
+                    times.len(),
+                    values.len(),
+                    per_key.max(1)
+                )));
+            }
+            if times
+                .windows(2)
+                .any(|w| w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less))
+                || !(times[0].is_finite() && times[times.len() - 1].is_finite())
+            {
+                return Err(ExportError::Data(format!(
+                    "{}: its key times are not finite and increasing",
+                    sampler()
+                )));
+            }
             // Cubic splines store (in-tangent, value, out-tangent) per key:
             // keep the values (the motion through the keys, not between them).
             let values = if cubic {
@@ -433,7 +497,7 @@ fn read_gltf(
             None => (t_start.min(t_end).max(0.0), DEFAULT_FPS),
         },
     };
-    let frames = frame_count(start, t_end, fps);
+    let frames = sampled_frames(start, t_end, fps).map_err(ExportError::Data)?;
     let parents = parents(doc);
     let mut nodes = Vec::new();
     for root in scene.nodes() {
@@ -491,6 +555,12 @@ fn read_gltf(
             }
             p
         };
+        let deforms =
+            parents[node.index()].is_some() || node.skin().is_some() || !targets.is_empty();
+        if deforms {
+            check_points(node.name().unwrap_or("a mesh"), frames, base.len())
+                .map_err(ExportError::Data)?;
+        }
         let motion = if parents[node.index()].is_some() || node.skin().is_some() {
             composed_motion(
                 &node,
@@ -725,6 +795,9 @@ where
                 ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
             })?;
         let n = base.len();
+        if let Some(a) = prim.indices() {
+            check_accessor(&a, &[U8, U16, U32], Dimensions::Scalar, "indices")?;
+        }
         let indices: Vec<u32> = match reader.read_indices() {
             Some(i) => i.into_u32().map(|i| i + at).collect(),
             None => (at..at + n as u32).collect(),
@@ -768,7 +841,19 @@ where
             // Every JOINTS_n / WEIGHTS_n set, four influences each.
             let mut set = 0;
             let (mut j, mut w) = (vec![Vec::new(); n], vec![Vec::new(); n]);
-            while let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set)) {
+            while let (Some(ja), Some(wa)) = (
+                prim.get(&gltf::Semantic::Joints(set)),
+                prim.get(&gltf::Semantic::Weights(set)),
+            ) {
+                check_accessor(&ja, &[U8, U16], Dimensions::Vec4, "joints")?;
+                check_accessor(&wa, &[U8, U16, F32], Dimensions::Vec4, "weights")?;
+                let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set))
+                else {
+                    return Err(ExportError::Data(format!(
+                        "mesh of node {}: joints or weights {set} lie outside their buffer",
+                        node.index()
+                    )));
+                };
                 for (v, (js, ws)) in js.into_u16().zip(ws.into_f32()).enumerate().take(n) {
                     j[v].extend(js.map(usize::from));
                     w[v].extend(ws.map(f64::from));
@@ -826,6 +911,9 @@ where
     let skin = match (node.skin(), influences) {
         (Some(skin), Some(inf)) => {
             let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
+            if let Some(a) = skin.inverse_bind_matrices() {
+                check_accessor(&a, &[F32], Dimensions::Mat4, "inverse bind matrices")?;
+            }
             let inverse_bind: Vec<M4> = match skin.reader(get).read_inverse_bind_matrices() {
                 Some(m) => m
                     .map(|columns| M4::from_fn(|r, c| columns[c][r] as f64))
@@ -924,6 +1012,27 @@ fn open_gltf(bytes: &[u8]) -> Result<gltf::Gltf, ExportError> {
         }
     }
     let root = gltf.document.as_json();
+    // gltf-json 1.4's own check of a primitive reads its POSITION accessor
+    // unchecked, and panics on an index past the accessors: check it first.
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (k, prim) in mesh.primitives.iter().enumerate() {
+            let position = gltf::json::validation::Checked::Valid(gltf::Semantic::Positions);
+            if let Some(i) = prim.attributes.get(&position)
+                && i.value() >= root.accessors.len()
+            {
+                return Err(invalid(gltf::Error::Validation(vec![(
+                    gltf::json::Path::new()
+                        .field("meshes")
+                        .index(m)
+                        .field("primitives")
+                        .index(k)
+                        .field("attributes")
+                        .key("POSITION"),
+                    gltf::json::validation::Error::IndexOutOfBounds,
+                )])));
+            }
+        }
+    }
     let mut errors = Vec::new();
     root.validate(root, gltf::json::Path::new, &mut |path, error| {
         let path = path();
@@ -931,6 +1040,31 @@ fn open_gltf(bytes: &[u8]) -> Result<gltf::Gltf, ExportError> {
             errors.push((path, error));
         }
     });
+    // gltf-json 1.4 checks a channel's sampler index but not its target,
+    // whose reader then unwraps a missing node or an unknown path.
+    for (i, anim) in root.animations.iter().enumerate() {
+        for (c, channel) in anim.channels.iter().enumerate() {
+            let at = |field: &str| {
+                gltf::json::Path::new()
+                    .field("animations")
+                    .index(i)
+                    .field("channels")
+                    .index(c)
+                    .field("target")
+                    .field(field)
+            };
+            use gltf::json::validation::Error::{IndexOutOfBounds, Invalid};
+            if channel.target.node.value() >= root.nodes.len() {
+                errors.push((at("node"), IndexOutOfBounds));
+            }
+            if matches!(
+                channel.target.path,
+                gltf::json::validation::Checked::Invalid
+            ) {
+                errors.push((at("path"), Invalid));
+            }
+        }
+    }
     if errors.is_empty() {
         Ok(gltf)
     } else {
@@ -948,24 +1082,14 @@ fn vec3s<'a, 's, F>(accessor: gltf::Accessor<'a>, get: F) -> Result<Vec<[f32; 3]
 where
     F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
 {
-    use gltf::accessor::{DataType, Dimensions, Iter};
-    let index = accessor.index();
-    let bad = |why: String| ExportError::Data(format!("accessor {index}: {why}"));
-    if accessor.dimensions() != Dimensions::Vec3 {
-        return Err(bad(format!(
-            "{:?} where a position needs VEC3",
-            accessor.dimensions()
-        )));
-    }
-    let size = accessor.data_type().size() * 3;
-    if let Some(stride) = accessor.view().and_then(|v| v.stride())
-        && stride < size
-    {
-        return Err(bad(format!(
-            "a byte stride of {stride}, less than its {size}-byte elements"
-        )));
-    }
-    let normalized = accessor.normalized();
+    use gltf::accessor::Iter;
+    check_accessor(
+        &accessor,
+        &[F32, I8, U8, I16, U16],
+        Dimensions::Vec3,
+        "positions",
+    )?;
+    let (normalized, index) = (accessor.normalized(), accessor.index());
     fn read<'a, 's, T, F>(
         accessor: gltf::Accessor<'a>,
         get: F,
@@ -988,9 +1112,13 @@ where
         DataType::I16 => read(accessor, get, |c: i16| c as f32),
         DataType::U16 if normalized => read(accessor, get, |c: u16| c as f32 / 65535.0),
         DataType::U16 => read(accessor, get, |c: u16| c as f32),
-        DataType::U32 => return Err(bad("32-bit integers, which no position may be".into())),
+        DataType::U32 => None,
     };
-    values.ok_or_else(|| bad("its data lies outside its buffer".into()))
+    values.ok_or_else(|| {
+        ExportError::Data(format!(
+            "accessor {index} (positions): its data lies outside its buffer"
+        ))
+    })
 }
 
 /// The name of the object a mesh node makes: the node's, or where it has
@@ -1023,4 +1151,57 @@ fn object_name(
         hops += 1;
     }
     format!("node-{}", node.index())
+}
+
+/// Checks that an accessor is what the gltf crate's reader for it expects:
+/// one of `types`, of `dims`, with elements no wider than its buffer
+/// view's stride. The crate's readers meet any other component type with
+/// `unreachable!` and a short stride with a failed assertion: a malformed
+/// file would panic instead of being refused.
+fn check_accessor(
+    accessor: &gltf::Accessor<'_>,
+    types: &[DataType],
+    dims: Dimensions,
+    what: &str,
+) -> Result<(), ExportError> {
+    let bad = |why: String| {
+        Err(ExportError::Data(format!(
+            "accessor {} ({what}): {why}",
+            accessor.index()
+        )))
+    };
+    if !types.contains(&accessor.data_type()) {
+        return bad(format!(
+            "component type {:?}, where glTF allows {types:?}",
+            accessor.data_type()
+        ));
+    }
+    if accessor.dimensions() != dims {
+        return bad(format!(
+            "type {:?}, where glTF asks for {dims:?}",
+            accessor.dimensions()
+        ));
+    }
+    let size = accessor.size();
+    if let Some(stride) = accessor.view().and_then(|v| v.stride())
+        && stride < size
+    {
+        return bad(format!(
+            "a byte stride of {stride}, less than its {size}-byte elements"
+        ));
+    }
+    Ok(())
+}
+
+/// [`check_accessor`] for an animation sampler: key times as floats, and
+/// values of the kind its target property takes (glTF 2.0, "Animations").
+fn check_sampler(channel: &gltf::animation::Channel<'_>) -> Result<(), ExportError> {
+    let sampler = channel.sampler();
+    check_accessor(&sampler.input(), &[F32], Dimensions::Scalar, "key times")?;
+    let (types, dims): (&[DataType], _) = match channel.target().property() {
+        Property::Translation | Property::Scale => (&[F32], Dimensions::Vec3),
+        Property::Rotation => (&[F32, I8, U8, I16, U16], Dimensions::Vec4),
+        Property::MorphTargetWeights => (&[F32, I8, U8, I16, U16], Dimensions::Scalar),
+    };
+    check_accessor(&sampler.output(), types, dims, "key values")
 }

@@ -8,9 +8,9 @@
 //! is skinned, by its UsdSkel skeleton ([`super::usd_skel`]). The layer's
 //! grammar, and what it refuses, are [`super::usd_layer`]'s.
 
-use super::clip::{Clip, ClipObject, Motion, frame_count};
+use super::clip::{Clip, ClipObject, Motion};
 use super::error::ExportError;
-use super::read::key_rate;
+use super::read::{check_points, key_rate, sampled_frames};
 use super::usd_layer::{Prim, Value, local_transform, parse, sample};
 use super::usd_skel::{Paths, Skinning};
 use nalgebra::{Matrix4, Vector3};
@@ -65,7 +65,7 @@ fn read(text: &str, name: &str) -> Result<Clip, String> {
     let rate = key_rate(shortest).unwrap_or(tcps);
     let (start, step) = (codes.first().copied().unwrap_or(0.0), tcps / rate);
     let end = codes.last().copied().unwrap_or(start);
-    let frames = frame_count(0.0, (end - start) / layer.time_codes_per_second, rate);
+    let frames = sampled_frames(0.0, (end - start) / tcps, rate)?;
     let to_z_up = |p: V3| -> V3 {
         let p = p * layer.meters_per_unit;
         if layer.up_y {
@@ -116,6 +116,13 @@ fn read(text: &str, name: &str) -> Result<Clip, String> {
         }
         let points = mesh.attribute("points").expect("found by its points");
         let skinning = Skinning::of(&paths, &chain)?;
+        let count = points
+            .default
+            .as_ref()
+            .or(points.samples.first().map(|(_, v)| v))
+            .and_then(Value::numbers)
+            .map_or(0, |p| p.len() / 3);
+        check_points(&mesh.name, frames, count)?;
         let mut frame_list = Vec::with_capacity(frames);
         for k in 0..frames {
             let t = start + k as f64 * step;
