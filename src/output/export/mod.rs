@@ -22,6 +22,7 @@ pub mod fall;
 mod format;
 pub mod frame;
 pub mod glb;
+mod gltf_data;
 mod look;
 pub mod pc2;
 mod read;
