@@ -52,7 +52,7 @@ pub struct BreedArgs {
     #[arg(long)]
     pub archive: bool,
     /// Breed toward the motion of this fall (CSV by header names: t,x,y,z, optional
-    /// qw,qx,qy,qz and area columns): its class and the descriptors its record measures
+    /// qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf or .usda): its class and the descriptors its record measures
     /// (with orientation: descent, spin, tumble, flips, reversals, drift, period, spreads;
     /// positions only: descent, drift, and tumble from the areas).
     #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
@@ -60,9 +60,20 @@ pub struct BreedArgs {
     /// The example's chord, metres, for --like [default: an animation file's own, else the prototype's chord].
     #[arg(long, requires = "like")]
     pub size: Option<f64>,
-    /// The --like file's vertical axis: z (leafmagic's) or y (turned to z up on reading).
-    #[arg(long, default_value = "z", requires = "like")]
+    /// The --like CSV's vertical axis: z (leafmagic's), y (turned to z up on reading), or -y (a y that points down, as image rows do; write --up=-y).
+    #[arg(
+        long,
+        default_value = "z",
+        requires = "like",
+        allow_hyphen_values = true
+    )]
     pub up: leafmagic::motion::trajectory::UpAxis,
+    /// Metres per unit of the --like CSV's x, y, z (a tracker's pixels: the metres one pixel spans in the plane of the fall).
+    #[arg(long, default_value_t = 1.0, requires = "like")]
+    pub scale: f64,
+    /// The --like CSV's t counts frames at this rate (frames per second), not seconds.
+    #[arg(long, requires = "like")]
+    pub frame_rate: Option<f64>,
     /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
     /// unset ones are free), within the class of --target if given (else any class).
     #[arg(long, value_name = "NAME=VALUE,...")]
@@ -259,9 +270,15 @@ pub struct FallArgs {
     /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or an animation file's mesh's own].
     #[arg(long)]
     pub size: Option<f64>,
-    /// The file's vertical axis: z (leafmagic's) or y (turned to z up on reading); glTF is y up by its specification, USD says its own.
-    #[arg(long, default_value = "z")]
+    /// A CSV's vertical axis: z (leafmagic's), y (turned to z up on reading), or -y (a y that points down, as image rows do; write --up=-y); glTF is y up by its specification, USD says its own.
+    #[arg(long, default_value = "z", allow_hyphen_values = true)]
     pub up: leafmagic::motion::trajectory::UpAxis,
+    /// Metres per unit of a CSV's x, y, z (a tracker's pixels: the metres one pixel spans in the plane of the fall).
+    #[arg(long, default_value_t = 1.0)]
+    pub scale: f64,
+    /// A CSV's t counts frames at this rate (frames per second), not seconds.
+    #[arg(long)]
+    pub frame_rate: Option<f64>,
     /// The object to read from an animation file that animates several (its glTF node's or USD Xform's name).
     #[arg(long)]
     pub object: Option<String>,
@@ -341,15 +358,51 @@ pub struct CompareArgs {
     /// The leaves' chord, metres: one for both falls, or A,B (a real square of 4.2 cm against a 5 cm leaf: 0.042,0.05) [default: 0.05, or an animation file's mesh's own].
     #[arg(long)]
     pub size: Option<EachFile<f64>>,
-    /// The files' vertical axis, z (leafmagic's) or y (turned to z up on reading): one for both, or A,B (a tracker's y-up record against a drop's: y,z).
-    #[arg(long, default_value = "z")]
+    /// The CSVs' vertical axis, z (leafmagic's), y (turned to z up on reading) or -y (pointing down, as image rows do): one for both, or A,B (a tracker's y-up record against a drop's: y,z).
+    #[arg(long, default_value = "z", allow_hyphen_values = true)]
     pub up: EachFile<leafmagic::motion::trajectory::UpAxis>,
+    /// Metres per unit of the CSVs' x, y, z: one for both, or A,B (a pixel track against a drop: 0.0004,1).
+    #[arg(long, default_value = "1")]
+    pub scale: EachFile<f64>,
+    /// The CSVs' t counts frames at this rate, not seconds: one for both, or A,B.
+    #[arg(long)]
+    pub frame_rate: Option<EachFile<f64>>,
     /// The object to read from animation files that animate several: one name for both, or A,B.
     #[arg(long)]
     pub object: Option<EachFile<String>>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
+}
+
+impl FallArgs {
+    /// How the file is read if it is a CSV record.
+    pub fn units(&self) -> super::input::CsvUnits {
+        super::input::CsvUnits {
+            up: self.up,
+            scale: self.scale,
+            frame_rate: self.frame_rate,
+        }
+    }
+}
+
+impl CompareArgs {
+    /// How each file is read if it is a CSV record.
+    pub fn units(&self) -> [super::input::CsvUnits; 2] {
+        let rate = |pick: fn(EachFile<f64>) -> f64| self.frame_rate.map(pick);
+        [
+            super::input::CsvUnits {
+                up: self.up.0,
+                scale: self.scale.0,
+                frame_rate: rate(|r| r.0),
+            },
+            super::input::CsvUnits {
+                up: self.up.1,
+                scale: self.scale.1,
+                frame_rate: rate(|r| r.1),
+            },
+        ]
+    }
 }
 
 /// A flag's value for each of two files: `V` for both, or `A,B`.

@@ -31,7 +31,15 @@ pub fn breed(args: BreedArgs) -> Result<()> {
             // whatever form it came: it is described at the size the
             // chosen prototype needs, and copied into the run as read.
             let example = match &args.like {
-                Some(path) => Some(input::read_record(path, args.up, None)?),
+                Some(path) => Some(input::read_record(
+                    path,
+                    input::CsvUnits {
+                        up: args.up,
+                        scale: args.scale,
+                        frame_rate: args.frame_rate,
+                    },
+                    None,
+                )?),
                 None => None,
             };
             let (prototype, like) = choose_prototype(&args, from.as_ref(), example.as_ref())?;

@@ -73,13 +73,47 @@ pub fn check_size(size: Option<f64>) -> Result<()> {
     }
 }
 
-/// Reads a recorded fall: a CSV record whose vertical axis is `up`, or a
-/// glTF animation (y up by its specification, read so), of which `object`
-/// names the one to read where several move. What the reading noticed
-/// goes to stderr.
-pub fn read_record(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Record> {
+/// How a CSV record's numbers are read: its vertical axis, the metres in
+/// one of its length units (a tracker's pixel, once measured against a
+/// ruler in the frame), and the frame rate if its `t` counts frames.
+/// Animation files say their own (glTF: y up, metres, seconds; USD its
+/// stage metadata).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CsvUnits {
+    /// The record's vertical axis (`--up`).
+    pub up: UpAxis,
+    /// Metres per unit of its x, y, z (`--scale`; 1 for metres).
+    pub scale: f64,
+    /// Frames per second when `t` is a frame number (`--frame-rate`).
+    pub frame_rate: Option<f64>,
+}
+
+impl CsvUnits {
+    /// Checks the flags: a finite, positive scale and frame rate.
+    fn check(&self) -> Result<()> {
+        if !(self.scale > 0.0 && self.scale.is_finite()) {
+            bail!(
+                "--scale must be a positive number of metres per unit of the file's lengths, got {}",
+                self.scale
+            );
+        }
+        if let Some(r) = self.frame_rate
+            && !(r > 0.0 && r.is_finite())
+        {
+            bail!("--frame-rate must be a positive number of frames per second, got {r}");
+        }
+        Ok(())
+    }
+}
+
+/// Reads a recorded fall: a CSV record read in `units`, or an animation
+/// file (glTF, y up by its specification; USD, as its stage says), of
+/// which `object` names the one to read where several move. What the
+/// reading noticed goes to stderr.
+pub fn read_record(path: &Path, units: CsvUnits, object: Option<&str>) -> Result<Record> {
+    units.check()?;
     let record = if export::fall::AnimationFormat::of(path).is_some() {
-        read_animation(path, up, object)?
+        read_animation(path, units, object)?
     } else {
         if let Some(object) = object {
             bail!(
@@ -87,7 +121,7 @@ pub fn read_record(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Reco
                 path.display()
             );
         }
-        read_csv_record(path, up)?
+        read_csv_record(path, units)?
     };
     for note in implausible_units(&record.trajectory) {
         eprintln!("note: {}: {note}", path.display());
@@ -97,9 +131,14 @@ pub fn read_record(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Reco
 
 /// Reads and classifies a recorded fall ([`read_record`]) with chord `size`
 /// (default: an animation's own, [`DEFAULT_SIZE_M`] for a CSV record).
-pub fn read_fall(path: &Path, size: Option<f64>, up: UpAxis, object: Option<&str>) -> Result<Fall> {
+pub fn read_fall(
+    path: &Path,
+    size: Option<f64>,
+    units: CsvUnits,
+    object: Option<&str>,
+) -> Result<Fall> {
     check_size(size)?;
-    let record = read_record(path, up, object)?;
+    let record = read_record(path, units, object)?;
     let size = record.size_or(size);
     let classification = classify::classify(&record.trajectory, size);
     Ok(Fall {
@@ -110,8 +149,9 @@ pub fn read_fall(path: &Path, size: Option<f64>, up: UpAxis, object: Option<&str
 }
 
 /// [`read_record`] of a CSV record.
-fn read_csv_record(path: &Path, up: UpAxis) -> Result<Record> {
-    let (traj, notes) = Trajectory::read_csv_with(path, up)?;
+fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
+    let (mut traj, notes) = Trajectory::read_csv_with(path, units.up)?;
+    traj.rescale(units.scale, units.frame_rate);
     if !notes.ignored_columns.is_empty() {
         eprintln!(
             "note: {}: ignored column{} {}",
@@ -150,11 +190,17 @@ fn read_csv_record(path: &Path, up: UpAxis) -> Result<Record> {
 
 /// [`read_record`] of a glTF file: the fall of its moving object
 /// ([`export::fall`]).
-fn read_animation(path: &Path, up: UpAxis, object: Option<&str>) -> Result<Record> {
+fn read_animation(path: &Path, units: CsvUnits, object: Option<&str>) -> Result<Record> {
     let fall = export::fall::read_fall(path, object)?;
-    if up != UpAxis::Z {
+    if units.up != UpAxis::Z {
         eprintln!(
             "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis): read as such",
+            path.display()
+        );
+    }
+    if units.scale != 1.0 || units.frame_rate.is_some() {
+        eprintln!(
+            "note: {}: --scale and --frame-rate do not apply to an animation file, which says its own units (glTF: metres and seconds; USD: metersPerUnit and timeCodesPerSecond): read as such",
             path.display()
         );
     }
@@ -222,14 +268,14 @@ fn implausible_units(traj: &Trajectory) -> Vec<String> {
     let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
     if median > MAX_PLAUSIBLE_INTERVAL_S {
         notes.push(format!(
-            "its samples are {median:.3} s apart (median), slower than any camera or simulator records a fall: t must be in seconds; is it in frames or milliseconds?"
+            "its samples are {median:.3} s apart (median), slower than any camera or simulator records a fall: t must be in seconds; is it in frames or milliseconds? (--frame-rate FPS reads a t that counts frames)"
         ));
     }
     let fall = p0.z - p1.z;
     let speed = fall / (t1 - t0);
     if speed > MAX_PLAUSIBLE_DESCENT_M_S {
         notes.push(format!(
-            "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres, centimetres or image pixels (a tracker calibrated to metres writes metres)?",
+            "it falls {fall:.3} m in {:.3} s ({speed:.0} m/s on average), faster than leaves fall through air (under {MAX_PLAUSIBLE_DESCENT_M_S} m/s): x, y, z must be in metres; is the file in millimetres, centimetres or image pixels? (--scale METRES_PER_UNIT reads them, --up=-y a y that counts image rows down)",
             t1 - t0
         ));
     }
@@ -241,10 +287,10 @@ fn implausible_units(traj: &Trajectory) -> Vec<String> {
 pub fn describe_fall(
     path: &Path,
     size: Option<f64>,
-    up: UpAxis,
+    units: CsvUnits,
     object: Option<&str>,
 ) -> Result<(Fall, Descriptors)> {
-    let fall = read_fall(path, size, up, object)?;
+    let fall = read_fall(path, size, units, object)?;
     let d = describe(path, &fall.classification)?;
     Ok((fall, d))
 }

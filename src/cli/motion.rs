@@ -9,7 +9,12 @@ use serde_json::json;
 
 /// `classify`: names the motion of a recorded fall.
 pub fn classify(args: FallArgs) -> Result<()> {
-    let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
+    let fall = input::read_fall(
+        &args.trajectory,
+        args.size,
+        args.units(),
+        args.object.as_deref(),
+    )?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     if args.json {
         // The classification's own fields in their order, then the notes.
@@ -91,7 +96,12 @@ fn descriptors_json(d: &Descriptors) -> serde_json::Value {
 /// of them the record could not give. An undetermined fall has none; that
 /// is an answer (with its reason), not an error, as in `classify`.
 pub fn describe(args: FallArgs) -> Result<()> {
-    let fall = input::read_fall(&args.trajectory, args.size, args.up, args.object.as_deref())?;
+    let fall = input::read_fall(
+        &args.trajectory,
+        args.size,
+        args.units(),
+        args.object.as_deref(),
+    )?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     let d = Descriptors::of(c).ok();
     if args.json {
@@ -140,8 +150,9 @@ pub fn compare(args: CompareArgs) -> Result<()> {
         Some(EachFile(a, b)) => (Some(a.as_str()), Some(b.as_str())),
         None => (None, None),
     };
-    let (_, a) = input::describe_fall(&args.a, size(|s| s.0), args.up.0, object_a)?;
-    let (_, b) = input::describe_fall(&args.b, size(|s| s.1), args.up.1, object_b)?;
+    let [units_a, units_b] = args.units();
+    let (_, a) = input::describe_fall(&args.a, size(|s| s.0), units_a, object_a)?;
+    let (_, b) = input::describe_fall(&args.b, size(|s| s.1), units_b, object_b)?;
     let d = describe::distance(&a, &b);
     if args.json {
         let side = descriptors_json;

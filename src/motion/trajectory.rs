@@ -221,7 +221,10 @@ pub enum TrajectoryError {
 /// Which world axis points up in a file. leafmagic works with z up; a file
 /// with y up (as many animation tools and trackers write) is turned about x
 /// by +90° on reading, so that its y becomes z: (x, y, z) → (x, −z, y), and
-/// the orientation q → r q with r that rotation.
+/// the orientation q → r q with r that rotation. A file whose y points
+/// down (image rows, as a tracker's pixel coordinates count them) is
+/// turned about x by −90°: (x, y, z) → (x, z, −y), a rotation too, so an
+/// orientation stays one.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum UpAxis {
     /// z up, gravity along −z (leafmagic's convention).
@@ -229,6 +232,8 @@ pub enum UpAxis {
     Z,
     /// y up, gravity along −y.
     Y,
+    /// y down, gravity along +y (image coordinates).
+    YDown,
 }
 
 impl std::str::FromStr for UpAxis {
@@ -237,7 +242,10 @@ impl std::str::FromStr for UpAxis {
         match s.trim() {
             "z" | "Z" => Ok(UpAxis::Z),
             "y" | "Y" => Ok(UpAxis::Y),
-            other => Err(format!("`{other}` is not an up axis (expected z or y)")),
+            "-y" | "-Y" | "y-down" => Ok(UpAxis::YDown),
+            other => Err(format!(
+                "`{other}` is not an up axis (expected z, y, or -y for a y that points down as image rows do)"
+            )),
         }
     }
 }
@@ -665,7 +673,7 @@ impl Trajectory {
         })?;
         let vertical = match up {
             UpAxis::Z => 2,
-            UpAxis::Y => 1,
+            UpAxis::Y | UpAxis::YDown => 1,
         };
         if missing_position == Some(vertical) {
             let name = REQUIRED_COLUMNS[1 + vertical];
@@ -675,7 +683,7 @@ impl Trajectory {
                 problem: format!(
                     "no column `{name}`, the vertical (--up {name}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
                     if up == UpAxis::Z {
-                        " (with --up y, `y` is the vertical)"
+                        " (with --up y, or --up=-y where it points down, `y` is the vertical)"
                     } else {
                         ""
                     }
@@ -801,8 +809,10 @@ impl Trajectory {
         if traj.is_empty() {
             return Err(TrajectoryError::NoData { file: file() });
         }
-        if up == UpAxis::Y {
-            traj.turn_y_up_to_z_up();
+        match up {
+            UpAxis::Z => {}
+            UpAxis::Y => traj.turn_y_up_to_z_up(),
+            UpAxis::YDown => traj.turn_y_down_to_z_up(),
         }
         Ok((
             traj,
@@ -822,6 +832,31 @@ impl Trajectory {
         }
         for q in &mut self.orientation {
             *q = r * *q;
+        }
+    }
+
+    /// Turns a record written with y down into z up (see [`UpAxis`]).
+    fn turn_y_down_to_z_up(&mut self) {
+        let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2);
+        for p in &mut self.position {
+            *p = Vector3::new(p.x, p.z, -p.y);
+        }
+        for q in &mut self.orientation {
+            *q = r * *q;
+        }
+    }
+
+    /// Multiplies every position by `metres_per_unit` and divides every
+    /// time by `frames_per_second` where given (a tracker's record in
+    /// pixels, its `t` a frame number); orientations and areas unchanged.
+    pub fn rescale(&mut self, metres_per_unit: f64, frames_per_second: Option<f64>) {
+        for p in &mut self.position {
+            *p *= metres_per_unit;
+        }
+        if let Some(fps) = frames_per_second {
+            for t in &mut self.time {
+                *t /= fps;
+            }
         }
     }
 
@@ -1369,6 +1404,34 @@ mod tests {
         assert!((n - Vector3::z()).norm() < 1e-12, "{n}");
         assert!("y".parse::<UpAxis>().unwrap() == UpAxis::Y);
         assert!("w".parse::<UpAxis>().is_err());
+    }
+
+    #[test]
+    fn y_down_files_are_turned_to_z_up_by_a_rotation() {
+        // Image rows: falling along +y; a plate whose normal is the file's
+        // up (−y) at row 1 (turned 90° about x from its rest normal z).
+        let s = 0.5f64.sqrt();
+        let text =
+            format!("t,x,y,z,qw,qx,qy,qz\n0,0,-1,0,1,0,0,0\n0.1,0.05,-0.9,0.02,{s},{s},0,0\n");
+        let (tr, _) =
+            Trajectory::from_csv_reader_with(text.as_bytes(), "down.csv", UpAxis::YDown).unwrap();
+        // (x, y, z) → (x, z, −y): 1 m up, then 0.9 m and 2 cm along +y.
+        assert_eq!(tr.position[0], Vector3::new(0.0, 0.0, 1.0));
+        assert!((tr.position[1] - Vector3::new(0.05, 0.02, 0.9)).norm() < 1e-15);
+        let n = tr.orientation[1] * Vector3::z();
+        assert!((n - Vector3::z()).norm() < 1e-12, "{n}");
+        // A rotation, not a mirror: right-handed axes stay right-handed.
+        let q = tr.orientation[0];
+        let (x, y, z) = (q * Vector3::x(), q * Vector3::y(), q * Vector3::z());
+        assert!((x.cross(&y) - z).norm() < 1e-12);
+        for spelled in ["-y", "y-down"] {
+            assert!(spelled.parse::<UpAxis>().unwrap() == UpAxis::YDown);
+        }
+        // Pixels and frame numbers to metres and seconds.
+        let mut tr = tr;
+        tr.rescale(0.001, Some(10.0));
+        assert!((tr.position[0].z - 0.001).abs() < 1e-18);
+        assert!((tr.time[1] - 0.01).abs() < 1e-18);
     }
 
     #[test]

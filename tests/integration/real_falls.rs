@@ -484,6 +484,65 @@ fn one_cameras_view_of_the_squares_mostly_agrees_with_people() {
     );
 }
 
+/// A tracker's raw output: pixels, y counting image rows down, `t` a frame
+/// number. The first real square seen by one camera as such a tracker
+/// writes it (0.4 mm a pixel, 98 fps, the origin at the image's top left)
+/// reads with `--up=-y --scale 0.0004 --frame-rate 98` as its metric `t,x,y`
+/// record does with `--up y`: the same class, and every feature within
+/// 1e-6 (the pixel file is written to 1e-4 px). Without the units it is
+/// undetermined, the notes naming them.
+#[test]
+fn a_pixel_track_reads_as_its_metric_record() {
+    let tr = Trajectory::read_csv(&square_file("square_000")).unwrap();
+    let (metres_per_px, fps) = (0.0004, 98.0);
+    let (mut metric, mut pixels) = (String::from("t,x,y\n"), String::from("t,x,y\n"));
+    for k in 0..tr.len() {
+        // Whole frames for both (the file's times are 0.010204 s steps).
+        let (p, frame) = (tr.position[k], (tr.time[k] * fps).round());
+        metric.push_str(&format!("{},{},{}\n", frame / fps, p.x, p.z));
+        pixels.push_str(&format!(
+            "{},{:.4},{:.4}\n",
+            frame,
+            (p.x + 0.3) / metres_per_px,
+            (1.2 - p.z) / metres_per_px
+        ));
+    }
+    let dir = scratch("pixel-tracker");
+    let (m, px) = (dir.join("metres.csv"), dir.join("pixels.csv"));
+    std::fs::write(&m, metric).unwrap();
+    std::fs::write(&px, pixels).unwrap();
+    let (want, _) = classify_json(&m, "0.042", &["--up", "y"]);
+    let (got, _) = classify_json(
+        &px,
+        "0.042",
+        &["--up=-y", "--scale", "0.0004", "--frame-rate", "98"],
+    );
+    assert_eq!(
+        (&got["class"], &got["regime"]),
+        (&want["class"], &want["regime"])
+    );
+    let (fw, fg) = (
+        want["features"].as_object().unwrap(),
+        got["features"].as_object().unwrap(),
+    );
+    assert_eq!(fw.keys().collect::<Vec<_>>(), fg.keys().collect::<Vec<_>>());
+    for (name, w) in fw {
+        if let (Some(w), Some(g)) = (w.as_f64(), fg[name].as_f64()) {
+            // Positions differ by the pixels' rounding, 1e-4 px = 4e-8 m.
+            assert!(
+                (g - w).abs() <= 1e-6 * w.abs().max(1e-3),
+                "{name}: {g} from pixels against {w} from metres"
+            );
+        }
+    }
+    let (raw, stderr) = classify_json(&px, "0.042", &["--up=-y"]);
+    assert_eq!(raw["class"], "undetermined");
+    assert!(
+        stderr.contains("in seconds; is it in frames"),
+        "the note names the time unit: {stderr}"
+    );
+}
+
 /// A tracker that loses the leaf writes rows without a position (empty or
 /// NaN): they are left out and noted with their lines (the squares' files
 /// end their lines with CRLF, where the csv crate's line count lags), and

@@ -287,7 +287,7 @@ pub fn classify_path_with(
 /// another axis, or points down (image rows count downward).
 pub(crate) fn rising_hint(chords: f64, min_chords: f64) -> &'static str {
     if chords <= -min_chords {
-        "; it rises instead: is its vertical the right axis (--up y for y up; a y that points down, as image rows do, must be negated)?"
+        "; it rises instead: is its vertical the right axis (--up y for y up, --up=-y for a y that points down as image rows do)?"
     } else {
         ""
     }
