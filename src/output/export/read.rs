@@ -464,18 +464,10 @@ fn read_gltf(
     for root in scene.nodes() {
         mesh_nodes(root, &mut nodes);
     }
-    // World transforms of every node per frame, for meshes below animated
-    // parents and for skins' joints (computed once, only if needed).
-    let composed = nodes
-        .iter()
-        .any(|n| parents[n.index()].is_some() || n.skin().is_some());
-    let worlds: Vec<Vec<M4>> = if composed {
-        (0..frames)
-            .map(|k| world_matrices(doc, &parents, &tracks, start + k as f64 / fps))
-            .collect()
-    } else {
-        Vec::new()
-    };
+    // World transforms of every node at frame k, for meshes below animated
+    // parents and for skins' joints: computed frame by frame, not held for
+    // all frames (a long bake of a deep rig would hold gigabytes).
+    let worlds_at = |k: usize| world_matrices(doc, &parents, &tracks, start + k as f64 / fps);
     let mut objects = Vec::new();
     for node in nodes {
         let Some(mesh) = node.mesh() else { continue };
@@ -523,13 +515,20 @@ fn read_gltf(
                 .map_err(ExportError::Data)?;
         }
         let motion = if parents[node.index()].is_some() || node.skin().is_some() {
+            // The mesh's own vertices at frame k, morph targets applied.
+            let points_at = |k: usize| -> Vec<V3> {
+                let weights = weights_at(start + k as f64 / fps);
+                base.iter()
+                    .enumerate()
+                    .map(|(i, b)| V3::from(morphed(i, b, &weights)))
+                    .collect()
+            };
             composed_motion(
                 &node,
-                &worlds,
-                &base,
+                frames,
+                worlds_at,
+                points_at,
                 influences.as_ref(),
-                |k| weights_at(start + k as f64 / fps),
-                &morphed,
                 get,
             )?
         } else {
@@ -855,15 +854,15 @@ where
 /// The motion of a mesh below other nodes, or skinned: every vertex in
 /// world space per frame. A plain mesh takes its node's world transform;
 /// a skinned one is moved by its joints, Σ w_j (world_j · inverseBind_j) p,
-/// its own node's transform ignored as glTF says. Morph targets apply
-/// first, in the mesh's own space.
+/// its own node's transform ignored as glTF says. `points_at(k)` gives the
+/// mesh's own vertices at frame k (morph targets applied, in its space),
+/// `worlds_at(k)` every node's world transform then.
 fn composed_motion<'a, 's, F>(
     node: &gltf::Node<'a>,
-    worlds: &[Vec<M4>],
-    base: &[[f32; 3]],
+    frames: usize,
+    worlds_at: impl Fn(usize) -> Vec<M4>,
+    points_at: impl Fn(usize) -> Vec<V3>,
     influences: Option<&Influences>,
-    weights_at: impl Fn(usize) -> Vec<f64>,
-    morphed: &impl Fn(usize, &[f32; 3], &[f64]) -> [f64; 3],
     get: F,
 ) -> Result<Motion, ExportError>
 where
@@ -893,16 +892,9 @@ where
         }
         _ => None,
     };
-    let frames = worlds
-        .iter()
-        .enumerate()
-        .map(|(k, world)| {
-            let weights = weights_at(k);
-            let points: Vec<V3> = base
-                .iter()
-                .enumerate()
-                .map(|(i, b)| V3::from(morphed(i, b, &weights)))
-                .collect();
+    let frames = (0..frames)
+        .map(|k| {
+            let (world, points) = (worlds_at(k), points_at(k));
             let placed = match &skin {
                 Some((joints, inverse_bind, inf)) => {
                     let matrices: Vec<M4> = joints
