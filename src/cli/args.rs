@@ -376,13 +376,15 @@ pub struct CompareArgs {
 }
 
 impl FallArgs {
-    /// How the file is read if it is a CSV record.
-    pub fn units(&self) -> super::input::CsvUnits {
-        super::input::CsvUnits {
+    /// The fall the arguments name, read and classified
+    /// ([`super::input::read_fall`]).
+    pub fn read(&self) -> anyhow::Result<super::input::Fall> {
+        let units = super::input::CsvUnits {
             up: self.up,
             scale: self.scale,
             frame_rate: self.frame_rate,
-        }
+        };
+        super::input::read_fall(&self.trajectory, self.size, units, self.object.as_deref())
     }
 }
 

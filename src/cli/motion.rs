@@ -9,12 +9,7 @@ use serde_json::json;
 
 /// `classify`: names the motion of a recorded fall.
 pub fn classify(args: FallArgs) -> Result<()> {
-    let fall = input::read_fall(
-        &args.trajectory,
-        args.size,
-        args.units(),
-        args.object.as_deref(),
-    )?;
+    let fall = args.read()?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     if args.json {
         // The classification's own fields in their order, then the notes.
@@ -96,12 +91,7 @@ fn descriptors_json(d: &Descriptors) -> serde_json::Value {
 /// of them the record could not give. An undetermined fall has none; that
 /// is an answer (with its reason), not an error, as in `classify`.
 pub fn describe(args: FallArgs) -> Result<()> {
-    let fall = input::read_fall(
-        &args.trajectory,
-        args.size,
-        args.units(),
-        args.object.as_deref(),
-    )?;
+    let fall = args.read()?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     let d = Descriptors::of(c).ok();
     if args.json {

@@ -809,11 +809,7 @@ impl Trajectory {
         if traj.is_empty() {
             return Err(TrajectoryError::NoData { file: file() });
         }
-        match up {
-            UpAxis::Z => {}
-            UpAxis::Y => traj.turn_y_up_to_z_up(),
-            UpAxis::YDown => traj.turn_y_down_to_z_up(),
-        }
+        traj.turn_to_z_up(up);
         Ok((
             traj,
             ReadNotes {
@@ -824,22 +820,19 @@ impl Trajectory {
         ))
     }
 
-    /// Turns a record written with y up into z up (see [`UpAxis`]).
-    fn turn_y_up_to_z_up(&mut self) {
-        let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2);
+    /// Turns a record written with `up` as its vertical into z up (see
+    /// [`UpAxis`]): a quarter turn about x, its positions by swapping
+    /// components (exact, where the rotation matrix's cos(π/2) is not 0).
+    fn turn_to_z_up(&mut self, up: UpAxis) {
+        let sign = match up {
+            UpAxis::Z => return,
+            UpAxis::Y => 1.0,
+            UpAxis::YDown => -1.0,
+        };
+        let r =
+            UnitQuaternion::from_axis_angle(&Vector3::x_axis(), sign * std::f64::consts::FRAC_PI_2);
         for p in &mut self.position {
-            *p = Vector3::new(p.x, -p.z, p.y);
-        }
-        for q in &mut self.orientation {
-            *q = r * *q;
-        }
-    }
-
-    /// Turns a record written with y down into z up (see [`UpAxis`]).
-    fn turn_y_down_to_z_up(&mut self) {
-        let r = UnitQuaternion::from_axis_angle(&Vector3::x_axis(), -std::f64::consts::FRAC_PI_2);
-        for p in &mut self.position {
-            *p = Vector3::new(p.x, p.z, -p.y);
+            *p = Vector3::new(p.x, -sign * p.z, sign * p.y);
         }
         for q in &mut self.orientation {
             *q = r * *q;

@@ -486,7 +486,6 @@ fn read_gltf(
         else {
             continue;
         };
-        let (t0, r0, s0) = node.transform().decomposed();
         let track = |p: Property| track_of(&tracks, node.index(), p);
         let default_weights: Vec<f64> = mesh
             .weights()
@@ -508,13 +507,13 @@ fn read_gltf(
             }
             p
         };
-        let deforms =
-            parents[node.index()].is_some() || node.skin().is_some() || !targets.is_empty();
-        if deforms {
+        // Below other nodes or skinned: placed vertex by vertex.
+        let composed = parents[node.index()].is_some() || node.skin().is_some();
+        if composed || !targets.is_empty() {
             check_points(node.name().unwrap_or("a mesh"), frames, base.len())
                 .map_err(ExportError::Data)?;
         }
-        let motion = if parents[node.index()].is_some() || node.skin().is_some() {
+        let motion = if composed {
             // The mesh's own vertices at frame k, morph targets applied.
             let points_at = |k: usize| -> Vec<V3> {
                 let weights = weights_at(start + k as f64 / fps);
@@ -538,10 +537,7 @@ fn read_gltf(
             let mut weights = Vec::with_capacity(frames);
             for k in 0..frames {
                 let t = start + k as f64 / fps;
-                let tr =
-                    track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
-                let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
-                let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
+                let (tr, r, s) = trs(&node, &tracks, t);
                 // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
                 let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
                 translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
@@ -651,6 +647,22 @@ fn track_of(
         .map(|(_, _, t)| t)
 }
 
+/// A node's translation, rotation (glTF's `[x, y, z, w]`) and scale at
+/// time `t`: its channels' values where it has them, else its own.
+fn trs(
+    node: &gltf::Node<'_>,
+    tracks: &[(usize, Property, Track)],
+    t: f64,
+) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+    let track = |p| track_of(tracks, node.index(), p);
+    let (t0, r0, s0) = node.transform().decomposed();
+    (
+        track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t)),
+        track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t)),
+        track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t)),
+    )
+}
+
 /// A node's local transform at time `t` (glTF axes, column vectors): its
 /// animated or default translation, rotation and scale as T·R·S, or its
 /// `matrix` where it has one and no channel moves it (glTF forbids
@@ -664,10 +676,7 @@ fn local_matrix(node: &gltf::Node<'_>, tracks: &[(usize, Property, Track)], t: f
         let columns = node.transform().matrix();
         return M4::from_fn(|r, c| columns[c][r] as f64);
     }
-    let (t0, r0, s0) = node.transform().decomposed();
-    let tr = track(Property::Translation).map_or(t0.map(f64::from).to_vec(), |x| x.at(t));
-    let r = track(Property::Rotation).map_or(r0.map(f64::from).to_vec(), |x| x.at(t));
-    let s = track(Property::Scale).map_or(s0.map(f64::from).to_vec(), |x| x.at(t));
+    let (tr, r, s) = trs(node, tracks, t);
     let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], r[1], r[2]));
     let mut m = q.to_homogeneous();
     for c in 0..3 {

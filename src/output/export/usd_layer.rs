@@ -217,6 +217,16 @@ pub(super) struct Attribute {
 }
 
 impl Attribute {
+    /// How many 3-vectors its default (else its first sample) holds: a
+    /// mesh's point count.
+    pub(super) fn vector_count(&self) -> usize {
+        self.default
+            .as_ref()
+            .or(self.samples.first().map(|(_, v)| v))
+            .and_then(Value::numbers)
+            .map_or(0, |p| p.len() / 3)
+    }
+
     /// A metadata entry by key.
     pub(super) fn meta(&self, key: &str) -> Option<&Value> {
         self.metadata.iter().find(|(k, _)| k == key).map(|(_, v)| v)

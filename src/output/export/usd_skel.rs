@@ -419,11 +419,7 @@ fn influences(
             None => Ok(i),
         }
     };
-    let points = mesh
-        .attribute("points")
-        .and_then(|a| a.default.as_ref().or(a.samples.first().map(|(_, v)| v)))
-        .and_then(Value::numbers)
-        .map_or(0, |p| p.len() / 3);
+    let points = mesh.attribute("points").map_or(0, Attribute::vector_count);
     let repeat = if constant { points } else { 1 };
     let joints_of = ji
         .iter()

@@ -116,13 +116,7 @@ fn read(text: &str, name: &str) -> Result<Clip, String> {
         }
         let points = mesh.attribute("points").expect("found by its points");
         let skinning = Skinning::of(&paths, &chain)?;
-        let count = points
-            .default
-            .as_ref()
-            .or(points.samples.first().map(|(_, v)| v))
-            .and_then(Value::numbers)
-            .map_or(0, |p| p.len() / 3);
-        check_points(&mesh.name, frames, count)?;
+        check_points(&mesh.name, frames, points.vector_count())?;
         let mut frame_list = Vec::with_capacity(frames);
         for k in 0..frames {
             let t = start + k as f64 * step;
