@@ -71,6 +71,14 @@ pub enum Command {
     /// Merge the shard files of a generation that something else evaluated (a Kubernetes
     /// Indexed Job, a Slurm array) into the run: its files and checkpoint, as breed would.
     Merge(MergeArgs),
+    /// Compose a USD stage and print it as one flat layer in JSON: what
+    /// reading a binary, packaged or composed USD file runs in a child
+    /// process (src/output/export/usd_stage.rs says why).
+    #[command(hide = true)]
+    ComposeUsd {
+        /// The USD file.
+        file: std::path::PathBuf,
+    },
 }
 
 /// Runs the parsed command.
@@ -89,5 +97,6 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Preview(args) => output::preview(args),
         Command::Shard(args) => breed::shard(args),
         Command::Merge(args) => breed::merge(args),
+        Command::ComposeUsd { file } => output::compose_usd(&file),
     }
 }

@@ -607,7 +607,13 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         dir.join("ext/tumble_thick_separate.bin"),
     )
     .unwrap();
-    let cases: [(&str, Vec<u8>, &str); 17] = [
+    // The rigged card's crate file with eight bytes at `at` set to 0xff.
+    let damaged = |at: usize| {
+        let mut b = std::fs::read(data("usd/composed/tumble_thick_rigged.usdc")).unwrap();
+        b[at..at + 8].fill(0xff);
+        b
+    };
+    let cases: [(&str, Vec<u8>, &str); 19] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -619,12 +625,34 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
             std::fs::read(data("blender/tumble_thick_separate.gltf")).unwrap(),
             "tumble_thick_separate.bin",
         ),
-        ("bake.usdc", b"PXR-USDC\x00\x00\x00\x00".to_vec(), "usdcat"),
-        ("pack.usdz", b"PK\x03\x04\x00\x00".to_vec(), "USDZ package"),
+        // Binary, packaged and composed USD (read through openusd in a
+        // child process, src/output/export/usd_stage.rs).
+        (
+            "bake.usdc",
+            b"PXR-USDC\x00\x00\x00\x00".to_vec(),
+            "failed to parse USDC layer",
+        ),
+        (
+            "pack.usdz",
+            b"PK\x03\x04\x00\x00".to_vec(),
+            "failed to open USDZ archive",
+        ),
         (
             "shot.usda",
             b"#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n".to_vec(),
-            "subLayers",
+            "it does not compose: unresolved sublayer @anim.usda@",
+        ),
+        // Damaged crate files, found by the fuzz harness: openusd 0.6
+        // indexed past a table, and asked for 17 TB (which aborts).
+        (
+            "indexed.usdc",
+            damaged(20728),
+            "the USD library (openusd) failed on it: index out of bounds",
+        ),
+        (
+            "greedy.usdc",
+            damaged(2589),
+            "stopped on it (signal: 6 (SIGABRT): memory allocation of 17592186044400 bytes failed)",
         ),
         (
             // Skinned to a skeleton the layer does not hold.
@@ -812,4 +840,74 @@ fn blender_usd_reads_as_its_gltf() {
         let b = read_fall(&data(&format!("blender/{name}.glb")), None).unwrap();
         same_class(name, (&a.trajectory, 0.04), (&b.trajectory, 0.04));
     }
+}
+
+/// USD as pipelines store it: binary crate files (`.usdc`, and a `.usd`
+/// holding one), a USDZ package, and a shot composed of layers (a sublayer
+/// retimed by offset 10 and scale ½, a reference to a crate-file asset
+/// that holds its mesh by payload, a variant selection that scales it 2×,
+/// an xformOpOrder inherited from a class, an inactive prim). Each reads
+/// as its text: the Blender and hand-written layers they were made from,
+/// and for the shot, what Pixar's own library flattens it to
+/// (`shot.flat.usda`, by `tests/data/usd/composed/make.py`, usd-core 26.11).
+/// The descriptors of the fall must be the same numbers, to the bit.
+#[test]
+fn crate_files_packages_and_composed_stages_read_as_their_text() {
+    let describe = |file: &str, object: Option<&str>| {
+        let mut cmd = leafmagic();
+        cmd.args(["describe", "--json"]).arg(data(file));
+        if let Some(o) = object {
+            cmd.args(["--object", o]);
+        }
+        let o = cmd.output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr).into_owned();
+        assert!(o.status.success(), "{file}: {err}");
+        let mut json: Value = serde_json::from_slice(&o.stdout).unwrap();
+        json.as_object_mut().unwrap().remove("file");
+        (json, err)
+    };
+    for (binary, text, object) in [
+        (
+            "usd/composed/tumble_thick.usdz",
+            "blender/tumble_thick.usda",
+            None,
+        ),
+        (
+            "usd/composed/tumble_thick_crate.usd",
+            "blender/tumble_thick.usda",
+            None,
+        ),
+        (
+            "usd/composed/tumble_thick_rigged.usdc",
+            "blender/tumble_thick_rigged.usda",
+            None,
+        ),
+        (
+            "usd/composed/skinned_leaf.usdc",
+            "usd/skinned_leaf.usda",
+            Some("blade"),
+        ),
+        (
+            "usd/composed/shot.usda",
+            "usd/composed/shot.flat.usda",
+            None,
+        ),
+    ] {
+        let (got, _) = describe(binary, object);
+        let (want, _) = describe(text, object);
+        assert_eq!(got, want, "{binary} against {text}");
+    }
+    // The composition did act: the keys run at twice Blender's 24 Hz (the
+    // sublayer's scale ½) and the card is twice its size (the variant).
+    let (_, note) = describe("usd/composed/shot.usda", None);
+    assert!(note.contains("object `leaf`, 241 keys at 48 Hz"), "{note}");
+    let chord = |note: &str| -> f64 {
+        let at = note.find("chord ").unwrap() + 6;
+        note[at..].split(' ').next().unwrap().parse().unwrap()
+    };
+    let (_, blender) = describe("blender/tumble_thick.usda", None);
+    assert!(
+        (chord(&note) / chord(&blender) - 2.0).abs() < 0.01,
+        "{note} / {blender}"
+    );
 }

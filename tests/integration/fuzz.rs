@@ -242,6 +242,14 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
         dir.join("tumble_thick_separate.bin"),
     )
     .unwrap();
+    // A mutated composed shot still finds the layers it names.
+    for layer in ["anim.usda", "card_asset.usdc", "card_mesh.usda"] {
+        std::fs::copy(
+            repo().join("tests/data/usd/composed").join(layer),
+            dir.join(layer),
+        )
+        .unwrap();
+    }
     let kinds: [(&str, Vec<PathBuf>); 4] = [
         (
             "leaf",
@@ -264,7 +272,8 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
         ),
         (
             // Falls in animation files: glTF (JSON and binary, skinned,
-            // quantised) and USD text (nested, UsdSkel).
+            // quantised), USD text (nested, UsdSkel), USD crate files, a
+            // USDZ package and a composed shot.
             "animation",
             [
                 "blender/tumble_thick_separate.gltf",
@@ -273,6 +282,10 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 "blender/tumble_thick_rigged.usda",
                 "blender/tumble_thick_parented.usda",
                 "usd/skinned_leaf.usda",
+                "usd/composed/tumble_thick_rigged.usdc",
+                "usd/composed/skinned_leaf.usdc",
+                "usd/composed/tumble_thick.usdz",
+                "usd/composed/shot.usda",
             ]
             .iter()
             .map(|f| repo().join("tests/data").join(f))

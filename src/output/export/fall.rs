@@ -33,7 +33,7 @@ use super::clip::{ClipObject, Motion};
 use super::error::ExportError;
 use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
 use super::read::read_gltf_keys;
-use super::usda_read::read_usda_keys;
+use super::usda_read::read_usd_file;
 use crate::motion::trajectory::Trajectory;
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -54,8 +54,8 @@ const MOVING_FRACTION_OF_CHORD: f64 = 1e-6;
 pub enum AnimationFormat {
     /// glTF 2.0: `.glb`, `.gltf`.
     Gltf,
-    /// USD: `.usda` (read), `.usd`, `.usdc`, `.usdz` (read if text, else
-    /// refused by name).
+    /// USD: `.usda`, `.usd`, `.usdc`, `.usdz` (text, binary crate files,
+    /// packages; composed stages flattened first).
     Usd,
 }
 
@@ -100,8 +100,7 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
         s.to_string_lossy().into_owned()
     });
     let clip = if AnimationFormat::of(path) == Some(AnimationFormat::Usd) {
-        let text = String::from_utf8_lossy(&bytes);
-        read_usda_keys(&text, &name)
+        read_usd_file(path, &bytes, &name)
     } else {
         read_gltf_keys(&bytes, &name, path.parent())
     }

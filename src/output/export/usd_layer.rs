@@ -14,10 +14,12 @@
 //! linearly (quaternions, alone or in arrays, by slerp) and held outside
 //! them, as USD does.
 //!
-//! What is refused, by name: the binary crate format, USDZ packages, and
-//! layers that need composing (sublayers, references, payloads, inherits,
-//! specializes, variant sets, `over` and `class` prims): `usdcat --flatten`
-//! from Pixar's library writes such a stage as one text layer this reads.
+//! `class` prims and prims authored `active = false` are left out with all
+//! below them, as USD's default traversal leaves them. What this reader
+//! refuses: the binary crate format, USDZ packages, and layers that need
+//! composing (sublayers, references, payloads, inherits, specializes,
+//! variant sets, `over` prims); [`composes`] tells the last apart from a
+//! malformed layer, and [`super::usd_stage`] reads all three.
 
 use nalgebra::{Matrix3, Matrix4, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
@@ -166,14 +168,42 @@ fn tokens(text: &str) -> Result<Vec<(Token, usize)>, String> {
 
 /// A value of USD text: numbers, strings and tokens, tuples and arrays
 /// (both [`Value::List`]), and dictionaries (time samples or metadata).
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(super) enum Value {
-    Number(f64),
+    Number(#[serde(with = "number")] f64),
     Str(String),
     Ident(String),
     Path(String),
     List(Vec<Value>),
     Dict(Vec<(Value, Value)>),
+}
+
+/// A number in JSON (how [`super::usd_stage`] carries a layer back from its
+/// child process): as itself where finite, else as the word USD text
+/// writes (`inf`, `-inf`, `NaN`), which JSON has no number for.
+mod number {
+    use serde::{Deserialize, Deserializer, Serializer, de::Error};
+
+    pub(super) fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
+        if x.is_finite() {
+            s.serialize_f64(*x)
+        } else {
+            s.serialize_str(&x.to_string())
+        }
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Number {
+            Finite(f64),
+            Word(String),
+        }
+        match Number::deserialize(d)? {
+            Number::Finite(x) => Ok(x),
+            Number::Word(w) => w.parse().map_err(D::Error::custom),
+        }
+    }
 }
 
 impl Value {
@@ -208,7 +238,7 @@ impl Value {
 /// An attribute (or a relationship, type `rel`, whose default holds its
 /// target paths): its default value, its time samples (time code, value)
 /// and its metadata (`interpolation`, `elementSize` of a primvar).
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Attribute {
     pub(super) type_name: String,
     pub(super) default: Option<Value>,
@@ -234,7 +264,7 @@ impl Attribute {
 }
 
 /// A prim: its type, attributes by name, and children.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug, Default, serde::Serialize, serde::Deserialize)]
 pub(super) struct Prim {
     pub(super) name: String,
     pub(super) type_name: String,
@@ -382,14 +412,18 @@ impl Parser {
         Ok(out)
     }
 
-    /// `def TYPE "name" (meta) { … }` after its specifier.
-    fn prim(&mut self, specifier: &str) -> Result<Prim, String> {
+    /// `def TYPE "name" (meta) { … }` after its specifier; `None` for a
+    /// prim USD's default traversal leaves out with all below it: a
+    /// `class` (abstract; in a layer that composes nothing, as this reader
+    /// requires, nothing inherits from it) or one authored `active = false`.
+    fn prim(&mut self, specifier: &str) -> Result<Option<Prim>, String> {
         let line = self.line();
-        if specifier != "def" {
+        if specifier == "over" {
             return Err(format!(
-                "line {line}: `{specifier}` prims compose onto others, which this reader does not do"
+                "line {line}: `over` prims compose onto others, which this reader does not do"
             ));
         }
+        let mut shown = specifier == "def";
         let mut prim = Prim::default();
         if let Some(Token::Ident(t)) = self.peek() {
             prim.type_name = t.clone();
@@ -404,7 +438,10 @@ impl Parser {
             }
         };
         if self.is('(') {
-            for (key, _) in self.metadata()? {
+            for (key, value) in self.metadata()? {
+                if key == "active" && matches!(&value, Value::Ident(v) if v == "false") {
+                    shown = false;
+                }
                 if COMPOSED.contains(&key.as_str()) {
                     return Err(format!(
                         "line {line}: prim `{}` has `{key}`, a composition this reader does not do",
@@ -418,7 +455,7 @@ impl Parser {
             let line = self.line();
             match self.next()? {
                 Token::Ident(w) if matches!(w.as_str(), "def" | "over" | "class") => {
-                    prim.children.push(self.prim(&w)?)
+                    prim.children.extend(self.prim(&w)?)
                 }
                 Token::Ident(w) if w == "variantSet" => {
                     return Err(format!(
@@ -436,7 +473,7 @@ impl Parser {
             }
         }
         self.expect('}')?;
-        Ok(prim)
+        Ok(shown.then_some(prim))
     }
 
     /// A property statement whose first word is `first`: qualifiers, a type
@@ -519,7 +556,7 @@ impl Parser {
 }
 
 /// The stage as read: its metadata and root prims.
-#[derive(Debug)]
+#[derive(Debug, serde::Serialize, serde::Deserialize)]
 pub(super) struct Layer {
     /// Whether the stage's up axis is y (USD's default), else z.
     pub(super) up_y: bool,
@@ -529,6 +566,17 @@ pub(super) struct Layer {
     pub(super) time_codes_per_second: f64,
     /// The root prims.
     pub(super) roots: Vec<Prim>,
+}
+
+/// Whether `text` asks for a composition this reader refuses (a
+/// composition arc in any metadata, a variant set, an `over`): what
+/// [`super::usd_stage`] then composes.
+pub(super) fn composes(text: &str) -> bool {
+    tokens(text).is_ok_and(|ts| {
+        ts.iter().any(|(t, _)| {
+            matches!(t, Token::Ident(w) if COMPOSED.contains(&w.as_str()) || w == "variantSet" || w == "over")
+        })
+    })
 }
 
 pub(super) fn parse(text: &str) -> Result<Layer, String> {
@@ -584,7 +632,7 @@ pub(super) fn parse(text: &str) -> Result<Layer, String> {
         match t {
             Token::Ident(w) if matches!(w.as_str(), "def" | "over" | "class") => {
                 p.next()?;
-                layer.roots.push(p.prim(&w)?);
+                layer.roots.extend(p.prim(&w)?);
             }
             t => return Err(format!("line {line}: expected a prim, found {t:?}")),
         }
@@ -818,5 +866,38 @@ mod tests {
         let e = parse("#usda 1.0\ndef Xform \"a\" {\n  double3 xformOp:translate = (1, 2\n}\n")
             .unwrap_err();
         assert!(e.contains("line"), "{e}");
+        // What is refused for composing is what `composes` sends on to
+        // openusd; a malformed layer is not.
+        for text in [
+            "#usda 1.0\ndef Xform \"a\" (\n    references = @other.usda@\n)\n{\n}\n",
+            "#usda 1.0\n(\n    subLayers = [@anim.usda@]\n)\n",
+            "#usda 1.0\nover \"a\" {\n}\n",
+            "#usda 1.0\ndef \"a\" {\n variantSet \"v\" = {\n }\n}\n",
+        ] {
+            assert!(parse(text).is_err() && composes(text), "{text}");
+        }
+        assert!(!composes(
+            "#usda 1.0\ndef Xform \"a\" {\n  double3 x = (1, 2\n}\n"
+        ));
+    }
+
+    /// A `class` (abstract) and an inactive prim are left out with all
+    /// below them, as USD's default traversal leaves them.
+    #[test]
+    fn classes_and_inactive_prims_are_left_out() {
+        let layer = parse(
+            "#usda 1.0\nclass \"_paper\" {\n def Mesh \"m\" {\n }\n}\n\
+             def Xform \"a\" {\n def Xform \"off\" (\n active = false\n ) {\n def Mesh \"m\" {\n }\n }\n\
+             def Xform \"on\" (\n active = true\n ) {\n }\n}\n",
+        )
+        .unwrap();
+        assert_eq!(layer.roots.len(), 1);
+        assert_eq!(layer.roots[0].name, "a");
+        let kept: Vec<&str> = layer.roots[0]
+            .children
+            .iter()
+            .map(|c| c.name.as_str())
+            .collect();
+        assert_eq!(kept, ["on"]);
     }
 }

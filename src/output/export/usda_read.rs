@@ -1,4 +1,5 @@
-//! Animated meshes read from one USD text layer (`.usda`): what leafmagic's
+//! Animated meshes read from USD (a text layer, `.usda`, or through
+//! [`super::usd_stage`] a crate file, a package or a composed stage): what leafmagic's
 //! own USD export writes ([`super::usd`]) and what Blender's USD exporter
 //! writes for an animated object, as a [`Clip`] whose objects deform (every
 //! vertex in world metres, z up, per key), for [`super::fall`].
@@ -11,9 +12,11 @@
 use super::clip::{Clip, ClipObject, Motion};
 use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
-use super::usd_layer::{Prim, Value, local_transform, parse, sample};
+use super::usd_layer::{Layer, Prim, Value, composes, local_transform, parse, sample};
 use super::usd_skel::{Paths, Skinning};
+use super::usd_stage::flatten;
 use nalgebra::{Matrix4, Vector3};
+use std::path::Path;
 
 type V3 = Vector3<f64>;
 type M4 = Matrix4<f64>;
@@ -47,8 +50,33 @@ pub fn read_usda_keys(text: &str, name: &str) -> Result<Clip, ExportError> {
     read(text, name).map_err(ExportError::Data)
 }
 
+/// The clip of the USD file at `path` (its bytes `bytes`), as
+/// [`read_usda_keys`] reads a text layer: one the text reader reads alone
+/// is read so; a binary crate file, a USDZ package or a layer that needs
+/// composing is composed and flattened first ([`super::usd_stage`]).
+pub fn read_usd_file(path: &Path, bytes: &[u8], name: &str) -> Result<Clip, ExportError> {
+    let alone = if bytes.starts_with(b"PXR-USDC") || bytes.starts_with(b"PK") {
+        None
+    } else {
+        let text = String::from_utf8_lossy(bytes);
+        match parse(&text) {
+            Ok(layer) => Some(layer),
+            Err(_) if composes(&text) => None,
+            Err(e) => return Err(ExportError::Data(e)),
+        }
+    };
+    let layer = match alone {
+        Some(layer) => layer,
+        None => flatten(path).map_err(ExportError::Data)?,
+    };
+    read_layer(&layer, name).map_err(ExportError::Data)
+}
+
 fn read(text: &str, name: &str) -> Result<Clip, String> {
-    let layer = parse(text)?;
+    read_layer(&parse(text)?, name)
+}
+
+fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
     let mut codes = Vec::new();
     for r in &layer.roots {
         sample_times(r, &mut codes);

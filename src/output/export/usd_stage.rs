@@ -1,0 +1,423 @@
+//! A USD stage that the text reader ([`super::usd_layer`]) does not read
+//! alone: a binary crate file (`.usdc`, or a `.usd` holding one), a USDZ
+//! package, or layers that need composing (sublayers, references,
+//! payloads, inherits, specializes, variant sets). The openusd crate opens
+//! and composes it (LIVRPS strength order, layer offsets on references
+//! and sublayers, variant selections); this module reads the composed
+//! prims back as one flat [`Layer`], as Pixar's `usdcat --flatten` would
+//! write it, so that the meshes, transforms and skins are read by the same
+//! code as a text layer's.
+//!
+//! What is kept of each prim: its name, type, attributes (type, default,
+//! time samples, `interpolation` and `elementSize`) and relationships
+//! (their composed targets). Prims that are not defined (`over` alone),
+//! abstract (`class`) or inactive are left out, as USD's default traversal
+//! does. Stage metadata (`upAxis`, `metersPerUnit`, `timeCodesPerSecond`,
+//! `framesPerSecond`) is the root layer's, as in USD.
+//!
+//! Single-precision values are read as the shortest decimal that gives
+//! them back, which is what USD writes for them in text: a `.usdc` and the
+//! `.usda` that `usdcat` writes of it then read to the same bits.
+//!
+//! openusd 0.6 trusts the counts and offsets a crate file gives: a damaged
+//! one made it index out of bounds, or ask for an allocation of exabytes,
+//! which aborts the process (6 % of byte-mutated crate files, by
+//! tests/integration/fuzz.rs). So it runs in a child process, the leafmagic
+//! executable's hidden `compose-usd` command ([`compose_usd_stage`]), which
+//! hands the flat layer back as JSON; whatever becomes of the child, the
+//! reader ends with an error that names the file.
+//! (openusd 0.8 bounds those counts, but needs Rust 1.96.)
+
+use super::usd_layer::{Attribute, Layer, Prim, Value};
+use openusd::{gf, sdf, usd};
+use std::path::Path;
+use std::process::Command;
+
+/// The composed stage at `path` as one flat layer, read in a child process
+/// (the module docs say why), or why it cannot be read.
+pub(super) fn flatten(path: &Path) -> Result<Layer, String> {
+    let program = std::env::current_exe()
+        .map_err(|e| format!("cannot find the leafmagic executable to read USD with: {e}"))?;
+    let out = Command::new(&program)
+        .arg("compose-usd")
+        .arg(path)
+        .env("RUST_BACKTRACE", "0")
+        .output()
+        .map_err(|e| format!("cannot start {} to read USD: {e}", program.display()))?;
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let said = stderr.trim();
+    match out.status.code() {
+        Some(0) => serde_json::from_slice(&out.stdout)
+            .map_err(|e| format!("the USD reader's answer did not read back: {e}")),
+        Some(1) if !said.is_empty() => Err(said.to_string()),
+        _ => Err(format!(
+            "the USD library (openusd) stopped on it ({}{}): it is probably damaged; \
+             Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core) says what is \
+             wrong with it, and leafmagic reads what that writes",
+            out.status,
+            // What the runtime says when a count read from the file asked
+            // for more memory than there is.
+            said.lines()
+                .find(|l| l.starts_with("memory allocation of"))
+                .map_or(String::new(), |l| format!(": {l}"))
+        )),
+    }
+}
+
+/// The composed stage at `path` as one flat layer, in JSON: what the
+/// hidden `leafmagic compose-usd FILE` prints, in the child process that
+/// reads a binary, packaged or composed USD file (the module docs say
+/// why). Errors are openusd's own words for a file it cannot open or
+/// compose.
+pub fn compose_usd_stage(path: &Path) -> Result<String, String> {
+    let layer = compose(path)?;
+    serde_json::to_string(&layer).map_err(|e| e.to_string())
+}
+
+/// The composed stage at `path` as one flat layer, in this process.
+fn compose(path: &Path) -> Result<Layer, String> {
+    let file = path
+        .to_str()
+        .ok_or_else(|| "its path is not UTF-8, which the USD reader needs".to_string())?;
+    let stage = usd::Stage::open(file).map_err(|e| format!("{e:#}"))?;
+    if let Some(e) = stage.composition_errors().first() {
+        return Err(format!("it does not compose: {e}"));
+    }
+    let mut layer = Layer {
+        up_y: true,
+        meters_per_unit: 0.01,
+        time_codes_per_second: 24.0,
+        roots: Vec::new(),
+    };
+    {
+        let root = stage.root_layer();
+        let data = root.data();
+        let field = |key: &str| {
+            data.try_field(&sdf::Path::abs_root(), key)
+                .ok()
+                .flatten()
+                .map(|v| v.into_owned())
+        };
+        if let Some(axis) = field("upAxis").as_ref().and_then(text) {
+            layer.up_y = axis != "Z";
+        }
+        if let Some(m) = field("metersPerUnit").as_ref().and_then(number) {
+            layer.meters_per_unit = m;
+        }
+        // framesPerSecond stands in where timeCodesPerSecond is unset, 24
+        // where both are (USD's rule, as the text reader's).
+        let rate = field("timeCodesPerSecond").or_else(|| field("framesPerSecond"));
+        if let Some(r) = rate.as_ref().and_then(number) {
+            layer.time_codes_per_second = r;
+        }
+    }
+    if !(layer.meters_per_unit > 0.0 && layer.time_codes_per_second > 0.0) {
+        return Err("metersPerUnit and timeCodesPerSecond must be positive".to_string());
+    }
+    layer.roots = children(&stage.prim(sdf::Path::abs_root()))?;
+    Ok(layer)
+}
+
+/// An openusd call's error in our words.
+fn failed(e: anyhow::Error) -> String {
+    format!("{e:#}")
+}
+
+/// The composed children of `prim` that a default traversal visits.
+fn children(prim: &usd::Prim) -> Result<Vec<Prim>, String> {
+    let mut out = Vec::new();
+    for child in prim.children().map_err(failed)? {
+        let shown = child.is_defined().map_err(failed)?
+            && child.is_active().map_err(failed)?
+            && !child.is_abstract().map_err(failed)?;
+        if shown {
+            out.push(flat_prim(&child)?);
+        }
+    }
+    Ok(out)
+}
+
+/// One composed prim and those below it.
+fn flat_prim(prim: &usd::Prim) -> Result<Prim, String> {
+    let path = prim.path();
+    let mut flat = Prim {
+        name: path.name().unwrap_or_default().to_string(),
+        type_name: prim
+            .type_name()
+            .map_err(failed)?
+            .map(|t| t.as_str().to_string())
+            .unwrap_or_default(),
+        attributes: Vec::new(),
+        children: Vec::new(),
+    };
+    let at = |e: String| format!("prim `{path}`: {e}");
+    for a in prim.attributes().map_err(|e| at(failed(e)))? {
+        let name = property_name(a.path());
+        let read = || -> Result<Attribute, String> {
+            let default = a.get::<sdf::Value>().map_err(failed)?;
+            let samples = a.time_samples().map_err(failed)?.unwrap_or_default();
+            if let Some((t, _)) = samples.iter().find(|(t, _)| !t.is_finite()) {
+                return Err(format!("a time sample at time code {t}"));
+            }
+            let mut metadata = Vec::new();
+            for key in ["interpolation", "elementSize"] {
+                if let Some(v) = a.get_metadata::<sdf::Value>(key).map_err(failed)? {
+                    metadata.extend(value(&v).map(|v| (key.to_string(), v)));
+                }
+            }
+            Ok(Attribute {
+                type_name: a
+                    .type_name()
+                    .map_err(failed)?
+                    .map(|t| t.as_str().to_string())
+                    .unwrap_or_default(),
+                default: default.as_ref().and_then(value),
+                // A blocked sample (`None` in text) has no value to hold.
+                samples: samples
+                    .iter()
+                    .filter_map(|(t, v)| value(v).map(|v| (*t, v)))
+                    .collect(),
+                metadata,
+            })
+        };
+        let attribute = read().map_err(|e| at(format!("`{name}`: {e}")))?;
+        flat.attributes.push((name, attribute));
+    }
+    for r in prim.relationships().map_err(|e| at(failed(e)))? {
+        let name = property_name(r.path());
+        let targets = r
+            .targets()
+            .map_err(|e| at(format!("`{name}`: {}", failed(e))))?;
+        let default = Value::List(
+            targets
+                .iter()
+                .map(|p| Value::Path(p.as_str().to_string()))
+                .collect(),
+        );
+        flat.attributes.push((
+            name,
+            Attribute {
+                type_name: "rel".to_string(),
+                default: Some(default),
+                ..Attribute::default()
+            },
+        ));
+    }
+    flat.children = children(prim)?;
+    Ok(flat)
+}
+
+/// The name of the property at `path` (`xformOp:translate`).
+fn property_name(path: &sdf::Path) -> String {
+    path.split_property()
+        .map_or_else(|| path.as_str().to_string(), |(_, name)| name.to_string())
+}
+
+/// A token or string value's text.
+fn text(v: &sdf::Value) -> Option<String> {
+    match value(v)? {
+        Value::Str(s) => Some(s),
+        _ => None,
+    }
+}
+
+/// A scalar value as a number.
+fn number(v: &sdf::Value) -> Option<f64> {
+    match value(v)? {
+        Value::Number(x) => Some(x),
+        _ => None,
+    }
+}
+
+/// An f32 as the shortest decimal that gives it back, in f64: what USD
+/// writes for it in text, so that text and crate files read the same.
+fn single(x: f32) -> f64 {
+    if x.is_finite() {
+        x.to_string().parse().unwrap_or(f64::from(x))
+    } else {
+        f64::from(x)
+    }
+}
+
+/// Numbers as a tuple, the text reader's shape for a vector.
+fn tuple(xs: impl IntoIterator<Item = f64>) -> Value {
+    Value::List(xs.into_iter().map(Value::Number).collect())
+}
+
+/// An array of `T`, each as `f` gives it.
+fn array<T>(xs: &[T], f: impl Fn(&T) -> Value) -> Value {
+    Value::List(xs.iter().map(f).collect())
+}
+
+fn vec2f(v: &gf::Vec2f) -> Value {
+    tuple([single(v.x), single(v.y)])
+}
+fn vec3f(v: &gf::Vec3f) -> Value {
+    tuple([single(v.x), single(v.y), single(v.z)])
+}
+fn vec4f(v: &gf::Vec4f) -> Value {
+    tuple([single(v.x), single(v.y), single(v.z), single(v.w)])
+}
+fn vec2d(v: &gf::Vec2d) -> Value {
+    tuple([v.x, v.y])
+}
+fn vec3d(v: &gf::Vec3d) -> Value {
+    tuple([v.x, v.y, v.z])
+}
+fn vec4d(v: &gf::Vec4d) -> Value {
+    tuple([v.x, v.y, v.z, v.w])
+}
+/// A half-precision number (openusd's `f16`), as [`single`] reads it.
+fn half<T: Copy + Into<f32>>(x: &T) -> f64 {
+    single((*x).into())
+}
+fn vec3h(v: &gf::Vec3h) -> Value {
+    tuple([half(&v.x), half(&v.y), half(&v.z)])
+}
+/// Quaternions as USD text writes them: (real, i, j, k).
+fn quatf(q: &gf::Quatf) -> Value {
+    tuple([single(q.w), single(q.x), single(q.y), single(q.z)])
+}
+fn quatd(q: &gf::Quatd) -> Value {
+    tuple([q.w, q.x, q.y, q.z])
+}
+fn quath(q: &gf::Quath) -> Value {
+    tuple([half(&q.w), half(&q.x), half(&q.y), half(&q.z)])
+}
+/// A matrix as its rows, as USD text writes it.
+fn matrix(m: &[f64], size: usize) -> Value {
+    Value::List(
+        m.chunks(size)
+            .map(|row| tuple(row.iter().copied()))
+            .collect(),
+    )
+}
+
+/// A composed value in the text reader's shapes ([`Value`]): numbers,
+/// tuples, arrays, strings and tokens, paths; `None` for what no reader of
+/// ours reads (dictionaries, list edits, blocks).
+fn value(v: &sdf::Value) -> Option<Value> {
+    use sdf::Value as S;
+    let n = |x: f64| Value::Number(x);
+    Some(match v {
+        S::Bool(b) => n(f64::from(u8::from(*b))),
+        S::Uchar(x) => n(f64::from(*x)),
+        S::Int(x) => n(f64::from(*x)),
+        S::Uint(x) => n(f64::from(*x)),
+        S::Int64(x) => n(*x as f64),
+        S::Uint64(x) => n(*x as f64),
+        S::Half(x) => n(half(x)),
+        S::Float(x) => n(single(*x)),
+        S::Double(x) => n(*x),
+        S::BoolVec(xs) => array(xs, |b| n(f64::from(u8::from(*b)))),
+        S::UcharVec(xs) => array(xs, |x| n(f64::from(*x))),
+        S::IntVec(xs) => array(xs, |x| n(f64::from(*x))),
+        S::UintVec(xs) => array(xs, |x| n(f64::from(*x))),
+        S::Int64Vec(xs) => array(xs, |x| n(*x as f64)),
+        S::Uint64Vec(xs) => array(xs, |x| n(*x as f64)),
+        S::HalfVec(xs) => array(xs, |x| n(half(x))),
+        S::FloatVec(xs) => array(xs, |x| n(single(*x))),
+        S::DoubleVec(xs) => array(xs, |x| n(*x)),
+        S::String(s) => Value::Str(s.clone()),
+        S::Token(t) => Value::Str(t.as_str().to_string()),
+        S::StringVec(xs) => array(xs, |s| Value::Str(s.clone())),
+        S::TokenVec(xs) => array(xs, |t| Value::Str(t.as_str().to_string())),
+        S::AssetPath(a) => Value::Str(a.authored_path.clone()),
+        S::Quath(q) => quath(q),
+        S::Quatf(q) => quatf(q),
+        S::Quatd(q) => quatd(q),
+        S::QuathVec(qs) => array(qs, quath),
+        S::QuatfVec(qs) => array(qs, quatf),
+        S::QuatdVec(qs) => array(qs, quatd),
+        S::Vec2f(v) => vec2f(v),
+        S::Vec2d(v) => vec2d(v),
+        S::Vec3h(v) => vec3h(v),
+        S::Vec3f(v) => vec3f(v),
+        S::Vec3d(v) => vec3d(v),
+        S::Vec4f(v) => vec4f(v),
+        S::Vec4d(v) => vec4d(v),
+        S::Vec2fVec(vs) => array(vs, vec2f),
+        S::Vec2dVec(vs) => array(vs, vec2d),
+        S::Vec3hVec(vs) => array(vs, vec3h),
+        S::Vec3fVec(vs) => array(vs, vec3f),
+        S::Vec3dVec(vs) => array(vs, vec3d),
+        S::Vec4fVec(vs) => array(vs, vec4f),
+        S::Vec4dVec(vs) => array(vs, vec4d),
+        S::Matrix2d(m) => matrix(&m.0, 2),
+        S::Matrix3d(m) => matrix(&m.0, 3),
+        S::Matrix4d(m) => matrix(&m.0, 4),
+        S::Matrix2dVec(ms) => array(ms, |m| matrix(&m.0, 2)),
+        S::Matrix3dVec(ms) => array(ms, |m| matrix(&m.0, 3)),
+        S::Matrix4dVec(ms) => array(ms, |m| matrix(&m.0, 4)),
+        S::PathVec(ps) => array(ps, |p| Value::Path(p.as_str().to_string())),
+        _ => return None,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values_take_the_text_reader_s_shapes() {
+        // f32 as the decimal USD text writes for it, not its binary value.
+        assert_eq!(single(0.1), 0.1);
+        assert_ne!(f64::from(0.1f32), 0.1);
+        // Quaternions real part first, as `(w, x, y, z)` in text.
+        let q = sdf::Value::Quatf(gf::Quatf {
+            w: 0.5,
+            x: 1.0,
+            y: 2.0,
+            z: 3.0,
+        });
+        assert_eq!(value(&q).unwrap().numbers().unwrap(), [0.5, 1.0, 2.0, 3.0]);
+        // Matrices as their rows.
+        let mut m = [0.0; 16];
+        m.iter_mut().enumerate().for_each(|(k, x)| *x = k as f64);
+        let Some(Value::List(rows)) = value(&sdf::Value::Matrix4d(gf::Matrix4d(m))) else {
+            panic!("a matrix is a list of rows");
+        };
+        assert_eq!(rows.len(), 4);
+        assert_eq!(rows[1].numbers().unwrap(), [4.0, 5.0, 6.0, 7.0]);
+        // Tokens are strings; dictionaries are not read.
+        let t = sdf::Value::TokenVec(vec!["xformOp:translate".into()]);
+        assert_eq!(value(&t).unwrap().strings().unwrap(), ["xformOp:translate"]);
+        assert_eq!(value(&sdf::Value::Dictionary(Default::default())), None);
+    }
+
+    #[test]
+    fn a_layer_comes_back_from_json_as_it_went_with_numbers_json_lacks() {
+        let layer = Layer {
+            up_y: false,
+            meters_per_unit: 1.0,
+            time_codes_per_second: 24.0,
+            roots: vec![Prim {
+                name: "card".into(),
+                type_name: "Mesh".into(),
+                attributes: vec![(
+                    "points".into(),
+                    Attribute {
+                        type_name: "point3f[]".into(),
+                        default: Some(Value::List(
+                            [0.1, f64::INFINITY, f64::NEG_INFINITY, -0.0]
+                                .map(Value::Number)
+                                .into(),
+                        )),
+                        samples: vec![(1.5, Value::Number(f64::NAN))],
+                        metadata: vec![("interpolation".into(), Value::Str("vertex".into()))],
+                    },
+                )],
+                children: Vec::new(),
+            }],
+        };
+        let json = serde_json::to_string(&layer).unwrap();
+        let back: Layer = serde_json::from_str(&json).unwrap();
+        let a = back.roots[0].attribute("points").unwrap();
+        let p = a.default.as_ref().unwrap().numbers().unwrap();
+        assert_eq!(p[..3], [0.1, f64::INFINITY, f64::NEG_INFINITY]);
+        assert!(p[3] == 0.0 && p[3].is_sign_negative());
+        assert!(matches!(a.samples[0], (1.5, Value::Number(x)) if x.is_nan()));
+        assert_eq!(a.meta("interpolation"), Some(&Value::Str("vertex".into())));
+        assert!(!back.up_y);
+    }
+}
