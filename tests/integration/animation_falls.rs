@@ -218,19 +218,11 @@ fn a_card_under_an_animated_parent_reads_as_the_card_s_fall() {
     }
 }
 
-/// A card bent by an armature, as an animator rigs a leaf: skinned to two
-/// bones along its length, the armature carrying the fall and the tip bone
-/// bending the card out of its plane. Blender's glTF (a skin: joints,
-/// inverse bind matrices, JOINTS_0/WEIGHTS_0) and its USD (UsdSkel: a
-/// Skeleton, a SkelAnimation, joint indices and weights) both read, at
-/// every key, as the vertices Blender itself evaluated (its depsgraph's,
-/// `blender/tumble_thick_rigged.vertices.csv`), to f32; the bend is there
-/// (the card is not flat at the bend's peaks), and the fall keeps the
-/// class of the unbent card's.
-#[test]
-fn a_card_bent_by_bones_reads_as_blender_poses_it() {
+/// The vertices Blender's depsgraph evaluated at each key (`make.py`'s
+/// `evaluated`), world metres, one list per key.
+fn blender_vertices(file: &str) -> Vec<Vec<V3>> {
     let mut blender: Vec<Vec<V3>> = Vec::new();
-    let mut r = csv::Reader::from_path(data("blender/tumble_thick_rigged.vertices.csv")).unwrap();
+    let mut r = csv::Reader::from_path(data(file)).unwrap();
     for row in r.records() {
         let row = row.unwrap();
         let f: usize = row[0].parse().unwrap();
@@ -244,7 +236,65 @@ fn a_card_bent_by_bones_reads_as_blender_poses_it() {
         }
         blender[f - 1].push(p);
     }
-    assert_eq!(blender.len(), 241);
+    assert_eq!(blender.len(), 241, "{file}");
+    blender
+}
+
+/// A card curled by an animated shape key, as an animator shapes a leaf
+/// without bones: the card carries the fall's keys and a shape key lifts
+/// its ends by up to 4 mm, weighted 0.5 + 0.5 sin(2π 1.5 t). Blender's glTF
+/// (a morph target and its weights channel) and its USD (a UsdSkel
+/// BlendShape on a one-joint skeleton whose animation holds only the
+/// weights) both read, at every key, as the vertices Blender evaluated
+/// (`blender/tumble_thick_curled.vertices.csv`) to f32; the curl is there,
+/// and the fall keeps the flat card's class.
+#[test]
+fn a_card_curled_by_a_shape_key_reads_as_blender_shapes_it() {
+    let blender = blender_vertices("blender/tumble_thick_curled.vertices.csv");
+    for file in [
+        "blender/tumble_thick_curled.glb",
+        "blender/tumble_thick_curled.usda",
+    ] {
+        let clip = keys_of(file);
+        assert_eq!(clip.objects.len(), 1, "{file}");
+        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.frames, 241, "{file}");
+        let mut most_curled = 0.0f64;
+        for (k, want) in blender.iter().enumerate() {
+            let got = clip.objects[0].positions(k);
+            same_points(&format!("{file} key {k}"), &got, want, 1e-5);
+            // The ends' lift off the flat card's plane: through the
+            // middle column (vertices 2, 7, 12 of the 5 × 3 grid, which the
+            // curl leaves), along the card's length (the two ends of a
+            // row, lifted alike).
+            let n = (want[4] - want[0]).cross(&(want[12] - want[2])).normalize();
+            most_curled = want
+                .iter()
+                .map(|p| (p - want[2]).dot(&n).abs())
+                .fold(most_curled, f64::max);
+        }
+        assert!(
+            (most_curled - 4e-3).abs() < 2e-4,
+            "{file}: the ends lift {most_curled} m at most, not 4 mm"
+        );
+        let fall = read_fall(&data(file), None).unwrap();
+        let flat = read_fall(&data("blender/tumble_thick.glb"), None).unwrap();
+        same_class(file, (&fall.trajectory, 0.04), (&flat.trajectory, 0.04));
+    }
+}
+
+/// A card bent by an armature, as an animator rigs a leaf: skinned to two
+/// bones along its length, the armature carrying the fall and the tip bone
+/// bending the card out of its plane. Blender's glTF (a skin: joints,
+/// inverse bind matrices, JOINTS_0/WEIGHTS_0) and its USD (UsdSkel: a
+/// Skeleton, a SkelAnimation, joint indices and weights) both read, at
+/// every key, as the vertices Blender itself evaluated (its depsgraph's,
+/// `blender/tumble_thick_rigged.vertices.csv`), to f32; the bend is there
+/// (the card is not flat at the bend's peaks), and the fall keeps the
+/// class of the unbent card's.
+#[test]
+fn a_card_bent_by_bones_reads_as_blender_poses_it() {
+    let blender = blender_vertices("blender/tumble_thick_rigged.vertices.csv");
     for file in [
         "blender/tumble_thick_rigged.glb",
         "blender/tumble_thick_rigged.usda",
@@ -613,7 +663,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         b[at..at + 8].fill(0xff);
         b
     };
-    let cases: [(&str, Vec<u8>, &str); 19] = [
+    let cases: [(&str, Vec<u8>, &str); 20] = [
         (
             "junk.glb",
             b"t,x,y,z\n0,0,0,0\n".to_vec(),
@@ -663,7 +713,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
             "bound to the skeleton `/root/rig/gone`, which is not in the layer",
         ),
         (
-            // UsdSkel blend shapes, which would be read wrong if ignored.
+            // UsdSkel blend shapes named without the shapes themselves.
             "shapes.usda",
             rigged
                 .replace(
@@ -671,7 +721,20 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
                     &format!("uniform token[] skel:blendShapes = [\"cup\"]\n{bound}"),
                 )
                 .into_bytes(),
-            "blend shapes",
+            "mesh `card`: 1 skel:blendShapes but 0 skel:blendShapeTargets",
+        ),
+        (
+            // Inbetween shapes, which would be read wrong if ignored.
+            "inbetween.usda",
+            std::fs::read_to_string(data("blender/tumble_thick_curled.usda"))
+                .unwrap()
+                .replacen(
+                    "uniform int[] pointIndices",
+                    "uniform vector3f[] inbetweens:half = [(0, 0, 1)] (\n weight = 0.5\n )\n uniform int[] pointIndices",
+                    1,
+                )
+                .into_bytes(),
+            "blend shape `curl` has the inbetween shape `inbetweens:half`, which this reader does not apply",
         ),
         (
             // gltfpack -c: meshopt-compressed buffers.

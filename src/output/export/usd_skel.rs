@@ -23,7 +23,18 @@
 //! above it, `skel:animationSource` on the Skeleton or above it),
 //! `skel:joints` on the mesh (its own joint order), `jointIndices` and
 //! `jointWeights` with their `elementSize`, per vertex or `constant`.
-//! Refused by name: blend shapes (`skel:blendShapes`).
+//!
+//! Blend shapes ([`BlendShapes`], "UsdSkel: Blend Shapes"), which is how
+//! Blender writes a shape key (a leaf that curls): before skinning,
+//!
+//! ```text
+//! p_i += Σ_s w_s(t) · offset_s,k    for each k with pointIndices_s[k] = i
+//! ```
+//!
+//! (every point in order where a shape has no `pointIndices`), the
+//! weights w_s the bound SkelAnimation's `blendShapeWeights`, matched to
+//! the mesh's `skel:blendShapes` by name (a shape the animation does not
+//! name weighs 0). Refused by name: inbetween shapes.
 
 use super::skin::{Influences, blend};
 use super::usd_layer::{Attribute, Prim, Value, local_transform, sample};
@@ -90,6 +101,79 @@ fn target(prim: &Prim, name: &str) -> Result<Option<String>, String> {
     Ok(Some(path))
 }
 
+/// Every target of relationship `name` on `prim` (none if it has none).
+fn targets(prim: &Prim, name: &str) -> Result<Vec<String>, String> {
+    let Some(rel) = prim.attribute(name).filter(|a| a.type_name == "rel") else {
+        return Ok(Vec::new());
+    };
+    let items = match &rel.default {
+        Some(Value::List(items)) => items.clone(),
+        Some(v) => vec![v.clone()],
+        None => Vec::new(),
+    };
+    items
+        .into_iter()
+        .map(|v| match v {
+            Value::Path(p) if p.starts_with('/') => Ok(p),
+            v => Err(format!(
+                "prim `{}`: `{name}` targets {v:?}, not an absolute path",
+                prim.name
+            )),
+        })
+        .collect()
+}
+
+/// What the mesh at the end of `chain` is bound to: the prims from the
+/// root to its Skeleton (`skel:skeleton` on the mesh or the nearest prim
+/// above it) and the SkelAnimation that drives it (`skel:animationSource`
+/// on the Skeleton or above it), or `None` if it is bound to none.
+#[allow(clippy::type_complexity)]
+fn binding<'a>(
+    paths: &Paths<'a>,
+    chain: &[&'a Prim],
+) -> Result<Option<(Vec<&'a Prim>, Option<&'a Prim>)>, String> {
+    let mesh = *chain.last().expect("a chain ends at its mesh");
+    let mut bound = None;
+    for p in chain.iter().rev() {
+        if let Some(path) = target(p, "skel:skeleton")? {
+            bound = Some(path);
+            break;
+        }
+    }
+    let Some(skeleton_path) = bound else {
+        return Ok(None);
+    };
+    let skeleton = paths.chain(&skeleton_path).ok_or_else(|| {
+        format!(
+            "mesh `{}` is bound to the skeleton `{skeleton_path}`, which is not in the layer",
+            mesh.name
+        )
+    })?;
+    let skel = *skeleton.last().expect("a path has a prim");
+    let mut source = None;
+    for p in skeleton.iter().rev() {
+        if let Some(path) = target(p, "skel:animationSource")? {
+            source = Some(path);
+            break;
+        }
+    }
+    let animation = match source {
+        None => None,
+        Some(path) => Some(
+            paths
+                .chain(&path)
+                .and_then(|c| c.last().copied())
+                .ok_or_else(|| {
+                    format!(
+                        "skeleton `{}` is animated by `{path}`, which is not in the layer",
+                        skel.name
+                    )
+                })?,
+        ),
+    };
+    Ok(Some((skeleton, animation)))
+}
+
 /// A uniform attribute's value (its default).
 fn uniform<'p>(prim: &'p Prim, name: &str) -> Option<&'p Value> {
     prim.attribute(name).and_then(|a| a.default.as_ref())
@@ -154,29 +238,10 @@ impl<'a> Skinning<'a> {
         if mesh.attribute("primvars:skel:jointIndices").is_none() {
             return Ok(None);
         }
-        if mesh.attribute("skel:blendShapes").is_some() {
-            return Err(format!(
-                "mesh `{}` has UsdSkel blend shapes, which this reader does not apply",
-                mesh.name
-            ));
-        }
-        let mut bound = None;
-        for p in chain.iter().rev() {
-            if let Some(path) = target(p, "skel:skeleton")? {
-                bound = Some(path);
-                break;
-            }
-        }
-        let Some(skeleton_path) = bound else {
+        let Some((skeleton, anim)) = binding(paths, chain)? else {
             // Joint influences without a skeleton deform nothing (UsdSkel).
             return Ok(None);
         };
-        let skeleton = paths.chain(&skeleton_path).ok_or_else(|| {
-            format!(
-                "mesh `{}` is bound to the skeleton `{skeleton_path}`, which is not in the layer",
-                mesh.name
-            )
-        })?;
         let skel = *skeleton.last().expect("a path has a prim");
         let joints = joint_names(skel, "joints")?
             .ok_or_else(|| format!("skeleton `{}` has no `joints`", skel.name))?;
@@ -228,28 +293,13 @@ impl<'a> Skinning<'a> {
                 })
                 .collect(),
         };
-        let mut source = None;
-        for p in skeleton.iter().rev() {
-            if let Some(path) = target(p, "skel:animationSource")? {
-                source = Some(path);
-                break;
-            }
-        }
-        let animation = match source {
+        // An animation that names no joints moves none (Blender writes
+        // one for blend-shape weights alone).
+        let animation = match anim {
             None => None,
-            Some(path) => {
-                let anim = paths
-                    .chain(&path)
-                    .and_then(|c| c.last().copied())
-                    .ok_or_else(|| {
-                        format!(
-                            "skeleton `{}` is animated by `{path}`, which is not in the layer",
-                            skel.name
-                        )
-                    })?;
-                let names = joint_names(anim, "joints")?
-                    .ok_or_else(|| format!("animation `{}` has no `joints`", anim.name))?;
-                let map = names
+            Some(anim) => {
+                let map = joint_names(anim, "joints")?
+                    .unwrap_or_default()
                     .iter()
                     .map(|j| index.get(j.as_str()).copied())
                     .collect();
@@ -283,7 +333,7 @@ impl<'a> Skinning<'a> {
     /// the layer's world space and units.
     pub(super) fn pose(&self, points: &[V3], t: f64) -> Result<Vec<V3>, String> {
         let mut local = self.rest.clone();
-        if let Some((anim, map)) = &self.animation {
+        if let Some((anim, map)) = self.animation.as_ref().filter(|(_, map)| !map.is_empty()) {
             // This reader poses a joint from all three channels, as
             // exporters write them; a missing one is named.
             let channel = |name: &str, width: usize| -> Result<Vec<f64>, String> {
@@ -345,6 +395,151 @@ impl<'a> Skinning<'a> {
             .map(|(j, b)| world * j.expect("every joint composed") * b * self.geom_bind)
             .collect();
         Ok(blend(points, &self.influences, &skinning))
+    }
+}
+
+/// A mesh's UsdSkel blend shapes (module docs): each shape's offsets by
+/// point, and the animation that weighs them.
+pub(super) struct BlendShapes<'a> {
+    /// The mesh's name, for errors.
+    mesh: String,
+    /// Each shape's (point index, offset).
+    shapes: Vec<Vec<(usize, V3)>>,
+    /// The SkelAnimation and, for each shape, its index among the
+    /// animation's `blendShapes`; `None` without one (every weight 0).
+    weights: Option<(&'a Prim, Vec<Option<usize>>)>,
+}
+
+impl<'a> BlendShapes<'a> {
+    /// The blend shapes of the mesh at the end of `chain`, or `None` if it
+    /// has none.
+    pub(super) fn of(paths: &Paths<'a>, chain: &[&'a Prim]) -> Result<Option<Self>, String> {
+        let mesh = *chain.last().expect("a chain ends at its mesh");
+        let Some(names) = joint_names(mesh, "skel:blendShapes")? else {
+            return Ok(None);
+        };
+        let at = |e: String| format!("mesh `{}`: {e}", mesh.name);
+        let found = targets(mesh, "skel:blendShapeTargets")?;
+        if found.len() != names.len() {
+            return Err(at(format!(
+                "{} skel:blendShapes but {} skel:blendShapeTargets",
+                names.len(),
+                found.len()
+            )));
+        }
+        let points = mesh.attribute("points").map_or(0, Attribute::vector_count);
+        let mut shapes = Vec::with_capacity(names.len());
+        for (name, path) in names.iter().zip(&found) {
+            let shape = paths
+                .chain(path)
+                .and_then(|c| c.last().copied())
+                .ok_or_else(|| {
+                    at(format!(
+                        "blend shape `{name}` is `{path}`, which is not in the layer"
+                    ))
+                })?;
+            if let Some((inbetween, _)) = shape
+                .attributes
+                .iter()
+                .find(|(n, _)| n.starts_with("inbetweens:"))
+            {
+                return Err(at(format!(
+                    "blend shape `{name}` has the inbetween shape `{inbetween}`, which this reader does not apply"
+                )));
+            }
+            let offsets = uniform(shape, "offsets")
+                .and_then(Value::numbers)
+                .filter(|o| o.len() % 3 == 0)
+                .ok_or_else(|| {
+                    at(format!(
+                        "blend shape `{name}` has no `offsets` of 3-vectors"
+                    ))
+                })?;
+            let offsets: Vec<V3> = offsets
+                .chunks(3)
+                .map(|c| V3::new(c[0], c[1], c[2]))
+                .collect();
+            let indices: Vec<usize> = match uniform(shape, "pointIndices") {
+                None => (0..offsets.len()).collect(),
+                Some(v) => v
+                    .numbers()
+                    .ok_or_else(|| {
+                        at(format!(
+                            "blend shape `{name}`: `pointIndices` are not numbers"
+                        ))
+                    })?
+                    .into_iter()
+                    .map(|x| x as usize)
+                    .collect(),
+            };
+            if indices.len() != offsets.len() || indices.iter().any(|&i| i >= points) {
+                return Err(at(format!(
+                    "blend shape `{name}`: {} offsets for {} point indices, of {points} points",
+                    offsets.len(),
+                    indices.len()
+                )));
+            }
+            shapes.push(indices.into_iter().zip(offsets).collect());
+        }
+        let weights = match binding(paths, chain)? {
+            Some((_, Some(anim))) => {
+                let order = joint_names(anim, "blendShapes")?.unwrap_or_default();
+                let map = names
+                    .iter()
+                    .map(|n| order.iter().position(|o| o == n))
+                    .collect();
+                Some((anim, map))
+            }
+            _ => None,
+        };
+        Ok(Some(BlendShapes {
+            mesh: mesh.name.clone(),
+            shapes,
+            weights,
+        }))
+    }
+
+    /// Adds each shape's offsets, times its weight at time code `t`, to
+    /// `points` (the mesh's own, before skinning).
+    pub(super) fn apply(&self, points: &mut [V3], t: f64) -> Result<(), String> {
+        let Some((anim, map)) = &self.weights else {
+            return Ok(());
+        };
+        let names = map.iter().flatten().count();
+        if names == 0 {
+            return Ok(());
+        }
+        let w = anim
+            .attribute("blendShapeWeights")
+            .and_then(|a| sample(a, t))
+            .ok_or_else(|| {
+                format!(
+                    "animation `{}` weighs blend shapes but has no `blendShapeWeights`",
+                    anim.name
+                )
+            })?;
+        for (shape, k) in self.shapes.iter().zip(map) {
+            let Some(&weight) = k.and_then(|k| w.get(k)) else {
+                if k.is_some() {
+                    return Err(format!(
+                        "animation `{}`: `blendShapeWeights` holds {} weights, fewer than its `blendShapes`",
+                        anim.name,
+                        w.len()
+                    ));
+                }
+                continue;
+            };
+            for &(i, offset) in shape {
+                let p = points.get_mut(i).ok_or_else(|| {
+                    format!(
+                        "mesh `{}`: a blend shape moves point {i}, past its points",
+                        self.mesh
+                    )
+                })?;
+                *p += offset * weight;
+            }
+        }
+        Ok(())
     }
 }
 
@@ -432,4 +627,116 @@ fn influences(
     }
     .normalised(points, joints.len())
     .map_err(|e| format!("mesh `{}`: {e}", mesh.name))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::export::usd_layer::parse;
+
+    /// Two shapes of a four-point mesh weighed by an animation that names
+    /// them in its own order (and one more), a third shape it does not name.
+    const SHAPED: &str = r#"#usda 1.0
+def SkelRoot "leaf"
+{
+    def Mesh "m"
+    {
+        point3f[] points = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]
+        uniform token[] skel:blendShapes = ["lift", "slide", "ghost"]
+        rel skel:blendShapeTargets = [</leaf/m/lift>, </leaf/m/slide>, </leaf/m/ghost>]
+        rel skel:skeleton = </leaf/skel>
+
+        def BlendShape "lift"
+        {
+            uniform vector3f[] offsets = [(0, 0, 1), (0, 0, 2)]
+            uniform int[] pointIndices = [1, 3]
+        }
+        def BlendShape "slide"
+        {
+            uniform vector3f[] offsets = [(1, 0, 0), (1, 0, 0), (1, 0, 0), (2, 0, 0)]
+        }
+        def BlendShape "ghost"
+        {
+            uniform vector3f[] offsets = [(100, 0, 0), (100, 0, 0), (100, 0, 0), (100, 0, 0)]
+        }
+    }
+    def Skeleton "skel"
+    {
+        rel skel:animationSource = </leaf/skel/anim>
+        def SkelAnimation "anim"
+        {
+            uniform token[] blendShapes = ["slide", "other", "lift"]
+            float[] blendShapeWeights.timeSamples = {
+                0: [0, 9, 0.5],
+                10: [1, 9, 1],
+            }
+        }
+    }
+}
+"#;
+
+    #[test]
+    fn blend_shapes_add_their_weighted_offsets_by_name() {
+        let layer = parse(SHAPED).unwrap();
+        let paths = Paths::new(&layer.roots);
+        let (root, mesh) = (&layer.roots[0], &layer.roots[0].children[0]);
+        let shapes = BlendShapes::of(&paths, &[root, mesh]).unwrap().unwrap();
+        let rest = [
+            V3::new(0.0, 0.0, 0.0),
+            V3::new(1.0, 0.0, 0.0),
+            V3::new(1.0, 1.0, 0.0),
+            V3::new(0.0, 1.0, 0.0),
+        ];
+        // Time code 5: slide weighs 0.5, lift 0.75 (linear between
+        // samples); ghost, which the animation does not name, 0.
+        let mut p = rest;
+        shapes.apply(&mut p, 5.0).unwrap();
+        let (slide, lift) = (0.5, 0.75);
+        let want = [
+            rest[0] + V3::new(1.0, 0.0, 0.0) * slide,
+            rest[1] + V3::new(1.0, 0.0, 0.0) * slide + V3::new(0.0, 0.0, 1.0) * lift,
+            rest[2] + V3::new(1.0, 0.0, 0.0) * slide,
+            rest[3] + V3::new(2.0, 0.0, 0.0) * slide + V3::new(0.0, 0.0, 2.0) * lift,
+        ];
+        for (g, w) in p.iter().zip(&want) {
+            assert!((g - w).norm() < 1e-12, "{g} against {w}");
+        }
+        // A mesh with no animation bound weighs every shape 0.
+        let unbound = SHAPED.replace("rel skel:skeleton = </leaf/skel>", "");
+        let layer = parse(&unbound).unwrap();
+        let paths = Paths::new(&layer.roots);
+        let (root, mesh) = (&layer.roots[0], &layer.roots[0].children[0]);
+        let shapes = BlendShapes::of(&paths, &[root, mesh]).unwrap().unwrap();
+        let mut p = rest;
+        shapes.apply(&mut p, 5.0).unwrap();
+        assert_eq!(p, rest);
+    }
+
+    #[test]
+    fn blend_shapes_that_do_not_fit_the_mesh_are_named() {
+        for (from, to, want) in [
+            (
+                "uniform int[] pointIndices = [1, 3]",
+                "uniform int[] pointIndices = [1, 4]",
+                "blend shape `lift`: 2 offsets for 2 point indices, of 4 points",
+            ),
+            (
+                "</leaf/m/slide>, ",
+                "",
+                "3 skel:blendShapes but 2 skel:blendShapeTargets",
+            ),
+            (
+                "</leaf/m/ghost>]",
+                "</leaf/m/gone>]",
+                "blend shape `ghost` is `/leaf/m/gone`, which is not in the layer",
+            ),
+        ] {
+            let text = SHAPED.replace(from, to);
+            let layer = parse(&text).unwrap();
+            let paths = Paths::new(&layer.roots);
+            let (root, mesh) = (&layer.roots[0], &layer.roots[0].children[0]);
+            let e = BlendShapes::of(&paths, &[root, mesh]).err().unwrap();
+            assert!(e.contains(want), "{e}");
+        }
+    }
 }

@@ -13,7 +13,7 @@ use super::clip::{Clip, ClipObject, Motion};
 use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
 use super::usd_layer::{Layer, Prim, Value, composes, local_transform, parse, sample};
-use super::usd_skel::{Paths, Skinning};
+use super::usd_skel::{BlendShapes, Paths, Skinning};
 use super::usd_stage::flatten;
 use nalgebra::{Matrix4, Vector3};
 use std::path::Path;
@@ -144,6 +144,7 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
         }
         let points = mesh.attribute("points").expect("found by its points");
         let skinning = Skinning::of(&paths, &chain)?;
+        let shapes = BlendShapes::of(&paths, &chain)?;
         check_points(&mesh.name, frames, points.vector_count())?;
         let mut frame_list = Vec::with_capacity(frames);
         for k in 0..frames {
@@ -153,7 +154,10 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
             if p.len() % 3 != 0 || p.is_empty() {
                 return Err(format!("mesh `{}`: points are not 3-vectors", mesh.name));
             }
-            let p: Vec<V3> = p.chunks(3).map(|c| V3::new(c[0], c[1], c[2])).collect();
+            let mut p: Vec<V3> = p.chunks(3).map(|c| V3::new(c[0], c[1], c[2])).collect();
+            if let Some(shapes) = &shapes {
+                shapes.apply(&mut p, t)?;
+            }
             let placed = match &skinning {
                 // A skinned mesh is placed by its skeleton, not by the
                 // prims above it (UsdSkel).

@@ -32,12 +32,26 @@ Two more put the card under other objects, as animators build a leaf:
   degrees (.glb with a glTF skin, .usda with UsdSkel). Blender's own
   evaluated vertices at each key, in world metres, go to
   tumble_thick_rigged.vertices.csv (frame, vertex, x, y, z): what the
-  animator saw, for the readers to match.
+  animator saw, for the readers to match;
+- tumble_thick_curled: the same 4 x 1 cm card, meshed 4 x 2, carrying
+  the fall's keys itself and curled by an animated shape key, `curl`
+  (the ends lift by 4 mm at full weight, z = 10 x^2; weight
+  0.5 + 0.5 sin(2 pi 1.5 t)): glTF writes a morph target, USD a UsdSkel
+  BlendShape on a one-joint skeleton. Its evaluated vertices go to
+  tumble_thick_curled.vertices.csv as the rigged card's do.
+
+`python make.py SRC OUT NAME ...` makes only the named ones (the six
+falls are `bakes`; `parented`, `rigged`, `curled`).
 """
 import bpy, csv, math, os, sys
 from mathutils import Quaternion, Vector
 
-src, out = sys.argv[-2], sys.argv[-1]
+src, out = sys.argv[1], sys.argv[2]
+only = sys.argv[3:]
+
+
+def wanted(name):
+    return not only or name in only
 os.makedirs(out, exist_ok=True)
 WIDTH = {"flutter_strip": 0.01, "tumble_thick": 0.01}
 
@@ -80,11 +94,12 @@ def bake(name, fall, upright=False, ground=False, gltf_format="GLB", usd=True):
         bpy.ops.wm.usd_export(filepath=os.path.join(out, name + ".usda"), export_animation=True)
 
 
-for fall in ["steady_fall", "glide_ballast", "wobble_card", "flutter_strip", "tumble_thick", "tumble_cardscoef"]:
-    bake(fall, fall)
-bake("tumble_thick_modelled_upright", "tumble_thick", upright=True, usd=False)
-bake("tumble_thick_with_ground", "tumble_thick", ground=True, usd=False)
-bake("tumble_thick_separate", "tumble_thick", gltf_format="GLTF_SEPARATE", usd=False)
+if wanted("bakes"):
+    for fall in ["steady_fall", "glide_ballast", "wobble_card", "flutter_strip", "tumble_thick", "tumble_cardscoef"]:
+        bake(fall, fall)
+    bake("tumble_thick_modelled_upright", "tumble_thick", upright=True, usd=False)
+    bake("tumble_thick_with_ground", "tumble_thick", ground=True, usd=False)
+    bake("tumble_thick_separate", "tumble_thick", gltf_format="GLTF_SEPARATE", usd=False)
 
 
 def keyed(rows):
@@ -174,10 +189,16 @@ def rigged():
         bend.keyframe_insert("rotation_quaternion", frame=frame)
     sc.frame_start, sc.frame_end = 1, frame
     export("tumble_thick_rigged")
-    with open(os.path.join(out, "tumble_thick_rigged.vertices.csv"), "w", newline="") as f:
+    evaluated(ob, frame, "tumble_thick_rigged.vertices.csv")
+
+
+def evaluated(ob, frames, name):
+    """Blender's own evaluated vertices of `ob` at each key, world metres."""
+    sc = bpy.context.scene
+    with open(os.path.join(out, name), "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["frame", "vertex", "x", "y", "z"])
-        for k in range(1, frame + 1):
+        for k in range(1, frames + 1):
             sc.frame_set(k)
             dg = bpy.context.evaluated_depsgraph_get()
             ev = ob.evaluated_get(dg)
@@ -188,5 +209,40 @@ def rigged():
             ev.to_mesh_clear()
 
 
-parented()
-rigged()
+def curled():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps = 24
+    rows = list(csv.DictReader(open(os.path.join(src, "tumble_thick.csv"))))
+    nx, ny = 4, 2
+    verts = [(-0.02 + 0.04 * i / nx, -0.005 + 0.01 * j / ny, 0.0) for j in range(ny + 1) for i in range(nx + 1)]
+    faces = [(j * (nx + 1) + i, j * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i)
+             for j in range(ny) for i in range(nx)]
+    me = bpy.data.meshes.new("card")
+    me.from_pydata(verts, [], faces)
+    ob = bpy.data.objects.new("card", me)
+    sc.collection.objects.link(ob)
+    ob.shape_key_add(name="Basis")
+    curl = ob.shape_key_add(name="curl")
+    for v in curl.data:
+        v.co.z = 10 * v.co.x ** 2
+    ob.rotation_mode = "QUATERNION"
+    frame = 1
+    for frame, loc, q in keyed(rows):
+        ob.location, ob.rotation_quaternion = loc, q
+        ob.keyframe_insert("location", frame=frame)
+        ob.keyframe_insert("rotation_quaternion", frame=frame)
+        t = (frame - 1) / 24
+        curl.value = 0.5 + 0.5 * math.sin(2 * math.pi * 1.5 * t)
+        curl.keyframe_insert("value", frame=frame)
+    sc.frame_start, sc.frame_end = 1, frame
+    export("tumble_thick_curled")
+    evaluated(ob, frame, "tumble_thick_curled.vertices.csv")
+
+
+if wanted("parented"):
+    parented()
+if wanted("rigged"):
+    rigged()
+if wanted("curled"):
+    curled()
