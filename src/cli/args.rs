@@ -74,6 +74,12 @@ pub struct BreedArgs {
     /// The --like CSV's t counts frames at this rate (frames per second), not seconds.
     #[arg(long, requires = "like")]
     pub frame_rate: Option<f64>,
+    /// The object to read from a --like animation file that animates several.
+    #[arg(long, requires = "like")]
+    pub object: Option<String>,
+    /// The animation to read from a --like glTF file whose animations move the same object.
+    #[arg(long, requires = "like")]
+    pub animation: Option<String>,
     /// Breed toward descriptors given in SI units, e.g. `descent=0.6,spin=20` (m/s, rad/s;
     /// unset ones are free), within the class of --target if given (else any class).
     #[arg(long, value_name = "NAME=VALUE,...")]
@@ -282,6 +288,9 @@ pub struct FallArgs {
     /// The object to read from an animation file that animates several (its glTF node's or USD Xform's name).
     #[arg(long)]
     pub object: Option<String>,
+    /// The animation to read from a glTF file whose animations move the same object (Blender writes each action of an object as one; by name, or index).
+    #[arg(long)]
+    pub animation: Option<String>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -370,6 +379,9 @@ pub struct CompareArgs {
     /// The object to read from animation files that animate several: one name for both, or A,B.
     #[arg(long)]
     pub object: Option<EachFile<String>>,
+    /// The animation to read from glTF files whose animations move the same object: one name for both, or A,B.
+    #[arg(long)]
+    pub animation: Option<EachFile<String>>,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -384,7 +396,11 @@ impl FallArgs {
             scale: self.scale,
             frame_rate: self.frame_rate,
         };
-        super::input::read_fall(&self.trajectory, self.size, units, self.object.as_deref())
+        let pick = super::input::Pick {
+            object: self.object.as_deref(),
+            animation: self.animation.as_deref(),
+        };
+        super::input::read_fall(&self.trajectory, self.size, units, pick)
     }
 }
 

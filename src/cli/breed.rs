@@ -38,7 +38,10 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                         scale: args.scale,
                         frame_rate: args.frame_rate,
                     },
-                    None,
+                    input::Pick {
+                        object: args.object.as_deref(),
+                        animation: args.animation.as_deref(),
+                    },
                 )?),
                 None => None,
             };

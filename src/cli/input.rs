@@ -106,20 +106,36 @@ impl CsvUnits {
     }
 }
 
+/// Which fall of an animation file to read: the object where several move
+/// (`--object`), and the glTF animation where several move it
+/// (`--animation`).
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Pick<'a> {
+    /// The object's name.
+    pub object: Option<&'a str>,
+    /// The animation's name (or index).
+    pub animation: Option<&'a str>,
+}
+
 /// Reads a recorded fall: a CSV record read in `units`, or an animation
 /// file (glTF, y up by its specification; USD, as its stage says), of
-/// which `object` names the one to read where several move. What the
+/// which `pick` names the fall to read where it holds several. What the
 /// reading noticed goes to stderr.
-pub fn read_record(path: &Path, units: CsvUnits, object: Option<&str>) -> Result<Record> {
+pub fn read_record(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
     units.check()?;
     let record = if export::fall::AnimationFormat::of(path).is_some() {
-        read_animation(path, units, object)?
+        read_animation(path, units, pick)?
     } else {
-        if let Some(object) = object {
-            bail!(
-                "--object {object}: {} is a CSV record, which holds one fall; --object picks an object of an animation file (.glb, .gltf, .usda)",
-                path.display()
-            );
+        for (flag, given, what) in [
+            ("--object", pick.object, "an object"),
+            ("--animation", pick.animation, "an animation"),
+        ] {
+            if let Some(given) = given {
+                bail!(
+                    "{flag} {given}: {} is a CSV record, which holds one fall; {flag} picks {what} of an animation file (.glb, .gltf, .usd)",
+                    path.display()
+                );
+            }
         }
         read_csv_record(path, units)?
     };
@@ -131,14 +147,9 @@ pub fn read_record(path: &Path, units: CsvUnits, object: Option<&str>) -> Result
 
 /// Reads and classifies a recorded fall ([`read_record`]) with chord `size`
 /// (default: an animation's own, [`DEFAULT_SIZE_M`] for a CSV record).
-pub fn read_fall(
-    path: &Path,
-    size: Option<f64>,
-    units: CsvUnits,
-    object: Option<&str>,
-) -> Result<Fall> {
+pub fn read_fall(path: &Path, size: Option<f64>, units: CsvUnits, pick: Pick<'_>) -> Result<Fall> {
     check_size(size)?;
-    let record = read_record(path, units, object)?;
+    let record = read_record(path, units, pick)?;
     let size = record.size_or(size);
     let classification = classify::classify(&record.trajectory, size);
     Ok(Fall {
@@ -190,8 +201,8 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
 
 /// [`read_record`] of a glTF file: the fall of its moving object
 /// ([`export::fall`]).
-fn read_animation(path: &Path, units: CsvUnits, object: Option<&str>) -> Result<Record> {
-    let fall = export::fall::read_fall(path, object)?;
+fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
+    let fall = export::fall::read_fall_of(path, pick.object, pick.animation)?;
     if units.up != UpAxis::Z {
         eprintln!(
             "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis): read as such",
@@ -288,9 +299,9 @@ pub fn describe_fall(
     path: &Path,
     size: Option<f64>,
     units: CsvUnits,
-    object: Option<&str>,
+    pick: Pick<'_>,
 ) -> Result<(Fall, Descriptors)> {
-    let fall = read_fall(path, size, units, object)?;
+    let fall = read_fall(path, size, units, pick)?;
     let d = describe(path, &fall.classification)?;
     Ok((fall, d))
 }

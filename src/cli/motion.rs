@@ -136,13 +136,18 @@ pub fn describe(args: FallArgs) -> Result<()> {
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
     let size = |pick: fn(EachFile<f64>) -> f64| args.size.map(pick);
-    let (object_a, object_b) = match &args.object {
-        Some(EachFile(a, b)) => (Some(a.as_str()), Some(b.as_str())),
-        None => (None, None),
+    let each = |given: &Option<EachFile<String>>| match given {
+        Some(EachFile(a, b)) => [Some(a.clone()), Some(b.clone())],
+        None => [None, None],
+    };
+    let (objects, animations) = (each(&args.object), each(&args.animation));
+    let pick = |k: usize| input::Pick {
+        object: objects[k].as_deref(),
+        animation: animations[k].as_deref(),
     };
     let [units_a, units_b] = args.units();
-    let (_, a) = input::describe_fall(&args.a, size(|s| s.0), units_a, object_a)?;
-    let (_, b) = input::describe_fall(&args.b, size(|s| s.1), units_b, object_b)?;
+    let (_, a) = input::describe_fall(&args.a, size(|s| s.0), units_a, pick(0))?;
+    let (_, b) = input::describe_fall(&args.b, size(|s| s.1), units_b, pick(1))?;
     let d = describe::distance(&a, &b);
     if args.json {
         let side = descriptors_json;

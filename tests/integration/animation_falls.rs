@@ -186,7 +186,7 @@ fn keys_of(file: &str) -> Clip {
     if file.ends_with(".usda") {
         export::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
     } else {
-        export::read_gltf_keys(&std::fs::read(&path).unwrap(), file, path.parent()).unwrap()
+        export::read_gltf_keys(&std::fs::read(&path).unwrap(), file, path.parent(), None).unwrap()
     }
 }
 
@@ -879,6 +879,7 @@ fn blender_usd_reads_as_its_gltf() {
             &std::fs::read(data(&format!("blender/{name}.glb"))).unwrap(),
             name,
             None,
+            None,
         )
         .unwrap();
         assert_eq!(usd.fps, 24.0);
@@ -973,4 +974,70 @@ fn crate_files_packages_and_composed_stages_read_as_their_text() {
         (chord(&note) / chord(&blender) - 2.0).abs() < 0.01,
         "{note} / {blender}"
     );
+}
+
+/// An object with several takes, as an animator keeps them: Blender writes
+/// the active action (`tumble`, tumble_thick's keys) and the one it stashed
+/// when the animator switched (`steady`, steady_fall's) as two glTF
+/// animations of the same card (`blender/tumble_thick_takes.glb`). Read
+/// together they were one fall of neither (the first channel of each
+/// property won); now the file is refused naming both, and `--animation`
+/// reads the one it names (by name or index) as the fall it holds.
+#[test]
+fn a_file_with_several_takes_is_read_by_the_one_named() {
+    let takes = data("blender/tumble_thick_takes.glb");
+    for (pick, original) in [
+        ("tumble", "blender/tumble_thick.glb"),
+        ("1", "blender/tumble_thick.glb"),
+        ("steady", "blender/steady_fall.glb"),
+    ] {
+        let got = export::fall::read_fall_of(&takes, None, Some(pick)).unwrap();
+        let want = read_fall(&data(original), None).unwrap();
+        let (g, w) = (&got.trajectory, &want.trajectory);
+        assert_eq!(g.time, w.time, "{pick}");
+        for k in 0..g.len() {
+            assert!(
+                (g.position[k] - w.position[k]).norm() < 1e-12,
+                "{pick} key {k}"
+            );
+            assert!(
+                g.orientation[k].angle_to(&w.orientation[k]) < 1e-9,
+                "{pick} key {k}"
+            );
+        }
+    }
+    let run = |args: &[&str]| {
+        let o = leafmagic().args(args).output().unwrap();
+        (
+            o.status.success(),
+            String::from_utf8_lossy(&o.stderr).into_owned(),
+        )
+    };
+    let file = takes.to_str().unwrap();
+    let (ok, err) = run(&["classify", file]);
+    assert!(
+        !ok && err.contains(
+            "tumble_thick_takes.glb: 2 of its animations move node `card` (`steady`, `tumble`): name the one to read with --animation NAME"
+        ),
+        "{err}"
+    );
+    let (ok, err) = run(&["classify", file, "--animation", "walk"]);
+    assert!(
+        !ok && err
+            .contains("--animation walk: no animation of that name; it holds `steady`, `tumble`"),
+        "{err}"
+    );
+    // Each side of a comparison its own take.
+    let (ok, err) = run(&["compare", file, file, "--animation", "tumble,steady"]);
+    assert!(ok, "{err}");
+    // Not for a USD stage, which holds one, nor for a CSV record.
+    for other in ["blender/tumble_thick.usda", "mujoco-falls/tumble_thick.csv"] {
+        let (ok, err) = run(&[
+            "classify",
+            data(other).to_str().unwrap(),
+            "--animation",
+            "tumble",
+        ]);
+        assert!(!ok && err.contains("--animation tumble"), "{err}");
+    }
 }

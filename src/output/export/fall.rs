@@ -95,14 +95,33 @@ pub struct AnimationFall {
 /// none). Errors name the file and, when the file holds several moving
 /// objects and none is named, list them.
 pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, ExportError> {
+    read_fall_of(path, object, None)
+}
+
+/// [`read_fall`], of the glTF animation `animation` names where the file
+/// holds several ([`super::read_gltf_keys`]); a USD stage holds one, and
+/// naming one there is refused.
+pub fn read_fall_of(
+    path: &Path,
+    object: Option<&str>,
+    animation: Option<&str>,
+) -> Result<AnimationFall, ExportError> {
     let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
     let name = path.file_stem().map_or("animation".to_string(), |s| {
         s.to_string_lossy().into_owned()
     });
     let clip = if AnimationFormat::of(path) == Some(AnimationFormat::Usd) {
+        if let Some(want) = animation {
+            return Err(ExportError::input(
+                path,
+                format!(
+                    "--animation {want}: a USD stage holds one animation; --animation picks one of a glTF file's"
+                ),
+            ));
+        }
         read_usd_file(path, &bytes, &name)
     } else {
-        read_gltf_keys(&bytes, &name, path.parent())
+        read_gltf_keys(&bytes, &name, path.parent(), animation)
     }
     .map_err(|e| match e {
         ExportError::Data(reason) => ExportError::input(path, reason),

@@ -19,6 +19,7 @@ use gltf::animation::util::ReadOutputs;
 use gltf::animation::{Interpolation, Property};
 use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
 use serde::Deserialize;
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 type V3 = Vector3<f64>;
@@ -266,15 +267,94 @@ impl Track {
 /// skinned one deform (every vertex placed per frame). Ground and wind
 /// glyphs come from leafmagic's scene `extras`.
 pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip, ExportError> {
-    read_gltf(bytes, name, None, Grid::From0(fps))
+    read_gltf(bytes, name, None, Grid::From0(fps), None)
 }
 
 /// A clip from the bytes of a glTF file (`.glb`, or `.gltf` whose buffers
 /// are data URIs or files in `dir`), sampled at its own keys: from the
 /// first key to the last, one frame per shortest key interval (see
 /// `Grid::Keys`). What a fall is read from ([`super::fall`]).
-pub fn read_gltf_keys(bytes: &[u8], name: &str, dir: Option<&Path>) -> Result<Clip, ExportError> {
-    read_gltf(bytes, name, dir, Grid::Keys)
+/// Of a file with several animations, `animation` names the one to read
+/// (by name, or by index where none has that name); without it, animations
+/// that move different nodes are read together, and two that move the same
+/// node's same property are refused, listed by name: an exporter writes
+/// each action of an object as an animation of its own (Blender writes
+/// the stashed actions beside the active one), and which is the fall only
+/// its author knows.
+pub fn read_gltf_keys(
+    bytes: &[u8],
+    name: &str,
+    dir: Option<&Path>,
+    animation: Option<&str>,
+) -> Result<Clip, ExportError> {
+    read_gltf(bytes, name, dir, Grid::Keys, animation)
+}
+
+/// The index of the animation `want` names among `doc`'s (its name, else
+/// its index), or why none does.
+fn named_animation(doc: &gltf::Document, want: &str) -> Result<usize, String> {
+    let count = doc.animations().len();
+    doc.animations()
+        .find(|a| a.name() == Some(want))
+        .map(|a| a.index())
+        .or_else(|| want.parse::<usize>().ok().filter(|&k| k < count))
+        .ok_or_else(|| {
+            if count == 0 {
+                format!("--animation {want}: it holds no animation")
+            } else {
+                format!(
+                    "--animation {want}: no animation of that name; it holds {}",
+                    animation_names(doc.animations())
+                )
+            }
+        })
+}
+
+/// Animations listed for a message: `name`, or `#k` for an unnamed one.
+fn animation_names<'a>(anims: impl Iterator<Item = gltf::Animation<'a>>) -> String {
+    anims
+        .map(|a| match a.name() {
+            Some(n) => format!("`{n}`"),
+            None => format!("#{}", a.index()),
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// Refuses `doc` when two of its animations move the same node's same
+/// property ([`read_gltf_keys`] says why), naming them and the node.
+fn check_one_take(doc: &gltf::Document) -> Result<(), String> {
+    // The first animation to move each (node, property); gltf's Property
+    // is not Hash, its discriminant is.
+    let mut mover: HashMap<(usize, u8), usize> = HashMap::new();
+    for anim in doc.animations() {
+        for ch in anim.channels() {
+            let node = ch.target().node();
+            let key = (node.index(), ch.target().property() as u8);
+            let Some(&first) = mover.get(&key) else {
+                mover.insert(key, anim.index());
+                continue;
+            };
+            if first == anim.index() {
+                continue;
+            }
+            let moving: Vec<gltf::Animation<'_>> = doc
+                .animations()
+                .filter(|a| {
+                    a.channels()
+                        .any(|c| c.target().node().index() == node.index())
+                })
+                .collect();
+            return Err(format!(
+                "{} of its animations move node `{}` ({}): name the one to read with --animation NAME",
+                moving.len(),
+                node.name()
+                    .map_or_else(|| format!("#{}", node.index()), str::to_string),
+                animation_names(moving.into_iter())
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Where a clip read from glTF is sampled.
@@ -344,12 +424,16 @@ pub(super) fn key_rate(shortest: f64) -> Option<f64> {
 }
 
 /// A clip from the bytes of a glTF file (binary, or JSON whose buffers are
-/// data URIs or files in `dir`), sampled on `grid`.
+/// data URIs or files in `dir`), sampled on `grid`: of its animations, the
+/// one `animation` names, else all of them ([`read_gltf_keys`] refuses two
+/// that move the same node; a player's [`Grid::From0`] reads the first
+/// channel of each node and property, as before).
 fn read_gltf(
     bytes: &[u8],
     name: &str,
     dir: Option<&Path>,
     grid: Grid,
+    animation: Option<&str>,
 ) -> Result<Clip, ExportError> {
     let gltf = open_gltf(bytes)?;
     let buffers = buffer_data(&gltf, dir)?;
@@ -365,11 +449,23 @@ fn read_gltf(
         .and_then(|r| serde_json::from_str::<SceneExtras>(r.get()).ok())
         .and_then(|e| e.leafmagic)
         .unwrap_or_default();
+    let only = match animation {
+        Some(want) => Some(named_animation(doc, want).map_err(ExportError::Data)?),
+        None => {
+            if matches!(grid, Grid::Keys) {
+                check_one_take(doc).map_err(ExportError::Data)?;
+            }
+            None
+        }
+    };
     // Tracks per (node, property).
     let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
     let mut t_end = 0.0f64;
     let mut t_start = f64::INFINITY;
-    for anim in doc.animations() {
+    for anim in doc
+        .animations()
+        .filter(|a| only.is_none_or(|k| a.index() == k))
+    {
         for ch in anim.channels() {
             check_sampler(&ch)?;
             let reader = ch.reader(get);

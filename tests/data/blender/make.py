@@ -40,8 +40,14 @@ Two more put the card under other objects, as animators build a leaf:
   BlendShape on a one-joint skeleton. Its evaluated vertices go to
   tumble_thick_curled.vertices.csv as the rigged card's do.
 
+- tumble_thick_takes.glb: a 4 x 1 cm card with two actions, as an
+  animator keeps takes: `tumble` (tumble_thick's keys), the active one,
+  and `steady` (steady_fall's), stashed in the NLA as Blender does when
+  the active action is switched. Blender's glTF exporter writes each as
+  an animation of its own, both moving the card.
+
 `python make.py SRC OUT NAME ...` makes only the named ones (the six
-falls are `bakes`; `parented`, `rigged`, `curled`).
+falls are `bakes`; `parented`, `rigged`, `curled`, `takes`).
 """
 import bpy, csv, math, os, sys
 from mathutils import Quaternion, Vector
@@ -240,9 +246,39 @@ def curled():
     evaluated(ob, frame, "tumble_thick_curled.vertices.csv")
 
 
+def takes():
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    sc = bpy.context.scene
+    sc.render.fps = 24
+    me = bpy.data.meshes.new("card")
+    me.from_pydata([(-0.02, -0.005, 0), (0.02, -0.005, 0), (0.02, 0.005, 0), (-0.02, 0.005, 0)], [], [(0, 1, 2, 3)])
+    ob = bpy.data.objects.new("card", me)
+    sc.collection.objects.link(ob)
+    ob.rotation_mode = "QUATERNION"
+    ob.animation_data_create()
+    frame = 1
+    for take, fall in [("steady", "steady_fall"), ("tumble", "tumble_thick")]:
+        rows = list(csv.DictReader(open(os.path.join(src, fall + ".csv"))))
+        action = bpy.data.actions.new(take)
+        ob.animation_data.action = action
+        for frame, loc, q in keyed(rows):
+            ob.location, ob.rotation_quaternion = loc, q
+            ob.keyframe_insert("location", frame=frame)
+            ob.keyframe_insert("rotation_quaternion", frame=frame)
+    # Switching the active action stashes the other in a muted NLA track.
+    stash = ob.animation_data.nla_tracks.new()
+    stash.name = "[Action Stash]"
+    stash.strips.new("steady", 1, bpy.data.actions["steady"])
+    stash.mute = True
+    sc.frame_start, sc.frame_end = 1, frame
+    bpy.ops.export_scene.gltf(filepath=os.path.join(out, "tumble_thick_takes.glb"), export_format="GLB")
+
+
 if wanted("parented"):
     parented()
 if wanted("rigged"):
     rigged()
 if wanted("curled"):
     curled()
+if wanted("takes"):
+    takes()
