@@ -272,7 +272,7 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
         ),
         (
             // Falls in animation files: glTF (JSON and binary, skinned,
-            // quantised), USD text (nested, UsdSkel, blend shapes), USD crate files, a
+            // quantised), USD text (nested, UsdSkel, blend shapes, a PointInstancer), USD crate files, a
             // USDZ package and a composed shot.
             "animation",
             [
@@ -283,6 +283,7 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 "blender/tumble_thick_parented.usda",
                 "usd/skinned_leaf.usda",
                 "blender/tumble_thick_curled.usda",
+                "usd/instanced/leaves.usda",
                 "usd/composed/tumble_thick_rigged.usdc",
                 "usd/composed/skinned_leaf.usdc",
                 "usd/composed/tumble_thick.usdz",

@@ -212,8 +212,9 @@ fn far_out(o: &ClipObject, frames: usize) -> Result<(), String> {
 
 /// `a (rigid), b (deforming)`: names with how they move.
 fn listed(objects: &[&ClipObject]) -> String {
-    objects
+    let mut names: Vec<String> = objects
         .iter()
+        .take(LISTED)
         .map(|o| {
             let how = match o.motion {
                 Motion::Rigid { .. } => "rigid",
@@ -221,9 +222,16 @@ fn listed(objects: &[&ClipObject]) -> String {
             };
             format!("`{}` ({how})", o.name)
         })
-        .collect::<Vec<_>>()
-        .join(", ")
+        .collect();
+    if objects.len() > LISTED {
+        names.push(format!("and {} more", objects.len() - LISTED));
+    }
+    names.join(", ")
 }
+
+/// Most objects a message lists by name: a PointInstancer's thousands of
+/// leaves would bury it.
+const LISTED: usize = 20;
 
 /// Whether any vertex of `o` leaves its first position by more than
 /// [`MOVING_FRACTION_OF_CHORD`] of its `chord`.
@@ -564,5 +572,31 @@ mod tests {
             assert!(da.angle_to(&db) < 1e-9, "frame {k}");
             assert!((a.time[k] - k as f64 / 24.0).abs() < 1e-15);
         }
+    }
+
+    #[test]
+    fn long_lists_of_objects_name_the_first_twenty_and_count_the_rest() {
+        let one = |k: usize| ClipObject {
+            name: format!("leaves[{k}]"),
+            kind: "mesh".into(),
+            label: String::new(),
+            regime: String::new(),
+            features: vec![],
+            triangles: vec![],
+            segments: vec![],
+            body: None,
+            render: None,
+            motion: Motion::Deforming { frames: vec![] },
+        };
+        let objects: Vec<ClipObject> = (0..25).map(one).collect();
+        let refs: Vec<&ClipObject> = objects.iter().collect();
+        let text = listed(&refs);
+        assert!(text.starts_with("`leaves[0]` (deforming), `leaves[1]` (deforming)"));
+        assert!(text.contains("`leaves[19]`") && !text.contains("`leaves[20]`"));
+        assert!(text.ends_with(", and 5 more"), "{text}");
+        assert_eq!(
+            listed(&refs[..2]),
+            "`leaves[0]` (deforming), `leaves[1]` (deforming)"
+        );
     }
 }

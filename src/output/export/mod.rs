@@ -30,6 +30,7 @@ pub mod render_mesh;
 mod scene;
 mod skin;
 pub mod usd;
+mod usd_instancer;
 mod usd_layer;
 mod usd_skel;
 mod usd_stage;

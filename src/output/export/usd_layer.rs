@@ -279,6 +279,38 @@ impl Prim {
             .find(|(n, _)| n == name)
             .map(|(_, a)| a)
     }
+
+    /// A Mesh's faces as triangles (each face a fan from its first
+    /// vertex), from its `faceVertexCounts` and `faceVertexIndices`.
+    pub(super) fn triangles(&self) -> Result<Vec<[u32; 3]>, String> {
+        let numbers = |name: &str| {
+            self.attribute(name)
+                .and_then(|a| a.default.as_ref())
+                .and_then(Value::numbers)
+                .unwrap_or_default()
+        };
+        let (counts, indices) = (numbers("faceVertexCounts"), numbers("faceVertexIndices"));
+        let mut triangles = Vec::new();
+        let mut at = 0usize;
+        for c in counts {
+            let c = c as usize;
+            if at + c > indices.len() {
+                return Err(format!(
+                    "mesh `{}`: faceVertexCounts run past faceVertexIndices",
+                    self.name
+                ));
+            }
+            for k in 1..c.saturating_sub(1) {
+                triangles.push([
+                    indices[at] as u32,
+                    indices[at + k] as u32,
+                    indices[at + k + 1] as u32,
+                ]);
+            }
+            at += c;
+        }
+        Ok(triangles)
+    }
 }
 
 /// The parser over the tokens, with the line of each for errors.
@@ -692,6 +724,18 @@ fn homogeneous(m: Matrix3<f64>, t: V3) -> M4 {
     h.fixed_view_mut::<3, 3>(0, 0).copy_from(&m);
     h.fixed_view_mut::<3, 1>(0, 3).copy_from(&t);
     h
+}
+
+/// The transform of the last prim of `chain` (the prims from the root down
+/// to it) at time code `t`: each one's local transform composed on its
+/// parents', unless its order resets them.
+pub(super) fn world_transform(chain: &[&Prim], t: f64) -> Result<M4, String> {
+    let mut world = M4::identity();
+    for prim in chain {
+        let (local, reset) = local_transform(prim, t)?;
+        world = if reset { local } else { world * local };
+    }
+    Ok(world)
 }
 
 /// A prim's local transform at time code `t` (column vectors: the first op

@@ -37,7 +37,7 @@
 //! name weighs 0). Refused by name: inbetween shapes.
 
 use super::skin::{Influences, blend};
-use super::usd_layer::{Attribute, Prim, Value, local_transform, sample};
+use super::usd_layer::{Attribute, Prim, Value, sample, world_transform};
 use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -67,7 +67,7 @@ impl<'a> Paths<'a> {
     }
 
     /// The prims from the root down to the one at `path`.
-    fn chain(&self, path: &str) -> Option<Vec<&'a Prim>> {
+    pub(super) fn chain(&self, path: &str) -> Option<Vec<&'a Prim>> {
         let mut out = Vec::new();
         let mut at = String::new();
         for part in path.trim_start_matches('/').split('/') {
@@ -102,7 +102,7 @@ fn target(prim: &Prim, name: &str) -> Result<Option<String>, String> {
 }
 
 /// Every target of relationship `name` on `prim` (none if it has none).
-fn targets(prim: &Prim, name: &str) -> Result<Vec<String>, String> {
+pub(super) fn targets(prim: &Prim, name: &str) -> Result<Vec<String>, String> {
     let Some(rel) = prim.attribute(name).filter(|a| a.type_name == "rel") else {
         return Ok(Vec::new());
     };
@@ -384,11 +384,7 @@ impl<'a> Skinning<'a> {
             }
             skel_space[j] = Some(m);
         }
-        let mut world = M4::identity();
-        for p in &self.skeleton {
-            let (m, reset) = local_transform(p, t)?;
-            world = if reset { m } else { world * m };
-        }
+        let world = world_transform(&self.skeleton, t)?;
         let skinning: Vec<M4> = skel_space
             .iter()
             .zip(&self.bind_inverse)

@@ -12,14 +12,14 @@
 use super::clip::{Clip, ClipObject, Motion};
 use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
-use super::usd_layer::{Layer, Prim, Value, composes, local_transform, parse, sample};
+use super::usd_instancer::instanced;
+use super::usd_layer::{Layer, Prim, Value, composes, parse, sample, world_transform};
 use super::usd_skel::{BlendShapes, Paths, Skinning};
 use super::usd_stage::flatten;
-use nalgebra::{Matrix4, Vector3};
+use nalgebra::Vector3;
 use std::path::Path;
 
 type V3 = Vector3<f64>;
-type M4 = Matrix4<f64>;
 
 /// Every time code at which something of `prim` or below it is sampled.
 fn sample_times(prim: &Prim, out: &mut Vec<f64>) {
@@ -31,14 +31,27 @@ fn sample_times(prim: &Prim, out: &mut Vec<f64>) {
     }
 }
 
-/// Meshes under `prim` with the chain of prims above each (outermost first).
-fn meshes<'a>(prim: &'a Prim, chain: &mut Vec<&'a Prim>, out: &mut Vec<Vec<&'a Prim>>) {
+/// Meshes under `prim` with the chain of prims above each (outermost first),
+/// and likewise the PointInstancers; a PointInstancer's own prototypes are
+/// drawn only through it (UsdGeom), so nothing below one is a mesh of its
+/// own.
+fn meshes<'a>(
+    prim: &'a Prim,
+    chain: &mut Vec<&'a Prim>,
+    out: &mut Vec<Vec<&'a Prim>>,
+    instancers: &mut Vec<Vec<&'a Prim>>,
+) {
     chain.push(prim);
+    if prim.type_name == "PointInstancer" {
+        instancers.push(chain.clone());
+        chain.pop();
+        return;
+    }
     if prim.type_name == "Mesh" && prim.attribute("points").is_some() {
         out.push(chain.clone());
     }
     for c in &prim.children {
-        meshes(c, chain, out);
+        meshes(c, chain, out, instancers);
     }
     chain.pop();
 }
@@ -102,46 +115,22 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
             p
         }
     };
-    let mut found = Vec::new();
+    let (mut found, mut instancers) = (Vec::new(), Vec::new());
     for r in &layer.roots {
-        meshes(r, &mut Vec::new(), &mut found);
+        meshes(r, &mut Vec::new(), &mut found, &mut instancers);
     }
     let paths = Paths::new(&layer.roots);
-    if found.is_empty() {
+    if found.is_empty() && instancers.is_empty() {
         return Err("no Mesh prim with points in it".to_string());
     }
+    let times: Vec<f64> = (0..frames).map(|k| start + k as f64 * step).collect();
     let mut objects = Vec::new();
+    for chain in &instancers {
+        objects.extend(instanced(&paths, chain, &times, &to_z_up)?);
+    }
     for chain in found {
         let mesh = *chain.last().expect("a chain ends at its mesh");
-        let counts = mesh
-            .attribute("faceVertexCounts")
-            .and_then(|a| a.default.as_ref())
-            .and_then(Value::numbers)
-            .unwrap_or_default();
-        let indices = mesh
-            .attribute("faceVertexIndices")
-            .and_then(|a| a.default.as_ref())
-            .and_then(Value::numbers)
-            .unwrap_or_default();
-        let mut triangles = Vec::new();
-        let mut at = 0usize;
-        for c in counts {
-            let c = c as usize;
-            if at + c > indices.len() {
-                return Err(format!(
-                    "mesh `{}`: faceVertexCounts run past faceVertexIndices",
-                    mesh.name
-                ));
-            }
-            for k in 1..c.saturating_sub(1) {
-                triangles.push([
-                    indices[at] as u32,
-                    indices[at + k] as u32,
-                    indices[at + k + 1] as u32,
-                ]);
-            }
-            at += c;
-        }
+        let triangles = mesh.triangles()?;
         let points = mesh.attribute("points").expect("found by its points");
         let skinning = Skinning::of(&paths, &chain)?;
         let shapes = BlendShapes::of(&paths, &chain)?;
@@ -171,11 +160,7 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
                     s.pose(&p, t)?
                 }
                 None => {
-                    let mut world = M4::identity();
-                    for prim in &chain {
-                        let (local, reset) = local_transform(prim, t)?;
-                        world = if reset { local } else { world * local };
-                    }
+                    let world = world_transform(&chain, t)?;
                     p.iter()
                         .map(|c| world.transform_point(&(*c).into()).coords)
                         .collect()
