@@ -75,6 +75,27 @@ pub struct ClipObject {
 }
 
 impl ClipObject {
+    /// A mesh read from an animation file: its vertices per frame, and
+    /// nothing else known of it.
+    pub fn read_mesh(
+        name: String,
+        triangles: Vec<[u32; 3]>,
+        frames: Vec<Vec<Vector3<f64>>>,
+    ) -> Self {
+        ClipObject {
+            name,
+            kind: "mesh".to_string(),
+            label: String::new(),
+            regime: String::new(),
+            features: Vec::new(),
+            triangles,
+            segments: Vec::new(),
+            body: None,
+            render: None,
+            motion: Motion::Deforming { frames },
+        }
+    }
+
     /// Number of vertices.
     pub fn vertex_count(&self) -> usize {
         match &self.motion {

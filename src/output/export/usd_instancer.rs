@@ -21,7 +21,7 @@
 //! is left out. Velocities, which only motion-blur between samples, are
 //! not read; `inactiveIds` and `invisibleIds` are not either.
 
-use super::clip::{ClipObject, Motion};
+use super::clip::ClipObject;
 use super::read::check_points;
 use super::usd_layer::{Prim, sample, world_transform};
 use super::usd_skel::{Paths, targets};
@@ -252,18 +252,7 @@ pub(super) fn instanced(
                     .attribute("points")
                     .map_or(0, |a| a.vector_count()) as u32;
             }
-            ClipObject {
-                name: format!("{}[{id}]", prim.name),
-                kind: "mesh".to_string(),
-                label: String::new(),
-                regime: String::new(),
-                features: Vec::new(),
-                triangles,
-                segments: Vec::new(),
-                body: None,
-                render: None,
-                motion: Motion::Deforming { frames },
-            }
+            ClipObject::read_mesh(format!("{}[{id}]", prim.name), triangles, frames)
         })
         .collect())
 }

@@ -101,6 +101,17 @@ fn target(prim: &Prim, name: &str) -> Result<Option<String>, String> {
     Ok(Some(path))
 }
 
+/// The single target of relationship `name` on the last prim of `chain`
+/// that has one (the prims above inherit a binding, UsdSkel).
+fn nearest_target(chain: &[&Prim], name: &str) -> Result<Option<String>, String> {
+    for p in chain.iter().rev() {
+        if let Some(path) = target(p, name)? {
+            return Ok(Some(path));
+        }
+    }
+    Ok(None)
+}
+
 /// Every target of relationship `name` on `prim` (none if it has none).
 pub(super) fn targets(prim: &Prim, name: &str) -> Result<Vec<String>, String> {
     let Some(rel) = prim.attribute(name).filter(|a| a.type_name == "rel") else {
@@ -133,14 +144,7 @@ fn binding<'a>(
     chain: &[&'a Prim],
 ) -> Result<Option<(Vec<&'a Prim>, Option<&'a Prim>)>, String> {
     let mesh = *chain.last().expect("a chain ends at its mesh");
-    let mut bound = None;
-    for p in chain.iter().rev() {
-        if let Some(path) = target(p, "skel:skeleton")? {
-            bound = Some(path);
-            break;
-        }
-    }
-    let Some(skeleton_path) = bound else {
+    let Some(skeleton_path) = nearest_target(chain, "skel:skeleton")? else {
         return Ok(None);
     };
     let skeleton = paths.chain(&skeleton_path).ok_or_else(|| {
@@ -150,14 +154,7 @@ fn binding<'a>(
         )
     })?;
     let skel = *skeleton.last().expect("a path has a prim");
-    let mut source = None;
-    for p in skeleton.iter().rev() {
-        if let Some(path) = target(p, "skel:animationSource")? {
-            source = Some(path);
-            break;
-        }
-    }
-    let animation = match source {
+    let animation = match nearest_target(&skeleton, "skel:animationSource")? {
         None => None,
         Some(path) => Some(
             paths

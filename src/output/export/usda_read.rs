@@ -9,7 +9,7 @@
 //! is skinned, by its UsdSkel skeleton ([`super::usd_skel`]). The layer's
 //! grammar, and what it refuses, are [`super::usd_layer`]'s.
 
-use super::clip::{Clip, ClipObject, Motion};
+use super::clip::{Clip, ClipObject};
 use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
 use super::usd_instancer::instanced;
@@ -197,18 +197,7 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
             Some(Value::Str(s)) => s.clone(),
             _ => named.name.clone(),
         };
-        objects.push(ClipObject {
-            name,
-            kind: "mesh".to_string(),
-            label: String::new(),
-            regime: String::new(),
-            features: Vec::new(),
-            triangles,
-            segments: Vec::new(),
-            body: None,
-            render: None,
-            motion: Motion::Deforming { frames: frame_list },
-        });
+        objects.push(ClipObject::read_mesh(name, triangles, frame_list));
     }
     let clip = Clip {
         name: name.to_string(),

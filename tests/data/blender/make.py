@@ -148,7 +148,9 @@ def parented():
     export("tumble_thick_parented")
 
 
-def rigged():
+def meshed_card():
+    """A fresh scene at 24 fps, tumble_thick's rows, and the 4 x 1 cm card
+    meshed 4 x 2 (its vertices and object, not yet linked)."""
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.render.fps = 24
@@ -159,7 +161,11 @@ def rigged():
              for j in range(ny) for i in range(nx)]
     me = bpy.data.meshes.new("card")
     me.from_pydata(verts, [], faces)
-    ob = bpy.data.objects.new("card", me)
+    return sc, rows, verts, bpy.data.objects.new("card", me)
+
+
+def rigged():
+    sc, rows, verts, ob = meshed_card()
     arm = bpy.data.armatures.new("rig")
     rig = bpy.data.objects.new("rig", arm)
     sc.collection.objects.link(ob)
@@ -216,17 +222,7 @@ def evaluated(ob, frames, name):
 
 
 def curled():
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    sc = bpy.context.scene
-    sc.render.fps = 24
-    rows = list(csv.DictReader(open(os.path.join(src, "tumble_thick.csv"))))
-    nx, ny = 4, 2
-    verts = [(-0.02 + 0.04 * i / nx, -0.005 + 0.01 * j / ny, 0.0) for j in range(ny + 1) for i in range(nx + 1)]
-    faces = [(j * (nx + 1) + i, j * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i + 1, (j + 1) * (nx + 1) + i)
-             for j in range(ny) for i in range(nx)]
-    me = bpy.data.meshes.new("card")
-    me.from_pydata(verts, [], faces)
-    ob = bpy.data.objects.new("card", me)
+    sc, rows, _, ob = meshed_card()
     sc.collection.objects.link(ob)
     ob.shape_key_add(name="Basis")
     curl = ob.shape_key_add(name="curl")
