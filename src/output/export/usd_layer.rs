@@ -168,42 +168,16 @@ fn tokens(text: &str) -> Result<Vec<(Token, usize)>, String> {
 
 /// A value of USD text: numbers, strings and tokens, tuples and arrays
 /// (both [`Value::List`]), and dictionaries (time samples or metadata).
-#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+/// In JSON (how [`super::usd_stage`] carries a layer back from its child
+/// process) as that module writes it.
+#[derive(Clone, Debug, PartialEq)]
 pub(super) enum Value {
-    Number(#[serde(with = "number")] f64),
+    Number(f64),
     Str(String),
     Ident(String),
     Path(String),
     List(Vec<Value>),
     Dict(Vec<(Value, Value)>),
-}
-
-/// A number in JSON (how [`super::usd_stage`] carries a layer back from its
-/// child process): as itself where finite, else as the word USD text
-/// writes (`inf`, `-inf`, `NaN`), which JSON has no number for.
-mod number {
-    use serde::{Deserialize, Deserializer, Serializer, de::Error};
-
-    pub(super) fn serialize<S: Serializer>(x: &f64, s: S) -> Result<S::Ok, S::Error> {
-        if x.is_finite() {
-            s.serialize_f64(*x)
-        } else {
-            s.serialize_str(&x.to_string())
-        }
-    }
-
-    pub(super) fn deserialize<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
-        #[derive(Deserialize)]
-        #[serde(untagged)]
-        enum Number {
-            Finite(f64),
-            Word(String),
-        }
-        match Number::deserialize(d)? {
-            Number::Finite(x) => Ok(x),
-            Number::Word(w) => w.parse().map_err(D::Error::custom),
-        }
-    }
 }
 
 impl Value {
