@@ -38,9 +38,7 @@ use std::process::Command;
 pub(super) fn flatten(path: &Path) -> Result<Layer, String> {
     let program = std::env::current_exe()
         .map_err(|e| format!("cannot find the leafmagic executable to read USD with: {e}"))?;
-    let out = Command::new(&program)
-        .arg("compose-usd")
-        .arg(path)
+    let out = reader(&program, path)
         .env("RUST_BACKTRACE", "0")
         .output()
         .map_err(|e| format!("cannot start {} to read USD: {e}", program.display()))?;
@@ -61,6 +59,40 @@ pub(super) fn flatten(path: &Path) -> Result<Layer, String> {
                 .find(|l| l.starts_with("memory allocation of"))
                 .map_or(String::new(), |l| format!(": {l}"))
         )),
+    }
+}
+
+/// Address space the child may take: [`MEMORY_BASE`] and
+/// [`MEMORY_PER_BYTE`] times the file's size. A damaged crate file of
+/// 1 kB otherwise had openusd fill gigabytes before failing (25 s); with
+/// the cap the allocation fails at once and the file is refused. A 30 MB
+/// point cache needs 0.6 GB.
+const MEMORY_BASE: u64 = 2 << 30;
+
+/// See [`MEMORY_BASE`]: the most a crate file's LZ4 and integer coding
+/// expand by, with room for openusd's own structures.
+const MEMORY_PER_BYTE: u64 = 400;
+
+/// The command that reads `path` in a child process: `program compose-usd
+/// PATH`, under a cap on its address space where a POSIX shell can set one
+/// (`ulimit -v`).
+fn reader(program: &Path, path: &Path) -> Command {
+    let shell = Path::new("/bin/sh");
+    if cfg!(unix) && shell.exists() {
+        let size = std::fs::metadata(path).map_or(0, |m| m.len());
+        let cap_kib = MEMORY_BASE.saturating_add(size.saturating_mul(MEMORY_PER_BYTE)) / 1024;
+        let mut cmd = Command::new(shell);
+        cmd.arg("-c")
+            .arg(r#"ulimit -v "$1" 2>/dev/null; exec "$2" compose-usd "$3""#)
+            .arg("sh")
+            .arg(cap_kib.to_string())
+            .arg(program)
+            .arg(path);
+        cmd
+    } else {
+        let mut cmd = Command::new(program);
+        cmd.arg("compose-usd").arg(path);
+        cmd
     }
 }
 
