@@ -458,6 +458,9 @@ pub struct PreviewArgs {
     /// Frames per second of the embedded motion [default: 30, or the .glb's own].
     #[arg(long)]
     pub fps: Option<f64>,
+    /// The animation to play of a .glb whose animations move the same object (by name, or index).
+    #[arg(long)]
+    pub animation: Option<String>,
 }
 
 /// Arguments of `shard`.

@@ -211,7 +211,12 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         bail!("--top must be at least 1");
     }
     let started = Instant::now();
-    let (clip, grid) = leafmagic::output::preview::load(&args.input, args.top, args.fps)?;
+    let (clip, grid) = leafmagic::output::preview::load(
+        &args.input,
+        args.top,
+        args.fps,
+        args.animation.as_deref(),
+    )?;
     let out = args.out.clone().unwrap_or_else(|| {
         if args.input.is_dir() {
             args.input.join("preview.html")

@@ -982,7 +982,8 @@ fn crate_files_packages_and_composed_stages_read_as_their_text() {
 /// animations of the same card (`blender/tumble_thick_takes.glb`). Read
 /// together they were one fall of neither (the first channel of each
 /// property won); now the file is refused naming both, and `--animation`
-/// reads the one it names (by name or index) as the fall it holds.
+/// reads (or `preview` plays) the one it names, by name or index, as the
+/// fall it holds.
 #[test]
 fn a_file_with_several_takes_is_read_by_the_one_named() {
     let takes = data("blender/tumble_thick_takes.glb");
@@ -1030,6 +1031,15 @@ fn a_file_with_several_takes_is_read_by_the_one_named() {
     // Each side of a comparison its own take.
     let (ok, err) = run(&["compare", file, file, "--animation", "tumble,steady"]);
     assert!(ok, "{err}");
+    // A preview plays the take it is given, and refuses to mix them.
+    let dir = scratch("takes");
+    let html = dir.join("takes.html");
+    let html = html.to_str().unwrap();
+    let (ok, err) = run(&["preview", file, "--out", html]);
+    assert!(!ok && err.contains("--animation NAME"), "{err}");
+    let (ok, err) = run(&["preview", file, "--out", html, "--animation", "tumble"]);
+    assert!(ok && std::path::Path::new(html).is_file(), "{err}");
+    let _ = std::fs::remove_dir_all(&dir);
     // Not for a USD stage, which holds one, nor for a CSV record.
     for other in ["blender/tumble_thick.usda", "mujoco-falls/tumble_thick.csv"] {
         let (ok, err) = run(&[

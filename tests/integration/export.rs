@@ -533,7 +533,8 @@ fn glb_reads_back_to_the_exported_positions_at_every_frame() {
     // base + Σ weight × target): every vertex at every frame within f32
     // rounding of what was exported, in the simulator's z-up axes.
     let clip = mixed_clip(30.0);
-    let back = export::from_glb_bytes(&glb::glb_bytes(&clip).unwrap(), "mixed", None).unwrap();
+    let back =
+        export::from_glb_bytes(&glb::glb_bytes(&clip).unwrap(), "mixed", None, None).unwrap();
     assert_eq!(back.frames, clip.frames);
     assert_eq!(back.fps, 30.0, "the frame rate travels in the extras");
     assert_eq!(back.ground, Some(0.0));
@@ -948,7 +949,7 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
             let stem = out.join(format!("leaf-{id}"));
             assert!(stem.with_extension("toml").is_file());
             if format == "glb" {
-                let clip = export::from_glb(&stem.with_extension("glb"), None).unwrap();
+                let clip = export::from_glb(&stem.with_extension("glb"), None, None).unwrap();
                 // 3 s at 30 fps; the leaf falls (it was re-dropped, not posed).
                 assert_eq!(clip.frames, 91);
                 let o = &clip.objects[0];

@@ -181,12 +181,16 @@ pub fn from_scene_dir(dir: &Path, fps: f64) -> Result<Clip, ExportError> {
 }
 
 /// Reads a `.glb` file as a clip (see [`from_glb_bytes`]).
-pub fn from_glb(path: &Path, fps: Option<f64>) -> Result<Clip, ExportError> {
+pub fn from_glb(
+    path: &Path,
+    fps: Option<f64>,
+    animation: Option<&str>,
+) -> Result<Clip, ExportError> {
     let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
     let name = path
         .file_stem()
         .map_or("glb".to_string(), |s| s.to_string_lossy().into_owned());
-    from_glb_bytes(&bytes, &name, fps).map_err(|e| match e {
+    from_glb_bytes(&bytes, &name, fps, animation).map_err(|e| match e {
         ExportError::Data(reason) => ExportError::input(path, reason),
         e => e,
     })
@@ -265,9 +269,15 @@ impl Track {
 /// span of its animation. A root node without morph targets moves rigidly
 /// by its TRS channels; one with morph targets, a node below others and a
 /// skinned one deform (every vertex placed per frame). Ground and wind
-/// glyphs come from leafmagic's scene `extras`.
-pub fn from_glb_bytes(bytes: &[u8], name: &str, fps: Option<f64>) -> Result<Clip, ExportError> {
-    read_gltf(bytes, name, None, Grid::From0(fps), None)
+/// glyphs come from leafmagic's scene `extras`. Of several animations,
+/// `animation` names the one to play, as [`read_gltf_keys`] reads them.
+pub fn from_glb_bytes(
+    bytes: &[u8],
+    name: &str,
+    fps: Option<f64>,
+    animation: Option<&str>,
+) -> Result<Clip, ExportError> {
+    read_gltf(bytes, name, None, Grid::From0(fps), animation)
 }
 
 /// A clip from the bytes of a glTF file (`.glb`, or `.gltf` whose buffers
@@ -425,9 +435,8 @@ pub(super) fn key_rate(shortest: f64) -> Option<f64> {
 
 /// A clip from the bytes of a glTF file (binary, or JSON whose buffers are
 /// data URIs or files in `dir`), sampled on `grid`: of its animations, the
-/// one `animation` names, else all of them ([`read_gltf_keys`] refuses two
-/// that move the same node; a player's [`Grid::From0`] reads the first
-/// channel of each node and property, as before).
+/// one `animation` names, else all of them, refusing two that move the
+/// same node ([`read_gltf_keys`]).
 fn read_gltf(
     bytes: &[u8],
     name: &str,
@@ -452,9 +461,7 @@ fn read_gltf(
     let only = match animation {
         Some(want) => Some(named_animation(doc, want).map_err(ExportError::Data)?),
         None => {
-            if matches!(grid, Grid::Keys) {
-                check_one_take(doc).map_err(ExportError::Data)?;
-            }
+            check_one_take(doc).map_err(ExportError::Data)?;
             None
         }
     };

@@ -28,8 +28,14 @@ pub const GRID_SPACING_CHORDS: f64 = 3.0;
 /// - a scene output directory (`summary.toml`), see [`export::from_scene_dir`];
 /// - a `.glb` file, see [`export::from_glb`].
 ///
-/// `fps` defaults to [`DEFAULT_FPS`] (or a leafmagic `.glb`'s own rate).
-pub fn load(input: &Path, top: usize, fps: Option<f64>) -> Result<(Clip, bool), ExportError> {
+/// `fps` defaults to [`DEFAULT_FPS`] (or a leafmagic `.glb`'s own rate);
+/// `animation` names the take of a `.glb` that holds several.
+pub fn load(
+    input: &Path,
+    top: usize,
+    fps: Option<f64>,
+    animation: Option<&str>,
+) -> Result<(Clip, bool), ExportError> {
     if !input.exists() {
         return Err(ExportError::input(input, "no such file or directory"));
     }
@@ -43,7 +49,13 @@ pub fn load(input: &Path, top: usize, fps: Option<f64>) -> Result<(Clip, bool), 
                 "not a .glb file (preview reads a breeding run directory, a scene output directory or a .glb file)",
             ));
         }
-        return Ok((export::from_glb(input, fps)?, false));
+        return Ok((export::from_glb(input, fps, animation)?, false));
+    }
+    if let Some(want) = animation {
+        return Err(ExportError::input(
+            input,
+            format!("--animation {want}: picks one of a .glb file's animations, not a directory's"),
+        ));
     }
     let fps = fps.unwrap_or(DEFAULT_FPS);
     if input.join("run.toml").is_file() {
