@@ -136,14 +136,12 @@ pub fn describe(args: FallArgs) -> Result<()> {
 /// `compare`: two falls' descriptors side by side, and their distance.
 pub fn compare(args: CompareArgs) -> Result<()> {
     let size = |pick: fn(EachFile<f64>) -> f64| args.size.map(pick);
-    let each = |given: &Option<EachFile<String>>| match given {
-        Some(EachFile(a, b)) => [Some(a.clone()), Some(b.clone())],
-        None => [None, None],
-    };
-    let (objects, animations) = (each(&args.object), each(&args.animation));
+    fn side(given: &Option<EachFile<String>>, k: usize) -> Option<&str> {
+        given.as_ref().map(|EachFile(a, b)| [a, b][k].as_str())
+    }
     let pick = |k: usize| input::Pick {
-        object: objects[k].as_deref(),
-        animation: animations[k].as_deref(),
+        object: side(&args.object, k),
+        animation: side(&args.animation, k),
     };
     let [units_a, units_b] = args.units();
     let (_, a) = input::describe_fall(&args.a, size(|s| s.0), units_a, pick(0))?;

@@ -576,18 +576,7 @@ mod tests {
 
     #[test]
     fn long_lists_of_objects_name_the_first_twenty_and_count_the_rest() {
-        let one = |k: usize| ClipObject {
-            name: format!("leaves[{k}]"),
-            kind: "mesh".into(),
-            label: String::new(),
-            regime: String::new(),
-            features: vec![],
-            triangles: vec![],
-            segments: vec![],
-            body: None,
-            render: None,
-            motion: Motion::Deforming { frames: vec![] },
-        };
+        let one = |k: usize| ClipObject::read_mesh(format!("leaves[{k}]"), vec![], vec![]);
         let objects: Vec<ClipObject> = (0..25).map(one).collect();
         let refs: Vec<&ClipObject> = objects.iter().collect();
         let text = listed(&refs);

@@ -780,15 +780,7 @@ fn local_matrix(node: &gltf::Node<'_>, tracks: &[(usize, Property, Track)], t: f
         return M4::from_fn(|r, c| columns[c][r] as f64);
     }
     let (tr, r, s) = trs(node, tracks, t);
-    let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], r[1], r[2]));
-    let mut m = q.to_homogeneous();
-    for c in 0..3 {
-        for row in 0..3 {
-            m[(row, c)] *= s[c];
-        }
-        m[(c, 3)] = tr[c];
-    }
-    m
+    skin::trs_matrix(&tr, [r[3], r[0], r[1], r[2]], &s)
 }
 
 /// Every node's world transform at time `t`: its parents' composed with

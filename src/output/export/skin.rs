@@ -5,7 +5,7 @@
 //! with bones (an animator bending it along its midrib) reaches the glTF
 //! and USD readers ([`super::read`], [`super::usda_read`]).
 
-use nalgebra::{Matrix4, Point3, Vector3};
+use nalgebra::{Matrix4, Point3, Quaternion, UnitQuaternion, Vector3};
 
 type V3 = Vector3<f64>;
 type M4 = Matrix4<f64>;
@@ -70,6 +70,22 @@ impl Influences {
 }
 
 /// The skinned positions of `points` (in the bind pose's space) under
+/// A joint's (a glTF node's, a PointInstancer instance's) local transform
+/// T·R·S (column vectors) from its translation, its rotation as a
+/// quaternion (real part first; normalised here) and its scale, as glTF
+/// and UsdGeom/UsdSkel compose them.
+pub(super) fn trs_matrix(translation: &[f64], rotation: [f64; 4], scale: &[f64]) -> M4 {
+    let [w, x, y, z] = rotation;
+    let mut m = UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z)).to_homogeneous();
+    for c in 0..3 {
+        for r in 0..3 {
+            m[(r, c)] *= scale[c];
+        }
+        m[(c, 3)] = translation[c];
+    }
+    m
+}
+
 /// `matrices` (one per joint, column vectors): Σ_j w_j M_j p per vertex.
 /// The influences must have been [`Influences::normalised`] against these
 /// points and matrices.

@@ -23,18 +23,23 @@
 
 use super::clip::ClipObject;
 use super::read::check_points;
+use super::skin::trs_matrix;
 use super::usd_layer::{Prim, sample, world_transform};
 use super::usd_skel::{Paths, targets};
-use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix4, Vector3};
 use std::collections::HashMap;
 
 type V3 = Vector3<f64>;
 type M4 = Matrix4<f64>;
 
-/// One prototype: the meshes under its root prim, each with the prims from
-/// the root down to it (the root first) and its triangles.
+/// One prototype: the meshes under its root prim, as one object.
 struct Prototype<'a> {
-    meshes: Vec<(Vec<&'a Prim>, Vec<[u32; 3]>)>,
+    /// Each mesh with the prims from the root down to it (the root first).
+    meshes: Vec<Vec<&'a Prim>>,
+    /// Their triangles, the meshes' vertices numbered one after another.
+    triangles: Vec<[u32; 3]>,
+    /// Their vertices, all meshes'.
+    vertices: usize,
 }
 
 /// Every Mesh with points at or under `prim`, with the prims from `prim`
@@ -71,7 +76,7 @@ fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
     let positions = read("positions")?.ok_or_else(|| at("no `positions`".to_string()))?;
     let proto = read("protoIndices")?.ok_or_else(|| at("no `protoIndices`".to_string()))?;
     let n = proto.len();
-    let check = |name: &str, v: &Option<Vec<f64>>, width: usize| -> Result<(), String> {
+    let check = |name: &str, v: Option<&Vec<f64>>, width: usize| -> Result<(), String> {
         match v {
             Some(v) if v.len() != width * n => Err(at(format!(
                 "{} numbers in `{name}` for {n} instances (protoIndices), not {width} each",
@@ -81,33 +86,19 @@ fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
         }
     };
     let (orientations, scales, ids) = (read("orientations")?, read("scales")?, read("ids")?);
-    check("positions", &Some(positions.clone()), 3)?;
-    check("orientations", &orientations, 4)?;
-    check("scales", &scales, 3)?;
-    check("ids", &ids, 1)?;
+    check("positions", Some(&positions), 3)?;
+    check("orientations", orientations.as_ref(), 4)?;
+    check("scales", scales.as_ref(), 3)?;
+    check("ids", ids.as_ref(), 1)?;
     let transform = (0..n)
         .map(|i| {
-            let mut m = match &orientations {
-                Some(q) => UnitQuaternion::from_quaternion(Quaternion::new(
-                    q[4 * i],
-                    q[4 * i + 1],
-                    q[4 * i + 2],
-                    q[4 * i + 3],
-                ))
-                .to_homogeneous(),
-                None => M4::identity(),
-            };
-            if let Some(s) = &scales {
-                for c in 0..3 {
-                    for r in 0..3 {
-                        m[(r, c)] *= s[3 * i + c];
-                    }
-                }
-            }
-            for r in 0..3 {
-                m[(r, 3)] = positions[3 * i + r];
-            }
-            m
+            let q = orientations.as_ref().map_or([1.0, 0.0, 0.0, 0.0], |q| {
+                [q[4 * i], q[4 * i + 1], q[4 * i + 2], q[4 * i + 3]]
+            });
+            let s = scales
+                .as_ref()
+                .map_or(&[1.0; 3][..], |s| &s[3 * i..3 * i + 3]);
+            trs_matrix(&positions[3 * i..3 * i + 3], q, s)
         })
         .collect();
     Ok(Instances {
@@ -137,16 +128,20 @@ pub(super) fn instanced(
             .chain(&path)
             .and_then(|c| c.last().copied())
             .ok_or_else(|| at(format!("its prototype `{path}` is not in the layer")))?;
-        let mut found = Vec::new();
-        prototype_meshes(root, &mut Vec::new(), &mut found);
-        let meshes = found
-            .into_iter()
-            .map(|c| {
-                let tris = c.last().expect("a chain ends at its mesh").triangles()?;
-                Ok((c, tris))
-            })
-            .collect::<Result<Vec<_>, String>>()?;
-        prototypes.push(Prototype { meshes });
+        let mut meshes = Vec::new();
+        prototype_meshes(root, &mut Vec::new(), &mut meshes);
+        let (mut triangles, mut vertices) = (Vec::new(), 0);
+        for chain in &meshes {
+            let mesh = *chain.last().expect("a chain ends at its mesh");
+            let offset = vertices as u32;
+            triangles.extend(mesh.triangles()?.iter().map(|t| t.map(|v| v + offset)));
+            vertices += mesh.attribute("points").map_or(0, |a| a.vector_count());
+        }
+        prototypes.push(Prototype {
+            meshes,
+            triangles,
+            vertices,
+        });
     }
     let Some(&first) = times.first() else {
         return Ok(Vec::new());
@@ -164,21 +159,10 @@ pub(super) fn instanced(
         }
         objects.push((id, p, Vec::with_capacity(times.len())));
     }
-    let vertices: Vec<usize> = prototypes
+    let total: usize = objects
         .iter()
-        .map(|p| {
-            p.meshes
-                .iter()
-                .map(|(c, _)| {
-                    c.last()
-                        .expect("a mesh")
-                        .attribute("points")
-                        .map_or(0, |a| a.vector_count())
-                })
-                .sum()
-        })
-        .collect();
-    let total: usize = objects.iter().map(|(_, p, _)| vertices[*p]).sum();
+        .map(|(_, p, _)| prototypes[*p].vertices)
+        .sum();
     check_points(&prim.name, times.len(), total)?;
     let mut present = vec![true; objects.len()];
     for &t in times {
@@ -194,9 +178,9 @@ pub(super) fn instanced(
         // Each prototype mesh placed in its prototype's frame, once per
         // time code: (prototype, its vertices there).
         let mut placed: Vec<Vec<V3>> = Vec::with_capacity(prototypes.len());
-        for proto in &prototypes {
-            let mut points = Vec::new();
-            for (mesh_chain, _) in &proto.meshes {
+        for (k, proto) in prototypes.iter().enumerate() {
+            let mut points = Vec::with_capacity(proto.vertices);
+            for mesh_chain in &proto.meshes {
                 let mesh = *mesh_chain.last().expect("a mesh");
                 let p = sample(mesh.attribute("points").expect("found by its points"), t)
                     .filter(|p| p.len() % 3 == 0)
@@ -213,6 +197,11 @@ pub(super) fn instanced(
                         .coords
                 }));
             }
+            if points.len() != proto.vertices {
+                return Err(at(format!(
+                    "prototype {k}: its point count changes over time"
+                )));
+            }
             placed.push(points);
         }
         for (k, (id, proto, frames)) in objects.iter_mut().enumerate() {
@@ -224,11 +213,6 @@ pub(super) fn instanced(
                 continue;
             }
             let m = world * now.transform[i];
-            if placed[*proto].len() != vertices[*proto] {
-                return Err(at(format!(
-                    "prototype {proto}: its point count changes over time"
-                )));
-            }
             frames.push(
                 placed[*proto]
                     .iter()
@@ -242,16 +226,7 @@ pub(super) fn instanced(
         .zip(present)
         .filter(|(_, kept)| *kept)
         .map(|((id, proto, frames), _)| {
-            let mut triangles = Vec::new();
-            let mut offset = 0u32;
-            for (mesh_chain, tris) in &prototypes[proto].meshes {
-                triangles.extend(tris.iter().map(|t| t.map(|v| v + offset)));
-                offset += mesh_chain
-                    .last()
-                    .expect("a mesh")
-                    .attribute("points")
-                    .map_or(0, |a| a.vector_count()) as u32;
-            }
+            let triangles = prototypes[proto].triangles.clone();
             ClipObject::read_mesh(format!("{}[{id}]", prim.name), triangles, frames)
         })
         .collect())

@@ -574,6 +574,55 @@ pub(super) struct Layer {
     pub(super) roots: Vec<Prim>,
 }
 
+/// A stage's metadata as authored (`None` where unset), which
+/// [`StageMetadata::layer`] reads with USD's defaults: what the text reader
+/// and [`super::usd_stage`] each find in a layer's header.
+#[derive(Debug, Default)]
+pub(super) struct StageMetadata {
+    pub(super) up_axis: Option<String>,
+    pub(super) meters_per_unit: Option<f64>,
+    pub(super) time_codes_per_second: Option<f64>,
+    pub(super) frames_per_second: Option<f64>,
+}
+
+impl StageMetadata {
+    /// The layer of `roots` under this metadata: y up unless the axis is
+    /// Z, 0.01 m a unit, and time codes per second, else frames per
+    /// second, else 24 (USD's rules); units that are not positive are
+    /// refused.
+    pub(super) fn layer(self, roots: Vec<Prim>) -> Result<Layer, String> {
+        let layer = Layer {
+            up_y: self.up_axis.is_none_or(|a| a != "Z"),
+            meters_per_unit: self.meters_per_unit.unwrap_or(0.01),
+            time_codes_per_second: self
+                .time_codes_per_second
+                .or(self.frames_per_second)
+                .unwrap_or(24.0),
+            roots,
+        };
+        if !(layer.meters_per_unit > 0.0 && layer.time_codes_per_second > 0.0) {
+            return Err("metersPerUnit and timeCodesPerSecond must be positive".to_string());
+        }
+        Ok(layer)
+    }
+}
+
+/// What a USD file that is not text is, by its first bytes (a binary crate
+/// file, a USDZ package), with what to do about it, or `None` for text.
+pub(super) fn stored_binary(bytes: &[u8]) -> Option<&'static str> {
+    if bytes.starts_with(b"PXR-USDC") {
+        Some(
+            "a binary USD crate file; write it as text with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)",
+        )
+    } else if bytes.starts_with(b"PK") {
+        Some(
+            "a USDZ package (a zip archive): unzip it and read the .usda inside, or flatten it with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)",
+        )
+    } else {
+        None
+    }
+}
+
 /// Whether `text` asks for a composition this reader refuses (a
 /// composition arc in any metadata, a variant set, an `over`): what
 /// [`super::usd_stage`] then composes.
@@ -586,17 +635,8 @@ pub(super) fn composes(text: &str) -> bool {
 }
 
 pub(super) fn parse(text: &str) -> Result<Layer, String> {
-    if text.starts_with("PXR-USDC") {
-        return Err(
-            "a binary USD crate file; write it as text with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)"
-                .to_string(),
-        );
-    }
-    if text.starts_with("PK") {
-        return Err(
-            "a USDZ package (a zip archive): unzip it and read the .usda inside, or flatten it with Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core)"
-                .to_string(),
-        );
+    if let Some(what) = stored_binary(text.as_bytes()) {
+        return Err(what.to_string());
     }
     if !text.starts_with("#usda") {
         return Err("not USD text: its first line is not `#usda 1.0`".to_string());
@@ -605,20 +645,14 @@ pub(super) fn parse(text: &str) -> Result<Layer, String> {
         tokens: tokens(text)?,
         at: 0,
     };
-    let mut layer = Layer {
-        up_y: true,
-        meters_per_unit: 0.01,
-        time_codes_per_second: 24.0,
-        roots: Vec::new(),
-    };
-    let (mut fps, mut codes_per_second) = (None, None);
+    let mut meta = StageMetadata::default();
     if p.is('(') {
         for (key, v) in p.metadata()? {
             match (key.as_str(), &v) {
-                ("upAxis", Value::Str(a)) => layer.up_y = a != "Z",
-                ("metersPerUnit", Value::Number(m)) => layer.meters_per_unit = *m,
-                ("timeCodesPerSecond", Value::Number(r)) => codes_per_second = Some(*r),
-                ("framesPerSecond", Value::Number(r)) => fps = Some(*r),
+                ("upAxis", Value::Str(a)) => meta.up_axis = Some(a.clone()),
+                ("metersPerUnit", Value::Number(m)) => meta.meters_per_unit = Some(*m),
+                ("timeCodesPerSecond", Value::Number(r)) => meta.time_codes_per_second = Some(*r),
+                ("framesPerSecond", Value::Number(r)) => meta.frames_per_second = Some(*r),
                 (k, _) if COMPOSED.contains(&k) => {
                     return Err(format!(
                         "the layer has `{k}`, a composition this reader does not do"
@@ -628,25 +662,18 @@ pub(super) fn parse(text: &str) -> Result<Layer, String> {
             }
         }
     }
-    // framesPerSecond stands in where timeCodesPerSecond is unset, 24
-    // where both are (USD's rule).
-    if let Some(r) = codes_per_second.or(fps) {
-        layer.time_codes_per_second = r;
-    }
+    let mut roots = Vec::new();
     while let Some(t) = p.peek().cloned() {
         let line = p.line();
         match t {
             Token::Ident(w) if matches!(w.as_str(), "def" | "over" | "class") => {
                 p.next()?;
-                layer.roots.extend(p.prim(&w)?);
+                roots.extend(p.prim(&w)?);
             }
             t => return Err(format!("line {line}: expected a prim, found {t:?}")),
         }
     }
-    if !(layer.meters_per_unit > 0.0 && layer.time_codes_per_second > 0.0) {
-        return Err("metersPerUnit and timeCodesPerSecond must be positive".to_string());
-    }
-    Ok(layer)
+    meta.layer(roots)
 }
 
 /// The value of `a` at time code `t`: interpolated linearly between the

@@ -36,9 +36,9 @@
 //! the mesh's `skel:blendShapes` by name (a shape the animation does not
 //! name weighs 0). Refused by name: inbetween shapes.
 
-use super::skin::{Influences, blend};
+use super::skin::{Influences, blend, trs_matrix};
 use super::usd_layer::{Attribute, Prim, Value, sample, world_transform};
-use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix4, Vector3};
 use std::collections::HashMap;
 
 type V3 = Vector3<f64>;
@@ -352,17 +352,8 @@ impl<'a> Skinning<'a> {
             );
             for (k, j) in map.iter().enumerate() {
                 let Some(j) = *j else { continue };
-                let q = &rot[4 * k..4 * k + 4];
-                let mut m =
-                    UnitQuaternion::from_quaternion(Quaternion::new(q[0], q[1], q[2], q[3]))
-                        .to_homogeneous();
-                for c in 0..3 {
-                    for r in 0..3 {
-                        m[(r, c)] *= sc[3 * k + c];
-                    }
-                    m[(c, 3)] = tr[3 * k + c];
-                }
-                local[j] = m;
+                let q = [rot[4 * k], rot[4 * k + 1], rot[4 * k + 2], rot[4 * k + 3]];
+                local[j] = trs_matrix(&tr[3 * k..3 * k + 3], q, &sc[3 * k..3 * k + 3]);
             }
         }
         // Skeleton space, parents before children (UsdSkel orders joints

@@ -13,7 +13,9 @@ use super::clip::{Clip, ClipObject};
 use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
 use super::usd_instancer::instanced;
-use super::usd_layer::{Layer, Prim, Value, composes, parse, sample, world_transform};
+use super::usd_layer::{
+    Layer, Prim, Value, composes, parse, sample, stored_binary, world_transform,
+};
 use super::usd_skel::{BlendShapes, Paths, Skinning};
 use super::usd_stage::flatten;
 use nalgebra::Vector3;
@@ -68,7 +70,7 @@ pub fn read_usda_keys(text: &str, name: &str) -> Result<Clip, ExportError> {
 /// is read so; a binary crate file, a USDZ package or a layer that needs
 /// composing is composed and flattened first ([`super::usd_stage`]).
 pub fn read_usd_file(path: &Path, bytes: &[u8], name: &str) -> Result<Clip, ExportError> {
-    let alone = if bytes.starts_with(b"PXR-USDC") || bytes.starts_with(b"PK") {
+    let alone = if stored_binary(bytes).is_some() {
         None
     } else {
         let text = String::from_utf8_lossy(bytes);
