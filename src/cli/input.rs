@@ -215,8 +215,16 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
             path.display()
         );
     }
+    let appears = if fall.appears_s > 0.0 {
+        format!(
+            " (it appears {:.2} s after the file's first key; its times start there)",
+            fall.appears_s
+        )
+    } else {
+        String::new()
+    };
     eprintln!(
-        "note: {}: object `{}`, {} keys at {} Hz, chord {:.4} m",
+        "note: {}: object `{}`, {} keys at {} Hz, chord {:.4} m{appears}",
         path.display(),
         fall.object,
         fall.trajectory.len(),

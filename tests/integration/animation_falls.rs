@@ -1053,22 +1053,39 @@ fn a_file_with_several_takes_is_read_by_the_one_named() {
 }
 
 /// Leaves scattered by a UsdGeom PointInstancer, as a particle simulation
-/// writes them (`usd/instanced/leaves.usda`, by its `make.py`: three
-/// MuJoCo falls as instances of two prototypes, y up in centimetres under
-/// a shifted parent, half-precision orientations, ids listed in another
-/// order at every other time code, a prototype root with its own turn, and
-/// a fourth instance that dies half way). Every vertex of every instance
-/// reads where Pixar's library places it (`leaves.points.csv`:
-/// `ComputeInstanceTransformsAtTime` and the instancer's world transform)
-/// at every key (below, how close), the dying instance is left out, and each
-/// instance keeps the class of the fall it was made from.
+/// writes them (`usd/instanced/leaves.usda`, by its `make.py`: MuJoCo
+/// falls as instances of two prototypes, y up in centimetres under a
+/// shifted parent, half-precision orientations, ids listed in another
+/// order at every other time code, a prototype root with its own turn; one
+/// instance dies half way, one is born a quarter of the way in, one is
+/// hidden for the last quarter and one is deactivated). Every vertex of
+/// every instance reads where Pixar's library places it, over the life
+/// its mask shows (`leaves.points.csv`: `ComputeInstanceTransformsAtTime`,
+/// `ComputeMaskAtTime` and the instancer's world transform) at every key
+/// (below, how close), the deactivated instance is not read, the crate
+/// file reads to the same bits as the text, and each instance keeps the
+/// class of the fall it was made from.
 #[test]
 fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
     let file = "usd/instanced/leaves.usda";
     let clip = export::read_usda_keys(&std::fs::read_to_string(data(file)).unwrap(), file).unwrap();
-    let mut names: Vec<&str> = clip.objects.iter().map(|o| o.name.as_str()).collect();
-    names.sort_unstable();
-    assert_eq!(names, ["leaves[11]", "leaves[3]", "leaves[7]"]);
+    let lives: std::collections::BTreeMap<&str, (usize, usize)> = clip
+        .objects
+        .iter()
+        .map(|o| (o.name.as_str(), (o.first_frame, o.frame_count())))
+        .collect();
+    // Each life: its first key and how many keys it holds, of 241.
+    let expected: std::collections::BTreeMap<&str, (usize, usize)> = [
+        ("leaves[11]", (0, 241)),
+        ("leaves[21]", (0, 180)),
+        ("leaves[3]", (0, 241)),
+        ("leaves[42]", (60, 181)),
+        ("leaves[7]", (0, 241)),
+        ("leaves[99]", (0, 120)),
+    ]
+    .into_iter()
+    .collect();
+    assert_eq!(lives, expected);
     assert_eq!(clip.frames, 241);
     let mut want: std::collections::HashMap<(usize, String), Vec<V3>> = Default::default();
     let mut r = csv::Reader::from_path(data("usd/instanced/leaves.points.csv")).unwrap();
@@ -1085,6 +1102,14 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
         );
         want.entry(key).or_default().push(p);
     }
+    // Pixar shows each instance at exactly the keys of its life.
+    for (name, &(first, count)) in &expected {
+        let shown: Vec<usize> = (0..clip.frames)
+            .filter(|&k| want.contains_key(&(k, name.to_string())))
+            .collect();
+        assert_eq!(shown, (first..first + count).collect::<Vec<_>>(), "{name}");
+    }
+    assert!(!want.keys().any(|(_, name)| name == "leaves[5]"));
     // Pixar turns each instance by its half-precision quaternion as
     // stored, |q| within 1e-3 of 1 (0.99951 at code 2 for id 11), which
     // scales the card by |q|²; leafmagic normalises it, as a rigid leaf
@@ -1092,8 +1117,8 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
     // times 1e-3), and the centres, which the scale leaves, within 1e-6 m.
     let centre = |ps: &[V3]| ps.iter().sum::<V3>() / ps.len() as f64;
     for o in &clip.objects {
-        for k in 0..clip.frames {
-            let expected = &want[&(k, o.name.clone())];
+        for k in 0..o.frame_count() {
+            let expected = &want[&(o.first_frame + k, o.name.clone())];
             let got = o.positions(k);
             assert_eq!(got.len(), expected.len());
             for (g, w) in got.iter().zip(expected) {
@@ -1106,6 +1131,51 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
                 o.name
             );
         }
+    }
+    // The crate file (read in leafmagic's child process, so through the
+    // binary): each instance describes to the same bytes as in the text.
+    let crate_file = data("usd/instanced/leaves.usdc");
+    for o in &clip.objects {
+        let describe = |path: &Path| {
+            let out = leafmagic()
+                .args(["describe", "--json", "--object", &o.name])
+                .arg(path)
+                .output()
+                .unwrap();
+            assert!(
+                out.status.success(),
+                "{}",
+                String::from_utf8_lossy(&out.stderr)
+            );
+            let mut v: Value = serde_json::from_slice(&out.stdout).unwrap();
+            v.as_object_mut().unwrap().remove("file");
+            (v, String::from_utf8_lossy(&out.stderr).into_owned())
+        };
+        let ((crate_out, crate_err), (text_out, _)) =
+            (describe(&crate_file), describe(&data(file)));
+        assert_eq!(crate_out, text_out, "{}", o.name);
+        assert_eq!(
+            crate_err.contains("it appears 2.50 s after the file's first key"),
+            o.name == "leaves[42]",
+            "{crate_err}"
+        );
+    }
+    let o = leafmagic()
+        .arg("classify")
+        .arg(&crate_file)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("`leaves[42]` (deforming, 2.50–10.00 s of 10.00 s)"),
+        "{err}"
+    );
+    assert!(!err.contains("leaves[5]"), "{err}");
+    for (id, fall) in [(42, "flutter_strip"), (21, "steady_fall")] {
+        let object = format!("leaves[{id}]");
+        let read = read_fall(&data(file), Some(&object)).unwrap();
+        let original = Trajectory::read_csv(&data(&format!("mujoco-falls/{fall}.csv"))).unwrap();
+        same_class(&object, (&read.trajectory, 0.04), (&original, 0.04));
     }
     for (id, fall) in [
         (7, "tumble_thick"),

@@ -649,6 +649,7 @@ fn pc2_is_byte_for_byte_the_specified_layout() {
         fps: 30.0,
         frames: 3,
         objects: vec![ClipObject {
+            first_frame: 0,
             name: "pair".into(),
             kind: "rope".into(),
             label: String::new(),
@@ -1451,6 +1452,7 @@ fn a_rigid_plate_is_exported_as_a_rigid_object() {
     }
     assert!(worst < 1e-9, "rigid placement off by {worst:.3e} m");
     let deforming = ClipObject {
+        first_frame: 0,
         motion: Motion::Deforming { frames: particles },
         ..object.clone()
     };

@@ -72,6 +72,12 @@ pub struct ClipObject {
     pub render: Option<RenderMesh>,
     /// The motion.
     pub motion: Motion,
+    /// The clip frame its motion starts at: 0, except for an object read
+    /// from a file that appears after the clip's start (a particle born
+    /// during it, a USD PointInstancer's leaf), whose motion then holds only
+    /// the frames of its own life. Exports take objects that live the
+    /// whole clip ([`Clip::validate`]).
+    pub first_frame: usize,
 }
 
 impl ClipObject {
@@ -93,7 +99,21 @@ impl ClipObject {
             body: None,
             render: None,
             motion: Motion::Deforming { frames },
+            first_frame: 0,
         }
+    }
+
+    /// Number of frames its motion holds.
+    pub fn frame_count(&self) -> usize {
+        match &self.motion {
+            Motion::Rigid { translation, .. } => translation.len(),
+            Motion::Deforming { frames } => frames.len(),
+        }
+    }
+
+    /// Whether it lives the whole of a clip of `frames` frames.
+    pub fn lives_whole(&self, frames: usize) -> bool {
+        self.first_frame == 0 && self.frame_count() == frames
     }
 
     /// Number of vertices.
@@ -176,6 +196,19 @@ impl Clip {
     /// one frame, every object with `frames` frames of its vertex count,
     /// indices in range, finite numbers.
     pub fn validate(&self) -> Result<(), ExportError> {
+        self.check(true)
+    }
+
+    /// [`Self::validate`] for a clip read from a file, whose objects may
+    /// live a part of it ([`ClipObject::first_frame`]): each holds at
+    /// least one frame and ends by the clip's last.
+    pub fn validate_read(&self) -> Result<(), ExportError> {
+        self.check(false)
+    }
+
+    /// The checks of [`Self::validate`]; `whole`: every object lives the
+    /// whole clip.
+    fn check(&self, whole: bool) -> Result<(), ExportError> {
         let bad = |m: String| Err(ExportError::Data(format!("{}: {m}", self.name)));
         if !(self.fps > 0.0 && self.fps.is_finite()) {
             return bad(format!("frame rate {} is not positive", self.fps));
@@ -195,27 +228,32 @@ impl Clip {
         }
         for o in &self.objects {
             let n = o.vertex_count();
-            let frames_ok = match &o.motion {
-                Motion::Rigid {
-                    translation,
-                    rotation,
-                    local,
-                } => {
-                    translation.len() == self.frames
-                        && rotation.len() == self.frames
-                        && local.iter().chain(translation).all(finite)
-                }
-                Motion::Deforming { frames } => {
-                    frames.len() == self.frames
-                        && frames.iter().all(|f| f.len() == n && f.iter().all(finite))
-                }
+            let lives = if whole {
+                o.lives_whole(self.frames)
+            } else {
+                o.frame_count() > 0 && o.first_frame + o.frame_count() <= self.frames
             };
+            let frames_ok = lives
+                && match &o.motion {
+                    Motion::Rigid {
+                        translation,
+                        rotation,
+                        local,
+                    } => {
+                        rotation.len() == translation.len()
+                            && local.iter().chain(translation).all(finite)
+                    }
+                    Motion::Deforming { frames } => {
+                        frames.iter().all(|f| f.len() == n && f.iter().all(finite))
+                    }
+                };
             if !frames_ok {
                 return bad(format!(
                     "object {}: frames missing, of unequal size or not finite",
                     o.name
                 ));
             }
+
             if n == 0 {
                 return bad(format!("object {} has no vertices", o.name));
             }

@@ -65,6 +65,7 @@ pub fn drop_clip_released(
     let count = frame_count(t0, t1, fps);
     let com = model.centre_of_mass(&model.rest_position);
     Ok(ClipObject {
+        first_frame: 0,
         name: name.to_string(),
         kind: "leaf".to_string(),
         label: label.to_string(),

@@ -88,6 +88,10 @@ pub struct AnimationFall {
     pub still: Vec<String>,
     /// Why the record has no orientation, when it has none.
     pub no_orientation: Option<String>,
+    /// When the object appears, s after the file's first key: 0 but for
+    /// one that lives only a part of the file (a PointInstancer's leaf
+    /// born during it), whose trajectory's times start at 0 there.
+    pub appears_s: f64,
 }
 
 /// Reads the fall of `object` (or of the only object that moves) from a
@@ -133,7 +137,13 @@ pub fn read_fall_of(
     let chords: Vec<f64> = objects.iter().map(|o| chord(&o.positions(0))).collect();
     let (moving, still): (Vec<usize>, Vec<usize>) =
         (0..objects.len()).partition(|&k| moves(&objects[k], chords[k]));
-    let named = |ks: &[usize]| listed(&ks.iter().map(|&k| &objects[k]).collect::<Vec<_>>());
+    let named = |ks: &[usize]| {
+        listed(
+            &ks.iter().map(|&k| &objects[k]).collect::<Vec<_>>(),
+            clip.frames,
+            clip.fps,
+        )
+    };
     let chosen = match object {
         Some(want) => objects.iter().position(|o| o.name == want).ok_or_else(|| {
             ExportError::input(
@@ -169,7 +179,7 @@ pub fn read_fall_of(
             }
         },
     };
-    far_out(&objects[chosen], clip.frames).map_err(|e| ExportError::input(path, e))?;
+    far_out(&objects[chosen]).map_err(|e| ExportError::input(path, e))?;
     let (trajectory, no_orientation) = fall_of(&objects[chosen], clip.fps);
     Ok(AnimationFall {
         trajectory,
@@ -182,6 +192,7 @@ pub fn read_fall_of(
             .map(|&k| objects[k].name.clone())
             .collect(),
         no_orientation,
+        appears_s: objects[chosen].first_frame as f64 / clip.fps,
     })
 }
 
@@ -192,9 +203,9 @@ pub fn read_fall_of(
 pub const MAX_COORDINATE_M: f64 = 1e6;
 
 /// Why `o` cannot be a fall if a vertex of it is farther than
-/// [`MAX_COORDINATE_M`] from the origin at one of its `frames`.
-fn far_out(o: &ClipObject, frames: usize) -> Result<(), String> {
-    for k in 0..frames {
+/// [`MAX_COORDINATE_M`] from the origin at one of its frames.
+fn far_out(o: &ClipObject) -> Result<(), String> {
+    for k in 0..o.frame_count() {
         if let Some((i, p)) = o
             .positions(k)
             .iter()
@@ -202,16 +213,22 @@ fn far_out(o: &ClipObject, frames: usize) -> Result<(), String> {
             .find(|(_, p)| p.iter().any(|c| c.is_nan() || c.abs() > MAX_COORDINATE_M))
         {
             return Err(format!(
-                "object `{}`: vertex {i} at key {k} is at ({:.4e}, {:.4e}, {:.4e}) m, more than {MAX_COORDINATE_M:e} m from the origin: are its units or its keys right?",
-                o.name, p.x, p.y, p.z
+                "object `{}`: vertex {i} at key {} is at ({:.4e}, {:.4e}, {:.4e}) m, more than {MAX_COORDINATE_M:e} m from the origin: are its units or its keys right?",
+                o.name,
+                o.first_frame + k,
+                p.x,
+                p.y,
+                p.z
             ));
         }
     }
     Ok(())
 }
 
-/// `a (rigid), b (deforming)`: names with how they move.
-fn listed(objects: &[&ClipObject]) -> String {
+/// `a (rigid), b (deforming, 0.50–4.00 s of 10.00 s)`: names with how
+/// they move, and when, for an object that lives only a part of a clip
+/// of `frames` frames at `fps`.
+fn listed(objects: &[&ClipObject], frames: usize, fps: f64) -> String {
     let mut names: Vec<String> = objects
         .iter()
         .take(LISTED)
@@ -220,7 +237,18 @@ fn listed(objects: &[&ClipObject]) -> String {
                 Motion::Rigid { .. } => "rigid",
                 Motion::Deforming { .. } => "deforming",
             };
-            format!("`{}` ({how})", o.name)
+            if o.lives_whole(frames) {
+                format!("`{}` ({how})", o.name)
+            } else {
+                let last = o.first_frame + o.frame_count().max(1) - 1;
+                format!(
+                    "`{}` ({how}, {:.2}–{:.2} s of {:.2} s)",
+                    o.name,
+                    o.first_frame as f64 / fps,
+                    last as f64 / fps,
+                    frames.saturating_sub(1) as f64 / fps
+                )
+            }
         })
         .collect();
     if objects.len() > LISTED {
@@ -529,6 +557,7 @@ mod tests {
             (t, q)
         };
         let rigid = ClipObject {
+            first_frame: 0,
             name: "card".into(),
             kind: "mesh".into(),
             label: String::new(),
@@ -545,6 +574,7 @@ mod tests {
             },
         };
         let deforming = ClipObject {
+            first_frame: 0,
             motion: Motion::Deforming {
                 frames: (0..frames)
                     .map(|k| {
@@ -576,16 +606,28 @@ mod tests {
 
     #[test]
     fn long_lists_of_objects_name_the_first_twenty_and_count_the_rest() {
-        let one = |k: usize| ClipObject::read_mesh(format!("leaves[{k}]"), vec![], vec![]);
+        let one = |k: usize| ClipObject::read_mesh(format!("leaves[{k}]"), vec![], vec![vec![]]);
         let objects: Vec<ClipObject> = (0..25).map(one).collect();
         let refs: Vec<&ClipObject> = objects.iter().collect();
-        let text = listed(&refs);
+        let text = listed(&refs, 1, 24.0);
         assert!(text.starts_with("`leaves[0]` (deforming), `leaves[1]` (deforming)"));
         assert!(text.contains("`leaves[19]`") && !text.contains("`leaves[20]`"));
         assert!(text.ends_with(", and 5 more"), "{text}");
         assert_eq!(
-            listed(&refs[..2]),
+            listed(&refs[..2], 1, 24.0),
             "`leaves[0]` (deforming), `leaves[1]` (deforming)"
+        );
+    }
+
+    #[test]
+    fn an_object_that_lives_part_of_the_clip_is_listed_with_its_life() {
+        let frames = |n: usize| vec![vec![V3::zeros()]; n];
+        let mut born = ClipObject::read_mesh("leaves[4]".into(), vec![], frames(12));
+        born.first_frame = 24;
+        let whole = ClipObject::read_mesh("leaves[5]".into(), vec![], frames(241));
+        assert_eq!(
+            listed(&[&born, &whole], 241, 24.0),
+            "`leaves[4]` (deforming, 1.00–1.46 s of 10.00 s), `leaves[5]` (deforming)"
         );
     }
 }

@@ -165,6 +165,7 @@ mod tests {
 
     fn object(frames: Vec<Vec<V3>>, body: Option<Body>) -> ClipObject {
         ClipObject {
+            first_frame: 0,
             name: "o".into(),
             kind: "leaf".into(),
             label: String::new(),

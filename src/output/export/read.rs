@@ -682,6 +682,7 @@ fn read_gltf(
             }
         };
         objects.push(ClipObject {
+            first_frame: 0,
             name: object_name(doc, &parents, &node, &objects),
             kind: if node_extras.kind.is_empty() {
                 "mesh".to_string()

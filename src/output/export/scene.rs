@@ -85,6 +85,7 @@ pub(crate) fn build_scene_clip(
             },
         };
         objects.push(ClipObject {
+            first_frame: 0,
             name: obj.name.clone(),
             kind: kind_name(obj.kind).to_string(),
             label: String::new(),

@@ -16,15 +16,21 @@
 //! included), p the mesh's points. `orientations` and `scales` are
 //! optional (identity). Each instance becomes an object named
 //! `INSTANCER[ID]`, its id from `ids` where the instancer has them, else
-//! its index; instances are matched across time samples by those ids, and
-//! an instance missing at any sampled time (born or dead during the clip)
-//! is left out. Velocities, which only motion-blur between samples, are
-//! not read; `inactiveIds` and `invisibleIds` are not either.
+//! its index; instances are matched across time samples by those ids.
+//! Each is read over its own life, as a particle simulation emits and
+//! kills its leaves: from the first sampled time it is shown to the last
+//! before it is gone, hidden or given another prototype
+//! ([`ClipObject::first_frame`] says where it starts). Shown is what
+//! Pixar's `ComputeMaskAtTime` shows: not deactivated (`inactiveIds`,
+//! list-edited prim metadata) nor hidden at that time (`invisibleIds`).
+//! An id that comes back after its life ended is not read again (a
+//! particle's id is not reused). Velocities, which only motion-blur
+//! between samples, are not read.
 
 use super::clip::ClipObject;
 use super::read::check_points;
 use super::skin::trs_matrix;
-use super::usd_layer::{Prim, sample, world_transform};
+use super::usd_layer::{Attribute, Prim, held, sample, world_transform};
 use super::usd_skel::{Paths, targets};
 use nalgebra::{Matrix4, Vector3};
 use std::collections::HashMap;
@@ -60,21 +66,27 @@ struct Instances {
     ids: Vec<i64>,
     proto: Vec<usize>,
     transform: Vec<M4>,
+    /// Whether each is shown: neither deactivated (`inactiveIds`) nor
+    /// hidden at `t` (`invisibleIds`), Pixar's `ComputeMaskAtTime`.
+    shown: Vec<bool>,
 }
 
 /// The instancer `prim`'s instances at time code `t`.
 fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
     let at = |e: String| format!("PointInstancer `{}`: {e}", prim.name);
-    let read = |name: &str| -> Result<Option<Vec<f64>>, String> {
+    let read = |name: &str,
+                how: fn(&Attribute, f64) -> Option<Vec<f64>>|
+     -> Result<Option<Vec<f64>>, String> {
         match prim.attribute(name) {
             None => Ok(None),
-            Some(a) => sample(a, t)
+            Some(a) => how(a, t)
                 .map(Some)
                 .ok_or_else(|| at(format!("`{name}` is not numbers"))),
         }
     };
-    let positions = read("positions")?.ok_or_else(|| at("no `positions`".to_string()))?;
-    let proto = read("protoIndices")?.ok_or_else(|| at("no `protoIndices`".to_string()))?;
+    let positions = read("positions", sample)?.ok_or_else(|| at("no `positions`".to_string()))?;
+    // Integers are held, not interpolated, between samples (USD).
+    let proto = read("protoIndices", held)?.ok_or_else(|| at("no `protoIndices`".to_string()))?;
     let n = proto.len();
     let check = |name: &str, v: Option<&Vec<f64>>, width: usize| -> Result<(), String> {
         match v {
@@ -85,7 +97,11 @@ fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
             _ => Ok(()),
         }
     };
-    let (orientations, scales, ids) = (read("orientations")?, read("scales")?, read("ids")?);
+    let (orientations, scales, ids) = (
+        read("orientations", sample)?,
+        read("scales", sample)?,
+        read("ids", held)?,
+    );
     check("positions", Some(&positions), 3)?;
     check("orientations", orientations.as_ref(), 4)?;
     check("scales", scales.as_ref(), 3)?;
@@ -101,14 +117,33 @@ fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
             trs_matrix(&positions[3 * i..3 * i + 3], q, s)
         })
         .collect();
+    let ids: Vec<i64> = ids.map_or_else(
+        || (0..n as i64).collect(),
+        |v| v.iter().map(|&x| x as i64).collect(),
+    );
+    let hidden = read("invisibleIds", held)?.unwrap_or_default();
+    let shown = ids
+        .iter()
+        .map(|id| prim.inactive_ids.binary_search(id).is_err() && !hidden.contains(&(*id as f64)))
+        .collect();
     Ok(Instances {
-        ids: ids.map_or_else(
-            || (0..n as i64).collect(),
-            |v| v.iter().map(|&x| x as i64).collect(),
-        ),
+        ids,
         proto: proto.iter().map(|&x| x as usize).collect(),
         transform,
+        shown,
     })
+}
+
+/// One instance's life over the sampled time codes: its id and
+/// prototype, the index of the time code it first appears at, its
+/// vertices at each time code from there on while it lasts, and whether
+/// it has ended (gone, hidden, or placed with another prototype).
+struct Life {
+    id: i64,
+    proto: usize,
+    first: usize,
+    frames: Vec<Vec<V3>>,
+    ended: bool,
 }
 
 /// The objects the PointInstancer at the end of `chain` places, one per
@@ -143,47 +178,21 @@ pub(super) fn instanced(
             vertices,
         });
     }
-    let Some(&first) = times.first() else {
-        return Ok(Vec::new());
-    };
-    let start = instances_at(prim, first)?;
-    // Each instance of the first time code, by id: its prototype and, per
-    // frame, its vertices (the prototype's meshes one after another).
-    let mut objects: Vec<(i64, usize, Vec<Vec<V3>>)> = Vec::new();
-    for (&id, &p) in start.ids.iter().zip(&start.proto) {
-        if p >= prototypes.len() {
-            return Err(at(format!(
-                "instance {id} uses prototype {p}, of {}",
-                prototypes.len()
-            )));
-        }
-        objects.push((id, p, Vec::with_capacity(times.len())));
-    }
-    let total: usize = objects
-        .iter()
-        .map(|(_, p, _)| prototypes[*p].vertices)
-        .sum();
-    check_points(&prim.name, times.len(), total)?;
-    let mut present = vec![true; objects.len()];
-    for &t in times {
-        let now = if t == first {
-            None
-        } else {
-            Some(instances_at(prim, t)?)
-        };
-        let now = now.as_ref().unwrap_or(&start);
-        let index: HashMap<i64, usize> =
-            now.ids.iter().enumerate().map(|(k, &id)| (id, k)).collect();
+    let mut lives: Vec<Life> = Vec::new();
+    let mut by_id: HashMap<i64, usize> = HashMap::new();
+    let mut held_vertices = 0usize;
+    for (k, &t) in times.iter().enumerate() {
+        let now = instances_at(prim, t)?;
         let world = world_transform(chain, t)?;
         // Each prototype mesh placed in its prototype's frame, once per
         // time code: (prototype, its vertices there).
         let mut placed: Vec<Vec<V3>> = Vec::with_capacity(prototypes.len());
-        for (k, proto) in prototypes.iter().enumerate() {
+        for (p, proto) in prototypes.iter().enumerate() {
             let mut points = Vec::with_capacity(proto.vertices);
             for mesh_chain in &proto.meshes {
                 let mesh = *mesh_chain.last().expect("a mesh");
-                let p = sample(mesh.attribute("points").expect("found by its points"), t)
-                    .filter(|p| p.len() % 3 == 0)
+                let v = sample(mesh.attribute("points").expect("found by its points"), t)
+                    .filter(|v| v.len() % 3 == 0)
                     .ok_or_else(|| {
                         at(format!(
                             "prototype mesh `{}`: points are not 3-vectors",
@@ -191,7 +200,7 @@ pub(super) fn instanced(
                         ))
                     })?;
                 let local = world_transform(mesh_chain, t)?;
-                points.extend(p.chunks(3).map(|c| {
+                points.extend(v.chunks(3).map(|c| {
                     local
                         .transform_point(&V3::new(c[0], c[1], c[2]).into())
                         .coords
@@ -199,35 +208,79 @@ pub(super) fn instanced(
             }
             if points.len() != proto.vertices {
                 return Err(at(format!(
-                    "prototype {k}: its point count changes over time"
+                    "prototype {p}: its point count changes over time"
                 )));
             }
             placed.push(points);
         }
-        for (k, (id, proto, frames)) in objects.iter_mut().enumerate() {
-            let Some(&i) = index.get(id).filter(|&&i| now.proto[i] == *proto) else {
-                present[k] = false;
+        let mut seen = vec![false; lives.len()];
+        for i in 0..now.ids.len() {
+            let (id, p) = (now.ids[i], now.proto[i]);
+            if p >= prototypes.len() {
+                return Err(at(format!(
+                    "instance {id} uses prototype {p}, of {}",
+                    prototypes.len()
+                )));
+            }
+            if !now.shown[i] {
                 continue;
+            }
+            let l = match by_id.get(&id) {
+                Some(&l) => {
+                    if seen[l] {
+                        return Err(at(format!(
+                            "id {id} is given to two instances at time code {t}"
+                        )));
+                    }
+                    seen[l] = true;
+                    if lives[l].proto != p {
+                        lives[l].ended = true;
+                    }
+                    l
+                }
+                None => {
+                    held_vertices += prototypes[p].vertices;
+                    check_points(&prim.name, times.len(), held_vertices)?;
+                    by_id.insert(id, lives.len());
+                    seen.push(true);
+                    lives.push(Life {
+                        id,
+                        proto: p,
+                        first: k,
+                        frames: Vec::new(),
+                        ended: false,
+                    });
+                    lives.len() - 1
+                }
             };
-            if !present[k] {
+            let life = &mut lives[l];
+            if life.ended {
                 continue;
             }
             let m = world * now.transform[i];
-            frames.push(
-                placed[*proto]
+            life.frames.push(
+                placed[p]
                     .iter()
-                    .map(|p| to_z_up(m.transform_point(&(*p).into()).coords))
+                    .map(|v| to_z_up(m.transform_point(&(*v).into()).coords))
                     .collect(),
             );
         }
+        // Gone (or hidden) at this time code: its life is over.
+        for (life, seen) in lives.iter_mut().zip(seen) {
+            life.ended |= !seen;
+        }
     }
-    Ok(objects
+    Ok(lives
         .into_iter()
-        .zip(present)
-        .filter(|(_, kept)| *kept)
-        .map(|((id, proto, frames), _)| {
-            let triangles = prototypes[proto].triangles.clone();
-            ClipObject::read_mesh(format!("{}[{id}]", prim.name), triangles, frames)
+        .map(|life| {
+            let triangles = prototypes[life.proto].triangles.clone();
+            let mut o = ClipObject::read_mesh(
+                format!("{}[{}]", prim.name, life.id),
+                triangles,
+                life.frames,
+            );
+            o.first_frame = life.first;
+            o
         })
         .collect())
 }

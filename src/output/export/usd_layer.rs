@@ -244,6 +244,40 @@ pub(super) struct Prim {
     pub(super) type_name: String,
     pub(super) attributes: Vec<(String, Attribute)>,
     pub(super) children: Vec<Prim>,
+    /// A PointInstancer's deactivated instances: its composed
+    /// `inactiveIds` list op (prim metadata, UsdGeom's `DeactivateIds`),
+    /// sorted.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(super) inactive_ids: Vec<i64>,
+}
+
+/// The items of an `SdfInt64ListOp` as one layer's opinion edits the
+/// `current` items of weaker ones (Sdf's list editing): an explicit list
+/// replaces them; otherwise the deleted items go and the added,
+/// prepended and appended ones join (order is not kept: the ids are a
+/// set). Returned sorted, without repeats.
+pub(super) fn edit_id_list(current: &[i64], op: &IdListOp) -> Vec<i64> {
+    let mut out: Vec<i64> = match &op.explicit {
+        Some(items) => items.clone(),
+        None => current
+            .iter()
+            .copied()
+            .filter(|i| !op.deleted.contains(i))
+            .chain(op.added.iter().copied())
+            .collect(),
+    };
+    out.sort_unstable();
+    out.dedup();
+    out
+}
+
+/// One layer's opinion of an id list op: its explicit items, or the items
+/// it deletes and those it adds (add, prepend and append alike).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub(super) struct IdListOp {
+    pub(super) explicit: Option<Vec<i64>>,
+    pub(super) deleted: Vec<i64>,
+    pub(super) added: Vec<i64>,
 }
 
 impl Prim {
@@ -391,22 +425,35 @@ impl Parser {
     /// (`prepend key = value`) and a bare doc string; returns the keys with
     /// their values.
     fn metadata(&mut self) -> Result<Vec<(String, Value)>, String> {
+        Ok(self
+            .edited_metadata()?
+            .into_iter()
+            .map(|(_, key, value)| (key, value))
+            .collect())
+    }
+
+    /// [`Self::metadata`], each entry with the list-editing word before its
+    /// key (`delete`, `prepend`, …; `None` for a plain `key = value`).
+    fn edited_metadata(&mut self) -> Result<Vec<(Option<String>, String, Value)>, String> {
         self.expect('(')?;
         let mut out = Vec::new();
         while !self.is(')') {
             let line = self.line();
             match self.next()? {
                 Token::Str(_) => {}
-                Token::Ident(mut key) => {
+                Token::Ident(first) => {
                     // After a list-editing word (`prepend apiSchemas`) or
                     // a type (`dictionary customData`), the last word is
                     // the key.
+                    let mut key = first.clone();
                     while let Some(Token::Ident(k)) = self.peek().cloned() {
                         self.next()?;
                         key = k;
                     }
+                    let edit =
+                        (key != first && LIST_OPS.contains(&first.as_str())).then_some(first);
                     self.expect('=')?;
-                    out.push((key, self.value()?));
+                    out.push((edit, key, self.value()?));
                 }
                 t => return Err(format!("line {line}: unexpected {t:?} in metadata")),
             }
@@ -444,9 +491,35 @@ impl Parser {
             }
         };
         if self.is('(') {
-            for (key, value) in self.metadata()? {
+            for (edit, key, value) in self.edited_metadata()? {
                 if key == "active" && matches!(&value, Value::Ident(v) if v == "false") {
                     shown = false;
+                }
+                if key == "inactiveIds" {
+                    let ids = value
+                        .numbers()
+                        .filter(|v| v.iter().all(|x| x.fract() == 0.0))
+                        .ok_or_else(|| {
+                            format!(
+                                "line {line}: prim `{}`: `inactiveIds` is not a list of ids",
+                                prim.name
+                            )
+                        })?;
+                    let ids: Vec<i64> = ids.iter().map(|&x| x as i64).collect();
+                    // One layer over nothing: a deletion has nothing to
+                    // delete from, so only the others count.
+                    let op = match edit.as_deref() {
+                        None => IdListOp {
+                            explicit: Some(ids),
+                            ..IdListOp::default()
+                        },
+                        Some("delete" | "reorder") => IdListOp::default(),
+                        Some(_) => IdListOp {
+                            added: ids,
+                            ..IdListOp::default()
+                        },
+                    };
+                    prim.inactive_ids = edit_id_list(&prim.inactive_ids, &op);
                 }
                 if COMPOSED.contains(&key.as_str()) {
                     return Err(format!(
@@ -676,6 +749,18 @@ pub(super) fn parse(text: &str) -> Result<Layer, String> {
     meta.layer(roots)
 }
 
+/// The value of `a` at time code `t` held from the last sample at or
+/// before it (the first sample before them all), else the default: how
+/// USD resolves what cannot be interpolated, such as the integer arrays
+/// (ids, prototype indices) of a PointInstancer.
+pub(super) fn held(a: &Attribute, t: f64) -> Option<Vec<f64>> {
+    if a.samples.is_empty() {
+        return a.default.as_ref()?.numbers();
+    }
+    let j = a.samples.partition_point(|(s, _)| *s <= t);
+    a.samples[j.saturating_sub(1)].1.numbers()
+}
+
 /// The value of `a` at time code `t`: interpolated linearly between the
 /// samples around it (slerp for quaternions), held outside them, else the
 /// default.
@@ -854,6 +939,7 @@ mod tests {
         };
         let n = |x: f64| Value::Number(x);
         let prim = Prim {
+            inactive_ids: vec![],
             name: "p".into(),
             type_name: "Xform".into(),
             attributes: vec![
@@ -944,5 +1030,37 @@ mod tests {
             .map(|c| c.name.as_str())
             .collect();
         assert_eq!(kept, ["on"]);
+    }
+
+    #[test]
+    fn deactivated_instance_ids_follow_sdf_list_editing() {
+        let ids = |meta: &str| {
+            let text = format!("#usda 1.0\ndef PointInstancer \"i\" (\n{meta}\n) {{\n}}\n");
+            parse(&text).map(|l| l.roots[0].inactive_ids.clone())
+        };
+        assert_eq!(ids("append inactiveIds = [5, 3]").unwrap(), [3, 5]);
+        assert_eq!(ids("inactiveIds = [9, 9, -1]").unwrap(), [-1, 9]);
+        // Over nothing, a deletion deletes nothing, and a reordering adds
+        // nothing.
+        assert_eq!(
+            ids("prepend inactiveIds = [1, 2]\ndelete inactiveIds = [2]").unwrap(),
+            [1, 2]
+        );
+        assert!(ids("delete inactiveIds = [2]").unwrap().is_empty());
+        assert!(ids("reorder inactiveIds = [2]").unwrap().is_empty());
+        assert!(ids("doc = \"no ids\"").unwrap().is_empty());
+        let err = ids("inactiveIds = [1.5]").unwrap_err();
+        assert!(err.contains("`inactiveIds` is not a list of ids"), "{err}");
+        // Layer over layer (the crate reader's prim stacks): an explicit
+        // list replaces the weaker ones', deletions remove from them.
+        let op = |explicit: Option<Vec<i64>>, deleted: Vec<i64>, added: Vec<i64>| IdListOp {
+            explicit,
+            deleted,
+            added,
+        };
+        let weak = edit_id_list(&[], &op(None, vec![], vec![4, 2]));
+        assert_eq!(weak, [2, 4]);
+        assert_eq!(edit_id_list(&weak, &op(None, vec![4], vec![7])), [2, 7]);
+        assert_eq!(edit_id_list(&weak, &op(Some(vec![8]), vec![], vec![])), [8]);
     }
 }

@@ -29,7 +29,7 @@
 //! reader ends with an error that names the file.
 //! (openusd 0.8 bounds those counts, but needs Rust 1.96.)
 
-use super::usd_layer::{Attribute, Layer, Prim, StageMetadata, Value};
+use super::usd_layer::{Attribute, IdListOp, Layer, Prim, StageMetadata, Value, edit_id_list};
 use openusd::{gf, sdf, usd};
 use std::path::Path;
 use std::process::Command;
@@ -161,6 +161,47 @@ fn children(prim: &usd::Prim) -> Result<Vec<Prim>, String> {
     Ok(out)
 }
 
+/// A PointInstancer's composed `inactiveIds`: each layer's list op of
+/// its prim stack applied over the weaker ones' (openusd 0.6 composes
+/// only the metadata it knows of).
+fn inactive_ids(prim: &usd::Prim) -> Result<Vec<i64>, String> {
+    let stage = prim.stage();
+    let mut ids = Vec::new();
+    for (layer, path) in prim.prim_stack().map_err(failed)?.iter().rev() {
+        let Some(layer) = stage.layer(layer) else {
+            continue;
+        };
+        let field = layer
+            .data()
+            .try_field(path, "inactiveIds")
+            .map_err(|e| format!("its `inactiveIds` in {}: {e}", layer.identifier()))?;
+        match field.as_deref() {
+            None => {}
+            Some(sdf::Value::Int64ListOp(op)) => {
+                let op = IdListOp {
+                    explicit: op.explicit.then(|| op.explicit_items.clone()),
+                    deleted: op.deleted_items.clone(),
+                    added: op
+                        .added_items
+                        .iter()
+                        .chain(&op.prepended_items)
+                        .chain(&op.appended_items)
+                        .copied()
+                        .collect(),
+                };
+                ids = edit_id_list(&ids, &op);
+            }
+            Some(v) => {
+                return Err(format!(
+                    "its `inactiveIds` in {} is not a list of ids ({v:?})",
+                    layer.identifier()
+                ));
+            }
+        }
+    }
+    Ok(ids)
+}
+
 /// One composed prim and those below it.
 fn flat_prim(prim: &usd::Prim) -> Result<Prim, String> {
     let path = prim.path();
@@ -173,8 +214,12 @@ fn flat_prim(prim: &usd::Prim) -> Result<Prim, String> {
             .unwrap_or_default(),
         attributes: Vec::new(),
         children: Vec::new(),
+        inactive_ids: Vec::new(),
     };
     let at = |e: String| format!("prim `{path}`: {e}");
+    if flat.type_name == "PointInstancer" {
+        flat.inactive_ids = inactive_ids(prim).map_err(at)?;
+    }
     for a in prim.attributes().map_err(|e| at(failed(e)))? {
         let name = property_name(a.path());
         let read = || -> Result<Attribute, String> {
@@ -307,9 +352,16 @@ fn vec3d(v: &gf::Vec3d) -> Value {
 fn vec4d(v: &gf::Vec4d) -> Value {
     tuple([v.x, v.y, v.z, v.w])
 }
-/// A half-precision number (openusd's `f16`), as [`single`] reads it.
+/// A half-precision number (openusd's `f16`) as USD text writes it: to
+/// six significant digits, C++'s default for a stream (`0.818848` for
+/// 0.81884765625), not its shortest decimal. So a crate file's quaths
+/// (Houdini writes orientations so) read as its text's.
 fn half<T: Copy + Into<f32>>(x: &T) -> f64 {
-    single((*x).into())
+    let x = f64::from((*x).into());
+    if !x.is_finite() || x == 0.0 {
+        return x;
+    }
+    format!("{x:.5e}").parse().unwrap_or(x)
 }
 fn vec3h(v: &gf::Vec3h) -> Value {
     tuple([half(&v.x), half(&v.y), half(&v.z)])
@@ -501,6 +553,12 @@ mod tests {
         assert_eq!(single(-0.0).to_bits(), (-0.0f64).to_bits());
         assert_eq!(single(1e-40), 1e-40);
         assert_eq!(single(f32::MAX), 3.4028235e38);
+        // A half as USD text writes it, to six significant digits (the
+        // values of a Houdini quath in tests/data/usd/instanced).
+        assert_eq!(half(&(1677.0f32 / 2048.0)), 0.818848);
+        assert_eq!(half(&(-1175.0f32 / 2048.0)), -0.57373);
+        assert_eq!(half(&(1874.0f32 / 131_072.0)), 0.0142975);
+        assert_eq!(half(&-0.0f32).to_bits(), (-0.0f64).to_bits());
         // Every one reads back as the f32 it came from.
         for bits in (0..u32::MAX).step_by(9_973) {
             let x = f32::from_bits(bits);
@@ -553,6 +611,7 @@ mod tests {
                     },
                 )],
                 children: Vec::new(),
+                inactive_ids: vec![-3, 5],
             }],
         };
         let json = serde_json::to_string(&layer).unwrap();
@@ -564,5 +623,10 @@ mod tests {
         assert!(matches!(a.samples[0], (1.5, Value::Number(x)) if x.is_nan()));
         assert_eq!(a.meta("interpolation"), Some(&Value::Str("vertex".into())));
         assert!(!back.up_y);
+        assert_eq!(back.roots[0].inactive_ids, [-3, 5]);
+        // A prim without deactivated ids carries no field for them.
+        let mut plain = layer;
+        plain.roots[0].inactive_ids.clear();
+        assert!(!serde_json::to_string(&plain).unwrap().contains("inactive"));
     }
 }

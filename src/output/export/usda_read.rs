@@ -209,7 +209,7 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
         ground: None,
         wind: Vec::new(),
     };
-    clip.validate().map_err(|e| e.to_string())?;
+    clip.validate_read().map_err(|e| e.to_string())?;
     Ok(clip)
 }
 

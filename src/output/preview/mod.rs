@@ -172,6 +172,7 @@ mod tests {
             fps: 10.0,
             frames: 2,
             objects: vec![ClipObject {
+                first_frame: 0,
                 name: "o".into(),
                 kind: "leaf".into(),
                 label: "floater".into(),

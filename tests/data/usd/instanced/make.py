@@ -14,8 +14,14 @@ precision, as Houdini writes them), ids int64. The 4 x 1 cm cards use
 prototype `narrow`, whose root Xform is turned 90 degrees about z with
 its mesh modelled along y (so the prototype's own transform counts), the
 4 x 2 cm card prototype `wide`. The instances are listed in another order
-at every odd time code (matched by id), and a fourth, id 99, is present
-only until time code 120 (left out by the reader).
+at every odd time code (matched by id). Three more live a part of the
+clip or none of it, as particles do: id 99 (tumble_thick, 50 cm aside)
+dies after time code 120; id 42 (flutter_strip from its own start, 50 cm
+the other way) is born at time code 61; id 21 (steady_fall, 30 cm aside)
+is hidden by `invisibleIds` from time code 181 on; id 5 is deactivated
+(`inactiveIds`) and never shown. The oracle holds what Pixar's mask
+(`ComputeMaskAtTime`) shows. leaves.usdc is the same layer as a crate
+file.
 """
 import csv, math, os
 from pxr import Gf, Sdf, Usd, UsdGeom, Vt
@@ -66,11 +72,24 @@ for k in range(241):
     listed = INSTANCES if t % 2 == 0 else list(reversed(INSTANCES))
     if t <= 120:
         listed = listed + [(99, "tumble_thick", 1)]
+    if t >= 61:
+        listed = [(42, "flutter_strip", 0)] + listed
+    listed = listed + [(21, "steady_fall", 1), (5, "tumble_thick", 0)]
     ids, protos, pos, ori = [], [], [], []
     for fid, fall, proto in listed:
-        p, q = falls.get(fid, falls[7])[k]
+        if fid == 42:
+            p, q = falls[3][k - 60]
+        elif fid == 21:
+            p, q = falls[11][k]
+            p = p + Gf.Vec3d(-50, 0, 0)
+        else:
+            p, q = falls.get(fid, falls[7])[k]
         if fid == 99:
             p = p + Gf.Vec3d(50, 0, 0)
+        if fid == 21:
+            p = p + Gf.Vec3d(0, 0, 30)
+        if fid == 5:
+            p = p + Gf.Vec3d(0, 0, -30)
         ids.append(fid)
         protos.append(proto)
         pos.append(Gf.Vec3f(p))
@@ -79,7 +98,10 @@ for k in range(241):
     inst.CreateProtoIndicesAttr().Set(Vt.IntArray(protos), t)
     inst.CreatePositionsAttr().Set(Vt.Vec3fArray(pos), t)
     inst.CreateOrientationsAttr().Set(Vt.QuathArray(ori), t)
+    inst.CreateInvisibleIdsAttr().Set(Vt.Int64Array([21] if t >= 181 else []), t)
+inst.DeactivateIds([5])
 stage.GetRootLayer().Save()
+stage.GetRootLayer().Export(os.path.join(HERE, "leaves.usdc"))
 
 # The oracle: every vertex of every instance, world metres, z up.
 cache = UsdGeom.XformCache()
@@ -90,11 +112,14 @@ with open(os.path.join(HERE, "leaves.points.csv"), "w", newline="") as f:
         t = 1 + k
         cache.SetTime(t)
         to_world = cache.GetLocalToWorldTransform(inst.GetPrim())
-        xforms = inst.ComputeInstanceTransformsAtTime(t, t)
+        xforms = inst.ComputeInstanceTransformsAtTime(
+            t, t, UsdGeom.PointInstancer.IncludeProtoXform, UsdGeom.PointInstancer.IgnoreMask
+        )
+        shown = inst.ComputeMaskAtTime(t)
         ids = inst.GetIdsAttr().Get(t)
         protos = inst.GetProtoIndicesAttr().Get(t)
         for i, fid in enumerate(ids):
-            if fid == 99:
+            if shown and not shown[i]:
                 continue
             proto = [m, w][protos[i]]
             # The mesh's own transform below the prototype root (none
