@@ -124,6 +124,60 @@ fn blender_bakes_read_as_the_falls_they_were_made_from() {
     }
 }
 
+/// Blender's Alembic export of the same bake (`make.py abc bakes`: y up,
+/// the card an Xform `card` over a PolyMesh `card`, a matrix per key) reads
+/// as the fall it was made from: each key the MuJoCo row to f32, the
+/// card's normal MuJoCo's body z, the same class; and the glTF and the
+/// Alembic file place every vertex alike at every key.
+#[test]
+fn blender_s_alembic_reads_as_the_fall_it_was_made_from() {
+    let file = "blender/tumble_thick.abc";
+    let fall = read_fall(&data(file), None).unwrap();
+    let csv = Trajectory::read_csv(&data("mujoco-falls/tumble_thick.csv")).unwrap();
+    assert_eq!(fall.object, "card/card");
+    assert_eq!(fall.rate_hz, 24.0);
+    let t = &fall.trajectory;
+    assert_eq!(t.len(), 241);
+    for k in 0..t.len() {
+        let want = csv.position[10 * k] + V3::new(0.0, 0.0, 2.0);
+        assert!(
+            f32_close(&t.position[k], &want),
+            "key {k}: {} against {want}",
+            t.position[k]
+        );
+        let (got, want) = (
+            t.orientation[k] * V3::z(),
+            csv.orientation[10 * k] * V3::z(),
+        );
+        assert!(
+            got.cross(&want).norm() < 1e-4,
+            "key {k}: normal {got} against {want}"
+        );
+    }
+    same_class(file, (t, 0.04), (&csv, 0.04));
+    let (abc, glb) = (keys_of(file), keys_of("blender/tumble_thick.glb"));
+    assert_eq!(abc.frames, glb.frames);
+    for k in 0..abc.frames {
+        same_points(
+            &format!("{file} key {k}"),
+            &abc.objects[0].positions(k),
+            &glb.objects[0].positions(k),
+            1e-5,
+        );
+    }
+    // One animation in an Alembic archive: --animation is refused.
+    let o = leafmagic()
+        .args(["classify", "--animation", "take"])
+        .arg(data(file))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !o.status.success() && err.contains("an Alembic archive holds one animation"),
+        "{err}"
+    );
+}
+
 /// What a modeller may do differently gives the same fall: the card
 /// modelled standing in its local xz-plane (the node's frame is not the
 /// card's), a static ground beside it (left out), the file written as
@@ -183,10 +237,23 @@ fn same_points(what: &str, got: &[V3], want: &[V3], tol: f64) {
 /// The clip a glTF or USD file reads as, at its own keys.
 fn keys_of(file: &str) -> Clip {
     let path = data(file);
-    if file.ends_with(".usda") {
+    if file.ends_with(".abc") {
+        export::read_abc(&std::fs::read(&path).unwrap(), file).unwrap()
+    } else if file.ends_with(".usda") {
         export::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
     } else {
         export::read_gltf_keys(&std::fs::read(&path).unwrap(), file, path.parent(), None).unwrap()
+    }
+}
+
+/// The card's name as each format names it: glTF and USD by its mesh,
+/// Alembic by its path (`PARENTS/card/card`: the object's Xform, then its
+/// mesh).
+fn card_name(file: &str, parents: &str) -> String {
+    if file.ends_with(".abc") {
+        format!("{parents}card/card")
+    } else {
+        "card".to_string()
     }
 }
 
@@ -202,10 +269,11 @@ fn a_card_under_an_animated_parent_reads_as_the_card_s_fall() {
     for file in [
         "blender/tumble_thick_parented.glb",
         "blender/tumble_thick_parented.usda",
+        "blender/tumble_thick_parented.abc",
     ] {
         let clip = keys_of(file);
         assert_eq!(clip.objects.len(), 1, "{file}: only the card has a mesh");
-        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.objects[0].name, card_name(file, "carrier/"), "{file}");
         assert_eq!(clip.frames, base.frames, "{file}");
         for k in 0..clip.frames {
             same_points(
@@ -254,10 +322,11 @@ fn a_card_curled_by_a_shape_key_reads_as_blender_shapes_it() {
     for file in [
         "blender/tumble_thick_curled.glb",
         "blender/tumble_thick_curled.usda",
+        "blender/tumble_thick_curled.abc",
     ] {
         let clip = keys_of(file);
         assert_eq!(clip.objects.len(), 1, "{file}");
-        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.objects[0].name, card_name(file, ""), "{file}");
         assert_eq!(clip.frames, 241, "{file}");
         let mut most_curled = 0.0f64;
         for (k, want) in blender.iter().enumerate() {
@@ -298,10 +367,11 @@ fn a_card_bent_by_bones_reads_as_blender_poses_it() {
     for file in [
         "blender/tumble_thick_rigged.glb",
         "blender/tumble_thick_rigged.usda",
+        "blender/tumble_thick_rigged.abc",
     ] {
         let clip = keys_of(file);
         assert_eq!(clip.objects.len(), 1, "{file}: the armature has no mesh");
-        assert_eq!(clip.objects[0].name, "card", "{file}");
+        assert_eq!(clip.objects[0].name, card_name(file, "rig/"), "{file}");
         assert_eq!(clip.frames, 241, "{file}");
         let mut most_bent = 0.0f64;
         for (k, want) in blender.iter().enumerate() {

@@ -273,7 +273,7 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
         (
             // Falls in animation files: glTF (JSON and binary, skinned,
             // quantised), USD text (nested, UsdSkel, blend shapes, a PointInstancer), USD crate files, a
-            // USDZ package and a composed shot.
+            // USDZ package, a composed shot and Alembic archives.
             "animation",
             [
                 "blender/tumble_thick_separate.gltf",
@@ -288,6 +288,8 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 "usd/composed/skinned_leaf.usdc",
                 "usd/composed/tumble_thick.usdz",
                 "usd/composed/shot.usda",
+                "blender/tumble_thick_parented.abc",
+                "blender/tumble_thick_curled.abc",
             ]
             .iter()
             .map(|f| repo().join("tests/data").join(f))

@@ -57,6 +57,8 @@ pub enum AnimationFormat {
     /// USD: `.usda`, `.usd`, `.usdc`, `.usdz` (text, binary crate files,
     /// packages; composed stages flattened first).
     Usd,
+    /// Alembic: `.abc` (Ogawa; [`super::read_abc`]).
+    Alembic,
 }
 
 impl AnimationFormat {
@@ -67,6 +69,7 @@ impl AnimationFormat {
         match ext.as_str() {
             "glb" | "gltf" => Some(AnimationFormat::Gltf),
             "usda" | "usd" | "usdc" | "usdz" => Some(AnimationFormat::Usd),
+            "abc" => Some(AnimationFormat::Alembic),
             _ => None,
         }
     }
@@ -114,18 +117,20 @@ pub fn read_fall_of(
     let name = path.file_stem().map_or("animation".to_string(), |s| {
         s.to_string_lossy().into_owned()
     });
-    let clip = if AnimationFormat::of(path) == Some(AnimationFormat::Usd) {
-        if let Some(want) = animation {
-            return Err(ExportError::input(
-                path,
-                format!(
-                    "--animation {want}: a USD stage holds one animation; --animation picks one of a glTF file's"
-                ),
-            ));
-        }
-        read_usd_file(path, &bytes, &name)
-    } else {
-        read_gltf_keys(&bytes, &name, path.parent(), animation)
+    let format = AnimationFormat::of(path);
+    if let (Some(want), Some(AnimationFormat::Usd | AnimationFormat::Alembic)) = (animation, format)
+    {
+        return Err(ExportError::input(
+            path,
+            format!(
+                "--animation {want}: a USD stage or an Alembic archive holds one animation; --animation picks one of a glTF file's"
+            ),
+        ));
+    }
+    let clip = match format {
+        Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name),
+        Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
+        _ => read_gltf_keys(&bytes, &name, path.parent(), animation),
     }
     .map_err(|e| match e {
         ExportError::Data(reason) => ExportError::input(path, reason),

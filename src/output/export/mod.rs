@@ -14,6 +14,7 @@
 //! a body frame and carry a pose per frame; deforming objects (mass-spring
 //! leaves, sheets, ropes) carry every vertex's position per frame.
 
+mod abc_read;
 mod clip;
 mod dress;
 mod drops;
@@ -37,6 +38,7 @@ mod usd_stage;
 mod usda_read;
 mod wind;
 
+pub use abc_read::read_abc;
 pub use clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count, resample_positions};
 pub use drops::{drop_clip, drop_clip_released, drop_individuals, side_by_side};
 pub use error::ExportError;

@@ -47,13 +47,21 @@ Two more put the card under other objects, as animators build a leaf:
   an animation of its own, both moving the card.
 
 `python make.py SRC OUT NAME ...` makes only the named ones (the six
-falls are `bakes`; `parented`, `rigged`, `curled`, `takes`).
+falls are `bakes`; `parented`, `rigged`, `curled`, `takes`). With `abc`
+among the names, the scenes are written as Blender's Alembic exporter
+writes them (NAME.abc, default options: y up, the armature's and the
+shape key's deformation baked into the points) and nothing else:
+`python make.py SRC OUT abc bakes parented rigged curled` wrote
+tumble_thick.abc, tumble_thick_parented.abc, tumble_thick_rigged.abc and
+tumble_thick_curled.abc (the rigged and curled cards' evaluated vertices
+are the CSVs above).
 """
 import bpy, csv, math, os, sys
 from mathutils import Quaternion, Vector
 
 src, out = sys.argv[1], sys.argv[2]
-only = sys.argv[3:]
+ABC = "abc" in sys.argv[3:]
+only = [n for n in sys.argv[3:] if n != "abc"]
 
 
 def wanted(name):
@@ -94,13 +102,23 @@ def bake(name, fall, upright=False, ground=False, gltf_format="GLB", usd=True):
         ob.keyframe_insert("location", frame=frame)
         ob.keyframe_insert("rotation_quaternion", frame=frame)
     sc.frame_start, sc.frame_end = 1, frame
+    if ABC:
+        alembic(name)
+        return
     ext = ".glb" if gltf_format == "GLB" else ".gltf"
     bpy.ops.export_scene.gltf(filepath=os.path.join(out, name + ext), export_format=gltf_format)
     if usd:
         bpy.ops.wm.usd_export(filepath=os.path.join(out, name + ".usda"), export_animation=True)
 
 
-if wanted("bakes"):
+def alembic(name):
+    sc = bpy.context.scene
+    bpy.ops.wm.alembic_export(filepath=os.path.join(out, name + ".abc"), start=sc.frame_start, end=sc.frame_end)
+
+
+if wanted("bakes") and ABC:
+    bake("tumble_thick", "tumble_thick")
+elif wanted("bakes"):
     for fall in ["steady_fall", "glide_ballast", "wobble_card", "flutter_strip", "tumble_thick", "tumble_cardscoef"]:
         bake(fall, fall)
     bake("tumble_thick_modelled_upright", "tumble_thick", upright=True, usd=False)
@@ -117,6 +135,9 @@ def keyed(rows):
 
 
 def export(name):
+    if ABC:
+        alembic(name)
+        return
     bpy.ops.export_scene.gltf(filepath=os.path.join(out, name + ".glb"), export_format="GLB")
     bpy.ops.wm.usd_export(filepath=os.path.join(out, name + ".usda"), export_animation=True)
 
@@ -206,6 +227,8 @@ def rigged():
 
 def evaluated(ob, frames, name):
     """Blender's own evaluated vertices of `ob` at each key, world metres."""
+    if ABC:
+        return
     sc = bpy.context.scene
     with open(os.path.join(out, name), "w", newline="") as f:
         w = csv.writer(f)
