@@ -132,7 +132,7 @@ pub fn read_record(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Recor
         ] {
             if let Some(given) = given {
                 bail!(
-                    "{flag} {given}: {} is a CSV record, which holds one fall; {flag} picks {what} of an animation file (.glb, .gltf, .usd)",
+                    "{flag} {given}: {} is a CSV record, which holds one fall; {flag} picks {what} of an animation file (.glb, .gltf, .usd, .abc)",
                     path.display()
                 );
             }
@@ -202,17 +202,30 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
 /// [`read_record`] of a glTF file: the fall of its moving object
 /// ([`export::fall`]).
 fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
-    let fall = export::fall::read_fall_of(path, pick.object, pick.animation)?;
+    let mut fall = export::fall::read_fall_of(path, pick.object, pick.animation)?;
     if units.up != UpAxis::Z {
         eprintln!(
-            "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis): read as such",
+            "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis; Alembic: y): read as such",
             path.display()
         );
     }
-    if units.scale != 1.0 || units.frame_rate.is_some() {
+    // Alembic carries no unit (metres are assumed, as Blender and Houdini
+    // write; Maya writes centimetres): --scale says what one unit is.
+    let alembic =
+        export::fall::AnimationFormat::of(path) == Some(export::fall::AnimationFormat::Alembic);
+    if alembic && units.scale != 1.0 {
+        fall.trajectory.rescale(units.scale, None);
+        fall.chord *= units.scale;
+    }
+    if (units.scale != 1.0 && !alembic) || units.frame_rate.is_some() {
         eprintln!(
-            "note: {}: --scale and --frame-rate do not apply to an animation file, which says its own units (glTF: metres and seconds; USD: metersPerUnit and timeCodesPerSecond): read as such",
-            path.display()
+            "note: {}: {} not apply to an animation file, which says its own units (glTF: metres and seconds; USD: metersPerUnit and timeCodesPerSecond; Alembic: seconds, and metres unless --scale says otherwise): read as such",
+            path.display(),
+            if alembic {
+                "--frame-rate does"
+            } else {
+                "--scale and --frame-rate do"
+            }
         );
     }
     let appears = if fall.appears_s > 0.0 {

@@ -31,6 +31,14 @@ fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
 }
 
+/// What `leafmagic ARGS` prints to stderr, asserting it fails.
+fn refusal(args: &[&std::ffi::OsStr]) -> String {
+    let o = leafmagic().args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert!(!o.status.success(), "{args:?} did not fail: {err}");
+    err
+}
+
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("leafmagic-anim-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -166,16 +174,33 @@ fn blender_s_alembic_reads_as_the_fall_it_was_made_from() {
         );
     }
     // One animation in an Alembic archive: --animation is refused.
-    let o = leafmagic()
-        .args(["classify", "--animation", "take"])
-        .arg(data(file))
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let path = data(file);
+    let err = refusal(&[
+        "classify".as_ref(),
+        "--animation".as_ref(),
+        "take".as_ref(),
+        path.as_ref(),
+    ]);
     assert!(
-        !o.status.success() && err.contains("an Alembic archive holds one animation"),
+        err.contains("an Alembic archive holds one animation"),
         "{err}"
     );
+    // Alembic carries no unit: --scale says what one is (0.01 for a Maya
+    // file in centimetres), where glTF and USD say their own.
+    let describe = |args: &[&str]| -> Value {
+        let o = leafmagic()
+            .args(["describe", "--json"])
+            .args(args)
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let (metres, halves) = (describe(&[]), describe(&["--scale", "0.5"]));
+    let size = |v: &Value| v["size_m"].as_f64().unwrap();
+    assert!((size(&halves) - 0.5 * size(&metres)).abs() < 1e-15);
+    assert_eq!(halves["class"], metres["class"]);
 }
 
 /// What a modeller may do differently gives the same fall: the card
@@ -1230,14 +1255,9 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
             "{crate_err}"
         );
     }
-    let o = leafmagic()
-        .arg("classify")
-        .arg(&crate_file)
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
+    let err = refusal(&["classify".as_ref(), crate_file.as_ref()]);
     assert!(
-        !o.status.success() && err.contains("`leaves[42]` (deforming, 2.50–10.00 s of 10.00 s)"),
+        err.contains("`leaves[42]` (deforming, 2.50–10.00 s of 10.00 s)"),
         "{err}"
     );
     assert!(!err.contains("leaves[5]"), "{err}");

@@ -844,16 +844,7 @@ pub fn read_abc(bytes: &[u8], name: &str) -> Result<Clip, String> {
             ))
         })
         .collect::<Result<Vec<_>, String>>()?;
-    let clip = Clip {
-        name: name.to_string(),
-        fps: rate,
-        frames,
-        objects,
-        ground: None,
-        wind: Vec::new(),
-    };
-    clip.validate_read().map_err(|e| e.to_string())?;
-    Ok(clip)
+    Clip::read(name, rate, frames, objects)
 }
 
 #[cfg(test)]

@@ -199,6 +199,26 @@ impl Clip {
         self.check(true)
     }
 
+    /// A clip read from a file named `name`: its `objects` sampled at
+    /// `frames` frames of `fps`, checked as [`Self::validate_read`] checks.
+    pub fn read(
+        name: &str,
+        fps: f64,
+        frames: usize,
+        objects: Vec<ClipObject>,
+    ) -> Result<Clip, String> {
+        let clip = Clip {
+            name: name.to_string(),
+            fps,
+            frames,
+            objects,
+            ground: None,
+            wind: Vec::new(),
+        };
+        clip.validate_read().map_err(|e| e.to_string())?;
+        Ok(clip)
+    }
+
     /// [`Self::validate`] for a clip read from a file, whose objects may
     /// live a part of it ([`ClipObject::first_frame`]): each holds at
     /// least one frame and ends by the clip's last.

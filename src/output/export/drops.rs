@@ -102,11 +102,7 @@ pub fn side_by_side(
         let x = (k as f64 - (n as f64 - 1.0) / 2.0) * spacing;
         o.translate(V3::new(x, 0.0, 0.0));
     }
-    let frames = match objects.first().map(|o| &o.motion) {
-        Some(Motion::Deforming { frames }) => frames.len(),
-        Some(Motion::Rigid { translation, .. }) => translation.len(),
-        None => 0,
-    };
+    let frames = objects.first().map_or(0, ClipObject::frame_count);
     let clip = Clip {
         name: name.to_string(),
         fps,

@@ -201,16 +201,7 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
         };
         objects.push(ClipObject::read_mesh(name, triangles, frame_list));
     }
-    let clip = Clip {
-        name: name.to_string(),
-        fps: rate,
-        frames,
-        objects,
-        ground: None,
-        wind: Vec::new(),
-    };
-    clip.validate_read().map_err(|e| e.to_string())?;
-    Ok(clip)
+    Clip::read(name, rate, frames, objects)
 }
 
 #[cfg(test)]
