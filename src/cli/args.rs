@@ -165,8 +165,8 @@ pub struct ExportArgs {
     #[arg(long)]
     pub out: PathBuf,
     /// Also re-drop each leaf as breeding dropped it and write its fall:
-    /// `glb` (leaf-<id>.glb), `pc2` (leaf-<id>.pc2 + leaf-<id>.obj) or `usd`
-    /// (leaf-<id>.usda).
+    /// `glb` (leaf-<id>.glb), `pc2` (leaf-<id>.pc2 + leaf-<id>.obj), `usd`
+    /// (leaf-<id>.usda) or `abc` (leaf-<id>.abc, Alembic).
     #[arg(long)]
     pub format: Option<leafmagic::output::export::Format>,
     /// Frames per second of the exported motion.
@@ -337,7 +337,7 @@ pub struct SceneArgs {
     #[arg(long)]
     pub explain: bool,
     /// Also export the run: `glb` (DIR/<scene>.glb), `pc2` (DIR/<object>.pc2
-    /// + .obj) or `usd` (DIR/<scene>.usda).
+    /// + .obj), `usd` (DIR/<scene>.usda) or `abc` (DIR/<scene>.abc, Alembic).
     #[arg(long)]
     pub export: Option<leafmagic::output::export::Format>,
     /// Frames per second of the exported motion.

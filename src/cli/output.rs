@@ -7,7 +7,7 @@ use super::report;
 use anyhow::{Context, Result, bail};
 use leafmagic::breed::{self, Run};
 use leafmagic::output::export::render_mesh::{RenderMesh, read_obj};
-use leafmagic::output::export::{Clip, Format, glb, pc2, usd};
+use leafmagic::output::export::{Clip, Format, abc, glb, pc2, usd};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -175,7 +175,7 @@ fn replace_dir(staging: &Path, out: &Path) -> Result<()> {
     Ok(())
 }
 
-/// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, or a `.pc2` and an `.obj` per object, the cache's samples
+/// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, `<stem>.abc`, or a `.pc2` and an `.obj` per object, the cache's samples
 /// spaced for a scene at `host_fps`); returns the paths.
 pub fn write_clip(
     clip: &Clip,
@@ -197,6 +197,11 @@ pub fn write_clip(
             vec![path]
         }
         Format::Pc2 => pc2::write_pc2(clip, dir, host_fps)?,
+        Format::Abc => {
+            let path = dir.join(format!("{stem}.abc"));
+            abc::write_abc(clip, &path)?;
+            vec![path]
+        }
     })
 }
 

@@ -283,7 +283,8 @@ impl Pod {
 #[derive(Clone, Debug)]
 struct PropertyHeader {
     name: String,
-    /// 0 compound, 1 scalar, 2 array.
+    /// 0 compound, 1 scalar, 2 or 3 array (3: an array whose every sample
+    /// holds one value, "scalar-like", which Alembic stores as an array).
     kind: u32,
     pod: Option<Pod>,
     extent: usize,
@@ -465,7 +466,8 @@ impl Archive<'_> {
         let h = &p.header;
         let pod = h.pod.ok_or("a compound has no samples")?;
         let stored = h.stored(k);
-        let slot = if h.kind == 2 { 2 * stored } else { stored };
+        // An array's samples are (datum, dimensions) pairs.
+        let slot = if h.kind >= 2 { 2 * stored } else { stored };
         let datum = match p.children.get(slot) {
             Some(Child::Data(d)) => self.ogawa.data(*d)?,
             None if h.samples == 0 => &[],

@@ -17,13 +17,16 @@ pub enum Format {
     /// USD (`.usda`, text): an Xform per object with the rigid part of its
     /// motion time-sampled, and a Mesh with its points, normals and UVs.
     Usd,
+    /// Alembic (`.abc`, Ogawa): an Xform per object with the rigid part of
+    /// its motion as a matrix per frame, and a PolyMesh with its points.
+    Abc,
 }
 
 /// A name that is no export format's.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 pub enum UnknownFormat {
     /// Not a format at all.
-    #[error("unknown export format '{0}' (expected glb, pc2, usd or usda)")]
+    #[error("unknown export format '{0}' (expected glb, pc2, usd, usda or abc)")]
     Unknown(String),
     /// Binary USD, which is made from the text by Pixar's library.
     #[error("{}", usd::USDC_HINT)]
@@ -37,6 +40,7 @@ impl FromStr for Format {
             "glb" => Ok(Format::Glb),
             "pc2" => Ok(Format::Pc2),
             "usd" | "usda" => Ok(Format::Usd),
+            "abc" => Ok(Format::Abc),
             "usdc" => Err(UnknownFormat::Usdc),
             _ => Err(UnknownFormat::Unknown(s.to_string())),
         }
@@ -49,6 +53,7 @@ impl fmt::Display for Format {
             Format::Glb => "glb",
             Format::Pc2 => "pc2",
             Format::Usd => "usd",
+            Format::Abc => "abc",
         })
     }
 }
@@ -65,6 +70,7 @@ mod tests {
         assert!(e.contains("fbx") && e.contains("glb, pc2, usd"), "{e}");
         assert_eq!("usd".parse::<Format>(), Ok(Format::Usd));
         assert_eq!("usda".parse::<Format>(), Ok(Format::Usd));
+        assert_eq!("abc".parse::<Format>(), Ok(Format::Abc));
         let e = "usdc".parse::<Format>().unwrap_err().to_string();
         assert!(e.contains("usd-core") && e.contains("Export"), "{e}");
     }

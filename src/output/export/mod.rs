@@ -14,6 +14,7 @@
 //! a body frame and carry a pose per frame; deforming objects (mass-spring
 //! leaves, sheets, ropes) carry every vertex's position per frame.
 
+pub mod abc;
 mod abc_read;
 mod clip;
 mod dress;
