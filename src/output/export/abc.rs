@@ -137,6 +137,43 @@ struct Property {
 }
 
 impl Property {
+    /// A scalar (`kind` 1) or array (2) property named `name` of `extent`
+    /// values of `pod` per sample, `samples` samples at the clip's time
+    /// sampling, with `values` stored (one: the same at every sample).
+    fn new(
+        name: &'static str,
+        kind: u32,
+        pod: Pod,
+        extent: u32,
+        samples: u32,
+        values: Vec<Vec<u8>>,
+    ) -> Property {
+        Property {
+            name,
+            kind,
+            pod,
+            extent,
+            samples,
+            sampling: 1,
+            metadata: "",
+            values,
+        }
+    }
+
+    /// With `metadata`.
+    fn with_metadata(self, metadata: &'static str) -> Property {
+        Property { metadata, ..self }
+    }
+
+    /// At the identity time sampling (0), as the library writes constant
+    /// schema properties.
+    fn untimed(self) -> Property {
+        Property {
+            sampling: 0,
+            ..self
+        }
+    }
+
     /// Its group (each stored sample a keyed datum, an array's with its
     /// dimensions after it, empty: one rank, from the size) and its packed
     /// header.
@@ -292,46 +329,26 @@ fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject) -> Result<u64, Expor
     let geom = compound(
         f,
         &[
-            Property {
-                name: ".selfBnds",
-                kind: 1,
-                pod: Pod::F64,
-                extent: 6,
-                samples: samples(&shapes),
-                sampling: 1,
-                metadata: "interpretation=box",
-                values: shapes.iter().map(|s| bounds(s)).collect(),
-            },
-            Property {
-                name: "P",
-                kind: 2,
-                pod: Pod::F32,
-                extent: 3,
-                samples: samples(&shapes),
-                sampling: 1,
-                metadata: "geoScope=vtx;interpretation=point",
-                values: shapes.iter().map(|s| f32s(s)).collect(),
-            },
-            Property {
-                name: ".faceIndices",
-                kind: 2,
-                pod: Pod::I32,
-                extent: 1,
-                samples: 1,
-                sampling: 1,
-                metadata: "",
-                values: vec![indices],
-            },
-            Property {
-                name: ".faceCounts",
-                kind: 2,
-                pod: Pod::I32,
-                extent: 1,
-                samples: 1,
-                sampling: 1,
-                metadata: "",
-                values: vec![counts],
-            },
+            Property::new(
+                ".selfBnds",
+                1,
+                Pod::F64,
+                6,
+                samples(&shapes),
+                shapes.iter().map(|s| bounds(s)).collect(),
+            )
+            .with_metadata("interpretation=box"),
+            Property::new(
+                "P",
+                2,
+                Pod::F32,
+                3,
+                samples(&shapes),
+                shapes.iter().map(|s| f32s(s)).collect(),
+            )
+            .with_metadata("geoScope=vtx;interpretation=point"),
+            Property::new(".faceIndices", 2, Pod::I32, 1, 1, vec![indices]),
+            Property::new(".faceCounts", 2, Pod::I32, 1, 1, vec![counts]),
         ],
         Vec::new(),
     );
@@ -366,58 +383,20 @@ fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject) -> Result<u64, Expor
         &[
             // Readers take an Xform's sample count and sampling from
             // `.inherits` (Alembic's IXformSchema): one per frame, all equal.
-            Property {
-                name: ".inherits",
-                kind: 1,
-                pod: Pod::Bool,
-                extent: 1,
-                samples: frames,
-                sampling: 1,
-                metadata: "",
-                values: vec![vec![1]],
-            },
-            Property {
-                name: ".ops",
-                kind: 1,
-                pod: Pod::U8,
-                extent: 1,
-                samples: 1,
-                sampling: 0,
-                metadata: "",
-                // One matrix op (type 3 in the high nibble).
-                values: vec![vec![0x30]],
-            },
-            Property {
-                name: ".vals",
-                kind: 1,
-                pod: Pod::F64,
-                extent: 16,
-                samples: frames,
-                sampling: 1,
-                metadata: "",
-                values: matrices,
-            },
+            Property::new(".inherits", 1, Pod::Bool, 1, frames, vec![vec![1]]),
+            // One matrix op (type 3 in the high nibble).
+            Property::new(".ops", 1, Pod::U8, 1, 1, vec![vec![0x30]]).untimed(),
+            Property::new(".vals", 1, Pod::F64, 16, frames, matrices),
             // Its presence says the transform is not a constant identity.
-            Property {
-                name: "isNotConstantIdentity",
-                kind: 1,
-                pod: Pod::Bool,
-                extent: 1,
-                samples: 1,
-                sampling: 0,
-                metadata: "",
-                values: vec![vec![1]],
-            },
-            Property {
-                name: ".animChans",
-                kind: 2,
-                pod: Pod::U32,
-                extent: 1,
-                samples: 1,
-                sampling: 1,
-                metadata: "",
-                values: vec![(0u32..16).flat_map(u32::to_le_bytes).collect()],
-            },
+            Property::new("isNotConstantIdentity", 1, Pod::Bool, 1, 1, vec![vec![1]]).untimed(),
+            Property::new(
+                ".animChans",
+                2,
+                Pod::U32,
+                1,
+                1,
+                vec![(0u32..16).flat_map(u32::to_le_bytes).collect()],
+            ),
         ],
         Vec::new(),
     );

@@ -212,7 +212,7 @@ fn time_samplings(bytes: &[u8]) -> Result<Vec<TimeSampling>, String> {
         let times = (0..n)
             .map(|_| c.f64("a time sampling's times"))
             .collect::<Result<Vec<_>, _>>()?;
-        if !times.iter().all(|t| t.is_finite()) || !tpc.is_finite() && tpc != f64::INFINITY {
+        if !times.iter().all(|t| t.is_finite()) || tpc.is_nan() {
             return Err("a time sampling's times are not finite".to_string());
         }
         // Acyclic sampling writes DBL_MAX / 32 as its time per cycle.

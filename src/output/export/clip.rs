@@ -207,16 +207,22 @@ impl Clip {
         frames: usize,
         objects: Vec<ClipObject>,
     ) -> Result<Clip, String> {
-        let clip = Clip {
+        let clip = Clip::bare(name, fps, frames, objects);
+        clip.validate_read().map_err(|e| e.to_string())?;
+        Ok(clip)
+    }
+
+    /// `objects` at `frames` frames of `fps`, named `name`, without ground
+    /// or wind, unchecked.
+    pub(super) fn bare(name: &str, fps: f64, frames: usize, objects: Vec<ClipObject>) -> Clip {
+        Clip {
             name: name.to_string(),
             fps,
             frames,
             objects,
             ground: None,
             wind: Vec::new(),
-        };
-        clip.validate_read().map_err(|e| e.to_string())?;
-        Ok(clip)
+        }
     }
 
     /// [`Self::validate`] for a clip read from a file, whose objects may

@@ -103,14 +103,7 @@ pub fn side_by_side(
         o.translate(V3::new(x, 0.0, 0.0));
     }
     let frames = objects.first().map_or(0, ClipObject::frame_count);
-    let clip = Clip {
-        name: name.to_string(),
-        fps,
-        frames,
-        objects,
-        ground: None,
-        wind: Vec::new(),
-    };
+    let clip = Clip::bare(name, fps, frames, objects);
     clip.validate()?;
     Ok(clip)
 }
