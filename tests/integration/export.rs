@@ -1600,7 +1600,8 @@ fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
 
 /// Alembic export of a rigid body and a deforming leaf (the mixed scene
 /// less its rope): each reads back vertex for vertex (to f32), the rigid
-/// body's points written once under a matrix per frame. A rope has no
+/// body's points written once under a matrix per frame, under unique
+/// names where two objects' names make the same identifier. A rope has no
 /// faces: the export is refused by the rope's name, and nothing is left
 /// behind.
 #[test]
@@ -1621,13 +1622,22 @@ fn alembic_export_writes_rigid_and_deforming_objects_and_refuses_a_rope() {
         "nothing written"
     );
     clip.objects.retain(|o| o.name != "rope");
+    // Two names whose identifiers are the same: the second gets `_2`, so
+    // the archive's children stay unique.
+    assert_eq!(clip.objects.len(), 2);
+    clip.objects[0].name = "card-1".into();
+    clip.objects[1].name = "card_1".into();
     export::abc::write_abc(&clip, &path).unwrap();
     let back = export::read_abc(&std::fs::read(&path).unwrap(), "mixed").unwrap();
     assert_eq!((back.frames, back.fps), (clip.frames, clip.fps));
     assert_eq!(back.objects.len(), clip.objects.len());
     let mut rigid = 0;
-    for (o, b) in clip.objects.iter().zip(&back.objects) {
-        let id = export::usd::identifier(&o.name);
+    for ((o, b), id) in clip
+        .objects
+        .iter()
+        .zip(&back.objects)
+        .zip(["card_1", "card_1_2"])
+    {
         assert_eq!(b.name, format!("{id}/{id}_mesh"));
         rigid += usize::from(matches!(o.motion, Motion::Rigid { .. }));
         for k in 0..clip.frames {

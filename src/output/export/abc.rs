@@ -2,7 +2,8 @@
 //! natively (Maya reads no PC2 without a plug-in). One Ogawa file, laid out
 //! as the Alembic 1.8 library lays it out (the reader's module docs,
 //! [`super::read_abc`], describe the layout): per object an `AbcGeom_Xform`
-//! named as the object ([`super::usd::identifier`]) carrying the moving
+//! named as the object (its USD identifier, `_2`, `_3` … appended where two
+//! objects' identifiers are the same) carrying the moving
 //! frame as a matrix per frame, over an `AbcGeom_PolyMesh` `<name>_mesh`
 //! with the shown vertices in that frame (written once for a rigid object),
 //! its faces (triangles, wound clockwise as Alembic winds them) and bounds.
@@ -16,7 +17,7 @@
 use super::clip::{Clip, ClipObject};
 use super::error::ExportError;
 use super::look::shown;
-use super::usd::identifier;
+use super::usd::unique_identifiers;
 use nalgebra::{Matrix4, Vector3};
 use std::path::Path;
 
@@ -289,7 +290,7 @@ fn bounds(points: &[V3]) -> Vec<u8> {
 }
 
 /// One object as an Xform over a PolyMesh; its group.
-fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject) -> Result<u64, ExportError> {
+fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject, id: &str) -> Result<u64, ExportError> {
     let framed = o.framed();
     let surface = shown(o, &framed);
     if surface.triangles.is_empty() {
@@ -408,7 +409,7 @@ fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject) -> Result<u64, Expor
     Ok(object(
         f,
         xform_props,
-        &[(format!("{}_mesh", identifier(&o.name)), POLYMESH, mesh)],
+        &[(format!("{id}_mesh"), POLYMESH, mesh)],
     ))
 }
 
@@ -421,9 +422,14 @@ pub fn write_abc(clip: &Clip, path: &Path) -> Result<usize, ExportError> {
     f.0.extend(0u64.to_le_bytes());
     let version = f.data(&0i32.to_le_bytes());
     let file_version = f.data(&10709i32.to_le_bytes());
+    let ids = unique_identifiers(
+        clip.objects.iter().map(|o| o.name.as_str()),
+        &mut Default::default(),
+    );
     let mut children = Vec::new();
-    for o in &clip.objects {
-        children.push((identifier(&o.name), XFORM, write_object(&mut f, clip, o)?));
+    for (o, id) in clip.objects.iter().zip(ids) {
+        let group = write_object(&mut f, clip, o, &id)?;
+        children.push((id, XFORM, group));
     }
     let top = object(&mut f, 0, &children);
     let metadata = f.data(

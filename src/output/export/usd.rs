@@ -68,7 +68,7 @@ pub fn identifier(name: &str) -> String {
 
 /// Unique identifiers for `names`, in order: a name whose identifier is
 /// already taken gets `_2`, `_3`, … appended.
-fn unique_identifiers<'a>(
+pub(super) fn unique_identifiers<'a>(
     names: impl Iterator<Item = &'a str>,
     taken: &mut BTreeSet<String>,
 ) -> Vec<String> {
