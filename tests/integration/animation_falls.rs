@@ -31,11 +31,19 @@ fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
 }
 
-/// What `leafmagic ARGS` prints to stderr, asserting it fails.
-fn refusal(args: &[&std::ffi::OsStr]) -> String {
+/// Whether `leafmagic ARGS` succeeds, and what it prints to stderr.
+fn run<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (bool, String) {
     let o = leafmagic().args(args).output().unwrap();
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert!(!o.status.success(), "{args:?} did not fail: {err}");
+    (
+        o.status.success(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// What `leafmagic ARGS` prints to stderr, asserting it fails.
+fn refusal<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
+    let (ok, err) = run(args);
+    assert!(!ok, "did not fail: {err}");
     err
 }
 
@@ -175,12 +183,7 @@ fn blender_s_alembic_reads_as_the_fall_it_was_made_from() {
     }
     // One animation in an Alembic archive: --animation is refused.
     let path = data(file);
-    let err = refusal(&[
-        "classify".as_ref(),
-        "--animation".as_ref(),
-        "take".as_ref(),
-        path.as_ref(),
-    ]);
+    let err = refusal(&["classify", "--animation", "take", path.to_str().unwrap()]);
     assert!(
         err.contains("an Alembic archive holds one animation"),
         "{err}"
@@ -694,13 +697,6 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     };
     let path = dir.join("two.glb");
     glb::write_glb(&two, &path).unwrap();
-    let run = |args: &[&str]| {
-        let o = leafmagic().args(args).output().unwrap();
-        (
-            o.status.success(),
-            String::from_utf8_lossy(&o.stderr).into_owned(),
-        )
-    };
     let p = path.to_str().unwrap();
     let (ok, err) = run(&["classify", p]);
     assert!(!ok);
@@ -1102,13 +1098,6 @@ fn a_file_with_several_takes_is_read_by_the_one_named() {
             );
         }
     }
-    let run = |args: &[&str]| {
-        let o = leafmagic().args(args).output().unwrap();
-        (
-            o.status.success(),
-            String::from_utf8_lossy(&o.stderr).into_owned(),
-        )
-    };
     let file = takes.to_str().unwrap();
     let (ok, err) = run(&["classify", file]);
     assert!(
@@ -1255,7 +1244,7 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
             "{crate_err}"
         );
     }
-    let err = refusal(&["classify".as_ref(), crate_file.as_ref()]);
+    let err = refusal(&["classify", crate_file.to_str().unwrap()]);
     assert!(
         err.contains("`leaves[42]` (deforming, 2.50–10.00 s of 10.00 s)"),
         "{err}"

@@ -287,7 +287,6 @@ struct PropertyHeader {
     /// holds one value, "scalar-like", which Alembic stores as an array).
     kind: u32,
     pod: Option<Pod>,
-    extent: usize,
     /// Samples written, and the first and last that change (the others
     /// repeat a stored one).
     samples: usize,
@@ -311,11 +310,10 @@ impl PropertyHeader {
     }
 }
 
-/// A compound's property headers (its last, data, child).
-fn property_headers(
-    bytes: &[u8],
-    metadata: &[String],
-) -> Result<Vec<(PropertyHeader, String)>, String> {
+/// A compound's property headers (its last, data, child); `indexed`
+/// metadata strings are in the archive (the properties' metadata is
+/// checked and passed over: nothing read here needs it).
+fn property_headers(bytes: &[u8], indexed: usize) -> Result<Vec<PropertyHeader>, String> {
     let mut c = Cursor { bytes, at: 0 };
     let mut out = Vec::new();
     while !c.done() {
@@ -326,7 +324,6 @@ fn property_headers(
             name: String::new(),
             kind,
             pod: None,
-            extent: 0,
             samples: 0,
             first_changed: 0,
             last_changed: 0,
@@ -337,18 +334,21 @@ fn property_headers(
                 Pod::of((info >> 4) & 0xf)
                     .ok_or_else(|| format!("a property of unknown type {}", (info >> 4) & 0xf))?,
             );
-            h.extent = ((info >> 12) & 0xff) as usize;
             h.samples = c.hinted(hint, "a property header")? as usize;
             if info & 0x200 != 0 {
                 h.first_changed = c.hinted(hint, "a property header")? as usize;
                 h.last_changed = c.hinted(hint, "a property header")? as usize;
+                if h.first_changed > h.last_changed {
+                    return Err(
+                        "a property's changed samples are out of order: it is damaged".into(),
+                    );
+                }
             } else if info & 0x800 != 0 {
                 (h.first_changed, h.last_changed) = (0, 0);
             } else {
+                // Every sample stored (one sample: first 1, last 0, and
+                // sample 0 is the first stored).
                 (h.first_changed, h.last_changed) = (1, h.samples.saturating_sub(1));
-            }
-            if h.first_changed > h.last_changed && h.last_changed != 0 {
-                return Err("a property's changed samples are out of order: it is damaged".into());
             }
             if info & 0x100 != 0 {
                 h.sampling = c.hinted(hint, "a property header")? as usize;
@@ -357,16 +357,15 @@ fn property_headers(
         let n = c.hinted(hint, "a property name")? as usize;
         h.name = String::from_utf8_lossy(c.take(n, "a property name")?).into_owned();
         let index = ((info >> 20) & 0xff) as usize;
-        let md = if index == 0xff {
+        if index == 0xff {
             let n = c.hinted(hint, "a property's metadata")? as usize;
-            String::from_utf8_lossy(c.take(n, "a property's metadata")?).into_owned()
-        } else {
-            metadata
-                .get(index)
-                .cloned()
-                .ok_or_else(|| format!("a property's metadata index {index} is not in the file"))?
-        };
-        out.push((h, md));
+            c.take(n, "a property's metadata")?;
+        } else if index >= indexed {
+            return Err(format!(
+                "a property's metadata index {index} is not in the file"
+            ));
+        }
+        out.push(h);
     }
     Ok(out)
 }
@@ -412,7 +411,9 @@ fn half_to_f64(h: u16) -> f64 {
 /// A property found in a compound: its header and where its samples are.
 struct Property {
     header: PropertyHeader,
-    /// Its group's children (samples; for an array, datum and dimensions).
+    /// Its group (0: none), and the group's children (samples; for an
+    /// array, datum and dimensions; for a compound, its properties).
+    group: u64,
     children: Vec<Child>,
 }
 
@@ -430,16 +431,21 @@ impl Archive<'_> {
         let Some(Child::Data(h)) = children.last().copied() else {
             return Ok(Vec::new());
         };
-        let headers = property_headers(self.ogawa.data(h)?, &self.metadata)?;
+        let headers = property_headers(self.ogawa.data(h)?, self.metadata.len())?;
         headers
             .into_iter()
             .enumerate()
-            .map(|(k, (header, _metadata))| {
-                let children = match children.get(k) {
-                    Some(Child::Group(g)) if k + 1 < children.len() => self.ogawa.group(*g)?,
-                    _ => Vec::new(),
+            .map(|(k, header)| {
+                let group = match children.get(k) {
+                    Some(Child::Group(g)) if k + 1 < children.len() => *g,
+                    _ => 0,
                 };
-                Ok(Property { header, children })
+                let children = self.ogawa.group(group)?;
+                Ok(Property {
+                    header,
+                    group,
+                    children,
+                })
             })
             .collect()
     }
@@ -447,18 +453,11 @@ impl Archive<'_> {
     /// The compound property `name` of the compound at `pos`, as its
     /// group's position.
     fn sub_compound(&self, pos: u64, name: &str) -> Result<Option<u64>, String> {
-        let children = self.ogawa.group(pos)?;
-        let Some(Child::Data(h)) = children.last().copied() else {
-            return Ok(None);
-        };
-        let headers = property_headers(self.ogawa.data(h)?, &self.metadata)?;
-        Ok(headers
-            .iter()
-            .position(|(hd, _)| hd.name == name && hd.kind == 0)
-            .and_then(|k| match children.get(k) {
-                Some(Child::Group(g)) if k + 1 < children.len() => Some(*g),
-                _ => None,
-            }))
+        Ok(self
+            .compound(pos)?
+            .into_iter()
+            .find(|p| p.header.name == name && p.header.kind == 0)
+            .map(|p| p.group))
     }
 
     /// Sample `k` of `p` as numbers, and its time, s.
@@ -601,11 +600,11 @@ struct Mesh {
     xforms: Vec<Xform>,
 }
 
-/// Walks the object group at `pos` (named `path`) with the transforms
-/// above it, collecting meshes.
+/// Walks the object whose group's `children` are given (named `path`),
+/// with the transforms above it, collecting meshes.
 fn walk(
     a: &Archive<'_>,
-    pos: u64,
+    children: &[Child],
     path: &str,
     above: &mut Vec<Xform>,
     out: &mut Vec<Mesh>,
@@ -621,7 +620,6 @@ fn walk(
             "it holds over {MAX_OBJECTS} objects: it is damaged, or too big for this reader"
         ));
     }
-    let children = a.ogawa.group(pos)?;
     let Some(Child::Data(h)) = children.last().copied() else {
         return Ok(());
     };
@@ -654,7 +652,8 @@ fn walk(
         };
         let full = format!("{path}/{name}");
         let at = |e: String| format!("object `{full}`: {e}");
-        let props = match a.ogawa.group(obj)?.first().copied() {
+        let own = a.ogawa.group(obj)?;
+        let props = match own.first().copied() {
             Some(Child::Group(p)) => p,
             _ => 0,
         };
@@ -672,7 +671,7 @@ fn walk(
                 .ok_or_else(|| at("a mesh without `.geom`".into()))?;
             out.push(read_mesh(a, g, &full, above).map_err(at)?);
         }
-        walk(a, obj, &full, above, out, depth + 1, seen)?;
+        walk(a, &own, &full, above, out, depth + 1, seen)?;
         if pushed {
             above.pop();
         }
@@ -791,7 +790,8 @@ pub fn read_abc(bytes: &[u8], name: &str) -> Result<Clip, String> {
         metadata,
     };
     let mut meshes = Vec::new();
-    walk(&archive, top, "", &mut Vec::new(), &mut meshes, 0, &mut 0)?;
+    let top = archive.ogawa.group(top)?;
+    walk(&archive, &top, "", &mut Vec::new(), &mut meshes, 0, &mut 0)?;
     if meshes.is_empty() {
         return Err("no PolyMesh with points in it".into());
     }
@@ -978,7 +978,6 @@ mod tests {
             name: String::new(),
             kind: 1,
             pod: Some(Pod::F32),
-            extent: 1,
             samples,
             first_changed: first,
             last_changed: last,

@@ -279,7 +279,6 @@ impl Clip {
                     o.name
                 ));
             }
-
             if n == 0 {
                 return bad(format!("object {} has no vertices", o.name));
             }

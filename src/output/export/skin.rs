@@ -69,7 +69,6 @@ impl Influences {
     }
 }
 
-/// The skinned positions of `points` (in the bind pose's space) under
 /// A joint's (a glTF node's, a PointInstancer instance's) local transform
 /// T·R·S (column vectors) from its translation, its rotation as a
 /// quaternion (real part first; normalised here) and its scale, as glTF
@@ -86,6 +85,7 @@ pub(super) fn trs_matrix(translation: &[f64], rotation: [f64; 4], scale: &[f64])
     m
 }
 
+/// The skinned positions of `points` (in the bind pose's space) under
 /// `matrices` (one per joint, column vectors): Σ_j w_j M_j p per vertex.
 /// The influences must have been [`Influences::normalised`] against these
 /// points and matrices.

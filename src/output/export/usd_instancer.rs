@@ -121,10 +121,16 @@ fn instances_at(prim: &Prim, t: f64) -> Result<Instances, String> {
         || (0..n as i64).collect(),
         |v| v.iter().map(|&x| x as i64).collect(),
     );
-    let hidden = read("invisibleIds", held)?.unwrap_or_default();
+    // Sorted, as `inactive_ids` is: a particle cache hides thousands.
+    let mut hidden: Vec<i64> = read("invisibleIds", held)?
+        .unwrap_or_default()
+        .iter()
+        .map(|&x| x as i64)
+        .collect();
+    hidden.sort_unstable();
     let shown = ids
         .iter()
-        .map(|id| prim.inactive_ids.binary_search(id).is_err() && !hidden.contains(&(*id as f64)))
+        .map(|id| prim.inactive_ids.binary_search(id).is_err() && hidden.binary_search(id).is_err())
         .collect();
     Ok(Instances {
         ids,
@@ -147,8 +153,9 @@ struct Life {
 }
 
 /// The objects the PointInstancer at the end of `chain` places, one per
-/// instance present at every time code of `times`, each vertex in world
-/// metres z up (`to_z_up` of the layer's units and axes).
+/// instance over its life among the time codes `times` ([`Life`]; its
+/// first one is the object's [`ClipObject::first_frame`]), each vertex in
+/// world metres z up (`to_z_up` of the layer's units and axes).
 pub(super) fn instanced(
     paths: &Paths<'_>,
     chain: &[&Prim],
