@@ -447,7 +447,7 @@ where
 /// Arguments of `preview`.
 #[derive(clap::Args, Debug)]
 pub struct PreviewArgs {
-    /// A breeding run directory, a scene output directory or a .glb file.
+    /// A breeding run directory, a scene output directory, or an animation file (.glb, .gltf, .usd, .usda, .usdc, .usdz, .abc): its falling objects that carry no label are labelled with their class.
     pub input: PathBuf,
     /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file].
     #[arg(long)]
@@ -455,12 +455,15 @@ pub struct PreviewArgs {
     /// For a breeding run: show the K best leaves of the last generation.
     #[arg(long, default_value_t = 5)]
     pub top: usize,
-    /// Frames per second of the embedded motion [default: 30, or the .glb's own].
+    /// Frames per second of the embedded motion [default: 30 for a directory; a leafmagic .glb's own rate or 30 for a .glb; the keys' own rate for another file].
     #[arg(long)]
     pub fps: Option<f64>,
-    /// The animation to play of a .glb whose animations move the same object (by name, or index).
+    /// The animation to play of a glTF file whose animations move the same object (by name, or index).
     #[arg(long)]
     pub animation: Option<String>,
+    /// Metres per unit of an Alembic archive, which carries no unit (0.01 for Maya's centimetres) [default: 1].
+    #[arg(long)]
+    pub scale: Option<f64>,
 }
 
 /// Arguments of `shard`.

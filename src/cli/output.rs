@@ -205,7 +205,8 @@ pub fn write_clip(
     })
 }
 
-/// `preview`: writes the HTML page of a run, a scene's output or a .glb.
+/// `preview`: writes the HTML page of a run, a scene's output or an
+/// animation file.
 pub fn preview(args: PreviewArgs) -> Result<()> {
     if let Some(f) = args.fps
         && !(f > 0.0 && f.is_finite())
@@ -216,11 +217,14 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         bail!("--top must be at least 1");
     }
     let started = Instant::now();
-    let (clip, grid) = leafmagic::output::preview::load(
+    let preview = leafmagic::output::preview::load(
         &args.input,
         args.top,
-        args.fps,
-        args.animation.as_deref(),
+        leafmagic::output::preview::FileOptions {
+            fps: args.fps,
+            animation: args.animation.as_deref(),
+            scale: args.scale,
+        },
     )?;
     let out = args.out.clone().unwrap_or_else(|| {
         if args.input.is_dir() {
@@ -229,12 +233,12 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
             args.input.with_extension("html")
         }
     });
-    let html = leafmagic::output::preview::html(&clip, grid)?;
+    let html = leafmagic::output::preview::html(&preview.clip, preview.grid)?;
     leafmagic::util::io::write_atomic(&out, html.as_bytes())
         .with_context(|| format!("cannot write {}", out.display()))?;
     println!(
         "{}",
-        report::output::preview(&out, html.len(), &clip, started.elapsed().as_secs_f64())
+        report::output::preview(&out, html.len(), &preview, started.elapsed().as_secs_f64())
     );
     Ok(())
 }

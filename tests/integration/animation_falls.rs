@@ -1267,3 +1267,232 @@ fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
         same_class(&object, (&read.trajectory, 0.04), (&original, 0.04));
     }
 }
+
+/// The page data of a `preview` page: its JSON, and per object its name,
+/// label, first clip frame and vertex positions per frame of its life.
+struct PageObject {
+    name: String,
+    label: String,
+    first: usize,
+    frames: Vec<Vec<V3>>,
+}
+
+fn page_objects(html: &Path) -> (Value, Vec<PageObject>) {
+    use base64::Engine as _;
+    let page = std::fs::read_to_string(html).unwrap();
+    let start = page.find("id=\"leafmagic-data\"").unwrap();
+    let start = start + page[start..].find('>').unwrap() + 1;
+    let end = start + page[start..].find("</script>").unwrap();
+    let data: Value = serde_json::from_str(&page[start..end].replace("<\\/", "</")).unwrap();
+    let objects = data["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| {
+            let n = o["n"].as_u64().unwrap() as usize;
+            let bytes = base64::engine::general_purpose::STANDARD
+                .decode(o["pos"].as_str().unwrap())
+                .unwrap();
+            let floats: Vec<f64> = bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64)
+                .collect();
+            PageObject {
+                name: o["name"].as_str().unwrap().to_string(),
+                label: o["label"].as_str().unwrap().to_string(),
+                first: o["first"].as_u64().unwrap() as usize,
+                frames: floats
+                    .chunks_exact(3 * n)
+                    .map(|f| {
+                        f.chunks_exact(3)
+                            .map(|c| V3::new(c[0], c[1], c[2]))
+                            .collect()
+                    })
+                    .collect(),
+            }
+        })
+        .collect();
+    (data, objects)
+}
+
+/// What `leafmagic classify FILE --object NAME [MORE]` names the fall: its
+/// class, as the page labels it.
+fn class_of(file: &Path, object: &str, more: &[&str]) -> String {
+    let o = leafmagic()
+        .arg("classify")
+        .arg(file)
+        .args(["--object", object, "--json"])
+        .args(more)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    v["class"].as_str().unwrap().to_string()
+}
+
+/// `preview` plays every animation file `classify` reads (glTF, USD text
+/// and crate, Alembic): each object over its own life (a PointInstancer's
+/// leaves born, killed, hidden), and each fall the file does not label
+/// labelled with the class `classify --object` gives it, at the file's own
+/// keys, even where the page samples a .glb at another rate.
+#[test]
+fn preview_plays_every_animation_file_with_its_falls_classified() {
+    let dir = scratch("preview-files");
+    for file in [
+        "usd/instanced/leaves.usda",
+        "usd/instanced/leaves.usdc",
+        "blender/tumble_thick.abc",
+        "blender/tumble_thick_separate.gltf",
+        "blender/tumble_thick_with_ground.glb",
+        "blender/flutter_strip.usda",
+    ] {
+        let path = data(file);
+        let html = dir.join(file.replace('/', "_") + ".html");
+        let o = leafmagic()
+            .arg("preview")
+            .arg(&path)
+            .arg("--out")
+            .arg(&html)
+            .output()
+            .unwrap();
+        assert!(
+            o.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let said = String::from_utf8_lossy(&o.stdout);
+        // A crate file is read by a child `leafmagic` process, which this
+        // test binary is not: its text twin stands for it (the instancer's
+        // test holds them the same).
+        let twin = if file.ends_with(".usdc") {
+            path.with_extension("usda")
+        } else {
+            path.clone()
+        };
+        let keys = export::fall::read_clip(&twin, None).unwrap();
+        let (data, objects) = page_objects(&html);
+        let mut classified = 0;
+        for (page, read) in objects.iter().zip(&keys.objects) {
+            assert_eq!(page.name, read.name);
+            if page.name == "ground" {
+                assert_eq!(page.label, "", "{file}: the still ground is not a fall");
+                continue;
+            }
+            assert_eq!(
+                page.label,
+                class_of(&path, &page.name, &[]),
+                "{file}: {}",
+                page.name
+            );
+            classified += 1;
+            if file.ends_with(".glb") {
+                continue; // sampled from 0 at 30 fps, not at its keys
+            }
+            // Over its own life, vertex for vertex as read (float32).
+            assert_eq!(
+                (page.first, page.frames.len()),
+                (read.first_frame, read.frame_count())
+            );
+            for (k, frame) in page.frames.iter().enumerate() {
+                for (a, b) in frame.iter().zip(read.positions(k)) {
+                    assert!(
+                        (a - b).norm() <= 1e-6 * (1.0 + b.norm()),
+                        "{file} {}",
+                        page.name
+                    );
+                }
+            }
+        }
+        assert_eq!(
+            data["frames"].as_u64().unwrap() as usize,
+            if file.ends_with(".glb") {
+                302
+            } else {
+                keys.frames
+            }
+        );
+        assert!(
+            said.contains(&format!("classified {classified} fall")),
+            "{file}: {said}"
+        );
+    }
+    // The instancer's leaves: one born at 2.5 s, one dead from 4.96 s.
+    let leaves = data("usd/instanced/leaves.usda");
+    let html = dir.join("leaves-12.html");
+    let (ok, err) = run(&[
+        "preview",
+        leaves.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+        "--fps",
+        "12",
+    ]);
+    assert!(ok, "{err}");
+    let (data12, objects) = page_objects(&html);
+    assert_eq!(data12["frames"], 121);
+    let keys = export::fall::read_clip(&leaves, None).unwrap();
+    let born = objects.iter().find(|o| o.name == "leaves[42]").unwrap();
+    let read = keys
+        .objects
+        .iter()
+        .find(|o| o.name == "leaves[42]")
+        .unwrap();
+    // 2.5 s: frame 60 of 24 Hz, frame 30 of 12 Hz; every other key.
+    assert_eq!((read.first_frame, born.first), (60, 30));
+    for (k, frame) in born.frames.iter().enumerate() {
+        for (a, b) in frame.iter().zip(read.positions(2 * k)) {
+            assert!((a - b).norm() <= 1e-6 * (1.0 + b.norm()));
+        }
+    }
+    let died = objects.iter().find(|o| o.name == "leaves[99]").unwrap();
+    assert_eq!((died.first, died.frames.len()), (0, 60)); // to 4.92 s of 4.96
+
+    // Alembic carries no unit: --scale says it, for the page and the labels.
+    let abc = data("blender/tumble_thick.abc");
+    let cm = dir.join("cm.html");
+    let (ok, err) = run(&[
+        "preview",
+        abc.to_str().unwrap(),
+        "--out",
+        cm.to_str().unwrap(),
+        "--scale",
+        "0.01",
+    ]);
+    assert!(ok, "{err}");
+    let (_, scaled) = page_objects(&cm);
+    let (_, metres) = page_objects(&dir.join("blender_tumble_thick.abc.html"));
+    assert_eq!(
+        scaled[0].label,
+        class_of(&abc, &scaled[0].name, &["--scale", "0.01"])
+    );
+    for (a, b) in scaled[0]
+        .frames
+        .iter()
+        .flatten()
+        .zip(metres[0].frames.iter().flatten())
+    {
+        assert!((a - b * 0.01).norm() <= 1e-6 * b.norm() * 0.01 + 1e-9);
+    }
+    for (args, want) in [
+        (
+            vec!["preview", leaves.to_str().unwrap(), "--scale", "0.01"],
+            "--scale 0.01: applies to an Alembic archive",
+        ),
+        (
+            vec!["preview", abc.to_str().unwrap(), "--scale=-1"],
+            "--scale must be a positive number",
+        ),
+        (
+            vec!["preview", dir.to_str().unwrap(), "--scale", "0.01"],
+            "--scale applies to an animation file",
+        ),
+        (
+            vec!["preview", abc.to_str().unwrap(), "--animation", "tumble"],
+            "--animation tumble: a USD stage or an Alembic archive holds one",
+        ),
+    ] {
+        let err = refusal(&args);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -1022,7 +1022,10 @@ fn bad_input_is_refused_with_the_file_and_the_reason() {
     let text = dir.join("notes.txt");
     std::fs::write(&text, "hello").unwrap();
     let e = run(&["preview", text.to_str().unwrap()]);
-    assert!(e.contains("notes.txt") && e.contains("not a .glb"), "{e}");
+    assert!(
+        e.contains("notes.txt") && e.contains("not an animation file") && e.contains(".abc"),
+        "{e}"
+    );
     let fake = dir.join("fake.glb");
     std::fs::write(&fake, b"glTF but not really").unwrap();
     let e = run(&["preview", fake.to_str().unwrap()]);
@@ -1256,6 +1259,59 @@ random_yaw = true
     let n = blobs(&mask, WIDTH as usize, 10);
     eprintln!("t=0.5, all objects: {n} separate leaves drawn");
     assert!(n >= 3, "only {n} leaves drawn");
+}
+
+/// A PointInstancer's leaves live a part of the shot
+/// (`tests/data/usd/instanced/leaves.usda`: `leaves[42]` is born at 2.5 s,
+/// `leaves[99]` dies at 4.96 s): the page draws each only over its life,
+/// and a camera on one waits where it will appear, or stays where it went.
+#[test]
+fn the_preview_page_shows_particles_only_while_they_live_in_headless_chromium() {
+    let Some(browser) = chromium() else {
+        eprintln!(
+            "SKIPPED the_preview_page_shows_particles...: no chromium (apt-get install chromium)"
+        );
+        return;
+    };
+    let dir = scratch("chromium-lives");
+    let page = dir.join("leaves.html");
+    let o = leafmagic()
+        .arg("preview")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/instanced/leaves.usda"))
+        .arg("--out")
+        .arg(&page)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // Anything but the page's background (#1d2430): leaf, label or glyph.
+    let drawn = |p: [u8; 3]| {
+        let bg = [29, 36, 48];
+        (0..3).any(|c| (i32::from(p[c]) - bg[c]).abs() > 30)
+    };
+    let (cx, cy) = (WIDTH as usize / 2, (HEIGHT - BAR) as usize / 2);
+    for (hash, alive) in [
+        ("t=1.0&follow=leaves%5B42%5D", false),
+        ("t=3.0&follow=leaves%5B42%5D", true),
+        ("t=2.0&follow=leaves%5B99%5D", true),
+        ("t=8.0&follow=leaves%5B99%5D", false),
+    ] {
+        let png = dir.join(format!("{}.png", hash.replace(['=', '&', '%', '.'], "_")));
+        let px = screenshot(&browser, &page, hash, &png);
+        let near_centre = (cy - 60..cy + 60)
+            .flat_map(|y| (cx - 60..cx + 60).map(move |x| (x, y)))
+            .filter(|&(x, y)| drawn(px[y * WIDTH as usize + x]))
+            .count();
+        eprintln!("{hash}: {near_centre} px drawn within 60 px of the centre");
+        if alive {
+            assert!(
+                near_centre >= 20,
+                "{hash}: the followed leaf is not drawn at the centre"
+            );
+        } else {
+            assert_eq!(near_centre, 0, "{hash}: a leaf is drawn outside its life");
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Connected groups (4-neighbour) of at least `min` true pixels.

@@ -1,6 +1,8 @@
 //! The human reports of `export` and `preview`: what was written, and where.
 
-use leafmagic::output::export::{Clip, Format};
+use leafmagic::output::export::Format;
+use leafmagic::output::preview::Preview;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// `export`: the leaf files and index.csv (one line, without its newline).
@@ -16,15 +18,50 @@ pub fn falls(files: usize, format: Format, seconds: f64, fps: f64, elapsed_s: f6
     )
 }
 
-/// `preview`: the page, its size and what it plays (one line, without its
-/// newline).
-pub fn preview(page: &Path, bytes: usize, clip: &Clip, elapsed_s: f64) -> String {
+/// `preview`: the page, its size, what it plays and, of a file, the
+/// classes it labelled its falls with (one line, without its newline).
+pub fn preview(page: &Path, bytes: usize, preview: &Preview, elapsed_s: f64) -> String {
+    let clip = &preview.clip;
+    let partial = clip
+        .objects
+        .iter()
+        .filter(|o| !o.lives_whole(clip.frames))
+        .count();
+    let lives = if partial > 0 {
+        format!(", {partial} of them over a part of it")
+    } else {
+        String::new()
+    };
     format!(
-        "wrote {} ({:.2} MB: {} objects, {} frames at {} fps) in {elapsed_s:.2} s",
+        "wrote {} ({:.2} MB: {} object{}{lives}, {} frames at {} fps{}) in {elapsed_s:.2} s",
         page.display(),
         bytes as f64 / 1e6,
         clip.objects.len(),
+        if clip.objects.len() == 1 { "" } else { "s" },
         clip.frames,
         clip.fps,
+        classified(preview),
+    )
+}
+
+/// "; classified K falls: N floater, …" when the preview labelled any
+/// falls of a file by their class, the most frequent class first.
+fn classified(preview: &Preview) -> String {
+    let objects = &preview.clip.objects;
+    let mut tally: BTreeMap<&str, usize> = BTreeMap::new();
+    for &k in &preview.classified {
+        *tally.entry(objects[k].label.as_str()).or_default() += 1;
+    }
+    if tally.is_empty() {
+        return String::new();
+    }
+    let mut classes: Vec<(&str, usize)> = tally.into_iter().collect();
+    classes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
+    let list: Vec<String> = classes.iter().map(|(c, n)| format!("{n} {c}")).collect();
+    let n = preview.classified.len();
+    format!(
+        "; classified {n} fall{}: {}",
+        if n == 1 { "" } else { "s" },
+        list.join(", ")
     )
 }

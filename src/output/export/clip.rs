@@ -155,6 +155,24 @@ impl ClipObject {
         p.iter().sum::<V3>() / p.len().max(1) as f64
     }
 
+    /// Scales every length of the object by `factor` (a read file's unit
+    /// to metres: Alembic carries none, and Maya writes centimetres). Its
+    /// motion and rest shape; a clip read from a file has no render mesh.
+    pub fn scale(&mut self, factor: f64) {
+        match &mut self.motion {
+            Motion::Rigid {
+                local, translation, ..
+            } => local
+                .iter_mut()
+                .chain(translation.iter_mut())
+                .for_each(|x| *x *= factor),
+            Motion::Deforming { frames } => frames.iter_mut().flatten().for_each(|x| *x *= factor),
+        }
+        if let Some(body) = &mut self.body {
+            body.rest.iter_mut().for_each(|x| *x *= factor);
+        }
+    }
+
     /// Moves the whole motion by `offset` (to lay objects side by side).
     pub fn translate(&mut self, offset: V3) {
         match &mut self.motion {
@@ -222,6 +240,98 @@ impl Clip {
             objects,
             ground: None,
             wind: Vec::new(),
+        }
+    }
+
+    /// The clip on the grid k / `fps` over the same span: each object at
+    /// the grid times within its life (from its first frame's time to its
+    /// last's, to 1e-9 s), linearly between its own frames (a rigid one's
+    /// rotation by spherical interpolation), as the previewer and glTF's
+    /// LINEAR play them. An object whose whole life falls between two grid
+    /// times keeps one frame, its first, at the nearest.
+    pub fn resampled(&self, fps: f64) -> Clip {
+        let frames = frame_count(0.0, self.duration(), fps);
+        let objects = self
+            .objects
+            .iter()
+            .map(|o| {
+                let own = o.frame_count();
+                let born = o.first_frame as f64 / self.fps;
+                let dies = (o.first_frame + own.max(1) - 1) as f64 / self.fps;
+                let mut first = ((born * fps) - 1e-9).ceil().max(0.0) as usize;
+                let last = ((dies * fps) + 1e-9).floor() as usize;
+                let mut count = (last + 1)
+                    .saturating_sub(first)
+                    .min(frames - first.min(frames));
+                // Where the object lies at grid time j / fps: frame index
+                // and weight within its own frames.
+                let mut at: Vec<(usize, f64)> = (first..first + count)
+                    .map(|j| {
+                        let f = ((j as f64 / fps - born) * self.fps).clamp(0.0, (own - 1) as f64);
+                        let k = (f.floor() as usize).min(own.saturating_sub(2));
+                        (k, if own > 1 { f - k as f64 } else { 0.0 })
+                    })
+                    .collect();
+                if count == 0 {
+                    first = ((born * fps).round() as usize).min(frames - 1);
+                    count = 1;
+                    at = vec![(0, 0.0)];
+                }
+                debug_assert_eq!(at.len(), count);
+                let motion = match &o.motion {
+                    Motion::Rigid {
+                        local,
+                        translation,
+                        rotation,
+                    } => Motion::Rigid {
+                        local: local.clone(),
+                        translation: at
+                            .iter()
+                            .map(|&(k, s)| {
+                                translation[k].lerp(&translation[(k + 1).min(own - 1)], s)
+                            })
+                            .collect(),
+                        rotation: at
+                            .iter()
+                            .map(|&(k, s)| {
+                                let (a, b) = (rotation[k], rotation[(k + 1).min(own - 1)]);
+                                a.try_slerp(&b, s, 1e-12)
+                                    .unwrap_or(if s < 0.5 { a } else { b })
+                            })
+                            .collect(),
+                    },
+                    Motion::Deforming { frames: f } => Motion::Deforming {
+                        frames: at
+                            .iter()
+                            .map(|&(k, s)| {
+                                let next = &f[(k + 1).min(own - 1)];
+                                f[k].iter().zip(next).map(|(a, b)| a.lerp(b, s)).collect()
+                            })
+                            .collect(),
+                    },
+                };
+                ClipObject {
+                    name: o.name.clone(),
+                    kind: o.kind.clone(),
+                    label: o.label.clone(),
+                    regime: o.regime.clone(),
+                    features: o.features.clone(),
+                    triangles: o.triangles.clone(),
+                    segments: o.segments.clone(),
+                    body: o.body.clone(),
+                    render: o.render.clone(),
+                    motion,
+                    first_frame: first,
+                }
+            })
+            .collect();
+        Clip {
+            name: self.name.clone(),
+            fps,
+            frames,
+            objects,
+            ground: self.ground,
+            wind: self.wind.clone(),
         }
     }
 
@@ -419,6 +529,112 @@ mod tests {
         assert_eq!(out.len(), 8);
         for (k, f) in out.iter().enumerate() {
             assert!((f[0] - at(k as f64 / 7.0)).norm() < 1e-14);
+        }
+    }
+
+    /// A read mesh of three vertices moving as `at(t)` (vertex i offset by
+    /// i along x), over clip frames `first..first + count` at `fps`.
+    fn moving(
+        name: &str,
+        fps: f64,
+        first: usize,
+        count: usize,
+        at: impl Fn(f64) -> V3,
+    ) -> ClipObject {
+        let frames = (first..first + count)
+            .map(|k| {
+                let p = at(k as f64 / fps);
+                (0..3).map(|i| p + V3::x() * i as f64).collect()
+            })
+            .collect();
+        ClipObject {
+            first_frame: first,
+            ..ClipObject::read_mesh(name.into(), vec![[0, 1, 2]], frames)
+        }
+    }
+
+    #[test]
+    fn a_resampled_clip_keeps_each_object_s_life_and_linear_motion() {
+        let at = |t: f64| V3::new(0.3 * t, -t, 2.0 - 0.5 * t);
+        // 24 keys per second over 10 s; one object lives it all, one is
+        // born at 2.5 s, one dies at 4.5 s, one lives 1/48 s between two
+        // frames of a 12 Hz grid.
+        let clip = Clip::bare(
+            "c",
+            24.0,
+            241,
+            vec![
+                moving("whole", 24.0, 0, 241, at),
+                moving("born", 24.0, 60, 181, at),
+                moving("dies", 24.0, 0, 109, at),
+                moving("brief", 24.0, 13, 1, at),
+            ],
+        );
+        clip.validate_read().unwrap();
+        let out = clip.resampled(12.0);
+        out.validate_read().unwrap();
+        assert_eq!(out.frames, 121);
+        let lives: Vec<(usize, usize)> = out
+            .objects
+            .iter()
+            .map(|o| (o.first_frame, o.frame_count()))
+            .collect();
+        // 2.5 s is frame 30 of 12 Hz; 4.5 s is frame 54; 13/24 s lies
+        // between frames 6 and 7, nearer 7 (6.5 rounds up).
+        assert_eq!(lives, [(0, 121), (30, 91), (0, 55), (7, 1)]);
+        for o in &out.objects[..3] {
+            for k in 0..o.frame_count() {
+                let t = (o.first_frame + k) as f64 / 12.0;
+                let p = o.positions(k);
+                assert!((p[0] - at(t)).norm() < 1e-12, "{} at {t} s", o.name);
+                assert!((p[2] - at(t) - V3::x() * 2.0).norm() < 1e-12);
+            }
+        }
+        // A 7 Hz grid falls between the keys: interpolated, still exact.
+        let out = clip.resampled(7.0);
+        let born = &out.objects[1];
+        assert_eq!(born.first_frame, 18); // ceil(2.5 × 7)
+        for k in 0..born.frame_count() {
+            let t = (born.first_frame + k) as f64 / 7.0;
+            assert!((born.positions(k)[0] - at(t)).norm() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn a_rigid_object_resamples_by_its_rotation_and_scales_by_its_lengths() {
+        // Turning at 1 rad/s about z, its centre moving along x.
+        let n = 31;
+        let mut o = ClipObject::read_mesh("r".into(), vec![[0, 1, 2]], vec![]);
+        o.motion = Motion::Rigid {
+            local: vec![V3::x(), V3::y(), V3::zeros()],
+            translation: (0..n).map(|k| V3::x() * k as f64 / 10.0).collect(),
+            rotation: (0..n)
+                .map(|k| UnitQuaternion::from_axis_angle(&Vector3::z_axis(), k as f64 / 10.0))
+                .collect(),
+        };
+        let clip = Clip::bare("c", 10.0, n, vec![o]);
+        // At 4 Hz, t = 0.25 s falls between keys 2 and 3: the rotation is
+        // spherically interpolated, so the vertex stays on its circle at
+        // the angle t.
+        let out = clip.resampled(4.0);
+        let r = &out.objects[0];
+        for k in 0..r.frame_count() {
+            let t = k as f64 / 4.0;
+            let p = r.positions(k)[0];
+            let want = V3::new(t + t.cos(), t.sin(), 0.0);
+            assert!((p - want).norm() < 1e-12, "t = {t}: {p:?} against {want:?}");
+        }
+        // Centimetres to metres: every vertex at every frame × 0.01.
+        let mut cm = clip.clone();
+        cm.objects[0].scale(0.01);
+        for k in 0..n {
+            for (a, b) in cm.objects[0]
+                .positions(k)
+                .iter()
+                .zip(clip.objects[0].positions(k))
+            {
+                assert!((a - b * 0.01).norm() < 1e-15);
+            }
         }
     }
 }

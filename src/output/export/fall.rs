@@ -29,7 +29,7 @@
 //! [`super::read_usda_keys`]): from the first key to the last, at one frame
 //! per shortest key interval.
 
-use super::clip::{ClipObject, Motion};
+use super::clip::{Clip, ClipObject, Motion};
 use super::error::ExportError;
 use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
 use super::read::read_gltf_keys;
@@ -113,29 +113,7 @@ pub fn read_fall_of(
     object: Option<&str>,
     animation: Option<&str>,
 ) -> Result<AnimationFall, ExportError> {
-    let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
-    let name = path.file_stem().map_or("animation".to_string(), |s| {
-        s.to_string_lossy().into_owned()
-    });
-    let format = AnimationFormat::of(path);
-    if let (Some(want), Some(AnimationFormat::Usd | AnimationFormat::Alembic)) = (animation, format)
-    {
-        return Err(ExportError::input(
-            path,
-            format!(
-                "--animation {want}: a USD stage or an Alembic archive holds one animation; --animation picks one of a glTF file's"
-            ),
-        ));
-    }
-    let clip = match format {
-        Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name),
-        Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
-        _ => read_gltf_keys(&bytes, &name, path.parent(), animation),
-    }
-    .map_err(|e| match e {
-        ExportError::Data(reason) => ExportError::input(path, reason),
-        e => e,
-    })?;
+    let clip = read_clip(path, animation)?;
     // Each object's chord, measured once: it sets what counts as moving,
     // and the chosen one's is the fall's size.
     let objects = &clip.objects;
@@ -201,6 +179,38 @@ pub fn read_fall_of(
     })
 }
 
+/// Every object of a glTF, USD or Alembic file ([`AnimationFormat::of`]
+/// its name; glTF if it names none), sampled at the file's own keys: what
+/// a fall is read from, and what `preview` plays of such a file. Of a glTF
+/// file with several animations, `animation` names the one to read
+/// ([`super::read_gltf_keys`]); a USD stage or an Alembic archive holds
+/// one, and naming one there is refused. Errors name the file.
+pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportError> {
+    let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
+    let name = path.file_stem().map_or("animation".to_string(), |s| {
+        s.to_string_lossy().into_owned()
+    });
+    let format = AnimationFormat::of(path);
+    if let (Some(want), Some(AnimationFormat::Usd | AnimationFormat::Alembic)) = (animation, format)
+    {
+        return Err(ExportError::input(
+            path,
+            format!(
+                "--animation {want}: a USD stage or an Alembic archive holds one animation; --animation picks one of a glTF file's"
+            ),
+        ));
+    }
+    match format {
+        Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name),
+        Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
+        _ => read_gltf_keys(&bytes, &name, path.parent(), animation),
+    }
+    .map_err(|e| match e {
+        ExportError::Data(reason) => ExportError::input(path, reason),
+        e => e,
+    })
+}
+
 /// Farthest a vertex may be from the origin, m: a thousand kilometres,
 /// beyond any fall, and small enough that the areas and moments of the
 /// shape stay finite (1e12 m², where a file with a coordinate of 1e308, a
@@ -209,7 +219,7 @@ pub const MAX_COORDINATE_M: f64 = 1e6;
 
 /// Why `o` cannot be a fall if a vertex of it is farther than
 /// [`MAX_COORDINATE_M`] from the origin at one of its frames.
-fn far_out(o: &ClipObject) -> Result<(), String> {
+pub(crate) fn far_out(o: &ClipObject) -> Result<(), String> {
     for k in 0..o.frame_count() {
         if let Some((i, p)) = o
             .positions(k)
@@ -268,7 +278,7 @@ const LISTED: usize = 20;
 
 /// Whether any vertex of `o` leaves its first position by more than
 /// [`MOVING_FRACTION_OF_CHORD`] of its `chord`.
-fn moves(o: &ClipObject, chord: f64) -> bool {
+pub(crate) fn moves(o: &ClipObject, chord: f64) -> bool {
     let frames = match &o.motion {
         Motion::Rigid { translation, .. } => translation.len(),
         Motion::Deforming { frames } => frames.len(),

@@ -6,8 +6,11 @@
 //! keeps 100 leaves × 10 s × 30 fps near 3.4 MB.
 
 use crate::breed::{self, Run};
+use crate::motion::classify;
+use crate::output::export::fall::{self, AnimationFormat};
 use crate::output::export::{self, Clip, DEFAULT_FPS, ExportError, glb::colour};
 use base64::Engine as _;
+use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
 
@@ -20,44 +23,69 @@ const VIEWER: &str = include_str!("viewer.js");
 /// apart, so that drifting falls rarely overlap.
 pub const GRID_SPACING_CHORDS: f64 = 3.0;
 
-/// The clip to preview from `input` and whether it is a grid of bred leaves:
+/// What `preview` plays: the clip, whether it is a grid of bred leaves,
+/// and how many of its objects were labelled here by the class of their
+/// fall ([`label_falls`]).
+#[derive(Clone, Debug)]
+pub struct Preview {
+    /// The motion to play.
+    pub clip: Clip,
+    /// A grid of bred leaves: every object labelled, laid side by side.
+    pub grid: bool,
+    /// The objects of a file labelled with their fall's class here
+    /// ([`label_falls`]), by index.
+    pub classified: Vec<usize>,
+}
+
+/// How to read a file for [`load`]: the ones that apply to it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct FileOptions<'a> {
+    /// Frames per second of the page [default: a leafmagic `.glb`'s own
+    /// rate, 30 for another `.glb`, the keys' own rate for other files].
+    pub fps: Option<f64>,
+    /// The glTF animation to play where several move the same object.
+    pub animation: Option<&'a str>,
+    /// Metres per unit of an Alembic archive (which carries no unit;
+    /// 0.01 for Maya's centimetres) [default: 1].
+    pub scale: Option<f64>,
+}
+
+/// The clip to preview from `input`:
 ///
 /// - a breeding run directory (`run.toml`): the `top` best of the last
 ///   generation, re-dropped as breeding dropped them
 ///   ([`export::drop_individuals`]), side by side with their classes;
 /// - a scene output directory (`summary.toml`), see [`export::from_scene_dir`];
-/// - a `.glb` file, see [`export::from_glb`].
-///
-/// `fps` defaults to [`DEFAULT_FPS`] (or a leafmagic `.glb`'s own rate);
-/// `animation` names the take of a `.glb` that holds several.
-pub fn load(
-    input: &Path,
-    top: usize,
-    fps: Option<f64>,
-    animation: Option<&str>,
-) -> Result<(Clip, bool), ExportError> {
+/// - an animation file: a `.glb` sampled from 0 at the page's rate
+///   ([`export::from_glb`]), a `.gltf`, USD or Alembic file at its own keys
+///   ([`export::fall::read_clip`]), resampled where `file.fps` asks; each
+///   object over its own life (a particle born or killed during the shot),
+///   and each falling one the file does not label labelled with the class
+///   `classify` gives its fall ([`label_falls`]).
+pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, ExportError> {
     if !input.exists() {
         return Err(ExportError::input(input, "no such file or directory"));
     }
     if input.is_file() {
-        let is_glb = input
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
-        if !is_glb {
+        return load_file(input, file);
+    }
+    for (flag, given) in [
+        ("--animation", file.animation.is_some()),
+        ("--scale", file.scale.is_some()),
+    ] {
+        if given {
             return Err(ExportError::input(
                 input,
-                "not a .glb file (preview reads a breeding run directory, a scene output directory or a .glb file)",
+                format!("{flag} applies to an animation file, not to a directory"),
             ));
         }
-        return Ok((export::from_glb(input, fps, animation)?, false));
     }
-    if let Some(want) = animation {
-        return Err(ExportError::input(
-            input,
-            format!("--animation {want}: picks one of a .glb file's animations, not a directory's"),
-        ));
-    }
-    let fps = fps.unwrap_or(DEFAULT_FPS);
+    let fps = file.fps.unwrap_or(DEFAULT_FPS);
+    let plain = |clip| Preview {
+        clip,
+        grid: false,
+        classified: Vec::new(),
+    };
     if input.join("run.toml").is_file() {
         let run = Run::open(input).map_err(|e| ExportError::input(input, e.to_string()))?;
         let Some(cp) = &run.checkpoint else {
@@ -83,10 +111,14 @@ pub fn load(
             .file_name()
             .map_or("run".to_string(), |n| n.to_string_lossy().into_owned());
         let clip = export::side_by_side(&name, objects, fps, GRID_SPACING_CHORDS * extent)?;
-        return Ok((clip, true));
+        return Ok(Preview {
+            clip,
+            grid: true,
+            classified: Vec::new(),
+        });
     }
     if input.join("summary.toml").is_file() {
-        return Ok((export::from_scene_dir(input, fps)?, false));
+        return Ok(plain(export::from_scene_dir(input, fps)?));
     }
     Err(ExportError::input(
         input,
@@ -94,16 +126,115 @@ pub fn load(
     ))
 }
 
+/// [`load`] of an animation file.
+fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError> {
+    let Some(format) = AnimationFormat::of(input) else {
+        return Err(ExportError::input(
+            input,
+            "not an animation file (preview reads a breeding run directory, a scene output directory, or a .glb, .gltf, .usd, .usda, .usdc, .usdz or .abc file)",
+        ));
+    };
+    if let Some(scale) = file.scale {
+        if format != AnimationFormat::Alembic {
+            return Err(ExportError::input(
+                input,
+                format!(
+                    "--scale {scale}: applies to an Alembic archive, which carries no unit; glTF is in metres, and USD says its metersPerUnit"
+                ),
+            ));
+        }
+        if !(scale > 0.0 && scale.is_finite()) {
+            return Err(ExportError::input(
+                input,
+                format!("--scale must be a positive number of metres per unit, got {scale}"),
+            ));
+        }
+    }
+    // Classified as `classify` reads the file, at its own keys, before any
+    // resampling for the page: a .glb's page is sampled from 0 at 30 fps,
+    // which can turn a 24 fps tumble into another class.
+    let mut keys = export::fall::read_clip(input, file.animation)?;
+    if let Some(scale) = file.scale {
+        keys.objects.iter_mut().for_each(|o| o.scale(scale));
+    }
+    let classified = label_falls(&mut keys);
+    let glb = input
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    let clip = if glb {
+        // The same nodes in the same order, on the page's grid.
+        let mut page = export::from_glb(input, file.fps, file.animation)?;
+        for &k in &classified {
+            let from = &keys.objects[k];
+            if let Some(to) = page.objects.get_mut(k).filter(|to| to.name == from.name) {
+                to.label.clone_from(&from.label);
+                to.regime.clone_from(&from.regime);
+            }
+        }
+        page
+    } else if let Some(fps) = file.fps {
+        keys.resampled(fps)
+    } else {
+        keys
+    };
+    Ok(Preview {
+        clip,
+        grid: false,
+        classified,
+    })
+}
+
+/// Labels each object of `clip` that falls (it has a surface and moves)
+/// and carries no label of its own with the class and regime `classify`
+/// gives its fall ([`fall::fall_of`], sized by its chord as `classify`
+/// sizes a file's fall), so that a client's cache shows which leaves
+/// float, spin or lilt; returns the indices of those it labelled. Leafmagic's own
+/// files keep their labels (a bred leaf's class), and ropes and rigid
+/// props are left as they are. The objects are classified in parallel;
+/// each label depends on its object alone.
+pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
+    let fps = clip.fps;
+    let labels: Vec<Option<(String, String)>> = clip
+        .objects
+        .par_iter()
+        .map(|o| {
+            let falls = o.label.is_empty()
+                && !o.triangles.is_empty()
+                && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet")
+                && o.frame_count() > 1;
+            if !falls {
+                return None;
+            }
+            let chord = fall::chord(&o.positions(0));
+            if !fall::moves(o, chord) || fall::far_out(o).is_err() {
+                return None;
+            }
+            let (trajectory, _) = fall::fall_of(o, fps);
+            let c = classify::classify(&trajectory, chord);
+            Some((c.class.to_string(), c.regime.to_string()))
+        })
+        .collect();
+    let mut labelled = Vec::new();
+    for (k, (o, label)) in clip.objects.iter_mut().zip(labels).enumerate() {
+        if let Some((class, regime)) = label {
+            (o.label, o.regime) = (class, regime);
+            labelled.push(k);
+        }
+    }
+    labelled
+}
+
 /// The page's data as JSON: names, labels, colours, topology, and every
-/// object's vertex positions per frame as base64 float32.
+/// object's vertex positions per frame of its life (from clip frame
+/// `first`) as base64 float32.
 pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
     let b64 = base64::engine::general_purpose::STANDARD;
     let objects: Vec<serde_json::Value> = clip
         .objects
         .iter()
         .map(|o| {
-            let mut bytes = Vec::with_capacity(clip.frames * o.vertex_count() * 12);
-            for k in 0..clip.frames {
+            let mut bytes = Vec::with_capacity(o.frame_count() * o.vertex_count() * 12);
+            for k in 0..o.frame_count() {
                 for p in o.positions(k) {
                     for c in [p.x, p.y, p.z] {
                         bytes.extend_from_slice(&(c as f32).to_le_bytes());
@@ -116,6 +247,7 @@ pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
                 "label": o.label,
                 "color": colour(o),
                 "n": o.vertex_count(),
+                "first": o.first_frame,
                 "tris": o.triangles.iter().flatten().collect::<Vec<_>>(),
                 "segs": o.segments.iter().flatten().collect::<Vec<_>>(),
                 "pos": b64.encode(&bytes),
@@ -141,9 +273,10 @@ fn escape_html(s: &str) -> String {
 }
 
 /// The self-contained HTML page for `clip` (`grid`: label every object, as
-/// for a grid of bred leaves).
+/// for a grid of bred leaves). Its objects may live a part of it
+/// ([`Clip::validate_read`]): the page shows each over its own life.
 pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
-    clip.validate()?;
+    clip.validate_read()?;
     let data = serde_json::to_string(&data_json(clip, grid))
         .map_err(|e| ExportError::Data(format!("cannot serialise the page data: {e}")))?
         // Inside <script>, "</" could end the element; "<\/" means the same in JSON.

@@ -13,11 +13,17 @@
     for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
     return new Float32Array(bytes.buffer);
   }
+  // Each object holds the frames of its own life, from clip frame `first`
+  // (a particle born or killed during the shot); outside it, it is hidden.
   const objs = data.objects.map(function (o) {
+    const P = f32(o.pos);
     return { name: o.name, kind: o.kind, label: o.label, color: o.color, n: o.n,
-      tris: o.tris, segs: o.segs, P: f32(o.pos), cur: new Float32Array(o.n * 3) };
+      tris: o.tris, segs: o.segs, P: P, first: o.first || 0,
+      frames: o.n > 0 ? P.length / (o.n * 3) : 1, shown: true, cur: new Float32Array(o.n * 3) };
   });
   const F = data.frames, fps = data.fps, T = Math.max(0, (F - 1) / fps);
+  // More labelled objects than this in view, and only the followed one is labelled.
+  const MAX_LABELS = 40;
 
   function params() {
     const p = {};
@@ -47,13 +53,19 @@
   if (P.follow && objs.some(function (o) { return o.name === P.follow; })) st.follow = P.follow;
 
   // Positions of every object at time t (linear between frames, as glTF
-  // LINEAR plays the exported file).
+  // LINEAR plays the exported file), and which objects live then.
   function update(t) {
-    const f = Math.min(Math.max(t * fps, 0), F - 1);
-    const k = Math.min(Math.floor(f), Math.max(F - 2, 0));
-    const a = F > 1 ? f - k : 0;
-    const k1 = F > 1 ? k + 1 : k;
+    const g = Math.min(Math.max(t * fps, 0), F - 1);
     objs.forEach(function (o) {
+      const G = o.frames, f = g - o.first;
+      // Half a frame's grace at either end, so that a life of one frame shows.
+      o.shown = f > -0.5 && f < G - 0.5;
+      // Outside its life it keeps the pose of its nearest frame: a camera
+      // on it waits where it will appear, or stays where it went.
+      const fc = Math.min(Math.max(f, 0), G - 1);
+      const k = Math.min(Math.floor(fc), Math.max(G - 2, 0));
+      const a = G > 1 ? fc - k : 0;
+      const k1 = G > 1 ? k + 1 : k;
       const s = k * o.n * 3, e = k1 * o.n * 3, P = o.P, c = o.cur;
       for (let i = 0; i < o.n * 3; i++) c[i] = P[s + i] * (1 - a) + P[e + i] * a;
       // Side by side, bred leaves fall at different speeds and drift, and
@@ -87,22 +99,32 @@
     }
     return r;
   }
-  // The camera's target: the chosen object's centre, or the mean of all
-  // objects' centres (the paper's user-centred camera follows an object).
+  // The camera's target: the chosen object's centre (alive or not), or the
+  // mean of the centres of all objects alive (the paper's user-centred
+  // camera follows an object); with none alive, where it last was.
+  let lastTarget = [0, 0, 0];
+  function live() { return objs.filter(function (o) { return o.shown; }); }
   function target() {
     if (st.follow) {
       const o = objs.find(function (o) { return o.name === st.follow; });
-      if (o) return centre(o);
+      if (o) return (lastTarget = centre(o));
     }
+    const on = live();
+    if (on.length === 0) return lastTarget;
     const c = [0, 0, 0];
-    objs.forEach(function (o) { const m = centre(o); for (let d = 0; d < 3; d++) c[d] += m[d] / objs.length; });
-    return c;
+    on.forEach(function (o) { const m = centre(o); for (let d = 0; d < 3; d++) c[d] += m[d] / on.length; });
+    return (lastTarget = c);
   }
+  // The first time anything lives (a cache whose particles are all born
+  // after its first key shows nothing at 0).
+  const born = objs.reduce(function (t, o) { return Math.min(t, o.first / fps); }, T);
   function fitDistance() {
     update(st.t);
+    // Fit the view to the objects alive, or, with none, to the first born.
+    if (!st.follow && live().length === 0) update(born);
     const c = target();
     let r = 0;
-    objs.forEach(function (o) {
+    (st.follow ? objs : live()).forEach(function (o) {
       if (st.follow && o.name !== st.follow) return;
       const m = centre(o);
       const d = Math.hypot(m[0] - c[0], m[1] - c[1], m[2] - c[2]) + radius(o, m);
@@ -110,12 +132,14 @@
     });
     // One object: leave room to see it move; all: fit them in the view.
     st.dist = Math.max(st.follow ? 4 * r : (data.grid ? 1.7 : 2.4) * r, 0.12);
+    update(st.t);
   }
   fitDistance();
   const R0 = st.dist;
   // Where the objects start: line primitives are drawn along their axis
   // nearest to it (an axis is infinite; its glyph should be in view).
   update(0);
+  if (live().length === 0) update(born);
   const C0 = target();
   update(st.t);
 
@@ -237,7 +261,7 @@
   function frame(cam) {
     const c = cam.centre;
     const tris = [], lines = [];
-    objs.forEach(function (o) {
+    live().forEach(function (o) {
       const q = o.cur;
       function v(i) { return [q[3 * i], q[3 * i + 1], q[3 * i + 2]]; }
       for (let k = 0; k < o.tris.length; k += 3) {
@@ -374,8 +398,12 @@
     og.font = Math.round(13 * dpr) + 'px system-ui, sans-serif';
     og.textAlign = 'center';
     const lh = 15 * dpr;
+    // Labels for every object but in a crowd (a particle cache's hundreds),
+    // where only the followed one is labelled.
+    const crowd = live().filter(function (o) { return o.label || data.grid; }).length > MAX_LABELS;
     objs.forEach(function (o, k) {
-      if (!o.label && !data.grid) return;
+      if (!o.shown || (!o.label && !data.grid)) return;
+      if (crowd && o.name !== st.follow) return;
       const c = centre(o);
       // Labels alternate above and below so that neighbours do not overlap.
       const up = k % 2 === 0;
