@@ -1594,6 +1594,16 @@ fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
             .output()
             .unwrap();
         assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // The exporter writes the committed archive byte for byte (the
+        // simulation is reproducible), so what Blender read of it below,
+        // points and UVs, is what this exporter writes. A deliberate change
+        // of layout writes the archives and Blender's readings again
+        // (`tests/data/abc/make.py`).
+        assert!(
+            std::fs::read(dir.join(format!("{scene}.abc"))).unwrap()
+                == std::fs::read(repo.join(format!("tests/data/abc/{scene}.abc"))).unwrap(),
+            "{scene}.abc is not the committed archive: write it and Blender's readings again (tests/data/abc/make.py)"
+        );
         let fresh = read(&dir.join(format!("{scene}.abc")));
         assert_eq!(
             (fresh.frames, fresh.fps, fresh.objects.len()),
@@ -1650,8 +1660,73 @@ fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
                 }
             }
         }
+        // The texture coordinates: Blender's UV map of each archive, per
+        // face corner, is the UV the OBJ of a PC2 export gives that
+        // corner's vertex (the same UVs the USD and glTF exports carry).
+        let pc2 = scratch(&format!("abc-{scene}-pc2"));
+        let o = leafmagic()
+            .arg("scene")
+            .arg(format!("scenes/{scene}.toml"))
+            .args(["--seconds", seconds, "--export", "pc2", "--out"])
+            .arg(&pc2)
+            .current_dir(repo)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let mut corners = 0;
+        let mut r =
+            csv::Reader::from_path(repo.join(format!("tests/data/abc/{scene}.blender.uv.csv")))
+                .unwrap();
+        let mut uvs: std::collections::HashMap<String, Vec<[f64; 2]>> = Default::default();
+        for row in r.records() {
+            let row = row.unwrap();
+            // `leaf_000` is the identifier of `leaf-000`.
+            let uv = uvs.entry(row[0].to_string()).or_insert_with(|| {
+                obj_vertex_uvs(&pc2.join(format!("{}.obj", row[0].replace('_', "-"))))
+            });
+            let vertex: usize = row[2].parse().unwrap();
+            let (u, v): (f64, f64) = (row[3].parse().unwrap(), row[4].parse().unwrap());
+            let want = uv[vertex];
+            assert!(
+                (u - want[0]).abs() < 1e-6 && (v - want[1]).abs() < 1e-6,
+                "{scene} {} corner {} (vertex {vertex}): Blender's UV ({u}, {v}) against {want:?}",
+                &row[0],
+                &row[1]
+            );
+            corners += 1;
+        }
+        // Three corners to a triangle, every triangle of every object.
+        let triangles: usize = committed.objects.iter().map(|o| o.triangles.len()).sum();
+        assert_eq!(corners, 3 * triangles, "{scene}: a corner without a UV");
+        let _ = std::fs::remove_dir_all(&pc2);
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// The UV of each vertex of an OBJ (`f v/vt` corners: the `vt` its
+/// corners name, which the PC2 export makes one per vertex).
+fn obj_vertex_uvs(path: &Path) -> Vec<[f64; 2]> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let vt: Vec<[f64; 2]> = text
+        .lines()
+        .filter_map(|l| l.strip_prefix("vt "))
+        .map(|l| {
+            let mut it = l.split_whitespace().map(|x| x.parse::<f64>().unwrap());
+            [it.next().unwrap(), it.next().unwrap()]
+        })
+        .collect();
+    let vertices = text.lines().filter(|l| l.starts_with("v ")).count();
+    let mut uv = vec![[f64::NAN; 2]; vertices];
+    for corner in text
+        .lines()
+        .filter_map(|l| l.strip_prefix("f "))
+        .flat_map(str::split_whitespace)
+    {
+        let (v, t) = corner.split_once('/').unwrap();
+        let (v, t): (usize, usize) = (v.parse().unwrap(), t.parse().unwrap());
+        uv[v - 1] = vt[t - 1];
+    }
+    uv
 }
 
 /// Alembic export of a rigid body and a deforming leaf (the mixed scene

@@ -261,6 +261,10 @@ fn object(f: &mut Ogawa, properties: u64, children: &[(String, &str, u64)]) -> u
 const XFORM: &str = "schema=AbcGeom_Xform_v3;schemaObjTitle=AbcGeom_Xform_v3:.xform";
 const POLYMESH: &str = "schema=AbcGeom_PolyMesh_v1;schemaBaseType=AbcGeom_GeomBase_v1;schemaObjTitle=AbcGeom_PolyMesh_v1:.geom";
 
+/// A face-varying V2f geometry parameter's metadata (the library's, its
+/// keys sorted as it writes them).
+const UV: &str = "arrayExtent=1;geoScope=fvr;interpretation=vector;isGeomParam=true;podExtent=2;podName=float32_t";
+
 /// z up (leafmagic) to y up (Alembic): (x, y, z) → (x, z, −y).
 fn y_up(p: &V3) -> V3 {
     V3::new(p.x, p.z, -p.y)
@@ -327,6 +331,25 @@ fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject, id: &str) -> Result<
         .flat_map(|_| 3i32.to_le_bytes())
         .collect();
     let samples = |v: &Vec<_>| if v.len() > 1 { frames } else { 1 };
+    // The texture coordinates, as the library writes a PolyMesh's `uv`: an
+    // indexed face-varying geometry parameter, one value per vertex and,
+    // per face corner, its vertex (the faces' own indices), so that a
+    // dressed leaf's texture lands where its USD and glTF put it.
+    let uv_values: Vec<u8> = surface
+        .uvs
+        .iter()
+        .flat_map(|u| [u[0] as f32, u[1] as f32])
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let uv = compound(
+        f,
+        &[
+            Property::new(".vals", 2, Pod::F32, 2, 1, vec![uv_values]).with_metadata(UV),
+            Property::new(".indices", 2, Pod::U32, 1, 1, vec![indices.clone()]),
+        ],
+        Vec::new(),
+    );
+    let uv = (uv, compound_header("uv", UV));
     let geom = compound(
         f,
         &[
@@ -351,7 +374,7 @@ fn write_object(f: &mut Ogawa, clip: &Clip, o: &ClipObject, id: &str) -> Result<
             Property::new(".faceIndices", 2, Pod::I32, 1, 1, vec![indices]),
             Property::new(".faceCounts", 2, Pod::I32, 1, 1, vec![counts]),
         ],
-        Vec::new(),
+        vec![uv],
     );
     let geom_props = compound(
         f,

@@ -14,7 +14,9 @@ matrix per frame.)
 importer, default options: y up turned to z up, each Xform and its mesh
 one object named as the Xform) into a 30 fps scene and writes every
 vertex of every mesh at every frame, world metres, as its depsgraph
-evaluates it: object, frame, vertex, x, y, z.
+evaluates it: object, frame, vertex, x, y, z. Beside it, OUT with
+`.uv.csv` for `.csv`: the active UV map Blender made of the archive's
+`uv`, per face corner (loop) in its order: object, loop, vertex, u, v.
 """
 import bpy, csv, sys
 
@@ -37,3 +39,10 @@ with open(out, "w", newline="") as f:
                 p = ev.matrix_world @ v.co
                 w.writerow([o.name, k, i] + ["%.7g" % c for c in p])
             ev.to_mesh_clear()
+with open(out[: -len(".csv")] + ".uv.csv", "w", newline="") as f:
+    w = csv.writer(f)
+    w.writerow(["object", "loop", "vertex", "u", "v"])
+    for o in meshes:
+        uv = o.data.uv_layers.active.data
+        for l in o.data.loops:
+            w.writerow([o.name, l.index, l.vertex_index] + ["%.7g" % c for c in uv[l.index].uv])
