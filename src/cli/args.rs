@@ -52,7 +52,7 @@ pub struct BreedArgs {
     #[arg(long)]
     pub archive: bool,
     /// Breed toward the motion of this fall (CSV by header names: t,x,y,z, optional
-    /// qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf or .usda): its class and the descriptors its record measures
+    /// qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf, .usd, .usda, .usdc, .usdz or .abc): its class and the descriptors its record measures
     /// (with orientation: descent, spin, tumble, flips, reversals, drift, period, spreads;
     /// positions only: descent, drift, and tumble from the areas).
     #[arg(long, value_name = "TRAJ.csv", conflicts_with_all = ["target", "target_features"])]
@@ -271,7 +271,7 @@ pub struct PlateArgs {
 /// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
 pub struct FallArgs {
-    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or an animation file (glTF .glb/.gltf, or one USD text layer .usda: leafmagic's export, a Blender or game-engine bake), read at its keys: the moving mesh's centre and principal axes, whether its own keys, parents, morph targets or bones move it.
+    /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or an animation file (glTF .glb/.gltf, USD .usd/.usda/.usdc/.usdz, Alembic .abc: leafmagic's export, a Blender, Houdini or game-engine bake), read at its keys: the moving mesh's centre and principal axes, whether its own keys, parents, morph targets or bones move it.
     pub trajectory: PathBuf,
     /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or an animation file's mesh's own].
     #[arg(long)]
@@ -279,13 +279,13 @@ pub struct FallArgs {
     /// A CSV's vertical axis: z (leafmagic's), y (turned to z up on reading), or -y (a y that points down, as image rows do; write --up=-y); glTF is y up by its specification, USD says its own.
     #[arg(long, default_value = "z", allow_hyphen_values = true)]
     pub up: leafmagic::motion::trajectory::UpAxis,
-    /// Metres per unit of a CSV's x, y, z (a tracker's pixels: the metres one pixel spans in the plane of the fall).
+    /// Metres per unit of a CSV's x, y, z (a tracker's pixels: the metres one pixel spans in the plane of the fall), or of an Alembic archive's lengths (it carries no unit: 0.01 for Maya's centimetres).
     #[arg(long, default_value_t = 1.0)]
     pub scale: f64,
     /// A CSV's t counts frames at this rate (frames per second), not seconds.
     #[arg(long)]
     pub frame_rate: Option<f64>,
-    /// The object to read from an animation file that animates several (its glTF node's or USD Xform's name).
+    /// The object to read from an animation file that animates several (its glTF node's name, its USD prim's or Alembic object's path, an instancer's leaf as INSTANCER[ID]).
     #[arg(long)]
     pub object: Option<String>,
     /// The animation to read from a glTF file whose animations move the same object (Blender writes each action of an object as one; by name, or index).
@@ -360,7 +360,7 @@ pub struct SceneArgs {
 /// Arguments of `compare`.
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {
-    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf or .usda).
+    /// First fall (CSV by header names: t,x,y,z, optional qw,qx,qy,qz and area columns; or an animation file, .glb, .gltf, .usd, .usda, .usdc, .usdz or .abc).
     pub a: PathBuf,
     /// Second fall.
     pub b: PathBuf,
@@ -447,7 +447,7 @@ where
 /// Arguments of `preview`.
 #[derive(clap::Args, Debug)]
 pub struct PreviewArgs {
-    /// A breeding run directory, a scene output directory, or an animation file (.glb, .gltf, .usd, .usda, .usdc, .usdz, .abc): its falling objects that carry no label are labelled with their class.
+    /// A breeding run directory, a scene output directory, an animation file (.glb, .gltf, .usd, .usda, .usdc, .usdz, .abc: its falling objects that carry no label are labelled with their class) or a fall record (.csv, as classify reads it: a plate where it has an orientation, a marker where it has a path only, labelled with its class).
     pub input: PathBuf,
     /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file].
     #[arg(long)]
@@ -461,9 +461,18 @@ pub struct PreviewArgs {
     /// The animation to play of a glTF file whose animations move the same object (by name, or index).
     #[arg(long)]
     pub animation: Option<String>,
-    /// Metres per unit of an Alembic archive, which carries no unit (0.01 for Maya's centimetres) [default: 1].
+    /// Metres per unit of an Alembic archive, which carries no unit (0.01 for Maya's centimetres), or of a CSV record's x, y, z [default: 1].
     #[arg(long)]
     pub scale: Option<f64>,
+    /// A CSV record's chord (the leaf's longest extent), metres: the plate drawn and the length scale of its classification [default: 0.05].
+    #[arg(long)]
+    pub size: Option<f64>,
+    /// A CSV record's vertical axis: z, y, or -y (write --up=-y) [default: z].
+    #[arg(long, allow_hyphen_values = true)]
+    pub up: Option<leafmagic::motion::trajectory::UpAxis>,
+    /// A CSV record's t counts frames at this rate (frames per second), not seconds.
+    #[arg(long)]
+    pub frame_rate: Option<f64>,
 }
 
 /// Arguments of `shard`.

@@ -3,7 +3,7 @@
 //! run, a scene's output or a .glb file.
 
 use super::args::{ExportArgs, PreviewArgs};
-use super::report;
+use super::{input, report};
 use anyhow::{Context, Result, bail};
 use leafmagic::breed::{self, Run};
 use leafmagic::output::export::render_mesh::{RenderMesh, read_obj};
@@ -217,15 +217,36 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         bail!("--top must be at least 1");
     }
     let started = Instant::now();
-    let preview = leafmagic::output::preview::load(
-        &args.input,
-        args.top,
-        leafmagic::output::preview::FileOptions {
-            fps: args.fps,
-            animation: args.animation.as_deref(),
-            scale: args.scale,
-        },
-    )?;
+    let record = args.input.is_file()
+        && args
+            .input
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let preview = if record {
+        preview_record(&args)?
+    } else {
+        for (flag, given) in [
+            ("--size", args.size.is_some()),
+            ("--up", args.up.is_some()),
+            ("--frame-rate", args.frame_rate.is_some()),
+        ] {
+            if given {
+                bail!(
+                    "{flag} applies to a CSV record (a .csv fall); {} is not one",
+                    args.input.display()
+                );
+            }
+        }
+        leafmagic::output::preview::load(
+            &args.input,
+            args.top,
+            leafmagic::output::preview::FileOptions {
+                fps: args.fps,
+                animation: args.animation.as_deref(),
+                scale: args.scale,
+            },
+        )?
+    };
     let out = args.out.clone().unwrap_or_else(|| {
         if args.input.is_dir() {
             args.input.join("preview.html")
@@ -241,6 +262,43 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         report::output::preview(&out, html.len(), &preview, started.elapsed().as_secs_f64())
     );
     Ok(())
+}
+
+/// `preview` of a CSV record: read and classified as `classify` reads and
+/// classifies it (its notes on stderr), played as the plate or marker of
+/// [`leafmagic::output::preview::from_record`], labelled with its class.
+fn preview_record(args: &PreviewArgs) -> Result<leafmagic::output::preview::Preview> {
+    if let Some(want) = &args.animation {
+        bail!(
+            "--animation {want}: {} is a CSV record, which holds one fall; --animation picks one of a glTF file's",
+            args.input.display()
+        );
+    }
+    let units = input::CsvUnits {
+        up: args.up.unwrap_or(leafmagic::motion::trajectory::UpAxis::Z),
+        scale: args.scale.unwrap_or(1.0),
+        frame_rate: args.frame_rate,
+    };
+    let fall = input::read_fall(&args.input, args.size, units, input::Pick::default())?;
+    let name = args
+        .input
+        .file_stem()
+        .map_or("fall".to_string(), |s| s.to_string_lossy().into_owned());
+    let mut clip = leafmagic::output::preview::from_record(
+        &name,
+        &fall.record.trajectory,
+        fall.size,
+        args.fps,
+    )
+    .map_err(|e| anyhow::anyhow!("{}: {e}", args.input.display()))?;
+    let object = &mut clip.objects[0];
+    object.label = fall.classification.class.to_string();
+    object.regime = fall.classification.regime.to_string();
+    Ok(leafmagic::output::preview::Preview {
+        clip,
+        grid: false,
+        classified: vec![0],
+    })
 }
 
 /// The hidden `compose-usd FILE`: the flat layer of a USD stage, in JSON on

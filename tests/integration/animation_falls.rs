@@ -1315,13 +1315,14 @@ fn page_objects(html: &Path) -> (Value, Vec<PageObject>) {
     (data, objects)
 }
 
-/// What `leafmagic classify FILE --object NAME [MORE]` names the fall: its
+/// What `leafmagic classify FILE [--object NAME] [MORE]` names the fall: its
 /// class, as the page labels it.
-fn class_of(file: &Path, object: &str, more: &[&str]) -> String {
+fn class_of(file: &Path, object: Option<&str>, more: &[&str]) -> String {
     let o = leafmagic()
         .arg("classify")
         .arg(file)
-        .args(["--object", object, "--json"])
+        .args(object.map(|o| ["--object", o]).into_iter().flatten())
+        .arg("--json")
         .args(more)
         .output()
         .unwrap();
@@ -1380,7 +1381,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
             }
             assert_eq!(
                 page.label,
-                class_of(&path, &page.name, &[]),
+                class_of(&path, Some(&page.name), &[]),
                 "{file}: {}",
                 page.name
             );
@@ -1463,7 +1464,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
     let (_, metres) = page_objects(&dir.join("blender_tumble_thick.abc.html"));
     assert_eq!(
         scaled[0].label,
-        class_of(&abc, &scaled[0].name, &["--scale", "0.01"])
+        class_of(&abc, Some(&scaled[0].name), &["--scale", "0.01"])
     );
     for (a, b) in scaled[0]
         .frames
@@ -1489,6 +1490,113 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
         (
             vec!["preview", abc.to_str().unwrap(), "--animation", "tumble"],
             "--animation tumble: a USD stage or an Alembic archive holds one",
+        ),
+    ] {
+        let err = refusal(&args);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `preview` plays a recorded fall (a CSV, as `classify` reads it): a
+/// square plate of diagonal `--size` posed by the record's orientation, or
+/// a marker where the record has a path only (a real square tracked on
+/// video), each labelled with the class `classify` gives it with the same
+/// flags, beside the record's whole path drawn still.
+#[test]
+fn preview_plays_a_recorded_fall_as_its_plate_or_its_path() {
+    let dir = scratch("preview-records");
+    // MuJoCo's tumbling card: 240 Hz, orientation and all.
+    let mujoco = data("mujoco-falls/tumble_thick.csv");
+    let html = dir.join("tumble.html");
+    let (ok, err) = run(&[
+        "preview",
+        mujoco.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+        "--size",
+        "0.04",
+    ]);
+    assert!(ok, "{err}");
+    let (page, objects) = page_objects(&html);
+    // 240 Hz is more than a page needs: 120 frames a second over its 10 s.
+    assert_eq!(
+        (page["fps"].as_f64(), page["frames"].as_u64()),
+        (Some(120.0), Some(1201))
+    );
+    let plate = &objects[0];
+    assert_eq!(plate.label, class_of(&mujoco, None, &["--size", "0.04"]));
+    let record = Trajectory::read_csv(&mujoco).unwrap();
+    let at = record.resampled(120.0);
+    for (k, corners) in plate.frames.iter().enumerate() {
+        // Its centre where the record puts it, its diagonals the chord,
+        // its normal the record's body z.
+        // Float32 on the page: 40 m down, a few micrometres.
+        let tol = 2e-7 * (1.0 + at.position[k].norm());
+        let centre = corners.iter().sum::<V3>() / 4.0;
+        assert!((centre - at.position[k]).norm() < tol, "frame {k}");
+        for diagonal in [corners[2] - corners[0], corners[3] - corners[1]] {
+            assert!((diagonal.norm() - 0.04).abs() < 4.0 * tol, "frame {k}");
+        }
+        let normal = (corners[1] - corners[0])
+            .cross(&(corners[2] - corners[0]))
+            .normalize();
+        assert!(
+            normal.dot(&(at.orientation[k] * V3::z())) > 1.0 - 1e-5,
+            "frame {k}"
+        );
+    }
+    // Its path, still: the record's samples, one frame.
+    let path = &objects[1];
+    assert_eq!(page["objects"][1]["still"], true);
+    assert_eq!(path.frames.len(), 1);
+    // Its 2,401 samples, every other one kept (at most 2,000 points).
+    let n = record.time.len();
+    assert_eq!((n, path.frames[0].len()), (2401, 1201));
+    for (j, p) in path.frames[0].iter().enumerate() {
+        let q = record.position[2 * j];
+        assert!((p - q).norm() < 2e-7 * (1.0 + q.norm()));
+    }
+
+    // A real square tracked on video: a path only, so a marker.
+    let square = data("real-falls/squares/square_003.csv");
+    let html = dir.join("square.html");
+    let (ok, err) = run(&[
+        "preview",
+        square.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+        "--size",
+        "0.069",
+    ]);
+    assert!(ok, "{err}");
+    let (page, objects) = page_objects(&html);
+    assert_eq!(page["fps"].as_f64(), Some(98.0));
+    assert_eq!(page["objects"][0]["kind"], "marker");
+    assert_eq!(page["objects"][0]["tris"].as_array().map(Vec::len), Some(0));
+    assert_eq!(
+        objects[0].label,
+        class_of(&square, None, &["--size", "0.069"])
+    );
+
+    // Flags that do not apply, refused by name.
+    let glb = data("blender/tumble_thick.glb");
+    for (args, want) in [
+        (
+            vec!["preview", glb.to_str().unwrap(), "--size", "0.04"],
+            "--size applies to a CSV record",
+        ),
+        (
+            vec!["preview", glb.to_str().unwrap(), "--up", "y"],
+            "--up applies to a CSV record",
+        ),
+        (
+            vec!["preview", square.to_str().unwrap(), "--animation", "tumble"],
+            "--animation tumble: ",
+        ),
+        (
+            vec!["preview", square.to_str().unwrap(), "--size", "0"],
+            "--size",
         ),
     ] {
         let err = refusal(&args);

@@ -25,7 +25,7 @@ pub fn preview(page: &Path, bytes: usize, preview: &Preview, elapsed_s: f64) -> 
     let partial = clip
         .objects
         .iter()
-        .filter(|o| !o.lives_whole(clip.frames))
+        .filter(|o| !o.lives_whole(clip.frames) && o.kind != leafmagic::output::preview::TRAIL)
         .count();
     let lives = if partial > 0 {
         format!(", {partial} of them over a part of it")

@@ -7,9 +7,13 @@
 
 use crate::breed::{self, Run};
 use crate::motion::classify;
+use crate::motion::trajectory::Trajectory;
 use crate::output::export::fall::{self, AnimationFormat};
-use crate::output::export::{self, Clip, DEFAULT_FPS, ExportError, glb::colour};
+use crate::output::export::{
+    self, Clip, ClipObject, DEFAULT_FPS, ExportError, Motion, glb::colour,
+};
 use base64::Engine as _;
+use nalgebra::Vector3;
 use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
@@ -224,6 +228,131 @@ pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
     labelled
 }
 
+/// Most frames a recorded fall's page is sampled at per second when its
+/// own rate is higher (a 240 Hz simulation record): twice what a screen
+/// shows, and fine enough that a tumbling plate turns under 10° a frame.
+pub const MAX_RECORD_FPS: f64 = 120.0;
+
+/// A recorded fall (a CSV record: its centre and, where it has one, its
+/// orientation) as a clip of one object named `name`, for `preview`:
+///
+/// - with an orientation, the plate it records: a square in the body's
+///   xy-plane (body z its normal, x its long axis, as
+///   [`crate::motion::trajectory`] defines them) whose diagonal is
+///   `chord`, the chord the fall was classified with;
+/// - without one (a path from video), a marker, three crossed lines of
+///   length `chord` that say where it is and nothing of its attitude;
+/// - and its whole path, a still line drawn at every time ([`TRAIL`]).
+///
+/// Sampled at `fps`, or at the record's own rate (its median sample
+/// interval, to four significant digits, at most [`MAX_RECORD_FPS`]), from
+/// its first sample: the page's
+/// t = 0. Positions and orientations are interpolated as
+/// [`Trajectory::resampled`] interpolates them.
+pub fn from_record(
+    name: &str,
+    trajectory: &Trajectory,
+    chord: f64,
+    fps: Option<f64>,
+) -> Result<Clip, ExportError> {
+    let n = trajectory.time.len();
+    if n < 2 {
+        return Err(ExportError::Data(format!(
+            "{name}: {n} sample{}: a fall to play needs two",
+            if n == 1 { "" } else { "s" }
+        )));
+    }
+    let fps = fps.unwrap_or_else(|| {
+        let mut gaps: Vec<f64> = trajectory.time.windows(2).map(|w| w[1] - w[0]).collect();
+        gaps.sort_by(f64::total_cmp);
+        // To four significant digits: times written to the microsecond
+        // make a 98 fps camera's rate 98.0008.
+        let rate = 1.0 / gaps[gaps.len() / 2];
+        let unit = 10f64.powi(rate.log10().floor() as i32 - 3);
+        ((rate / unit).round() * unit).min(MAX_RECORD_FPS)
+    });
+    let r = trajectory.resampled(fps);
+    let frames = r.time.len();
+    let h = 0.5 * chord;
+    let (kind, local, triangles, segments, rotation) = if trajectory.has_orientation() {
+        // Corners on the body axes' diagonals: a square of diagonal `chord`.
+        let side = h * std::f64::consts::FRAC_1_SQRT_2;
+        let local = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+            .map(|(x, y)| Vector3::new(x * side, y * side, 0.0))
+            .to_vec();
+        let triangles = vec![[0, 1, 2], [0, 2, 3]];
+        ("leaf", local, triangles, Vec::new(), r.orientation.clone())
+    } else {
+        let local = (0..3)
+            .flat_map(|axis| {
+                let mut e = Vector3::zeros();
+                e[axis] = h;
+                [-e, e]
+            })
+            .collect();
+        let segments = vec![[0, 1], [2, 3], [4, 5]];
+        let identity = vec![nalgebra::UnitQuaternion::identity(); frames];
+        ("marker", local, Vec::new(), segments, identity)
+    };
+    let object = ClipObject {
+        name: name.to_string(),
+        kind: kind.to_string(),
+        label: String::new(),
+        regime: String::new(),
+        features: Vec::new(),
+        triangles,
+        segments,
+        body: None,
+        render: None,
+        motion: Motion::Rigid {
+            local,
+            translation: r.position.clone(),
+            rotation,
+        },
+        first_frame: 0,
+    };
+    // The whole path as a still trail beside it, so that the fall shows
+    // against something when the camera follows it (a record has no
+    // ground): at most TRAIL_POINTS points of the record's own samples.
+    let step = n.div_ceil(TRAIL_POINTS).max(1);
+    let mut points: Vec<Vector3<f64>> = trajectory.position.iter().step_by(step).copied().collect();
+    if (n - 1) % step != 0 {
+        points.push(trajectory.position[n - 1]);
+    }
+    let trail = ClipObject {
+        name: format!("{name} path"),
+        kind: TRAIL.to_string(),
+        label: String::new(),
+        regime: String::new(),
+        features: Vec::new(),
+        triangles: Vec::new(),
+        segments: (1..points.len() as u32).map(|i| [i - 1, i]).collect(),
+        body: None,
+        render: None,
+        motion: Motion::Deforming {
+            frames: vec![points],
+        },
+        first_frame: 0,
+    };
+    let clip = Clip {
+        name: name.to_string(),
+        fps,
+        frames,
+        objects: vec![object, trail],
+        ground: None,
+        wind: Vec::new(),
+    };
+    clip.validate_read()?;
+    Ok(clip)
+}
+
+/// The kind of a still object the page draws at every time from its one
+/// frame: a recorded fall's path ([`from_record`]).
+pub const TRAIL: &str = "path";
+
+/// Most points of a recorded fall's drawn path.
+const TRAIL_POINTS: usize = 2000;
+
 /// The page's data as JSON: names, labels, colours, topology, and every
 /// object's vertex positions per frame of its life (from clip frame
 /// `first`) as base64 float32.
@@ -248,6 +377,7 @@ pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
                 "color": colour(o),
                 "n": o.vertex_count(),
                 "first": o.first_frame,
+                "still": o.kind == TRAIL,
                 "tris": o.triangles.iter().flatten().collect::<Vec<_>>(),
                 "segs": o.segments.iter().flatten().collect::<Vec<_>>(),
                 "pos": b64.encode(&bytes),

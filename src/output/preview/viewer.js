@@ -18,7 +18,7 @@
   const objs = data.objects.map(function (o) {
     const P = f32(o.pos);
     return { name: o.name, kind: o.kind, label: o.label, color: o.color, n: o.n,
-      tris: o.tris, segs: o.segs, P: P, first: o.first || 0,
+      tris: o.tris, segs: o.segs, P: P, first: o.first || 0, still: !!o.still,
       frames: o.n > 0 ? P.length / (o.n * 3) : 1, shown: true, cur: new Float32Array(o.n * 3) };
   });
   const F = data.frames, fps = data.fps, T = Math.max(0, (F - 1) / fps);
@@ -51,6 +51,11 @@
   if (P.yaw && isFinite(parseFloat(P.yaw))) st.yaw = parseFloat(P.yaw) * Math.PI / 180;
   if (P.pitch && isFinite(parseFloat(P.pitch))) st.pitch = parseFloat(P.pitch) * Math.PI / 180;
   if (P.follow && objs.some(function (o) { return o.name === P.follow; })) st.follow = P.follow;
+  // A recorded fall beside its still path: the camera on the fall, its
+  // path passing by (all objects at once would make a 5 cm plate a dot on
+  // a metres-long line).
+  const movers = objs.filter(function (o) { return !o.still; });
+  if (P.follow === undefined && movers.length === 1 && movers.length < objs.length) st.follow = movers[0].name;
 
   // Positions of every object at time t (linear between frames, as glTF
   // LINEAR plays the exported file), and which objects live then.
@@ -59,7 +64,8 @@
     objs.forEach(function (o) {
       const G = o.frames, f = g - o.first;
       // Half a frame's grace at either end, so that a life of one frame shows.
-      o.shown = f > -0.5 && f < G - 0.5;
+      // A still object (a record's path) holds one frame, shown throughout.
+      o.shown = o.still || (f > -0.5 && f < G - 0.5);
       // Outside its life it keeps the pose of its nearest frame: a camera
       // on it waits where it will appear, or stays where it went.
       const fc = Math.min(Math.max(f, 0), G - 1);
