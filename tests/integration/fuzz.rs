@@ -1,5 +1,6 @@
 //! A seeded fuzz harness: leaf, scene and fall files of the repository
-//! (falls as CSV records and as glTF and USD animations)
+//! (falls as CSV records and as glTF, USD and Alembic animations, handed
+//! to `classify` and to `preview`, which classifies every object)
 //! (and a plate as `leafmagic plate` writes it), mutated (bytes flipped,
 //! lines cut, duplicated or swapped, numbers replaced by extremes, text that
 //! is not UTF-8, truncation), are handed to the
@@ -340,6 +341,15 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                     let mut classify = leafmagic();
                     classify.arg("classify").arg(&file);
                     commands.push(("classify", classify));
+                    // The page classifies every object of the file, not
+                    // only the one classify picks, and resamples them.
+                    let mut preview = leafmagic();
+                    preview
+                        .arg("preview")
+                        .arg(&file)
+                        .arg("--out")
+                        .arg(dir.join(format!("page-{case}.html")));
+                    commands.push(("preview", preview));
                 }
             }
             for (what, cmd) in commands {
@@ -351,6 +361,7 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 }
             }
             let _ = std::fs::remove_dir_all(dir.join(format!("out-{case}")));
+            let _ = std::fs::remove_file(dir.join(format!("page-{case}.html")));
         }
     }
     // The mutations do reach the checks (most cases are refused).
