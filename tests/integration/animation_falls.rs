@@ -1604,3 +1604,68 @@ fn preview_plays_a_recorded_fall_as_its_plate_or_its_path() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The preview of a `breed --like` run shows the example the run was bred
+/// toward beside its best leaves: the example's own motion (from the copy
+/// the run keeps), labelled with the class the run recorded for it, one
+/// place left of the first leaf and released at the leaves' height.
+#[test]
+fn a_like_run_s_preview_shows_its_example_beside_its_leaves() {
+    let dir = scratch("like-preview");
+    let run_dir = dir.join("run");
+    let example = data("mujoco-falls/tumble_thick.csv");
+    let (ok, err) = run(&[
+        "breed",
+        "--like",
+        example.to_str().unwrap(),
+        "--size",
+        "0.04",
+        "--generations",
+        "1",
+        "--population",
+        "8",
+        "--out",
+        run_dir.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let html = dir.join("page.html");
+    let (ok, err) = run(&[
+        "preview",
+        run_dir.to_str().unwrap(),
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (page, objects) = page_objects(&html);
+    assert_eq!(objects.len(), 6, "the five best and the example");
+    let centre = |f: &[V3]| f.iter().sum::<V3>() / f.len() as f64;
+    let ex = &objects[0];
+    assert_eq!(ex.name, "example");
+    assert_eq!(ex.label, class_of(&example, None, &["--size", "0.04"]));
+    // Its motion is the example's, at the page's 30 fps, from its release.
+    let record = Trajectory::read_csv(&run_dir.join("example.csv"))
+        .unwrap()
+        .resampled(30.0);
+    let frames = page["frames"].as_u64().unwrap() as usize;
+    assert_eq!(ex.frames.len(), record.time.len().min(frames));
+    let start = centre(&ex.frames[0]);
+    for (k, f) in ex.frames.iter().enumerate() {
+        let moved = centre(f) - start;
+        let want = record.position[k] - record.position[0];
+        assert!(
+            (moved - want).norm() < 1e-5 * (1.0 + want.norm()),
+            "frame {k}"
+        );
+    }
+    // Left of the row, about one place before its first leaf (each leaf's
+    // centre sits near its place, off by its shape), at its height.
+    let leaves: Vec<V3> = objects[1..].iter().map(|o| centre(&o.frames[0])).collect();
+    let mean_gap = (leaves[4].x - leaves[0].x) / 4.0;
+    let gap = leaves[0].x - start.x;
+    assert!(
+        gap > 0.5 * mean_gap && gap < 1.5 * mean_gap,
+        "the example {gap} m left of the first leaf, the leaves {mean_gap} m apart"
+    );
+    assert!(start.y.abs() < 1e-6 && (start.z - leaves[0].z).abs() < 1e-6);
+    let _ = std::fs::remove_dir_all(&dir);
+}

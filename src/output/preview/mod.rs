@@ -14,6 +14,8 @@ use crate::output::export::{
 };
 use base64::Engine as _;
 use nalgebra::Vector3;
+
+type V3 = Vector3<f64>;
 use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
@@ -114,7 +116,17 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
         let name = input
             .file_name()
             .map_or("run".to_string(), |n| n.to_string_lossy().into_owned());
-        let clip = export::side_by_side(&name, objects, fps, GRID_SPACING_CHORDS * extent)?;
+        let spacing = GRID_SPACING_CHORDS * extent;
+        let mut clip = export::side_by_side(&name, objects, fps, spacing)?;
+        if let (Some(like), Some(example)) = (&run.settings().like, run.example()) {
+            let size = like.size_m.unwrap_or(extent);
+            let mut o = example_object(&example, size, &clip, spacing)?;
+            if let Some(class) = like.class {
+                o.label = class.to_string();
+            }
+            clip.objects.insert(0, o);
+            clip.validate_read()?;
+        }
         return Ok(Preview {
             clip,
             grid: true,
@@ -128,6 +140,40 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
         input,
         "neither a breeding run (no run.toml) nor a scene output directory (no summary.toml)",
     ))
+}
+
+/// The example fall of a `--like` run as one more object of the row of its
+/// bred leaves `row` (laid `spacing` apart): its plate or marker
+/// ([`from_record`]) on the row's frames, one place left of the first
+/// leaf, released at the leaves' height. A real fall filmed over a metre
+/// ends long before a 10 s drop: it lives its own span and is then gone,
+/// rather than hang where the camera last saw it.
+fn example_object(
+    example: &Trajectory,
+    size: f64,
+    row: &Clip,
+    spacing: f64,
+) -> Result<ClipObject, ExportError> {
+    let played = from_record("example", example, size, Some(row.fps))?;
+    let mut o = played
+        .objects
+        .into_iter()
+        .next()
+        .expect("from_record gives the fall first");
+    if let Motion::Rigid {
+        translation,
+        rotation,
+        ..
+    } = &mut o.motion
+    {
+        translation.truncate(row.frames);
+        rotation.truncate(row.frames);
+    }
+    let first = row.objects.first().map_or(V3::zeros(), |l| l.centre(0));
+    let n = row.objects.len() as f64;
+    let slot = V3::new(-(n + 1.0) / 2.0 * spacing, 0.0, first.z);
+    o.translate(slot - o.centre(0));
+    Ok(o)
 }
 
 /// [`load`] of an animation file.
@@ -426,8 +472,6 @@ pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::export::{ClipObject, Motion};
-    use nalgebra::Vector3;
 
     fn clip() -> Clip {
         Clip {

@@ -137,7 +137,7 @@
       r = Math.max(r, d);
     });
     // One object: leave room to see it move; all: fit them in the view.
-    st.dist = Math.max(st.follow ? 4 * r : (data.grid ? 1.7 : 2.4) * r, 0.12);
+    st.dist = Math.max(st.follow ? 4 * r : (data.grid ? 2.0 : 2.4) * r, 0.12);
     update(st.t);
   }
   fitDistance();
