@@ -254,7 +254,8 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
             args.input.with_extension("html")
         }
     });
-    let html = leafmagic::output::preview::html(&preview.clip, preview.grid)?;
+    let html = leafmagic::output::preview::html(&preview.clip, preview.grid)
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.input.display()))?;
     leafmagic::util::io::write_atomic(&out, html.as_bytes())
         .with_context(|| format!("cannot write {}", out.display()))?;
     println!(

@@ -448,11 +448,60 @@ fn escape_html(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// Most characters of page data a browser is asked to hold: the viewer
+/// reads the data as one JavaScript string, and Chrome's V8 holds none
+/// over 2^29 − 24 characters (about 537 million; Firefox about a billion).
+pub const MAX_PAGE_DATA_CHARS: usize = 500_000_000;
+
+/// An upper bound on the characters of `clip`'s page data
+/// ([`data_json`]): each object's positions as base64 (4 characters per 3
+/// bytes of float32), at most 12 characters per index of its topology
+/// (ten digits and a comma), and 512 for its name, label and keys.
+pub fn page_data_chars(clip: &Clip) -> usize {
+    clip.objects
+        .iter()
+        .map(|o| {
+            let bytes = o.frame_count() * o.vertex_count() * 12;
+            let indices = 3 * o.triangles.len() + 2 * o.segments.len();
+            4 * bytes.div_ceil(3) + 12 * indices + 512 + 2 * (o.name.len() + o.label.len())
+        })
+        .sum::<usize>()
+        + 4096
+        + clip.wind.len() * 512
+}
+
+/// Refuses a clip whose page no browser could open
+/// ([`MAX_PAGE_DATA_CHARS`]), saying how big it would be and at what frame
+/// rate it would fit, before anything is built.
+fn fits_a_browser(clip: &Clip) -> Result<(), ExportError> {
+    let chars = page_data_chars(clip);
+    if chars <= MAX_PAGE_DATA_CHARS {
+        return Ok(());
+    }
+    // The positions dominate and scale with the frame rate.
+    let fits = (clip.fps * MAX_PAGE_DATA_CHARS as f64 / chars as f64 * 0.95).floor();
+    Err(ExportError::Data(format!(
+        "{}: its page would hold about {:.0} MB of data ({} objects, {} frames at {} fps), more than a browser holds in one page ({:.0} MB; Chrome's largest string): {}",
+        clip.name,
+        chars as f64 / 1e6,
+        clip.objects.len(),
+        clip.frames,
+        clip.fps,
+        MAX_PAGE_DATA_CHARS as f64 / 1e6,
+        if fits >= 1.0 {
+            format!("pass --fps {fits} or lower, or export it (--format abc, usd) for a client")
+        } else {
+            "export it instead (--format abc, usd) for a client".to_string()
+        }
+    )))
+}
+
 /// The self-contained HTML page for `clip` (`grid`: label every object, as
 /// for a grid of bred leaves). Its objects may live a part of it
 /// ([`Clip::validate_read`]): the page shows each over its own life.
 pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
     clip.validate_read()?;
+    fits_a_browser(clip)?;
     let data = serde_json::to_string(&data_json(clip, grid))
         .map_err(|e| ExportError::Data(format!("cannot serialise the page data: {e}")))?
         // Inside <script>, "</" could end the element; "<\/" means the same in JSON.
@@ -528,5 +577,53 @@ mod tests {
             .collect();
         assert_eq!(&f[..3], &[0.0, 0.0, 0.0]);
         assert_eq!(&f[9..12], &[0.0, 0.0, 1.0]);
+    }
+
+    #[test]
+    fn the_page_data_estimate_bounds_the_page_and_a_page_too_big_is_refused() {
+        // A hundred deforming leaves of seven vertices over 301 frames.
+        let leaf = |k: usize| {
+            let frames = (0..301)
+                .map(|f| {
+                    (0..7)
+                        .map(|i| V3::new(k as f64, i as f64 * 0.01, -(f as f64) * 0.003))
+                        .collect()
+                })
+                .collect();
+            ClipObject {
+                label: "floater".into(),
+                ..ClipObject::read_mesh(
+                    format!("leaf-{k:03}"),
+                    vec![[0, 1, 2], [2, 3, 4], [4, 5, 6]],
+                    frames,
+                )
+            }
+        };
+        let clip = Clip::read("hundred", 30.0, 301, (0..100).map(leaf).collect()).unwrap();
+        let data = serde_json::to_string(&data_json(&clip, false))
+            .unwrap()
+            .len();
+        let estimate = page_data_chars(&clip);
+        assert!(
+            estimate >= data && estimate < data + data / 20,
+            "{estimate} against {data}"
+        );
+        assert!(html(&clip, false).is_ok());
+        // A rigid mesh of a million vertices over 100 frames at 30 fps:
+        // 1.2 GB of float32, 1.6 billion characters of base64. Refused
+        // before anything is built, with the rate that would fit.
+        let mut big = ClipObject::read_mesh("scan".into(), vec![[0, 1, 2]], Vec::new());
+        big.motion = Motion::Rigid {
+            local: vec![V3::zeros(); 1_000_000],
+            translation: vec![V3::zeros(); 100],
+            rotation: vec![nalgebra::UnitQuaternion::identity(); 100],
+        };
+        let big = Clip::read("scan", 30.0, 100, vec![big]).unwrap();
+        assert!(page_data_chars(&big) > 1_600_000_000);
+        let e = html(&big, false).unwrap_err().to_string();
+        assert!(
+            e.contains("more than a browser holds") && e.contains("--fps 8 or lower"),
+            "{e}"
+        );
     }
 }
