@@ -447,9 +447,10 @@ where
 /// Arguments of `preview`.
 #[derive(clap::Args, Debug)]
 pub struct PreviewArgs {
-    /// A breeding run directory, a scene output directory, an animation file (.glb, .gltf, .usd, .usda, .usdc, .usdz, .abc: its falling objects that carry no label are labelled with their class) or a fall record (.csv, as classify reads it: a plate where it has an orientation, a marker where it has a path only, labelled with its class).
-    pub input: PathBuf,
-    /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file].
+    /// A breeding run directory, a scene output directory, an animation file (.glb, .gltf, .usd, .usda, .usdc, .usdz, .abc: its falling objects that carry no label are labelled with their class) or a fall record (.csv, as classify reads it: a plate where it has an orientation, a marker where it has a path only, labelled with its class). Several files: side by side on one page, to compare their falls.
+    #[arg(required = true, num_args = 1..)]
+    pub inputs: Vec<PathBuf>,
+    /// The HTML file to write [default: INPUT/preview.html for a directory, INPUT with .html for a file, the first INPUT with .compare.html for several].
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// For a breeding run: show the K best leaves of the last generation.

@@ -205,8 +205,8 @@ pub fn write_clip(
     })
 }
 
-/// `preview`: writes the HTML page of a run, a scene's output or an
-/// animation file.
+/// `preview`: writes the HTML page of a run, a scene's output, an
+/// animation file or a fall record, or of several files side by side.
 pub fn preview(args: PreviewArgs) -> Result<()> {
     if let Some(f) = args.fps
         && !(f > 0.0 && f.is_finite())
@@ -217,45 +217,60 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
         bail!("--top must be at least 1");
     }
     let started = Instant::now();
-    let record = args.input.is_file()
-        && args
-            .input
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
-    let preview = if record {
-        preview_record(&args)?
+    let first = &args.inputs[0];
+    let (preview, out) = if let [input] = args.inputs.as_slice() {
+        let out = args.out.clone().unwrap_or_else(|| {
+            if input.is_dir() {
+                input.join("preview.html")
+            } else {
+                input.with_extension("html")
+            }
+        });
+        (preview_one(&args, input, true)?, out)
     } else {
+        if let Some(dir) = args.inputs.iter().find(|p| p.is_dir()) {
+            bail!(
+                "{}: a directory; several inputs are compared as files (falls, animation files), one directory is previewed alone",
+                dir.display()
+            );
+        }
+        let csv = args.inputs.iter().any(|p| is_record(p));
         for (flag, given) in [
             ("--size", args.size.is_some()),
             ("--up", args.up.is_some()),
             ("--frame-rate", args.frame_rate.is_some()),
         ] {
-            if given {
-                bail!(
-                    "{flag} applies to a CSV record (a .csv fall); {} is not one",
-                    args.input.display()
-                );
+            if given && !csv {
+                bail!("{flag} applies to a CSV record (a .csv fall); none of the inputs is one");
             }
         }
-        leafmagic::output::preview::load(
-            &args.input,
-            args.top,
-            leafmagic::output::preview::FileOptions {
-                fps: args.fps,
-                animation: args.animation.as_deref(),
-                scale: args.scale,
-            },
-        )?
-    };
-    let out = args.out.clone().unwrap_or_else(|| {
-        if args.input.is_dir() {
-            args.input.join("preview.html")
-        } else {
-            args.input.with_extension("html")
+        let mut parts: Vec<(String, leafmagic::output::preview::Preview)> = Vec::new();
+        for input in &args.inputs {
+            let stem = input
+                .file_stem()
+                .map_or("fall".to_string(), |s| s.to_string_lossy().into_owned());
+            // Two inputs of one name (a/x.csv, b/x.csv) stay apart.
+            let mut name = stem.clone();
+            let mut k = 2;
+            while parts.iter().any(|(n, _)| *n == name) {
+                name = format!("{stem}-{k}");
+                k += 1;
+            }
+            let mut part = preview_one(&args, input, false)?;
+            if is_record(input) {
+                // A record's fall is named as its input.
+                part.clip.objects[0].name.clone_from(&name);
+            }
+            parts.push((name, part));
         }
-    });
+        let out = args
+            .out
+            .clone()
+            .unwrap_or_else(|| first.with_extension("compare.html"));
+        (leafmagic::output::preview::together(parts, args.fps)?, out)
+    };
     let html = leafmagic::output::preview::html(&preview.clip, preview.grid)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.input.display()))?;
+        .map_err(|e| anyhow::anyhow!("{}: {e}", first.display()))?;
     leafmagic::util::io::write_atomic(&out, html.as_bytes())
         .with_context(|| format!("cannot write {}", out.display()))?;
     println!(
@@ -265,14 +280,63 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
     Ok(())
 }
 
+/// Whether `path` is read as a fall record (a `.csv` file).
+fn is_record(path: &Path) -> bool {
+    path.is_file()
+        && path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("csv"))
+}
+
+/// The preview of one input; `alone`: the page's only one, where a flag
+/// that does not apply to it is refused (among several, a flag applies to
+/// the inputs it fits: --size to the records, --scale to the records and
+/// Alembic archives).
+fn preview_one(
+    args: &PreviewArgs,
+    input: &Path,
+    alone: bool,
+) -> Result<leafmagic::output::preview::Preview> {
+    if is_record(input) {
+        return preview_record(args, input);
+    }
+    if alone {
+        for (flag, given) in [
+            ("--size", args.size.is_some()),
+            ("--up", args.up.is_some()),
+            ("--frame-rate", args.frame_rate.is_some()),
+        ] {
+            if given {
+                bail!(
+                    "{flag} applies to a CSV record (a .csv fall); {} is not one",
+                    input.display()
+                );
+            }
+        }
+    }
+    let alembic = leafmagic::output::export::fall::AnimationFormat::of(input)
+        == Some(leafmagic::output::export::fall::AnimationFormat::Alembic);
+    Ok(leafmagic::output::preview::load(
+        input,
+        args.top,
+        leafmagic::output::preview::FileOptions {
+            fps: args.fps,
+            animation: args.animation.as_deref(),
+            scale: args.scale.filter(|_| alone || alembic),
+        },
+    )?)
+}
+
 /// `preview` of a CSV record: read and classified as `classify` reads and
 /// classifies it (its notes on stderr), played as the plate or marker of
 /// [`leafmagic::output::preview::from_record`], labelled with its class.
-fn preview_record(args: &PreviewArgs) -> Result<leafmagic::output::preview::Preview> {
-    if let Some(want) = &args.animation {
+fn preview_record(args: &PreviewArgs, input: &Path) -> Result<leafmagic::output::preview::Preview> {
+    if let Some(want) = &args.animation
+        && args.inputs.len() == 1
+    {
         bail!(
             "--animation {want}: {} is a CSV record, which holds one fall; --animation picks one of a glTF file's",
-            args.input.display()
+            input.display()
         );
     }
     let units = input::CsvUnits {
@@ -280,9 +344,8 @@ fn preview_record(args: &PreviewArgs) -> Result<leafmagic::output::preview::Prev
         scale: args.scale.unwrap_or(1.0),
         frame_rate: args.frame_rate,
     };
-    let fall = input::read_fall(&args.input, args.size, units, input::Pick::default())?;
-    let name = args
-        .input
+    let fall = input::read_fall(input, args.size, units, input::Pick::default())?;
+    let name = input
         .file_stem()
         .map_or("fall".to_string(), |s| s.to_string_lossy().into_owned());
     let mut clip = leafmagic::output::preview::from_record(
@@ -291,7 +354,7 @@ fn preview_record(args: &PreviewArgs) -> Result<leafmagic::output::preview::Prev
         fall.size,
         args.fps,
     )
-    .map_err(|e| anyhow::anyhow!("{}: {e}", args.input.display()))?;
+    .map_err(|e| anyhow::anyhow!("{}: {e}", input.display()))?;
     let object = &mut clip.objects[0];
     object.label = fall.classification.class.to_string();
     object.regime = fall.classification.regime.to_string();

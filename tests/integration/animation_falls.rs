@@ -1669,3 +1669,84 @@ fn a_like_run_s_preview_shows_its_example_beside_its_leaves() {
     assert!(start.y.abs() < 1e-6 && (start.z - leaves[0].z).abs() < 1e-6);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `preview A B ...` puts several falls side by side on one page to compare
+/// them by eye: each labelled as `classify` labels it, all played at the
+/// highest of their rates, each released at one height in a place of its
+/// own along x; the flags apply to the inputs they fit, and a directory
+/// among several is refused.
+#[test]
+fn preview_of_several_files_puts_their_falls_side_by_side() {
+    let dir = scratch("preview-several");
+    let record = data("mujoco-falls/tumble_thick.csv");
+    let glb = data("blender/tumble_thick.glb");
+    let abc = data("blender/tumble_thick.abc");
+    let html = dir.join("page.html");
+    let (ok, err) = run(&[
+        "preview",
+        record.to_str().unwrap(),
+        glb.to_str().unwrap(),
+        abc.to_str().unwrap(),
+        "--size",
+        "0.04",
+        "--out",
+        html.to_str().unwrap(),
+    ]);
+    assert!(ok, "{err}");
+    let (page, objects) = page_objects(&html);
+    assert_eq!(page["grid"], true);
+    // The record's 240 Hz, capped at 120; the files' 24 and 30 below it.
+    assert_eq!(page["fps"].as_f64(), Some(120.0));
+    let names: Vec<&str> = objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "tumble_thick",
+            "tumble_thick-2/card",
+            "tumble_thick-3/card/card"
+        ]
+    );
+    assert_eq!(
+        objects[0].label,
+        class_of(&record, None, &["--size", "0.04"])
+    );
+    assert_eq!(objects[1].label, class_of(&glb, None, &[]));
+    assert_eq!(objects[2].label, class_of(&abc, None, &[]));
+    // Released at one height, left to right in the order given.
+    let centre = |f: &[V3]| f.iter().sum::<V3>() / f.len() as f64;
+    let starts: Vec<V3> = objects.iter().map(|o| centre(&o.frames[0])).collect();
+    for s in &starts {
+        assert!(s.z.abs() < 1e-6 && s.y.abs() < 1e-6, "{s}");
+    }
+    assert!(starts[0].x < starts[1].x && starts[1].x < starts[2].x);
+    // The record's fall as it moves, from its release, at 120 fps.
+    let at = Trajectory::read_csv(&record).unwrap().resampled(120.0);
+    for (k, f) in objects[0].frames.iter().enumerate().step_by(60) {
+        let moved = centre(f) - starts[0];
+        let want = at.position[k] - at.position[0];
+        assert!(
+            (moved - want).norm() < 1e-5 * (1.0 + want.norm()),
+            "frame {k}"
+        );
+    }
+    for (args, want) in [
+        (
+            vec![
+                "preview",
+                glb.to_str().unwrap(),
+                abc.to_str().unwrap(),
+                "--size",
+                "0.04",
+            ],
+            "--size applies to a CSV record (a .csv fall); none of the inputs is one",
+        ),
+        (
+            vec!["preview", glb.to_str().unwrap(), dir.to_str().unwrap()],
+            "a directory; several inputs are compared as files",
+        ),
+    ] {
+        let err = refusal(&args);
+        assert!(err.contains(want), "{args:?}: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

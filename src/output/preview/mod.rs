@@ -238,9 +238,9 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
 /// and carries no label of its own with the class and regime `classify`
 /// gives its fall ([`fall::fall_of`], sized by its chord as `classify`
 /// sizes a file's fall), so that a client's cache shows which leaves
-/// float, spin or lilt; returns the indices of those it labelled. Leafmagic's own
-/// files keep their labels (a bred leaf's class), and ropes and rigid
-/// props are left as they are. The objects are classified in parallel;
+/// float, spin or lilt; returns the indices of those it labelled.
+/// Leafmagic's own files keep their labels (a bred leaf's class), and
+/// ropes and rigid props are left as they are. The objects are classified in parallel;
 /// each label depends on its object alone.
 pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
     let fps = clip.fps;
@@ -274,9 +274,99 @@ pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
     labelled
 }
 
+/// Several inputs' previews on one page, to compare their falls by eye:
+/// each `(name, preview)` keeps its objects (without a record's still
+/// path, which the side-by-side view would leave behind), named
+/// `name/object` (a record's fall keeps its own name), its first object
+/// released at the page's origin height in a place of its own along x,
+/// `GRID_SPACING_CHORDS` of the largest chord apart beyond its own width;
+/// as a grid, so every fall is labelled and can be drawn at one height
+/// with how far it fell and drifted. All are played at `fps`, or at the
+/// highest of their own rates (at most [`MAX_RECORD_FPS`]); one that ends
+/// before the others is then gone.
+pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Preview, ExportError> {
+    let fps = fps.unwrap_or_else(|| {
+        parts
+            .iter()
+            .map(|(_, p)| p.clip.fps)
+            .fold(0.0, f64::max)
+            .min(MAX_RECORD_FPS)
+    });
+    let mut placed: Vec<(Vec<ClipObject>, Vec<bool>)> = Vec::new();
+    let (mut widest, mut chord) = (0.0f64, 0.0f64);
+    for (name, part) in parts {
+        let clip = if part.clip.fps == fps {
+            part.clip
+        } else {
+            part.clip.resampled(fps)
+        };
+        let mut objects = Vec::new();
+        let mut labelled = Vec::new();
+        for (k, mut o) in clip.objects.into_iter().enumerate() {
+            if o.kind == TRAIL {
+                continue;
+            }
+            if o.name != name {
+                o.name = format!("{name}/{}", o.name);
+            }
+            let p = o.positions(0);
+            let c = o.centre(0);
+            chord = chord.max(2.0 * p.iter().map(|x| (x - c).norm()).fold(0.0, f64::max));
+            labelled.push(part.classified.contains(&k));
+            objects.push(o);
+        }
+        let Some(anchor) = objects.first().map(|o| o.centre(0)) else {
+            return Err(ExportError::Data(format!("{name}: nothing in it to play")));
+        };
+        for o in &mut objects {
+            o.translate(-anchor);
+        }
+        let xs = objects.iter().map(|o| o.centre(0).x);
+        let (lo, hi) = xs.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), x| {
+            (lo.min(x), hi.max(x))
+        });
+        widest = widest.max(hi - lo);
+        placed.push((objects, labelled));
+    }
+    let spacing = widest + GRID_SPACING_CHORDS * chord;
+    let m = placed.len() as f64;
+    let mut objects = Vec::new();
+    let mut classified = Vec::new();
+    for (i, (part, labelled)) in placed.into_iter().enumerate() {
+        let slot = Vector3::new((i as f64 - (m - 1.0) / 2.0) * spacing, 0.0, 0.0);
+        for (mut o, was) in part.into_iter().zip(labelled) {
+            o.translate(slot);
+            if was {
+                classified.push(objects.len());
+            }
+            objects.push(o);
+        }
+    }
+    let frames = objects
+        .iter()
+        .map(|o| o.first_frame + o.frame_count())
+        .max()
+        .unwrap_or(1);
+    let clip = Clip {
+        name: "compare".to_string(),
+        fps,
+        frames,
+        objects,
+        ground: None,
+        wind: Vec::new(),
+    };
+    clip.validate_read()?;
+    Ok(Preview {
+        clip,
+        grid: true,
+        classified,
+    })
+}
+
 /// Most frames a recorded fall's page is sampled at per second when its
 /// own rate is higher (a 240 Hz simulation record): twice what a screen
-/// shows, and fine enough that a tumbling plate turns under 10° a frame.
+/// shows, and fine enough that a plate tumbling at 20 rad/s (MuJoCo's
+/// tumbling card turns at 15) turns under 10° a frame.
 pub const MAX_RECORD_FPS: f64 = 120.0;
 
 /// A recorded fall (a CSV record: its centre and, where it has one, its
@@ -292,9 +382,8 @@ pub const MAX_RECORD_FPS: f64 = 120.0;
 ///
 /// Sampled at `fps`, or at the record's own rate (its median sample
 /// interval, to four significant digits, at most [`MAX_RECORD_FPS`]), from
-/// its first sample: the page's
-/// t = 0. Positions and orientations are interpolated as
-/// [`Trajectory::resampled`] interpolates them.
+/// its first sample, the page's t = 0. Positions and orientations are
+/// interpolated as [`Trajectory::resampled`] interpolates them.
 pub fn from_record(
     name: &str,
     trajectory: &Trajectory,
