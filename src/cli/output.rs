@@ -234,15 +234,10 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
                 dir.display()
             );
         }
-        let csv = args.inputs.iter().any(|p| is_record(p));
-        for (flag, given) in [
-            ("--size", args.size.is_some()),
-            ("--up", args.up.is_some()),
-            ("--frame-rate", args.frame_rate.is_some()),
-        ] {
-            if given && !csv {
-                bail!("{flag} applies to a CSV record (a .csv fall); none of the inputs is one");
-            }
+        if let Some(flag) = record_flag(&args)
+            && !args.inputs.iter().any(|p| is_record(p))
+        {
+            bail!("{flag} applies to a CSV record (a .csv fall); none of the inputs is one");
         }
         let mut parts: Vec<(String, leafmagic::output::preview::Preview)> = Vec::new();
         for input in &args.inputs {
@@ -280,6 +275,17 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
     Ok(())
 }
 
+/// The first flag given that only a CSV record reads.
+fn record_flag(args: &PreviewArgs) -> Option<&'static str> {
+    [
+        ("--size", args.size.is_some()),
+        ("--up", args.up.is_some()),
+        ("--frame-rate", args.frame_rate.is_some()),
+    ]
+    .into_iter()
+    .find_map(|(flag, given)| given.then_some(flag))
+}
+
 /// Whether `path` is read as a fall record (a `.csv` file).
 fn is_record(path: &Path) -> bool {
     path.is_file()
@@ -298,21 +304,13 @@ fn preview_one(
     alone: bool,
 ) -> Result<leafmagic::output::preview::Preview> {
     if is_record(input) {
-        return preview_record(args, input);
+        return preview_record(args, input, alone);
     }
-    if alone {
-        for (flag, given) in [
-            ("--size", args.size.is_some()),
-            ("--up", args.up.is_some()),
-            ("--frame-rate", args.frame_rate.is_some()),
-        ] {
-            if given {
-                bail!(
-                    "{flag} applies to a CSV record (a .csv fall); {} is not one",
-                    input.display()
-                );
-            }
-        }
+    if let Some(flag) = record_flag(args).filter(|_| alone) {
+        bail!(
+            "{flag} applies to a CSV record (a .csv fall); {} is not one",
+            input.display()
+        );
     }
     let alembic = leafmagic::output::export::fall::AnimationFormat::of(input)
         == Some(leafmagic::output::export::fall::AnimationFormat::Alembic);
@@ -330,10 +328,12 @@ fn preview_one(
 /// `preview` of a CSV record: read and classified as `classify` reads and
 /// classifies it (its notes on stderr), played as the plate or marker of
 /// [`leafmagic::output::preview::from_record`], labelled with its class.
-fn preview_record(args: &PreviewArgs, input: &Path) -> Result<leafmagic::output::preview::Preview> {
-    if let Some(want) = &args.animation
-        && args.inputs.len() == 1
-    {
+fn preview_record(
+    args: &PreviewArgs,
+    input: &Path,
+    alone: bool,
+) -> Result<leafmagic::output::preview::Preview> {
+    if let Some(want) = args.animation.as_ref().filter(|_| alone) {
         bail!(
             "--animation {want}: {} is a CSV record, which holds one fall; --animation picks one of a glTF file's",
             input.display()

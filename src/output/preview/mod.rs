@@ -300,9 +300,13 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         } else {
             part.clip.resampled(fps)
         };
+        let mut was_labelled = vec![false; clip.objects.len()];
+        for &k in &part.classified {
+            was_labelled[k] = true;
+        }
         let mut objects = Vec::new();
         let mut labelled = Vec::new();
-        for (k, mut o) in clip.objects.into_iter().enumerate() {
+        for (mut o, was) in clip.objects.into_iter().zip(was_labelled) {
             if o.kind == TRAIL {
                 continue;
             }
@@ -310,9 +314,9 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
                 o.name = format!("{name}/{}", o.name);
             }
             let p = o.positions(0);
-            let c = o.centre(0);
+            let c = p.iter().sum::<V3>() / p.len().max(1) as f64;
             chord = chord.max(2.0 * p.iter().map(|x| (x - c).norm()).fold(0.0, f64::max));
-            labelled.push(part.classified.contains(&k));
+            labelled.push(was);
             objects.push(o);
         }
         let Some(anchor) = objects.first().map(|o| o.centre(0)) else {
