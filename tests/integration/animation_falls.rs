@@ -1346,6 +1346,8 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
         "blender/tumble_thick_separate.gltf",
         "blender/tumble_thick_with_ground.glb",
         "blender/flutter_strip.usda",
+        "particles/leaves.abc",
+        "particles/dying.abc",
     ] {
         let path = data(file);
         let html = dir.join(file.replace('/', "_") + ".html");

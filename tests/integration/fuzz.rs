@@ -291,6 +291,7 @@ fn mutated_leaf_scene_and_fall_files_end_cleanly_and_name_the_file() {
                 "usd/composed/shot.usda",
                 "blender/tumble_thick_parented.abc",
                 "blender/tumble_thick_curled.abc",
+                "particles/dying.abc",
             ]
             .iter()
             .map(|f| repo().join("tests/data").join(f))

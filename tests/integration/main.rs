@@ -23,6 +23,7 @@ mod k8s;
 mod layers;
 mod leaves;
 mod like;
+mod particles;
 mod plate_cli;
 mod real_falls;
 mod real_falls_aero;

@@ -16,6 +16,13 @@ type V3 = Vector3<f64>;
 /// and the previewer play comfortably, and 8× fewer keys than a drop records.
 pub const DEFAULT_FPS: f64 = 30.0;
 
+/// The kind of a particle read from a point cloud (an Alembic `Points`
+/// object): drawn as a marker its width across.
+pub const POINT_KIND: &str = "point";
+
+/// The kind of a recorded fall without orientation, drawn as a marker.
+pub const MARKER_KIND: &str = "marker";
+
 /// How an object moves.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Motion {
@@ -101,6 +108,46 @@ impl ClipObject {
             motion: Motion::Deforming { frames },
             first_frame: 0,
         }
+    }
+
+    /// A marker: three crossed lines of length `size` along the world
+    /// axes, centred on `translation` per frame, claiming no attitude (a
+    /// path from video, a particle of an Alembic point cloud). `kind` says
+    /// which ([`POINT_KIND`] for a particle); [`super::fall::fall_of`]
+    /// reads such an object's centre only.
+    pub fn marker(name: String, kind: &str, size: f64, translation: Vec<V3>) -> Self {
+        let h = 0.5 * size;
+        let local = (0..3)
+            .flat_map(|axis| {
+                let mut e = V3::zeros();
+                e[axis] = h;
+                [-e, e]
+            })
+            .collect();
+        let rotation = vec![UnitQuaternion::identity(); translation.len()];
+        ClipObject {
+            name,
+            kind: kind.to_string(),
+            label: String::new(),
+            regime: String::new(),
+            features: Vec::new(),
+            triangles: Vec::new(),
+            segments: vec![[0, 1], [2, 3], [4, 5]],
+            body: None,
+            render: None,
+            motion: Motion::Rigid {
+                local,
+                translation,
+                rotation,
+            },
+            first_frame: 0,
+        }
+    }
+
+    /// Whether it is a marker ([`Self::marker`]): a position whose drawn
+    /// lines say nothing of an attitude.
+    pub fn is_marker(&self) -> bool {
+        matches!(self.kind.as_str(), MARKER_KIND | POINT_KIND)
     }
 
     /// Number of frames its motion holds.

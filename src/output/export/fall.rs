@@ -249,6 +249,7 @@ fn listed(objects: &[&ClipObject], frames: usize, fps: f64) -> String {
         .take(LISTED)
         .map(|o| {
             let how = match o.motion {
+                _ if o.is_marker() => "point",
                 Motion::Rigid { .. } => "rigid",
                 Motion::Deforming { .. } => "deforming",
             };
@@ -445,7 +446,12 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
                 .unzip()
         }
     };
-    let principal = principal_frame(&rest, &o.triangles, &mass);
+    // A marker's crossed lines have moments but no attitude to read.
+    let principal = if o.is_marker() {
+        None
+    } else {
+        principal_frame(&rest, &o.triangles, &mass)
+    };
     let mut t = Trajectory::with_capacity(centre.len());
     for (k, c) in centre.iter().enumerate() {
         let time = k as f64 / fps;
@@ -455,10 +461,17 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
         }
     }
     let why = principal.is_none().then(|| {
-        format!(
-            "`{}` spans no plane (its vertices lie on a line or at a point): read from its centre only",
-            o.name
-        )
+        if o.is_marker() {
+            format!(
+                "`{}` is a point (a particle), with no attitude: read from its path only, sized by its width",
+                o.name
+            )
+        } else {
+            format!(
+                "`{}` spans no plane (its vertices lie on a line or at a point): read from its centre only",
+                o.name
+            )
+        }
     });
     (t, why)
 }

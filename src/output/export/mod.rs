@@ -39,8 +39,10 @@ mod usd_stage;
 mod usda_read;
 mod wind;
 
-pub use abc_read::read_abc;
-pub use clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count, resample_positions};
+pub use abc_read::{DEFAULT_POINT_WIDTH_M, MAX_DEATHS_PER_SAMPLE, read_abc};
+pub use clip::{
+    Clip, ClipObject, DEFAULT_FPS, MARKER_KIND, Motion, POINT_KIND, frame_count, resample_positions,
+};
 pub use drops::{drop_clip, drop_clip_released, drop_individuals, side_by_side};
 pub use error::ExportError;
 pub use format::{Format, UnknownFormat};

@@ -10,7 +10,7 @@ use crate::motion::classify;
 use crate::motion::trajectory::Trajectory;
 use crate::output::export::fall::{self, AnimationFormat};
 use crate::output::export::{
-    self, Clip, ClipObject, DEFAULT_FPS, ExportError, Motion, glb::colour,
+    self, Clip, ClipObject, DEFAULT_FPS, ExportError, MARKER_KIND, Motion, POINT_KIND, glb::colour,
 };
 use base64::Engine as _;
 use nalgebra::Vector3;
@@ -249,8 +249,9 @@ pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
         .par_iter()
         .map(|o| {
             let falls = o.label.is_empty()
-                && !o.triangles.is_empty()
-                && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet")
+                && ((!o.triangles.is_empty()
+                    && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
+                    || o.kind == POINT_KIND)
                 && o.frame_count() > 1;
             if !falls {
                 return None;
@@ -412,43 +413,31 @@ pub fn from_record(
     });
     let r = trajectory.resampled(fps);
     let frames = r.time.len();
-    let h = 0.5 * chord;
-    let (kind, local, triangles, segments, rotation) = if trajectory.has_orientation() {
+    let object = if trajectory.has_orientation() {
         // Corners on the body axes' diagonals: a square of diagonal `chord`.
-        let side = h * std::f64::consts::FRAC_1_SQRT_2;
+        let side = 0.5 * chord * std::f64::consts::FRAC_1_SQRT_2;
         let local = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
             .map(|(x, y)| Vector3::new(x * side, y * side, 0.0))
             .to_vec();
-        let triangles = vec![[0, 1, 2], [0, 2, 3]];
-        ("leaf", local, triangles, Vec::new(), r.orientation.clone())
+        ClipObject {
+            name: name.to_string(),
+            kind: "leaf".to_string(),
+            label: String::new(),
+            regime: String::new(),
+            features: Vec::new(),
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            segments: Vec::new(),
+            body: None,
+            render: None,
+            motion: Motion::Rigid {
+                local,
+                translation: r.position.clone(),
+                rotation: r.orientation.clone(),
+            },
+            first_frame: 0,
+        }
     } else {
-        let local = (0..3)
-            .flat_map(|axis| {
-                let mut e = Vector3::zeros();
-                e[axis] = h;
-                [-e, e]
-            })
-            .collect();
-        let segments = vec![[0, 1], [2, 3], [4, 5]];
-        let identity = vec![nalgebra::UnitQuaternion::identity(); frames];
-        ("marker", local, Vec::new(), segments, identity)
-    };
-    let object = ClipObject {
-        name: name.to_string(),
-        kind: kind.to_string(),
-        label: String::new(),
-        regime: String::new(),
-        features: Vec::new(),
-        triangles,
-        segments,
-        body: None,
-        render: None,
-        motion: Motion::Rigid {
-            local,
-            translation: r.position.clone(),
-            rotation,
-        },
-        first_frame: 0,
+        ClipObject::marker(name.to_string(), MARKER_KIND, chord, r.position.clone())
     };
     // The whole path as a still trail beside it, so that the fall shows
     // against something when the camera follows it (a record has no
