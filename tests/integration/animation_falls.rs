@@ -1375,7 +1375,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
         let keys = export::fall::read_clip(&twin, None).unwrap();
         let (data, objects) = page_objects(&html);
         let mut classified = 0;
-        for (page, read) in objects.iter().zip(&keys.objects) {
+        for (index, (page, read)) in objects.iter().zip(&keys.objects).enumerate() {
             assert_eq!(page.name, read.name);
             if page.name == "ground" {
                 assert_eq!(page.label, "", "{file}: the still ground is not a fall");
@@ -1396,8 +1396,22 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
                 (page.first, page.frames.len()),
                 (read.first_frame, read.frame_count())
             );
+            // A particle's page holds its centre and its size.
+            let marker = data["objects"][index]["marker"].as_f64();
+            if read.is_marker() {
+                let size = export::fall::chord(&read.positions(0));
+                assert!((marker.unwrap() - size).abs() < 1e-12 * size);
+            } else {
+                assert_eq!(marker, None);
+            }
             for (k, frame) in page.frames.iter().enumerate() {
-                for (a, b) in frame.iter().zip(read.positions(k)) {
+                let at = if read.is_marker() {
+                    vec![read.centre(k)]
+                } else {
+                    read.positions(k)
+                };
+                assert_eq!(frame.len(), at.len());
+                for (a, b) in frame.iter().zip(at) {
                     assert!(
                         (a - b).norm() <= 1e-6 * (1.0 + b.norm()),
                         "{file} {}",

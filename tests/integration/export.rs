@@ -1311,6 +1311,37 @@ fn the_preview_page_shows_particles_only_while_they_live_in_headless_chromium() 
             assert_eq!(near_centre, 0, "{hash}: a leaf is drawn outside its life");
         }
     }
+    // A particle of Blender's cache comes as its centre and size, and the
+    // viewer draws its three crossed lines about it: followed, they reach
+    // out on all four sides of the centre of the view (its vertical line
+    // above and below, the other two left and right), where a marker
+    // drawn from its centre alone would be a point or one ray.
+    let cache = dir.join("particles.html");
+    let o = leafmagic()
+        .arg("preview")
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/particles/leaves.abc"))
+        .arg("--out")
+        .arg(&cache)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let hash = "t=1.0&follow=tree%2Fleaves%2F2";
+    let px = screenshot(&browser, &cache, hash, &dir.join("particle.png"));
+    let count = |xs: std::ops::Range<usize>, ys: std::ops::Range<usize>| {
+        ys.flat_map(|y| xs.clone().map(move |x| (x, y)))
+            .filter(|&(x, y)| drawn(px[y * WIDTH as usize + x]))
+            .count()
+    };
+    let sides = [
+        count(cx - 3..cx + 3, cy - 70..cy - 30),
+        count(cx - 3..cx + 3, cy + 30..cy + 70),
+        count(cx - 70..cx - 30, cy - 60..cy + 60),
+        count(cx + 30..cx + 70, cy - 60..cy + 60),
+    ];
+    assert!(
+        sides.iter().all(|&n| n > 0),
+        "{hash}: the marker's lines reach {sides:?} px above, below, left and right"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

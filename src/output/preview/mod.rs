@@ -483,33 +483,47 @@ const TRAIL_POINTS: usize = 2000;
 
 /// The page's data as JSON: names, labels, colours, topology, and every
 /// object's vertex positions per frame of its life (from clip frame
-/// `first`) as base64 float32.
+/// `first`) as base64 float32; of a marker, its centre and its size.
 pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
     let b64 = base64::engine::general_purpose::STANDARD;
     let objects: Vec<serde_json::Value> = clip
         .objects
         .iter()
         .map(|o| {
-            let mut bytes = Vec::with_capacity(o.frame_count() * o.vertex_count() * 12);
+            let n = page_vertices(o);
+            let mut bytes = Vec::with_capacity(o.frame_count() * n * 12);
             for k in 0..o.frame_count() {
-                for p in o.positions(k) {
+                let points = if o.is_marker() {
+                    vec![o.centre(k)]
+                } else {
+                    o.positions(k)
+                };
+                for p in points {
                     for c in [p.x, p.y, p.z] {
                         bytes.extend_from_slice(&(c as f32).to_le_bytes());
                     }
                 }
             }
-            json!({
+            let mut object = json!({
                 "name": o.name,
                 "kind": o.kind,
                 "label": o.label,
                 "color": colour(o),
-                "n": o.vertex_count(),
+                "n": n,
                 "first": o.first_frame,
                 "still": o.kind == TRAIL,
                 "tris": o.triangles.iter().flatten().collect::<Vec<_>>(),
                 "segs": o.segments.iter().flatten().collect::<Vec<_>>(),
                 "pos": b64.encode(&bytes),
-            })
+            });
+            if o.is_marker() {
+                // Its centre per frame, and its size: the viewer draws the
+                // three crossed lines (a particle cache's thousands of
+                // markers take a sixth of the page).
+                object["marker"] = json!(fall::chord(&o.positions(0)));
+                object["segs"] = json!([]);
+            }
+            object
         })
         .collect();
     json!({
@@ -521,6 +535,12 @@ pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
         "wind": clip.wind,
         "objects": objects,
     })
+}
+
+/// How many vertices per frame the page holds of `o`: one for a marker
+/// (its centre; [`data_json`]), else all.
+fn page_vertices(o: &ClipObject) -> usize {
+    if o.is_marker() { 1 } else { o.vertex_count() }
 }
 
 fn escape_html(s: &str) -> String {
@@ -543,7 +563,7 @@ pub fn page_data_chars(clip: &Clip) -> usize {
     clip.objects
         .iter()
         .map(|o| {
-            let bytes = o.frame_count() * o.vertex_count() * 12;
+            let bytes = o.frame_count() * page_vertices(o) * 12;
             let indices = 3 * o.triangles.len() + 2 * o.segments.len();
             4 * bytes.div_ceil(3) + 12 * indices + 512 + 2 * (o.name.len() + o.label.len())
         })
@@ -691,6 +711,24 @@ mod tests {
             "{estimate} against {data}"
         );
         assert!(html(&clip, false).is_ok());
+        // A thousand particles over 240 frames: a marker's centre per frame.
+        let particles: Vec<ClipObject> = (0..1000)
+            .map(|k| {
+                let path = (0..240).map(|f| V3::new(k as f64, 0.0, -0.01 * f as f64));
+                ClipObject::marker(format!("leaves/{k}"), POINT_KIND, 0.04, path.collect())
+            })
+            .collect();
+        let clip = Clip::read("cache", 24.0, 240, particles).unwrap();
+        let data = serde_json::to_string(&data_json(&clip, false))
+            .unwrap()
+            .len();
+        let estimate = page_data_chars(&clip);
+        // Within a fifth: the 512 characters kept per object for its name
+        // and keys weigh more beside 240 centres than beside a leaf's frames.
+        assert!(
+            estimate >= data && estimate < data + data / 5,
+            "{estimate} against {data}"
+        );
         // A rigid mesh of a million vertices over 100 frames at 30 fps:
         // 1.2 GB of float32, 1.6 billion characters of base64. Refused
         // before anything is built, with the rate that would fit.

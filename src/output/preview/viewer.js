@@ -15,11 +15,14 @@
   }
   // Each object holds the frames of its own life, from clip frame `first`
   // (a particle born or killed during the shot); outside it, it is hidden.
+  // A marker (a particle, a path from video) comes as its centre per frame
+  // and its size, and is drawn as three crossed lines that size.
   const objs = data.objects.map(function (o) {
     const P = f32(o.pos);
-    return { name: o.name, kind: o.kind, label: o.label, color: o.color, n: o.n,
-      tris: o.tris, segs: o.segs, P: P, first: o.first || 0, still: !!o.still,
-      frames: o.n > 0 ? P.length / (o.n * 3) : 1, shown: true, cur: new Float32Array(o.n * 3) };
+    const mk = o.marker || 0, n = mk ? 6 : o.n;
+    return { name: o.name, kind: o.kind, label: o.label, color: o.color, n: n, np: o.n, mk: mk,
+      tris: o.tris, segs: mk ? [0, 1, 2, 3, 4, 5] : o.segs, P: P, first: o.first || 0, still: !!o.still,
+      frames: o.n > 0 ? P.length / (o.n * 3) : 1, shown: true, cur: new Float32Array(n * 3) };
   });
   const F = data.frames, fps = data.fps, T = Math.max(0, (F - 1) / fps);
   // More labelled objects than this in view, and only the followed one is labelled.
@@ -72,8 +75,17 @@
       const k = Math.min(Math.floor(fc), Math.max(G - 2, 0));
       const a = G > 1 ? fc - k : 0;
       const k1 = G > 1 ? k + 1 : k;
-      const s = k * o.n * 3, e = k1 * o.n * 3, P = o.P, c = o.cur;
-      for (let i = 0; i < o.n * 3; i++) c[i] = P[s + i] * (1 - a) + P[e + i] * a;
+      const s = k * o.np * 3, e = k1 * o.np * 3, P = o.P, c = o.cur;
+      for (let i = 0; i < o.np * 3; i++) c[i] = P[s + i] * (1 - a) + P[e + i] * a;
+      if (o.mk) {
+        const x = c[0], y = c[1], z = c[2], h = o.mk / 2;
+        for (let i = 0; i < 6; i++) {
+          const d = i >> 1, sg = i & 1 ? 1 : -1;
+          c[3 * i] = x + (d === 0 ? sg * h : 0);
+          c[3 * i + 1] = y + (d === 1 ? sg * h : 0);
+          c[3 * i + 2] = z + (d === 2 ? sg * h : 0);
+        }
+      }
       // Side by side, bred leaves fall at different speeds and drift, and
       // soon lie metres apart; aligned, each is drawn about its centre of
       // mass in its own place of the grid (its descent and drift go into
@@ -82,7 +94,7 @@
       for (let i = 0; i < o.n; i++) for (let d = 0; d < 3; d++) m[d] += c[3 * i + d] / o.n;
       if (!o.home) o.home = [0, 1, 2].map(function (d) {
         let h = 0;
-        for (let i = 0; i < o.n; i++) h += P[3 * i + d] / o.n;
+        for (let i = 0; i < o.np; i++) h += P[3 * i + d] / o.np;
         return h;
       });
       o.z = m[2] - o.home[2];

@@ -15,9 +15,10 @@ written in its frame under a moving Xform.
   so none dies during the shot; Blender's exporter (default options, y up)
   writes each living particle with its place in the list as `.pointIds`,
   which is its own number while none has died.
-- `dying.abc`: 12 particles emitted over frames 1-24 with a lifetime of 10
-  frames, so from frame 11 on particles die, some in the very frame
-  another is born, and the exporter renumbers the rest each time.
+- `dying.abc`: 12 particles emitted over frames 1-24, each living 12
+  frames less up to 60 % at random, so they die out of the order they
+  were born in, some in the very frame another is born, and the exporter
+  renumbers the rest each time.
 
 Beside each, `.blender.csv`: every living particle at every frame as
 Blender's particle system holds it, by its own index, world metres, z up:
@@ -26,7 +27,7 @@ frame, particle, x, y, z, size.
 import bpy, csv
 
 
-def shot(count, last, lifetime):
+def shot(count, last, lifetime, spread=0.0):
     bpy.ops.wm.read_factory_settings(use_empty=True)
     sc = bpy.context.scene
     sc.frame_start, sc.frame_end = 1, 36
@@ -47,6 +48,7 @@ def shot(count, last, lifetime):
     st.count = count
     st.frame_start, st.frame_end = 1, last
     st.lifetime = lifetime
+    st.lifetime_random = spread
     st.normal_factor = 0.2
     st.particle_size = 0.05
     st.size_random = 0.5
@@ -58,8 +60,11 @@ def shot(count, last, lifetime):
     return sc, em
 
 
-for name, count, last, lifetime in [("leaves", 6, 10, 100), ("dying", 12, 24, 10)]:
-    sc, em = shot(count, last, lifetime)
+for name, count, last, lifetime, spread in [
+    ("leaves", 6, 10, 100, 0.0),
+    ("dying", 12, 24, 12, 0.6),
+]:
+    sc, em = shot(count, last, lifetime, spread)
     with open(name + ".blender.csv", "w", newline="") as f:
         w = csv.writer(f)
         w.writerow(["frame", "particle", "x", "y", "z", "size"])
