@@ -1274,15 +1274,24 @@ fn the_preview_page_shows_particles_only_while_they_live_in_headless_chromium() 
         return;
     };
     let dir = scratch("chromium-lives");
-    let page = dir.join("leaves.html");
-    let o = leafmagic()
-        .arg("preview")
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/instanced/leaves.usda"))
-        .arg("--out")
-        .arg(&page)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    // The page `preview` makes of tests/data/`file`, at `dir`/`name`.
+    let preview = |file: &str, name: &str| {
+        let page = dir.join(name);
+        let o = leafmagic()
+            .arg("preview")
+            .arg(
+                Path::new(env!("CARGO_MANIFEST_DIR"))
+                    .join("tests/data")
+                    .join(file),
+            )
+            .arg("--out")
+            .arg(&page)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        page
+    };
+    let page = preview("usd/instanced/leaves.usda", "leaves.html");
     // Anything but the page's background (#1d2430): leaf, label or glyph.
     let drawn = |p: [u8; 3]| {
         let bg = [29, 36, 48];
@@ -1316,15 +1325,7 @@ fn the_preview_page_shows_particles_only_while_they_live_in_headless_chromium() 
     // out on all four sides of the centre of the view (its vertical line
     // above and below, the other two left and right), where a marker
     // drawn from its centre alone would be a point or one ray.
-    let cache = dir.join("particles.html");
-    let o = leafmagic()
-        .arg("preview")
-        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/particles/leaves.abc"))
-        .arg("--out")
-        .arg(&cache)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let cache = preview("particles/leaves.abc", "particles.html");
     let hash = "t=1.0&follow=tree%2Fleaves%2F2";
     let px = screenshot(&browser, &cache, hash, &dir.join("particle.png"));
     let count = |xs: std::ops::Range<usize>, ys: std::ops::Range<usize>| {

@@ -701,15 +701,20 @@ mod tests {
                 )
             }
         };
+        // The estimate is at least the page's data, and over it by less
+        // than `1 / over` of it.
+        let bounds = |clip: &Clip, over: usize| {
+            let data = serde_json::to_string(&data_json(clip, false))
+                .unwrap()
+                .len();
+            let estimate = page_data_chars(clip);
+            assert!(
+                estimate >= data && estimate < data + data / over,
+                "{estimate} against {data}"
+            );
+        };
         let clip = Clip::read("hundred", 30.0, 301, (0..100).map(leaf).collect()).unwrap();
-        let data = serde_json::to_string(&data_json(&clip, false))
-            .unwrap()
-            .len();
-        let estimate = page_data_chars(&clip);
-        assert!(
-            estimate >= data && estimate < data + data / 20,
-            "{estimate} against {data}"
-        );
+        bounds(&clip, 20);
         assert!(html(&clip, false).is_ok());
         // A thousand particles over 240 frames: a marker's centre per frame.
         let particles: Vec<ClipObject> = (0..1000)
@@ -718,17 +723,9 @@ mod tests {
                 ClipObject::marker(format!("leaves/{k}"), POINT_KIND, 0.04, path.collect())
             })
             .collect();
-        let clip = Clip::read("cache", 24.0, 240, particles).unwrap();
-        let data = serde_json::to_string(&data_json(&clip, false))
-            .unwrap()
-            .len();
-        let estimate = page_data_chars(&clip);
         // Within a fifth: the 512 characters kept per object for its name
         // and keys weigh more beside 240 centres than beside a leaf's frames.
-        assert!(
-            estimate >= data && estimate < data + data / 5,
-            "{estimate} against {data}"
-        );
+        bounds(&Clip::read("cache", 24.0, 240, particles).unwrap(), 5);
         // A rigid mesh of a million vertices over 100 frames at 30 fps:
         // 1.2 GB of float32, 1.6 billion characters of base64. Refused
         // before anything is built, with the rate that would fit.
