@@ -296,6 +296,18 @@ pub struct FallArgs {
     pub json: bool,
 }
 
+/// Arguments of `classify`: one recorded fall, or every fall of an
+/// animation file.
+#[derive(clap::Args, Debug)]
+pub struct ClassifyArgs {
+    /// The fall, and how to read it.
+    #[command(flatten)]
+    pub fall: FallArgs,
+    /// Classify every fall of an animation file (each moving mesh, and each particle of an Alembic points cache) and print one line each with the counts per class, instead of naming one with --object.
+    #[arg(long, conflicts_with = "object")]
+    pub all: bool,
+}
+
 /// Arguments of `accuracy`.
 #[derive(clap::Args, Debug)]
 pub struct AccuracyArgs {

@@ -21,8 +21,8 @@ mod scene;
 
 use anyhow::Result;
 use args::{
-    AccuracyArgs, BreedArgs, CheckArgs, CompareArgs, DropArgs, ExportArgs, FallArgs, MergeArgs,
-    PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
+    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, FallArgs,
+    MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -51,7 +51,7 @@ pub enum Command {
     Check(CheckArgs),
     /// Name the motion of a recorded fall (CSV by header names: t,x,y,z; orientation
     /// and projected areas optional).
-    Classify(FallArgs),
+    Classify(ClassifyArgs),
     /// The motion descriptors of one recorded fall (what `breed --like` and
     /// `compare` steer by), with which of them the record lets one measure.
     Describe(FallArgs),

@@ -1,14 +1,19 @@
 //! `classify`, `describe` and `compare`: what a recorded fall shows, the
 //! numbers `breed --like` steers by, and how far apart two falls are.
 
-use super::args::{CompareArgs, EachFile, FallArgs};
+use super::args::{ClassifyArgs, CompareArgs, EachFile, FallArgs};
 use super::{input, report};
-use anyhow::Result;
+use anyhow::{Result, bail};
 use leafmagic::motion::describe::{self, Descriptors};
 use serde_json::json;
 
-/// `classify`: names the motion of a recorded fall.
-pub fn classify(args: FallArgs) -> Result<()> {
+/// `classify`: names the motion of a recorded fall, or with `--all` of
+/// every fall of an animation file.
+pub fn classify(args: ClassifyArgs) -> Result<()> {
+    if args.all {
+        return classify_all(&args.fall);
+    }
+    let args = args.fall;
     let fall = args.read()?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     if args.json {
@@ -30,6 +35,82 @@ pub fn classify(args: FallArgs) -> Result<()> {
             "{}",
             report::motion::classified(&args.trajectory, traj.len(), c)
         );
+    }
+    Ok(())
+}
+
+/// `classify --all`: every fall of an animation file, each classified as
+/// `classify FILE --object NAME` classifies it ([`export::fall::classify_objects`]).
+fn classify_all(args: &FallArgs) -> Result<()> {
+    use leafmagic::motion::trajectory::UpAxis;
+    use leafmagic::output::export::{self, fall::AnimationFormat};
+    let path = &args.trajectory;
+    let Some(format) = AnimationFormat::of(path) else {
+        bail!(
+            "{}: --all classifies every fall of an animation file (.glb, .gltf, USD or Alembic); a CSV record holds one fall: leave --all out",
+            path.display()
+        );
+    };
+    if args.up != UpAxis::Z || args.frame_rate.is_some() {
+        bail!(
+            "{}: --up and --frame-rate apply to a CSV record; an animation file says its own up axis and rate",
+            path.display()
+        );
+    }
+    let alembic = format == AnimationFormat::Alembic;
+    if args.scale != 1.0 && !alembic {
+        bail!(
+            "{}: --scale applies to a CSV record or an Alembic archive; glTF and USD say their own units",
+            path.display()
+        );
+    }
+    input::check_size(args.size)?;
+    let mut clip = export::fall::read_clip(path, args.animation.as_deref())?;
+    if args.scale != 1.0 {
+        if !(args.scale > 0.0 && args.scale.is_finite()) {
+            bail!(
+                "--scale must be a positive number of metres per unit, got {}",
+                args.scale
+            );
+        }
+        clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
+    }
+    let classes = export::fall::classify_objects(&clip, args.size);
+    if args.json {
+        let objects: Vec<serde_json::Value> = clip
+            .objects
+            .iter()
+            .zip(&classes)
+            .filter_map(|(o, c)| {
+                let c = c.as_ref()?;
+                let last = o.first_frame + o.frame_count() - 1;
+                Some(json!({
+                    "object": o.name,
+                    "first_s": o.first_frame as f64 / clip.fps,
+                    "last_s": last as f64 / clip.fps,
+                    "class": c.class.as_str(),
+                    "regime": c.regime.as_str(),
+                    "inputs": c.inputs,
+                    "reason": c.reason,
+                }))
+            })
+            .collect();
+        let left_out: Vec<&str> = clip
+            .objects
+            .iter()
+            .zip(&classes)
+            .filter(|(_, c)| c.is_none())
+            .map(|(o, _)| o.name.as_str())
+            .collect();
+        let out = json!({
+            "file": path.display().to_string(),
+            "rate_hz": clip.fps,
+            "objects": objects,
+            "left_out": left_out,
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+    } else {
+        print!("{}", report::motion::classified_each(path, &clip, &classes));
     }
     Ok(())
 }

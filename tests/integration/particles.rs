@@ -118,3 +118,97 @@ fn classify_reads_a_particle_as_a_path_sized_by_its_width() {
     assert_eq!(v["inputs"], "path", "{v}");
     assert!(v["features"]["descent_m"].as_f64().unwrap() > 1.0, "{v}");
 }
+
+/// `classify --all` names every fall of a file as `classify --object`
+/// names each, with the tally, and leaves out what does not fall (a
+/// glTF's ground); flags that do not apply are refused by name.
+#[test]
+fn classify_all_names_every_fall_of_a_file_as_classify_object_does() {
+    let class_of = |file: &Path, object: &str| {
+        let o = leafmagic()
+            .arg("classify")
+            .arg(file)
+            .args(["--object", object, "--json"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        v["class"].as_str().unwrap().to_string()
+    };
+    let ground = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/blender/tumble_thick_with_ground.glb");
+    for (file, falls, left_out) in [(data("leaves.abc"), 7, 0), (ground, 1, 1)] {
+        let o = leafmagic()
+            .arg("classify")
+            .arg(&file)
+            .args(["--all", "--json"])
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+        let objects = v["objects"].as_array().unwrap();
+        assert_eq!(objects.len(), falls, "{v}");
+        assert_eq!(v["left_out"].as_array().unwrap().len(), left_out, "{v}");
+        for o in objects {
+            let name = o["object"].as_str().unwrap();
+            assert_eq!(
+                o["class"],
+                class_of(&file, name),
+                "{}: {name}",
+                file.display()
+            );
+        }
+        // The table: a line per fall and the tally.
+        let o = leafmagic()
+            .arg("classify")
+            .arg(&file)
+            .arg("--all")
+            .output()
+            .unwrap();
+        let table = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            table.contains(&format!("classified      {falls} fall")),
+            "{table}"
+        );
+        for o in objects {
+            let line = table
+                .lines()
+                .find(|l| l.starts_with(o["object"].as_str().unwrap()))
+                .unwrap();
+            assert!(line.contains(o["class"].as_str().unwrap()), "{line}");
+        }
+    }
+    let csv =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares/square_003.csv");
+    let abc = data("leaves.abc");
+    let glb = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/blender/tumble_thick.glb");
+    for (file, more, want) in [
+        (&csv, vec![], "a CSV record holds one fall"),
+        (&abc, vec!["--object", "tree/leaves/1"], "--object"),
+        (
+            &abc,
+            vec!["--up", "y"],
+            "--up and --frame-rate apply to a CSV record",
+        ),
+        (
+            &glb,
+            vec!["--scale", "0.01"],
+            "--scale applies to a CSV record or an Alembic archive",
+        ),
+        (
+            &abc,
+            vec!["--size", "0"],
+            "--size must be a positive number",
+        ),
+    ] {
+        let o = leafmagic()
+            .arg("classify")
+            .arg(file)
+            .arg("--all")
+            .args(&more)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert!(!o.status.success() && err.contains(want), "{more:?}: {err}");
+    }
+}

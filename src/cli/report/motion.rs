@@ -95,6 +95,69 @@ pub fn classified(path: &Path, samples: usize, c: &Classification) -> String {
     })
 }
 
+/// `classify --all`: the file, then each fall of it on a line (its name,
+/// when it lives, its class and regime), then the tally and what was left
+/// out.
+pub fn classified_each(
+    path: &Path,
+    clip: &leafmagic::output::export::Clip,
+    classes: &[Option<Classification>],
+) -> String {
+    text(|out| {
+        writeln!(
+            out,
+            "file            {} ({} objects, {} keys at {} Hz)",
+            path.display(),
+            clip.objects.len(),
+            clip.frames,
+            clip.fps
+        )?;
+        let width = clip
+            .objects
+            .iter()
+            .zip(classes)
+            .filter(|(_, c)| c.is_some())
+            .map(|(o, _)| o.name.chars().count())
+            .max()
+            .unwrap_or(0)
+            .max("object".len());
+        writeln!(
+            out,
+            "{:width$}  {:>13}  class (regime)",
+            "object", "life (s)"
+        )?;
+        for (o, c) in clip.objects.iter().zip(classes) {
+            let Some(c) = c else { continue };
+            let first = o.first_frame as f64 / clip.fps;
+            let last = (o.first_frame + o.frame_count() - 1) as f64 / clip.fps;
+            writeln!(
+                out,
+                "{:width$}  {:>13}  {} ({})",
+                o.name,
+                format!("{first:.2}–{last:.2}"),
+                c.class,
+                c.regime
+            )?;
+        }
+        let tally = super::output::class_tally(classes.iter().flatten().map(|c| c.class.as_str()));
+        writeln!(
+            out,
+            "classified      {}",
+            if tally.is_empty() { "none" } else { &tally }
+        )?;
+        let left = classes.iter().filter(|c| c.is_none()).count();
+        if left > 0 {
+            writeln!(
+                out,
+                "left out        {left} object{} that {} not fall (still, a rope or a prop, or labelled by leafmagic)",
+                if left == 1 { "" } else { "s" },
+                if left == 1 { "does" } else { "do" }
+            )?;
+        }
+        Ok(())
+    })
+}
+
 /// `describe`: the file, its class (with the inputs and reason), and each
 /// descriptor with its unit, its scale in distances and what it measures,
 /// or why the record could not give it.

@@ -45,22 +45,39 @@ pub fn preview(page: &Path, bytes: usize, preview: &Preview, elapsed_s: f64) -> 
 }
 
 /// "; classified K falls: N floater, …" when the preview labelled any
-/// falls of a file by their class, the most frequent class first.
+/// falls of a file by their class ([`class_tally`]).
 fn classified(preview: &Preview) -> String {
     let objects = &preview.clip.objects;
-    let mut tally: BTreeMap<&str, usize> = BTreeMap::new();
-    for &k in &preview.classified {
-        *tally.entry(objects[k].label.as_str()).or_default() += 1;
-    }
+    let tally = class_tally(
+        preview
+            .classified
+            .iter()
+            .map(|&k| objects[k].label.as_str()),
+    );
     if tally.is_empty() {
+        String::new()
+    } else {
+        format!("; classified {tally}")
+    }
+}
+
+/// "K falls: N floater, M spinner, …" of the classes given, the most
+/// frequent first; empty for none.
+pub fn class_tally<'a>(classes: impl IntoIterator<Item = &'a str>) -> String {
+    let mut tally: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut n = 0;
+    for c in classes {
+        *tally.entry(c).or_default() += 1;
+        n += 1;
+    }
+    if n == 0 {
         return String::new();
     }
     let mut classes: Vec<(&str, usize)> = tally.into_iter().collect();
     classes.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(b.0)));
     let list: Vec<String> = classes.iter().map(|(c, n)| format!("{n} {c}")).collect();
-    let n = preview.classified.len();
     format!(
-        "; classified {n} fall{}: {}",
+        "{n} fall{}: {}",
         if n == 1 { "" } else { "s" },
         list.join(", ")
     )

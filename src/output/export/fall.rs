@@ -34,6 +34,7 @@ use super::error::ExportError;
 use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
 use super::read::read_gltf_keys;
 use super::usda_read::read_usd_file;
+use crate::motion::classify::{Classification, classify};
 use crate::motion::trajectory::Trajectory;
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -209,6 +210,35 @@ pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportErr
         ExportError::Data(reason) => ExportError::input(path, reason),
         e => e,
     })
+}
+
+/// Whether `o` is a fall to classify: a surface that moves (a mesh, leaf
+/// or sheet) or a particle, with more than one frame, unlabelled (a
+/// leafmagic file's leaves keep their class), within
+/// [`MAX_COORDINATE_M`]. Still objects, ropes and rigid props are not.
+fn is_fall(o: &ClipObject, chord: f64) -> bool {
+    let kind = (!o.triangles.is_empty() && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
+        || o.kind == super::clip::POINT_KIND;
+    o.label.is_empty() && kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
+}
+
+/// Every object of `clip` classified as `classify FILE --object NAME`
+/// classifies it ([`fall_of`] at the clip's keys, sized by `size` or its
+/// chord; a particle by its width), in parallel; `None` for an object
+/// that is no fall to classify (still, a rope or a prop, or labelled).
+pub fn classify_objects(clip: &Clip, size: Option<f64>) -> Vec<Option<Classification>> {
+    use rayon::prelude::*;
+    clip.objects
+        .par_iter()
+        .map(|o| {
+            let chord = chord(&o.positions(0));
+            if !is_fall(o, chord) {
+                return None;
+            }
+            let (trajectory, _) = fall_of(o, clip.fps);
+            Some(classify(&trajectory, size.unwrap_or(chord)))
+        })
+        .collect()
 }
 
 /// Farthest a vertex may be from the origin, m: a thousand kilometres,

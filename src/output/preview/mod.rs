@@ -6,17 +6,15 @@
 //! keeps 100 leaves × 10 s × 30 fps near 3.4 MB.
 
 use crate::breed::{self, Run};
-use crate::motion::classify;
 use crate::motion::trajectory::Trajectory;
 use crate::output::export::fall::{self, AnimationFormat};
 use crate::output::export::{
-    self, Clip, ClipObject, DEFAULT_FPS, ExportError, MARKER_KIND, Motion, POINT_KIND, glb::colour,
+    self, Clip, ClipObject, DEFAULT_FPS, ExportError, MARKER_KIND, Motion, glb::colour,
 };
 use base64::Engine as _;
 use nalgebra::Vector3;
 
 type V3 = Vector3<f64>;
-use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
 
@@ -234,41 +232,19 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
     })
 }
 
-/// Labels each object of `clip` that falls (it has a surface and moves)
-/// and carries no label of its own with the class and regime `classify`
-/// gives its fall ([`fall::fall_of`], sized by its chord as `classify`
-/// sizes a file's fall), so that a client's cache shows which leaves
-/// float, spin or lilt; returns the indices of those it labelled.
+/// Labels each object of `clip` that falls (it has a surface and moves,
+/// or is a particle) and carries no label of its own with the class and
+/// regime `classify` gives its fall ([`fall::classify_objects`], sized as
+/// `classify` sizes a file's fall), so that a client's cache shows which
+/// leaves float, spin or lilt; returns the indices of those it labelled.
 /// Leafmagic's own files keep their labels (a bred leaf's class), and
-/// ropes and rigid props are left as they are. The objects are classified in parallel;
-/// each label depends on its object alone.
+/// ropes and rigid props are left as they are.
 pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
-    let fps = clip.fps;
-    let labels: Vec<Option<(String, String)>> = clip
-        .objects
-        .par_iter()
-        .map(|o| {
-            let falls = o.label.is_empty()
-                && ((!o.triangles.is_empty()
-                    && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
-                    || o.kind == POINT_KIND)
-                && o.frame_count() > 1;
-            if !falls {
-                return None;
-            }
-            let chord = fall::chord(&o.positions(0));
-            if !fall::moves(o, chord) || fall::far_out(o).is_err() {
-                return None;
-            }
-            let (trajectory, _) = fall::fall_of(o, fps);
-            let c = classify::classify(&trajectory, chord);
-            Some((c.class.to_string(), c.regime.to_string()))
-        })
-        .collect();
+    let labels = fall::classify_objects(clip, None);
     let mut labelled = Vec::new();
     for (k, (o, label)) in clip.objects.iter_mut().zip(labels).enumerate() {
-        if let Some((class, regime)) = label {
-            (o.label, o.regime) = (class, regime);
+        if let Some(c) = label {
+            (o.label, o.regime) = (c.class.to_string(), c.regime.to_string());
             labelled.push(k);
         }
     }
@@ -720,7 +696,12 @@ mod tests {
         let particles: Vec<ClipObject> = (0..1000)
             .map(|k| {
                 let path = (0..240).map(|f| V3::new(k as f64, 0.0, -0.01 * f as f64));
-                ClipObject::marker(format!("leaves/{k}"), POINT_KIND, 0.04, path.collect())
+                ClipObject::marker(
+                    format!("leaves/{k}"),
+                    export::POINT_KIND,
+                    0.04,
+                    path.collect(),
+                )
             })
             .collect();
         // Within a fifth: the 512 characters kept per object for its name
