@@ -65,14 +65,14 @@ fn classify_all(args: &FallArgs) -> Result<()> {
         );
     }
     input::check_size(args.size)?;
+    if !(args.scale > 0.0 && args.scale.is_finite()) {
+        bail!(
+            "--scale must be a positive number of metres per unit, got {}",
+            args.scale
+        );
+    }
     let mut clip = export::fall::read_clip(path, args.animation.as_deref())?;
     if args.scale != 1.0 {
-        if !(args.scale > 0.0 && args.scale.is_finite()) {
-            bail!(
-                "--scale must be a positive number of metres per unit, got {}",
-                args.scale
-            );
-        }
         clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
     }
     let classes = export::fall::classify_objects(&clip, args.size);

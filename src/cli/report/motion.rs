@@ -149,7 +149,7 @@ pub fn classified_each(
         if left > 0 {
             writeln!(
                 out,
-                "left out        {left} object{} that {} not fall (still, a rope or a prop, or labelled by leafmagic)",
+                "left out        {left} object{} that {} not fall (still, a rope or a prop)",
                 if left == 1 { "" } else { "s" },
                 if left == 1 { "does" } else { "do" }
             )?;

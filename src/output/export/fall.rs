@@ -213,19 +213,18 @@ pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportErr
 }
 
 /// Whether `o` is a fall to classify: a surface that moves (a mesh, leaf
-/// or sheet) or a particle, with more than one frame, unlabelled (a
-/// leafmagic file's leaves keep their class), within
+/// or sheet) or a particle, with more than one frame, within
 /// [`MAX_COORDINATE_M`]. Still objects, ropes and rigid props are not.
 fn is_fall(o: &ClipObject, chord: f64) -> bool {
     let kind = (!o.triangles.is_empty() && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
         || o.kind == super::clip::POINT_KIND;
-    o.label.is_empty() && kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
+    kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
 }
 
 /// Every object of `clip` classified as `classify FILE --object NAME`
 /// classifies it ([`fall_of`] at the clip's keys, sized by `size` or its
 /// chord; a particle by its width), in parallel; `None` for an object
-/// that is no fall to classify (still, a rope or a prop, or labelled).
+/// that is no fall to classify (still, a rope or a prop).
 pub fn classify_objects(clip: &Clip, size: Option<f64>) -> Vec<Option<Classification>> {
     use rayon::prelude::*;
     clip.objects

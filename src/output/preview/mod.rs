@@ -243,7 +243,7 @@ pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
     let labels = fall::classify_objects(clip, None);
     let mut labelled = Vec::new();
     for (k, (o, label)) in clip.objects.iter_mut().zip(labels).enumerate() {
-        if let Some(c) = label {
+        if let Some(c) = label.filter(|_| o.label.is_empty()) {
             (o.label, o.regime) = (c.class.to_string(), c.regime.to_string());
             labelled.push(k);
         }
