@@ -29,7 +29,7 @@ pub fn problem(arg: &str) -> Result<(String, Model, State)> {
 
 /// The chord `classify` assumes for a CSV record when no `--size` is
 /// given, m (an animation file gives its mesh's own).
-pub const DEFAULT_SIZE_M: f64 = 0.05;
+pub const DEFAULT_SIZE_M: f64 = leafmagic::motion::classify::DEFAULT_CHORD_M;
 
 /// A recorded fall as read: the record, what reading it noted, and what
 /// an animation file told of it.

@@ -75,7 +75,7 @@ fn classify_all(args: &FallArgs) -> Result<()> {
     if args.scale != 1.0 {
         clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
     }
-    let classes = export::fall::classify_objects(&clip, args.size);
+    let classes = export::fall::classify_objects(&clip, args.size, |_| true);
     if args.json {
         let objects: Vec<serde_json::Value> = clip
             .objects
@@ -83,11 +83,11 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             .zip(&classes)
             .filter_map(|(o, c)| {
                 let c = c.as_ref()?;
-                let last = o.first_frame + o.frame_count() - 1;
+                let (first, last) = o.life_s(clip.fps);
                 Some(json!({
                     "object": o.name,
-                    "first_s": o.first_frame as f64 / clip.fps,
-                    "last_s": last as f64 / clip.fps,
+                    "first_s": first,
+                    "last_s": last,
                     "class": c.class.as_str(),
                     "regime": c.regime.as_str(),
                     "inputs": c.inputs,

@@ -1616,16 +1616,21 @@ fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
     for (scene, seconds, frames, objects) in
         [("ground-blow", "0.5", 16, 16), ("rocking-bin", "1", 31, 1)]
     {
-        let dir = scratch(&format!("abc-{scene}"));
-        let o = leafmagic()
-            .arg("scene")
-            .arg(format!("scenes/{scene}.toml"))
-            .args(["--seconds", seconds, "--export", "abc", "--out"])
-            .arg(&dir)
-            .current_dir(repo)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        // The scene's run exported as `format` into a scratch directory.
+        let export = |format: &str| {
+            let dir = scratch(&format!("abc-{scene}-{format}"));
+            let o = leafmagic()
+                .arg("scene")
+                .arg(format!("scenes/{scene}.toml"))
+                .args(["--seconds", seconds, "--export", format, "--out"])
+                .arg(&dir)
+                .current_dir(repo)
+                .output()
+                .unwrap();
+            assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+            dir
+        };
+        let dir = export("abc");
         // The exporter writes the committed archive byte for byte (the
         // simulation is reproducible), so what Blender read of it below,
         // points and UVs, is what this exporter writes. A deliberate change
@@ -1695,16 +1700,7 @@ fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
         // The texture coordinates: Blender's UV map of each archive, per
         // face corner, is the UV the OBJ of a PC2 export gives that
         // corner's vertex (the same UVs the USD and glTF exports carry).
-        let pc2 = scratch(&format!("abc-{scene}-pc2"));
-        let o = leafmagic()
-            .arg("scene")
-            .arg(format!("scenes/{scene}.toml"))
-            .args(["--seconds", seconds, "--export", "pc2", "--out"])
-            .arg(&pc2)
-            .current_dir(repo)
-            .output()
-            .unwrap();
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let pc2 = export("pc2");
         let mut corners = 0;
         let mut r =
             csv::Reader::from_path(repo.join(format!("tests/data/abc/{scene}.blender.uv.csv")))

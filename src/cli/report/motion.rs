@@ -128,8 +128,7 @@ pub fn classified_each(
         )?;
         for (o, c) in clip.objects.iter().zip(classes) {
             let Some(c) = c else { continue };
-            let first = o.first_frame as f64 / clip.fps;
-            let last = (o.first_frame + o.frame_count() - 1) as f64 / clip.fps;
+            let (first, last) = o.life_s(clip.fps);
             writeln!(
                 out,
                 "{:width$}  {:>13}  {} ({})",

@@ -95,6 +95,11 @@ use rules::decide;
 
 // ---------------------------------------------------------------- thresholds
 
+/// The chord a fall is classified at when nothing gives its size (a CSV
+/// record without `--size`, a particle whose cache has no widths), m: a
+/// leaf of the prototypes' size (prototype A's chord is 4.8 cm).
+pub const DEFAULT_CHORD_M: f64 = 0.05;
+
 /// Lowest accepted sampling rate, Hz: film's 24 frames per second (and,
 /// with [`SAMPLE_RATE_TOLERANCE`], NTSC's 23.976), the slowest rate an
 /// animation pipeline bakes a simulation at. Every rule is written in

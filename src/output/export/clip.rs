@@ -158,6 +158,13 @@ impl ClipObject {
         }
     }
 
+    /// When it lives in a clip at `fps`, s: the times of its first and
+    /// last frames.
+    pub fn life_s(&self, fps: f64) -> (f64, f64) {
+        let last = self.first_frame + self.frame_count().max(1) - 1;
+        (self.first_frame as f64 / fps, last as f64 / fps)
+    }
+
     /// Whether it lives the whole of a clip of `frames` frames.
     pub fn lives_whole(&self, frames: usize) -> bool {
         self.first_frame == 0 && self.frame_count() == frames
@@ -303,8 +310,7 @@ impl Clip {
             .iter()
             .map(|o| {
                 let own = o.frame_count();
-                let born = o.first_frame as f64 / self.fps;
-                let dies = (o.first_frame + own.max(1) - 1) as f64 / self.fps;
+                let (born, dies) = o.life_s(self.fps);
                 let mut first = ((born * fps) - 1e-9).ceil().max(0.0) as usize;
                 let last = ((dies * fps) + 1e-9).floor() as usize;
                 let mut count = (last + 1)

@@ -221,15 +221,23 @@ fn is_fall(o: &ClipObject, chord: f64) -> bool {
     kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
 }
 
-/// Every object of `clip` classified as `classify FILE --object NAME`
-/// classifies it ([`fall_of`] at the clip's keys, sized by `size` or its
-/// chord; a particle by its width), in parallel; `None` for an object
-/// that is no fall to classify (still, a rope or a prop).
-pub fn classify_objects(clip: &Clip, size: Option<f64>) -> Vec<Option<Classification>> {
+/// Every object of `clip` that `wanted` names classified as `classify
+/// FILE --object NAME` classifies it ([`fall_of`] at the clip's keys, sized
+/// by `size` or its chord; a particle by its width), in parallel; `None`
+/// for an object not wanted or that is no fall to classify (still, a rope
+/// or a prop).
+pub fn classify_objects(
+    clip: &Clip,
+    size: Option<f64>,
+    wanted: impl Fn(&ClipObject) -> bool + Sync,
+) -> Vec<Option<Classification>> {
     use rayon::prelude::*;
     clip.objects
         .par_iter()
         .map(|o| {
+            if !wanted(o) {
+                return None;
+            }
             let chord = chord(&o.positions(0));
             if !is_fall(o, chord) {
                 return None;
@@ -285,12 +293,10 @@ fn listed(objects: &[&ClipObject], frames: usize, fps: f64) -> String {
             if o.lives_whole(frames) {
                 format!("`{}` ({how})", o.name)
             } else {
-                let last = o.first_frame + o.frame_count().max(1) - 1;
+                let (born, dies) = o.life_s(fps);
                 format!(
-                    "`{}` ({how}, {:.2}–{:.2} s of {:.2} s)",
+                    "`{}` ({how}, {born:.2}–{dies:.2} s of {:.2} s)",
                     o.name,
-                    o.first_frame as f64 / fps,
-                    last as f64 / fps,
                     frames.saturating_sub(1) as f64 / fps
                 )
             }

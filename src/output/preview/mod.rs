@@ -240,10 +240,10 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
 /// Leafmagic's own files keep their labels (a bred leaf's class), and
 /// ropes and rigid props are left as they are.
 pub fn label_falls(clip: &mut Clip) -> Vec<usize> {
-    let labels = fall::classify_objects(clip, None);
+    let labels = fall::classify_objects(clip, None, |o| o.label.is_empty());
     let mut labelled = Vec::new();
     for (k, (o, label)) in clip.objects.iter_mut().zip(labels).enumerate() {
-        if let Some(c) = label.filter(|_| o.label.is_empty()) {
+        if let Some(c) = label {
             (o.label, o.regime) = (c.class.to_string(), c.regime.to_string());
             labelled.push(k);
         }

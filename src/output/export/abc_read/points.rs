@@ -36,7 +36,7 @@ type M4 = Matrix4<f64>;
 /// Width a particle is drawn and classified at when its cloud has no
 /// `.widths`, m: the chord `classify` takes for a record that does not say
 /// (`leafmagic classify --size` sets another).
-pub const DEFAULT_POINT_WIDTH_M: f64 = 0.05;
+pub const DEFAULT_POINT_WIDTH_M: f64 = crate::motion::classify::DEFAULT_CHORD_M;
 
 /// Most particles that may be gone between two samples of a renumbered
 /// cloud: following them costs up to this many steps per point (module
@@ -190,44 +190,50 @@ fn identities(
 /// are born, numbered on from the highest so far. Each point is predicted
 /// at its last place plus its last displacement.
 fn follow(points: &[Sample], widths: Option<&Widths>) -> Result<Vec<Vec<u64>>, String> {
-    let width = |t: f64, j: usize| {
-        widths
-            .and_then(|w| w.at(t, j))
-            .unwrap_or(DEFAULT_POINT_WIDTH_M)
+    // Each sample's points and widths, taken once: a sample's widths are
+    // the price of its points born, then of its points gone.
+    let places = |p: &[f64]| -> Vec<V3> {
+        p.chunks_exact(3)
+            .map(|c| V3::new(c[0], c[1], c[2]))
+            .collect()
     };
-    let at = |p: &[f64], j: usize| V3::new(p[3 * j], p[3 * j + 1], p[3 * j + 2]);
+    let sized = |t: f64, n: usize| -> Vec<f64> {
+        (0..n)
+            .map(|j| {
+                widths
+                    .and_then(|w| w.at(t, j))
+                    .unwrap_or(DEFAULT_POINT_WIDTH_M)
+            })
+            .collect()
+    };
+    let mut old = places(&points[0].1);
+    let mut old_widths = sized(points[0].0, old.len());
     let mut out: Vec<Vec<u64>> = Vec::with_capacity(points.len());
-    out.push((0..points[0].1.len() as u64 / 3).collect());
-    let mut next = out[0].len() as u64;
-    // Each identity's last displacement (file units per sample).
-    let mut moved: BTreeMap<u64, V3> = BTreeMap::new();
+    out.push((0..old.len() as u64).collect());
+    let mut next = old.len() as u64;
+    // Each old point's last displacement (file units per sample).
+    let mut moved = vec![V3::zeros(); old.len()];
     for s in 1..points.len() {
-        let (t0, old) = (points[s - 1].0, &points[s - 1].1);
-        let (t1, new) = (points[s].0, &points[s].1);
-        let (n, m) = (old.len() / 3, new.len() / 3);
-        let predicted: Vec<V3> = (0..n)
-            .map(|i| at(old, i) + moved.get(&out[s - 1][i]).copied().unwrap_or_default())
-            .collect();
-        let fresh: Vec<V3> = (0..m).map(|j| at(new, j)).collect();
-        let gone: Vec<f64> = (0..n).map(|i| width(t0, i)).collect();
-        let born: Vec<f64> = (0..m).map(|j| width(t1, j)).collect();
-        let survived = align(&predicted, &fresh, &gone, &born).ok_or_else(|| {
+        let (t0, t1) = (points[s - 1].0, points[s].0);
+        let fresh = places(&points[s].1);
+        let fresh_widths = sized(t1, fresh.len());
+        let predicted: Vec<V3> = old.iter().zip(&moved).map(|(x, v)| x + v).collect();
+        let survived = align(&predicted, &fresh, &old_widths, &fresh_widths).ok_or_else(|| {
             format!(
                 "its points are renumbered at every sample (as Blender's exporter writes particles), and between {t0} s and {t1} s over {MAX_DEATHS_PER_SAMPLE} of them are gone: too many to tell which"
             )
         })?;
-        let mut row = Vec::with_capacity(m);
-        let mut now = BTreeMap::new();
+        let mut row = Vec::with_capacity(fresh.len());
+        let mut now = vec![V3::zeros(); fresh.len()];
         for (j, &i) in survived.iter().enumerate() {
-            let id = out[s - 1][i];
-            now.insert(id, fresh[j] - at(old, i));
-            row.push(id);
+            row.push(out[s - 1][i]);
+            now[j] = fresh[j] - old[i];
         }
-        for _ in survived.len()..m {
+        for _ in survived.len()..fresh.len() {
             row.push(next);
             next += 1;
         }
-        moved = now;
+        (old, old_widths, moved) = (fresh, fresh_widths, now);
         out.push(row);
     }
     Ok(out)
@@ -261,9 +267,10 @@ fn align(predicted: &[V3], fresh: &[V3], gone: &[f64], born: &[f64]) -> Option<V
         // whether old point i went on that path.
         let mut cost = vec![f64::INFINITY; band];
         cost[0] = 0.0;
+        let mut next = vec![f64::INFINITY; band];
         let mut went = vec![false; n * band];
         for i in 0..n {
-            let mut next = vec![f64::INFINITY; band];
+            next.fill(f64::INFINITY);
             for d in 0..band.min(i + 1) {
                 if cost[d] == f64::INFINITY {
                     continue;
@@ -284,7 +291,7 @@ fn align(predicted: &[V3], fresh: &[V3], gone: &[f64], born: &[f64]) -> Option<V
                     }
                 }
             }
-            cost = next;
+            std::mem::swap(&mut cost, &mut next);
         }
         let best = (0..band)
             .filter(|&d| cost[d] < f64::INFINITY && n - d <= m)
