@@ -77,6 +77,9 @@ pub struct BreedArgs {
     /// The object to read from a --like animation file that animates several.
     #[arg(long, requires = "like")]
     pub object: Option<String>,
+    /// What a --like animation file's reading may reach.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
     /// The animation to read from a --like glTF file whose animations move the same object.
     #[arg(long, requires = "like")]
     pub animation: Option<String>,
@@ -268,6 +271,32 @@ pub struct PlateArgs {
     pub out: Option<PathBuf>,
 }
 
+/// How far an animation file's reading may reach: the folders its
+/// references may resolve into and the memory it may take.
+#[derive(clap::Args, Debug, Clone, Default)]
+pub struct ReadingArgs {
+    /// Let an animation file's references (glTF buffers and images, USD sublayers, references and payloads) reach into DIR too, as USD's search paths do; by default they resolve only inside the file's own folder. Repeatable.
+    #[arg(long = "allow-references", value_name = "DIR")]
+    pub allow_references: Vec<PathBuf>,
+    /// The most memory reading an animation file may take, bytes [default: 4.3e9].
+    #[arg(long = "max-memory", value_name = "BYTES", value_parser = parse_work)]
+    pub max_memory: Option<f64>,
+}
+
+impl ReadingArgs {
+    /// The library's reading policy these flags give.
+    pub fn policy(&self) -> leafmagic::util::confined::ReadPolicy {
+        let mut policy = leafmagic::util::confined::ReadPolicy {
+            also_allowed: self.allow_references.clone(),
+            ..Default::default()
+        };
+        if let Some(bytes) = self.max_memory {
+            policy.max_memory = bytes.min(u64::MAX as f64) as u64;
+        }
+        policy
+    }
+}
+
 /// Arguments of `classify` and `describe`: one recorded fall.
 #[derive(clap::Args, Debug)]
 pub struct FallArgs {
@@ -291,6 +320,9 @@ pub struct FallArgs {
     /// The animation to read from a glTF file whose animations move the same object (Blender writes each action of an object as one; by name, or index).
     #[arg(long)]
     pub animation: Option<String>,
+    /// What an animation file's reading may reach.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -394,6 +426,9 @@ pub struct CompareArgs {
     /// The animation to read from glTF files whose animations move the same object: one name for both, or A,B.
     #[arg(long)]
     pub animation: Option<EachFile<String>>,
+    /// What an animation file's reading may reach.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
     /// Print one JSON object instead of a table.
     #[arg(long)]
     pub json: bool,
@@ -408,9 +443,11 @@ impl FallArgs {
             scale: self.scale,
             frame_rate: self.frame_rate,
         };
+        let policy = self.reading.policy();
         let pick = super::input::Pick {
             object: self.object.as_deref(),
             animation: self.animation.as_deref(),
+            policy: Some(&policy),
         };
         super::input::read_fall(&self.trajectory, self.size, units, pick)
     }
@@ -474,6 +511,9 @@ pub struct PreviewArgs {
     /// The animation to play of a glTF file whose animations move the same object (by name, or index).
     #[arg(long)]
     pub animation: Option<String>,
+    /// What an animation file's reading may reach.
+    #[command(flatten)]
+    pub reading: ReadingArgs,
     /// Metres per unit of an Alembic archive, which carries no unit (0.01 for Maya's centimetres), or of a CSV record's x, y, z [default: 1].
     #[arg(long)]
     pub scale: Option<f64>,

@@ -41,6 +41,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                     input::Pick {
                         object: args.object.as_deref(),
                         animation: args.animation.as_deref(),
+                        policy: Some(&args.reading.policy()),
                     },
                 )?),
                 None => None,

@@ -115,6 +115,9 @@ pub struct Pick<'a> {
     pub object: Option<&'a str>,
     /// The animation's name (or index).
     pub animation: Option<&'a str>,
+    /// What the file's references may reach and its read may take
+    /// [default: its own folder, the default budget].
+    pub policy: Option<&'a leafmagic::util::confined::ReadPolicy>,
 }
 
 /// Reads a recorded fall: a CSV record read in `units`, or an animation
@@ -202,7 +205,9 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
 /// [`read_record`] of a glTF file: the fall of its moving object
 /// ([`export::fall`]).
 fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
-    let mut fall = export::fall::read_fall_of(path, pick.object, pick.animation)?;
+    let default = leafmagic::util::confined::ReadPolicy::default();
+    let policy = pick.policy.unwrap_or(&default);
+    let mut fall = export::fall::read_fall_in(path, pick.object, pick.animation, policy)?;
     if units.up != UpAxis::Z {
         eprintln!(
             "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis; Alembic: y): read as such",

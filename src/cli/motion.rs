@@ -71,7 +71,8 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             args.scale
         );
     }
-    let mut clip = export::fall::read_clip(path, args.animation.as_deref())?;
+    let mut clip =
+        export::fall::read_clip_in(path, args.animation.as_deref(), &args.reading.policy())?;
     if args.scale != 1.0 {
         clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
     }
@@ -220,9 +221,11 @@ pub fn compare(args: CompareArgs) -> Result<()> {
     fn side(given: &Option<EachFile<String>>, k: usize) -> Option<&str> {
         given.as_ref().map(|EachFile(a, b)| [a, b][k].as_str())
     }
+    let policy = args.reading.policy();
     let pick = |k: usize| input::Pick {
         object: side(&args.object, k),
         animation: side(&args.animation, k),
+        policy: Some(&policy),
     };
     let [units_a, units_b] = args.units();
     let (_, a) = input::describe_fall(&args.a, size(|s| s.0), units_a, pick(0))?;

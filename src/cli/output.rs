@@ -321,6 +321,7 @@ fn preview_one(
             fps: args.fps,
             animation: args.animation.as_deref(),
             scale: args.scale.filter(|_| alone || alembic),
+            policy: Some(&args.reading.policy()),
         },
     )?)
 }

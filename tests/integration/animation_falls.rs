@@ -270,7 +270,7 @@ fn keys_of(file: &str) -> Clip {
     } else if file.ends_with(".usda") {
         export::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
     } else {
-        export::read_gltf_keys(&std::fs::read(&path).unwrap(), file, path.parent(), None).unwrap()
+        export::fall::read_clip(&path, None).unwrap()
     }
 }
 

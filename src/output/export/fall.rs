@@ -36,6 +36,7 @@ use super::read::read_gltf_keys;
 use super::usda_read::read_usd_file;
 use crate::motion::classify::{Classification, classify};
 use crate::motion::trajectory::Trajectory;
+use crate::util::confined::{ReadPolicy, ReadScope};
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
 
@@ -114,7 +115,17 @@ pub fn read_fall_of(
     object: Option<&str>,
     animation: Option<&str>,
 ) -> Result<AnimationFall, ExportError> {
-    let clip = read_clip(path, animation)?;
+    read_fall_in(path, object, animation, &ReadPolicy::default())
+}
+
+/// [`read_fall_of`] under `policy` ([`read_clip_in`]).
+pub fn read_fall_in(
+    path: &Path,
+    object: Option<&str>,
+    animation: Option<&str>,
+    policy: &ReadPolicy,
+) -> Result<AnimationFall, ExportError> {
+    let clip = read_clip_in(path, animation, policy)?;
     // Each object's chord, measured once: it sets what counts as moving,
     // and the chosen one's is the fall's size.
     let objects = &clip.objects;
@@ -187,7 +198,21 @@ pub fn read_fall_of(
 /// ([`super::read_gltf_keys`]); a USD stage or an Alembic archive holds
 /// one, and naming one there is refused. Errors name the file.
 pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportError> {
-    let bytes = std::fs::read(path).map_err(|e| ExportError::io(path, e))?;
+    read_clip_in(path, animation, &ReadPolicy::default())
+}
+
+/// [`read_clip`] under `policy`: the folders the file's references may
+/// reach besides its own and the memory its read may take ([`ReadScope`]).
+pub fn read_clip_in(
+    path: &Path,
+    animation: Option<&str>,
+    policy: &ReadPolicy,
+) -> Result<Clip, ExportError> {
+    let scope = &ReadScope::new(path, policy).map_err(|e| ExportError::input(path, e))?;
+    let bytes = scope
+        .check(path)
+        .and_then(|real| scope.read_checked(&real))
+        .map_err(|e| ExportError::input(path, e))?;
     let name = path.file_stem().map_or("animation".to_string(), |s| {
         s.to_string_lossy().into_owned()
     });
@@ -202,9 +227,12 @@ pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportErr
         ));
     }
     match format {
-        Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name),
+        Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name, scope),
         Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
-        _ => read_gltf_keys(&bytes, &name, path.parent(), animation),
+        _ => {
+            let dir = path.parent().unwrap_or(Path::new("."));
+            read_gltf_keys(&bytes, &name, Some((dir, scope)), animation)
+        }
     }
     .map_err(|e| match e {
         ExportError::Data(reason) => ExportError::input(path, reason),

@@ -8,16 +8,19 @@
 //! with `unreachable!`.
 
 use super::error::ExportError;
+use crate::util::confined::ReadScope;
 use gltf::accessor::DataType::{F32, I8, I16, U8, U16};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::animation::Property;
 use std::path::Path;
 
 /// The bytes of each buffer of a glTF document: the binary chunk of a
-/// `.glb`, a `data:` URI (base64), or a file beside the `.gltf` (`dir`).
+/// `.glb`, a `data:` URI (base64), or a file beside the `.gltf`, in its
+/// folder `dir` and only where `scope` lets a reference reach
+/// ([`ReadScope::read`]).
 pub(super) fn buffer_data(
     gltf: &gltf::Gltf,
-    dir: Option<&Path>,
+    files: Option<(&Path, &ReadScope)>,
 ) -> Result<Vec<Option<Vec<u8>>>, ExportError> {
     use base64::Engine as _;
     gltf.document
@@ -42,15 +45,13 @@ pub(super) fn buffer_data(
                             ))
                         });
                 }
-                let Some(dir) = dir else {
+                let Some((dir, scope)) = files else {
                     return Ok(None);
                 };
-                let path = dir.join(uri);
-                std::fs::read(&path).map(Some).map_err(|e| {
+                scope.read(dir, uri).map(Some).map_err(|why| {
                     ExportError::Data(format!(
-                        "buffer {} is the file `{uri}`, which cannot be read ({}: {e})",
+                        "buffer {} refers to the file `{uri}`, which is not read: {why}",
                         b.index(),
-                        path.display()
                     ))
                 })
             }

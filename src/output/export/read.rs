@@ -13,6 +13,7 @@ use super::skin::{self, Influences};
 use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::Scene;
+use crate::util::confined::ReadScope;
 use gltf::accessor::DataType::{F32, U8, U16, U32};
 use gltf::accessor::Dimensions;
 use gltf::animation::util::ReadOutputs;
@@ -281,7 +282,7 @@ pub fn from_glb_bytes(
 }
 
 /// A clip from the bytes of a glTF file (`.glb`, or `.gltf` whose buffers
-/// are data URIs or files in `dir`), sampled at its own keys: from the
+/// are data URIs or files in the folder `files` names, as far as its scope reaches), sampled at its own keys: from the
 /// first key to the last, one frame per shortest key interval (see
 /// `Grid::Keys`). What a fall is read from ([`super::fall`]).
 /// Of a file with several animations, `animation` names the one to read
@@ -294,10 +295,10 @@ pub fn from_glb_bytes(
 pub fn read_gltf_keys(
     bytes: &[u8],
     name: &str,
-    dir: Option<&Path>,
+    files: Option<(&Path, &ReadScope)>,
     animation: Option<&str>,
 ) -> Result<Clip, ExportError> {
-    read_gltf(bytes, name, dir, Grid::Keys, animation)
+    read_gltf(bytes, name, files, Grid::Keys, animation)
 }
 
 /// The index of the animation `want` names among `doc`'s (its name, else
@@ -434,18 +435,18 @@ pub(super) fn key_rate(shortest: f64) -> Option<f64> {
 }
 
 /// A clip from the bytes of a glTF file (binary, or JSON whose buffers are
-/// data URIs or files in `dir`), sampled on `grid`: of its animations, the
+/// data URIs or files in the folder `files` names, as far as its scope reaches), sampled on `grid`: of its animations, the
 /// one `animation` names, else all of them, refusing two that move the
 /// same node ([`read_gltf_keys`]).
 fn read_gltf(
     bytes: &[u8],
     name: &str,
-    dir: Option<&Path>,
+    files: Option<(&Path, &ReadScope)>,
     grid: Grid,
     animation: Option<&str>,
 ) -> Result<Clip, ExportError> {
     let gltf = open_gltf(bytes)?;
-    let buffers = buffer_data(&gltf, dir)?;
+    let buffers = buffer_data(&gltf, files)?;
     let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).and_then(|d| d.as_deref());
     let doc = &gltf.document;
     let scene = doc

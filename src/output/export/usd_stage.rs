@@ -30,13 +30,14 @@
 //! (openusd 0.8 bounds those counts, but needs Rust 1.96.)
 
 use super::usd_layer::{Attribute, IdListOp, Layer, Prim, StageMetadata, Value, edit_id_list};
+use crate::util::confined::ReadScope;
 use openusd::{gf, sdf, usd};
 use std::path::Path;
 use std::process::Command;
 
 /// The composed stage at `path` as one flat layer, read in a child process
 /// (the module docs say why), or why it cannot be read.
-pub(super) fn flatten(path: &Path) -> Result<Layer, String> {
+pub(super) fn flatten(path: &Path, _scope: &ReadScope) -> Result<Layer, String> {
     let program = std::env::current_exe()
         .map_err(|e| format!("cannot find the leafmagic executable to read USD with: {e}"))?;
     let out = reader(&program, path)

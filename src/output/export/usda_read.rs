@@ -18,6 +18,7 @@ use super::usd_layer::{
 };
 use super::usd_skel::{BlendShapes, Paths, Skinning};
 use super::usd_stage::flatten;
+use crate::util::confined::ReadScope;
 use nalgebra::Vector3;
 use std::path::Path;
 
@@ -69,7 +70,12 @@ pub fn read_usda_keys(text: &str, name: &str) -> Result<Clip, ExportError> {
 /// [`read_usda_keys`] reads a text layer: one the text reader reads alone
 /// is read so; a binary crate file, a USDZ package or a layer that needs
 /// composing is composed and flattened first ([`super::usd_stage`]).
-pub fn read_usd_file(path: &Path, bytes: &[u8], name: &str) -> Result<Clip, ExportError> {
+pub fn read_usd_file(
+    path: &Path,
+    bytes: &[u8],
+    name: &str,
+    scope: &ReadScope,
+) -> Result<Clip, ExportError> {
     let alone = if stored_binary(bytes).is_some() {
         None
     } else {
@@ -82,7 +88,7 @@ pub fn read_usd_file(path: &Path, bytes: &[u8], name: &str) -> Result<Clip, Expo
     };
     let layer = match alone {
         Some(layer) => layer,
-        None => flatten(path).map_err(ExportError::Data)?,
+        None => flatten(path, scope).map_err(ExportError::Data)?,
     };
     read_layer(&layer, name).map_err(ExportError::Data)
 }

@@ -11,6 +11,7 @@ use crate::output::export::fall::{self, AnimationFormat};
 use crate::output::export::{
     self, Clip, ClipObject, DEFAULT_FPS, ExportError, MARKER_KIND, Motion, glb::colour,
 };
+use crate::util::confined::ReadPolicy;
 use base64::Engine as _;
 use nalgebra::Vector3;
 
@@ -52,6 +53,9 @@ pub struct FileOptions<'a> {
     /// Metres per unit of an Alembic archive (which carries no unit;
     /// 0.01 for Maya's centimetres) [default: 1].
     pub scale: Option<f64>,
+    /// What an animation file's references may reach and its read may
+    /// take [default: its own folder, the default budget].
+    pub policy: Option<&'a ReadPolicy>,
 }
 
 /// The clip to preview from `input`:
@@ -201,7 +205,9 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
     // Classified as `classify` reads the file, at its own keys, before any
     // resampling for the page: a .glb's page is sampled from 0 at 30 fps,
     // which can turn a 24 fps tumble into another class.
-    let mut keys = export::fall::read_clip(input, file.animation)?;
+    let default = ReadPolicy::default();
+    let policy = file.policy.unwrap_or(&default);
+    let mut keys = export::fall::read_clip_in(input, file.animation, policy)?;
     if let Some(scale) = file.scale {
         keys.objects.iter_mut().for_each(|o| o.scale(scale));
     }
