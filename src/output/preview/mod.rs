@@ -525,11 +525,65 @@ fn page_vertices(o: &ClipObject) -> usize {
     if o.is_marker() { 1 } else { o.vertex_count() }
 }
 
+/// Refuses a clip whose page would hold a number that is not finite or a
+/// vertex past [`fall::MAX_COORDINATE_M`]: what `describe` refuses of the
+/// same file ([`fall::far_out`]). JSON has no NaN (serde writes `null`)
+/// and float32 turns 1e39 into infinity, so such a page would draw
+/// nothing where the file is at fault; the error names the object, the
+/// vertex and the key.
+fn finite_in_page(clip: &Clip) -> Result<(), ExportError> {
+    let refuse = |m: String| Err(ExportError::Data(format!("{}: {m}", clip.name)));
+    if clip.ground.is_some_and(|g| !g.is_finite()) {
+        return refuse(format!("its ground height {:?} is not finite", clip.ground));
+    }
+    for o in &clip.objects {
+        if let Err(e) = fall::far_out(o) {
+            return refuse(e);
+        }
+    }
+    for w in &clip.wind {
+        let numbers = w.point.iter().chain(&w.direction).chain([&w.strength]);
+        if numbers.into_iter().any(|x| !x.is_finite()) {
+            return refuse(format!(
+                "its {} wind primitive has a number that is not finite",
+                w.kind
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// JSON made inert inside the page's `<script type="application/json">`
+/// element: `<`, `>` and `&` written as `\u003c`, `\u003e`, `\u0026`, so
+/// that no name can end the element (`</script>`), open a comment (`<!--`,
+/// which makes the HTML tokenizer swallow the scripts after it) or start
+/// a tag; U+2028 and U+2029 as escapes too, since older JavaScript reads
+/// them as line ends. Outside strings JSON has none of these characters,
+/// so the data parses to the same values.
+fn inert_json(json: &str) -> String {
+    let mut out = String::with_capacity(json.len());
+    for c in json.chars() {
+        match c {
+            '<' => out.push_str("\\u003c"),
+            '>' => out.push_str("\\u003e"),
+            '&' => out.push_str("\\u0026"),
+            '\u{2028}' => out.push_str("\\u2028"),
+            '\u{2029}' => out.push_str("\\u2029"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// `s` as HTML text: markup characters as entities, and the line and
+/// paragraph separators as character references, as in the data.
 fn escape_html(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
         .replace('"', "&quot;")
+        .replace('\u{2028}', "&#x2028;")
+        .replace('\u{2029}', "&#x2029;")
 }
 
 /// Most characters of page data a browser is asked to hold: the viewer
@@ -585,11 +639,12 @@ fn fits_a_browser(clip: &Clip) -> Result<(), ExportError> {
 /// ([`Clip::validate_read`]): the page shows each over its own life.
 pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
     clip.validate_read()?;
+    finite_in_page(clip)?;
     fits_a_browser(clip)?;
-    let data = serde_json::to_string(&data_json(clip, grid))
-        .map_err(|e| ExportError::Data(format!("cannot serialise the page data: {e}")))?
-        // Inside <script>, "</" could end the element; "<\/" means the same in JSON.
-        .replace("</", "<\\/");
+    let data = inert_json(
+        &serde_json::to_string(&data_json(clip, grid))
+            .map_err(|e| ExportError::Data(format!("cannot serialise the page data: {e}")))?,
+    );
     // Split the template rather than search-and-replace in the result, so
     // nothing in the data (an object's name) can be taken for a placeholder.
     let (head, rest) = PAGE
@@ -646,6 +701,62 @@ mod tests {
         // The name's "</script>" must not close the data element.
         assert_eq!(page.matches("</script>").count(), 2);
         assert!(page.contains("t&lt;/script&gt; · leafmagic"));
+    }
+
+    /// Names that would end the data element, open a comment that
+    /// swallows the viewer, start a tag, break a string or a line: the
+    /// page keeps exactly its own tags, and its data parses back to the
+    /// very names.
+    #[test]
+    fn no_name_can_change_the_page() {
+        let names = [
+            "<!--<script>",
+            "</script><script>alert(1)</script>",
+            "a\"b'c",
+            "line\u{2028}sep\u{2029}end",
+            "&amp; <b>",
+            "<!-- -->",
+        ];
+        for name in names {
+            let mut c = clip();
+            c.name = name.into();
+            c.objects[0].name = name.into();
+            c.objects[0].label = name.into();
+            let page = html(&c, true).unwrap();
+            let template = html(&clip(), true).unwrap();
+            for tag in ["<script", "</script>", "<!--", "-->"] {
+                assert_eq!(
+                    page.matches(tag).count(),
+                    template.matches(tag).count(),
+                    "{name:?}: {tag}"
+                );
+            }
+            assert!(!page.contains('\u{2028}') && !page.contains('\u{2029}'));
+            let open = "id=\"leafmagic-data\">";
+            let start = page.find(open).unwrap() + open.len();
+            let end = start + page[start..].find("</script>").unwrap();
+            let data: serde_json::Value = serde_json::from_str(&page[start..end]).unwrap();
+            assert_eq!(data["name"], name);
+            assert_eq!(data["objects"][0]["name"], name);
+            assert_eq!(data["objects"][0]["label"], name);
+        }
+    }
+
+    /// A page holds only finite numbers: a NaN or far-out vertex is
+    /// refused with the object named, as `describe` refuses it.
+    #[test]
+    fn a_page_with_a_number_that_is_not_finite_is_refused() {
+        for bad in [f64::NAN, f64::INFINITY, 1e39, -2e6] {
+            let mut c = clip();
+            if let Motion::Deforming { frames } = &mut c.objects[0].motion {
+                frames[1][2].y = bad;
+            }
+            let e = html(&c, false).unwrap_err().to_string();
+            assert!(e.contains("object") && e.contains('o'), "{bad}: {e}");
+        }
+        let mut c = clip();
+        c.ground = Some(f64::NAN);
+        assert!(html(&c, false).unwrap_err().to_string().contains("ground"));
     }
 
     #[test]
