@@ -129,6 +129,68 @@ fn errors_name_the_file_the_line_and_the_field() {
     assert_eq!(e.line, Some(line_of(&text, "[[leaf]]")), "{e}");
 }
 
+/// A name given as a number (a rigid shape, a wind kind, a bound's shape,
+/// a pin, a vortex core) says that a string was wanted and which, naming
+/// the file, the line and the field.
+#[test]
+fn a_number_where_a_name_belongs_says_the_names() {
+    let wind = "\n[[wind]]\nkind = \"line_vortex\"\npoint = [0.0, 0.0, 0.0]\naxis = [0.0, 0.0, 1.0]\ncirculation = 1.0\ncore_radius = 0.1\n";
+    let cases: Vec<(String, &str, &str, &str)> = vec![
+        (
+            format!(
+                "{MINIMAL}\n[[rigid]]\nname = \"b\"\nshape = 3\nsize = [1.0, 1.0, 1.0]\nmass = 2.0\n"
+            ),
+            "shape = 3",
+            "rigid[0].shape",
+            "expected a string: one of box, cylinder",
+        ),
+        (
+            format!(
+                "{MINIMAL}{}",
+                wind.replace("kind = \"line_vortex\"", "kind = 3")
+            ),
+            "kind = 3",
+            "wind[0].kind",
+            "expected a string: one of uniform, point_source,",
+        ),
+        (
+            format!("{MINIMAL}{wind}core = 2\n"),
+            "core = 2",
+            "wind[0].core",
+            "expected a string: one of lamb_oseen, rankine",
+        ),
+        (
+            format!(
+                "{MINIMAL}{wind}bounds = {{ shape = 3, center = [0.0, 0.0, 0.0], radius = 1.0, falloff = 0.1 }}\n"
+            ),
+            "bounds = ",
+            "wind[0].bounds.shape",
+            "expected a string: one of sphere, box, cylinder",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[sheet]]\nname = \"s\"\nsize = [1.0, 1.0]\ncells = [2, 2]\nmass = 0.1\nstiffness = 10.0\npin = 1\n"
+            ),
+            "pin = 1",
+            "sheet[0].pin",
+            "expected a string: one of none, top_edge, top_corners, corners, border",
+        ),
+    ];
+    for (text, needle, field, words) in cases {
+        let e = error(&text);
+        let shown = e.to_string();
+        let line = line_of(&text, needle);
+        assert_eq!(e.field, field, "{shown}");
+        assert_eq!(e.line, Some(line), "{shown}");
+        assert!(
+            shown.starts_with(&format!("test.toml:{line}: {field}: ")),
+            "{shown}"
+        );
+        assert!(shown.contains(words), "{words:?} not in: {shown}");
+        assert!(!shown.contains("wanted string or table"), "{shown}");
+    }
+}
+
 #[test]
 fn the_compiler_keeps_what_each_scene_uses() {
     let kept = |scene: &Scene, term: &str| {
