@@ -8,7 +8,7 @@
 #
 #   deploy/k8s/breed.sh RUN SHARDS IMAGE -- BREED_SETTINGS...
 #   e.g. deploy/k8s/breed.sh floaters 64 registry.example/leafmagic:0.1 -- \
-#          --population 10000 --generations 8 --seconds 10
+#          --population 10000 --generations 8 --seconds 10 --max-work 4e10
 #
 # Each generation's Job is leafmagic-NAME-gen-G (NAME: RUN as a DNS label,
 # render.sh), so runs in one namespace never delete each other's Jobs. The

@@ -436,13 +436,25 @@ impl Run {
                 note(&format!(
                     "{damage}; rewriting it from checkpoint.json, which holds that generation"
                 ));
-                if let Some(cp) = &run.checkpoint {
-                    let path = run.dir.join(generation_file(cp.generation));
+                if let Some(cp) = &mut run.checkpoint {
+                    let name = generation_file(cp.generation);
+                    let path = run.dir.join(&name);
                     let bytes = population_csv(cp.generation, &cp.population);
                     write_atomic(&path, bytes.as_bytes()).map_err(|e| io_err(&path, e))?;
+                    // The damage may have been the recorded hash itself
+                    // (the file was right): record the true one, or the
+                    // next reader finds the same damage again.
+                    let hash = content_hash(bytes.as_bytes());
+                    if cp.fnv1a64.get(&name) != Some(&hash) {
+                        cp.fnv1a64.insert(name, hash);
+                        let cp_path = run.dir.join(CHECKPOINT_FILE);
+                        let json = encode_checkpoint(cp).map_err(|e| io_err(&cp_path, e))?;
+                        write_atomic(&cp_path, json.as_bytes()).map_err(|e| io_err(&cp_path, e))?;
+                    }
                 }
             }
         }
+        run.restore_checkpoint_text(note)?;
         run.restore_tables(note)?;
         Ok(run)
     }
@@ -562,6 +574,25 @@ impl Run {
             estimated: None,
         };
         Ok((run, finding))
+    }
+
+    /// Rewrites checkpoint.json in leafmagic's own form when another JSON
+    /// writer re-saved it (spaces, key order) with its content intact: the
+    /// run's files then come out as an uninterrupted run's.
+    fn restore_checkpoint_text(&self, note: &mut dyn FnMut(&str)) -> Result<(), BreedError> {
+        let Some(cp) = &self.checkpoint else {
+            return Ok(());
+        };
+        let path = self.dir.join(CHECKPOINT_FILE);
+        let json = encode_checkpoint(cp).map_err(|e| io_err(&path, e))?;
+        if std::fs::read(&path).ok().as_deref() != Some(json.as_bytes()) {
+            note(&format!(
+                "{}: its content is intact but not written as leafmagic writes it; rewritten",
+                path.display()
+            ));
+            self.write(CHECKPOINT_FILE, json.as_bytes())?;
+        }
+        Ok(())
     }
 
     /// Rewrites generations.csv and generations.svg where they differ from
@@ -1024,8 +1055,9 @@ fn generation_file(generation: usize) -> String {
 }
 
 /// Checks every generation file up to the checkpoint's against the hashes
-/// it recorded (a checkpoint without hashes: its own generation's file
-/// against what its population gives).
+/// it recorded. A hash missing is a damage of the checkpoint (every
+/// checkpoint records one per generation file): a file left unchecked
+/// would be trusted.
 fn check_generation_files(dir: &Path, cp: &Checkpoint) -> Option<Finding> {
     let own = generation_file(cp.generation);
     for g in 0..=cp.generation {
@@ -1033,15 +1065,15 @@ fn check_generation_files(dir: &Path, cp: &Checkpoint) -> Option<Finding> {
         let path = dir.join(&name);
         let checked = match cp.fnv1a64.get(&name) {
             Some(recorded) => check_generation_file(&path, recorded),
-            None if name == own => {
-                let expected = population_csv(cp.generation, &cp.population);
-                check_generation_file(&path, &content_hash(expected.as_bytes()))
-            }
-            None if cp.fnv1a64.is_empty() => Ok(()),
             None => Err(Damage::new(
                 &dir.join(CHECKPOINT_FILE),
-                "fnv1a64",
-                format!("records no content hash for {name}"),
+                format!("fnv1a64.\"{name}\""),
+                format!(
+                    "missing: the checkpoint of generation {} records the content hash of every \
+                     generation file from {} to {own}, so {name} cannot be checked",
+                    cp.generation,
+                    generation_file(0)
+                ),
             )),
         };
         if let Err(d) = checked {

@@ -7,8 +7,10 @@
 //! recomputed, everything else refuses the directory.
 //!
 //! The checkpoint's text ends with `,"digest":"<16 hex digits>"}`: the
-//! FNV-1a 64 hash ([`super::shard::fnv1a64`]) of the same text without that
-//! field. Checked on the raw bytes, so no re-serialisation is trusted.
+//! FNV-1a 64 hash ([`super::shard::fnv1a64`]) of the checkpoint's other
+//! fields in a canonical form ([`checkpoint_digest`]: keys sorted, no
+//! spaces). A checkpoint re-saved by another JSON writer (spaces, key
+//! order) is checked all the same, and one without a digest is refused.
 
 use super::population::{Checkpoint, Individual};
 use super::selection::{MAX_SCALE, MIN_SCALE};
@@ -41,7 +43,10 @@ impl Damage {
     }
 }
 
+/// How leafmagic writes the digest (a checkpoint written before the
+/// canonical digest hashed its own text up to this key).
 const DIGEST_KEY: &str = ",\"digest\":\"";
+const DIGEST_FIELD: &str = "digest";
 /// The run's settings and prototype, which every checkpoint names.
 pub(crate) const RUN_FILE: &str = "run.toml";
 
@@ -50,11 +55,57 @@ pub fn content_hash(bytes: &[u8]) -> String {
     format!("{:016x}", fnv1a64(bytes))
 }
 
+/// The digest of a checkpoint's JSON (its `digest` field, if any, left
+/// out): the content hash of its canonical text, so that how a writer
+/// spaced or ordered it does not matter but every value does.
+pub fn checkpoint_digest(json: &serde_json::Value) -> String {
+    let mut text = String::new();
+    canonical(json, true, &mut text);
+    content_hash(text.as_bytes())
+}
+
+/// Compact JSON with the keys of every object sorted (whatever order the
+/// map type keeps); the top level's digest field skipped.
+fn canonical(v: &serde_json::Value, top: bool, out: &mut String) {
+    use serde_json::Value;
+    match v {
+        Value::Array(items) => {
+            out.push('[');
+            for (k, item) in items.iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                canonical(item, false, out);
+            }
+            out.push(']');
+        }
+        Value::Object(map) => {
+            let mut keys: Vec<&String> = map
+                .keys()
+                .filter(|k| !(top && k.as_str() == DIGEST_FIELD))
+                .collect();
+            keys.sort();
+            out.push('{');
+            for (k, key) in keys.into_iter().enumerate() {
+                if k > 0 {
+                    out.push(',');
+                }
+                out.push_str(&Value::String(key.clone()).to_string());
+                out.push(':');
+                canonical(&map[key], false, out);
+            }
+            out.push('}');
+        }
+        // Scalars print one way (numbers in their shortest round-trip form).
+        other => out.push_str(&other.to_string()),
+    }
+}
+
 /// The checkpoint's file text: its JSON with the digest of that JSON as a
 /// last field.
 pub(crate) fn encode_checkpoint(cp: &Checkpoint) -> Result<String, serde_json::Error> {
     let body = serde_json::to_string(cp)?;
-    let digest = content_hash(body.as_bytes());
+    let digest = checkpoint_digest(&serde_json::to_value(cp)?);
     // `body` is an object: it ends with '}'.
     Ok(format!(
         "{}{DIGEST_KEY}{digest}\"}}",
@@ -62,45 +113,59 @@ pub(crate) fn encode_checkpoint(cp: &Checkpoint) -> Result<String, serde_json::E
     ))
 }
 
-/// Parses checkpoint text and checks its digest (a checkpoint written
-/// before digests existed has none, and is checked field by field only).
+/// Parses checkpoint text and checks its digest, which must be there.
 pub(crate) fn decode_checkpoint(text: &str, file: &Path) -> Result<Checkpoint, Damage> {
-    let body = match text.rfind(DIGEST_KEY) {
-        Some(k) if text.ends_with("\"}") => {
-            let recorded = &text[k + DIGEST_KEY.len()..text.len() - 2];
-            let body = format!("{}}}", &text[..k]);
-            let actual = content_hash(body.as_bytes());
-            if recorded != actual {
-                return Err(Damage::new(
-                    file,
-                    "digest",
-                    format!(
-                        "the content hash of the file is {actual}, not the {recorded} recorded \
-                         when it was written: it was edited or damaged"
-                    ),
-                ));
-            }
-            body
-        }
-        // The key cannot occur inside a JSON string (its quotes would be
-        // escaped there): the file was rewritten by something else.
-        Some(_) => {
-            return Err(Damage::new(
-                file,
-                "digest",
-                "is not the last field, where leafmagic writes it: the file was rewritten by \
-                 another program, so its content hash cannot vouch for it",
-            ));
-        }
-        None => text.to_string(),
-    };
-    serde_json::from_str(&body).map_err(|e| {
+    let json: serde_json::Value = serde_json::from_str(text).map_err(|e| {
         Damage::new(
             file,
             format!("line {} column {}", e.line(), e.column()),
             format!("not a checkpoint: {e}"),
         )
-    })
+    })?;
+    let recorded = match json.get(DIGEST_FIELD) {
+        Some(serde_json::Value::String(d)) => d.clone(),
+        Some(_) => {
+            return Err(Damage::new(
+                file,
+                DIGEST_FIELD,
+                "is not a string of 16 hex digits: the file was edited or damaged",
+            ));
+        }
+        None if !json.is_object() => {
+            return Err(Damage::new(
+                file,
+                "(file)",
+                "not a checkpoint: not a JSON object",
+            ));
+        }
+        None => {
+            return Err(Damage::new(
+                file,
+                DIGEST_FIELD,
+                "missing: leafmagic writes the content hash of the checkpoint's other fields                  there, and without it an edited checkpoint cannot be told from the one written",
+            ));
+        }
+    };
+    let actual = checkpoint_digest(&json);
+    if recorded != actual && !legacy_digest_matches(text, &recorded) {
+        return Err(Damage::new(
+            file,
+            DIGEST_FIELD,
+            format!(
+                "the content hash of the checkpoint's fields is {actual}, not the {recorded}                  recorded when it was written: it was edited or damaged"
+            ),
+        ));
+    }
+    serde_json::from_value(json)
+        .map_err(|e| Damage::new(file, "(content)", format!("not a checkpoint: {e}")))
+}
+
+/// Whether the digest is the one an earlier leafmagic wrote: the hash of
+/// the file's own text before `,"digest":…`, exactly as written.
+fn legacy_digest_matches(text: &str, recorded: &str) -> bool {
+    let suffix = format!("{DIGEST_KEY}{recorded}\"}}");
+    text.strip_suffix(&suffix)
+        .is_some_and(|body| content_hash(format!("{body}}}").as_bytes()) == recorded)
 }
 
 /// Checks every field of a checkpoint against the run's settings and
@@ -117,19 +182,26 @@ pub(crate) fn check_checkpoint(
     let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     // run.toml first: a checkpoint cannot repair the run's definition, so a
     // run.toml that changed under it is refused (a damage of run.toml).
-    if let Some(recorded) = cp.fnv1a64.get(RUN_FILE) {
-        let actual = content_hash(run_toml);
-        if *recorded != actual {
-            return Err(Damage::new(
-                &file.with_file_name(RUN_FILE),
-                "(file)",
-                format!(
-                    "changed since checkpoint.json was written (content hash {actual}, recorded \
-                     {recorded}): a run's settings and prototype cannot change while it runs; \
-                     restore it, or start a new run"
-                ),
-            ));
-        }
+    let Some(recorded) = cp.fnv1a64.get(RUN_FILE) else {
+        return bad(
+            format!("fnv1a64.\"{RUN_FILE}\""),
+            format!(
+                "missing: every checkpoint records the content hash of {RUN_FILE}, which the \
+                 run's files are checked against"
+            ),
+        );
+    };
+    let actual = content_hash(run_toml);
+    if *recorded != actual {
+        return Err(Damage::new(
+            &file.with_file_name(RUN_FILE),
+            "(file)",
+            format!(
+                "changed since checkpoint.json was written (content hash {actual}, recorded \
+                 {recorded}): a run's settings and prototype cannot change while it runs; \
+                 restore it, or start a new run"
+            ),
+        ));
     }
     if cp.settings != *settings {
         return Err(Damage::new(
@@ -354,7 +426,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn the_digest_catches_any_edit_and_old_checkpoints_still_read() {
+    fn the_digest_catches_any_edit_however_the_file_is_spaced_and_is_required() {
         let proto = LeafSpec::load("a").unwrap();
         let settings = BreedSettings::default_run();
         let plan = super::super::selection::plan(&settings, &proto, None);
@@ -367,7 +439,7 @@ mod tests {
             history: Vec::new(),
             archive: Vec::new(),
             cmaes: None,
-            fnv1a64: Default::default(),
+            fnv1a64: [(RUN_FILE.to_string(), "0123456789abcdef".to_string())].into(),
         };
         let text = encode_checkpoint(&cp).unwrap();
         let file = Path::new("checkpoint.json");
@@ -378,9 +450,29 @@ mod tests {
             decode_checkpoint(&edited, file).unwrap_err().field,
             "digest"
         );
-        // Without a digest (a run written before digests): parsed as it is.
-        let old = serde_json::to_string(&cp).unwrap();
+        // Re-saved by another writer (spaces, newlines): still checked.
+        let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+        let pretty = serde_json::to_string_pretty(&v).unwrap();
+        assert!(pretty.contains("\"digest\": \""));
+        assert_eq!(decode_checkpoint(&pretty, file).unwrap(), cp);
+        let edited = pretty.replacen("\"scale\": 1.0", "\"scale\": 2.0", 1);
+        assert_ne!(edited, pretty);
+        assert_eq!(
+            decode_checkpoint(&edited, file).unwrap_err().field,
+            "digest"
+        );
+        // The hash written before the canonical form (the text as written).
+        let body = serde_json::to_string(&cp).unwrap();
+        let old = format!(
+            "{}{DIGEST_KEY}{}\"}}",
+            &body[..body.len() - 1],
+            content_hash(body.as_bytes())
+        );
         assert_eq!(decode_checkpoint(&old, file).unwrap(), cp);
+        // Without a digest: refused, not read as it is.
+        let damage = decode_checkpoint(&body, file).unwrap_err();
+        assert_eq!(damage.field, "digest");
+        assert!(damage.reason.starts_with("missing"), "{damage}");
         let cut = &text[..text.len() / 2];
         assert!(
             decode_checkpoint(cut, file)

@@ -42,6 +42,9 @@ pub struct Record {
     pub object: Option<String>,
     /// For an animation file: the object's chord (longest extent), m.
     pub chord: Option<f64>,
+    /// For an animation file: what its reader left out without refusing
+    /// it, printed as `warning: FILE: …` and listed by `--json`.
+    pub warnings: Vec<String>,
 }
 
 impl Record {
@@ -199,6 +202,7 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
         notes,
         object: None,
         chord: None,
+        warnings: Vec::new(),
     })
 }
 
@@ -208,6 +212,9 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
     let default = leafmagic::util::confined::ReadPolicy::default();
     let policy = pick.policy.unwrap_or(&default);
     let mut fall = export::fall::read_fall_in(path, pick.object, pick.animation, policy)?;
+    for warning in &fall.warnings {
+        eprintln!("warning: {}: {warning}", path.display());
+    }
     if units.up != UpAxis::Z {
         eprintln!(
             "note: {}: --up does not apply to an animation file, which says its own up axis (glTF: y; USD: its upAxis; Alembic: y): read as such",
@@ -264,6 +271,7 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
         notes: ReadNotes::default(),
         object: Some(fall.object),
         chord: Some(fall.chord),
+        warnings: fall.warnings,
     })
 }
 

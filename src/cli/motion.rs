@@ -73,6 +73,9 @@ fn classify_all(args: &FallArgs) -> Result<()> {
     }
     let mut clip =
         export::fall::read_clip_in(path, args.animation.as_deref(), &args.reading.policy())?;
+    for warning in &clip.warnings {
+        eprintln!("warning: {}: {warning}", path.display());
+    }
     if args.scale != 1.0 {
         clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
     }
@@ -108,6 +111,7 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             "rate_hz": clip.fps,
             "objects": objects,
             "left_out": left_out,
+            "warnings": clip.warnings,
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
@@ -135,6 +139,9 @@ struct ReadingNotes<'a> {
     /// The chord an animation file's fall was classified with, m.
     #[serde(skip_serializing_if = "Option::is_none")]
     size_m: Option<f64>,
+    /// What reading an animation file left out without refusing it.
+    #[serde(skip_serializing_if = "<[String]>::is_empty")]
+    warnings: &'a [String],
 }
 
 impl<'a> ReadingNotes<'a> {
@@ -146,6 +153,7 @@ impl<'a> ReadingNotes<'a> {
             lost_rows: notes.lost_rows.map(|l| l.count),
             object: fall.record.object.as_deref(),
             size_m: fall.record.object.is_some().then_some(fall.size),
+            warnings: &fall.record.warnings,
         }
     }
 }

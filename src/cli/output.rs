@@ -134,45 +134,24 @@ pub fn export(args: ExportArgs) -> Result<()> {
     }
 }
 
-/// A new, empty temporary sibling of `out` to write into.
+/// A new, empty staging sibling of `out` to write into (staging folders
+/// of killed exports are removed: [`leafmagic::util::io::staging_dir`]).
 fn staging_dir(out: &Path) -> Result<PathBuf> {
-    let parent = out
-        .parent()
-        .filter(|p| !p.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    std::fs::create_dir_all(parent)
-        .with_context(|| format!("cannot create {}", parent.display()))?;
-    let name = out
-        .file_name()
-        .with_context(|| format!("--out {}: not a directory name", out.display()))?
-        .to_string_lossy();
-    let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&staging);
-    std::fs::create_dir(&staging)
-        .with_context(|| format!("cannot create {}", staging.display()))?;
-    Ok(staging)
+    leafmagic::util::io::staging_dir(out).with_context(|| {
+        format!(
+            "--out {}: cannot create a staging folder beside it",
+            out.display()
+        )
+    })
 }
 
-/// Puts the complete `staging` directory where `out` is: the old `out`, if
-/// any, is moved aside first and removed after.
+/// Puts the complete `staging` directory where `out` is, in one step where
+/// the file system allows ([`leafmagic::util::io::swap_dir`]).
 fn replace_dir(staging: &Path, out: &Path) -> Result<()> {
-    let old = staging.with_extension("old");
-    let had = out.exists();
-    if had {
-        std::fs::rename(out, &old)
-            .with_context(|| format!("cannot move {} aside", out.display()))?;
-    }
-    if let Err(e) = std::fs::rename(staging, out) {
-        if had {
-            let _ = std::fs::rename(&old, out);
-        }
+    leafmagic::util::io::swap_dir(staging, out).map_err(|e| {
         let _ = std::fs::remove_dir_all(staging);
-        return Err(e).with_context(|| format!("cannot move the export into {}", out.display()));
-    }
-    if had {
-        let _ = std::fs::remove_dir_all(&old);
-    }
-    Ok(())
+        anyhow::Error::new(e).context(format!("cannot move the export into {}", out.display()))
+    })
 }
 
 /// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, `<stem>.abc`, or a `.pc2` and an `.obj` per object, the cache's samples

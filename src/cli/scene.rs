@@ -14,9 +14,13 @@ use std::time::Instant;
 /// `scene`: loads, compiles and runs a scene file, or with `--explain`
 /// lists its decisions and stops.
 pub fn scene(args: SceneArgs) -> Result<()> {
-    let mut scene = Scene::load(&args.file)?;
-    scene.max_work = args.max_work;
-    scene.max_memory = args.max_memory;
+    // Held to the limits from the parsed file on, before any object is built.
+    let limits = scene::Limits {
+        max_work: args.max_work,
+        max_memory: args.max_memory,
+        seconds: args.seconds,
+    };
+    let scene = Scene::load_within(&args.file, &limits)?;
     let decisions = scene.explain();
     let frame = 1.0 / scene.frame_rate;
     if args.explain {

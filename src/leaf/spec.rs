@@ -72,6 +72,7 @@ fn default_gravity() -> [f64; 3] {
 pub struct AeroSpec {
     /// Which law; `linear` is the paper's.
     #[serde(default)]
+    #[serde(deserialize_with = "law_name")]
     pub law: AeroLawName,
     /// Normal coefficient αⁿ, kg/(m²·s) (linear law; required there).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -147,6 +148,10 @@ pub struct AeroSpec {
     /// default 0, off).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub munk_relief: Option<f64>,
+}
+
+fn law_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AeroLawName, D::Error> {
+    crate::util::named::by_name(d, &["linear", "quadratic", "unsteady"])
 }
 
 /// The name of an aerodynamic law in a leaf file.

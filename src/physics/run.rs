@@ -349,10 +349,15 @@ pub const LONG_WORK: f64 = 3e7;
 /// 800 drops; the shipped scenes are at most 1.3e6. `--max-work` raises it.
 pub const MAX_WORK: f64 = 1e9;
 /// The default limit of a whole breeding run (every drop of every
-/// generation), in particle-steps: about 75 minutes of one core for leaves
-/// at [`REFERENCE_RATE`], 10⁴ leaves × 8 generations of prototype A being
-/// 3.7e9. `breed --max-work` raises it.
-pub const MAX_BREED_WORK: f64 = 1e11;
+/// generation), in particle-steps: about ten minutes of one core. Measured
+/// here: the README's quick start (100 leaves × 8 generations, 4 drops of
+/// 10 s, prototype A), estimated at 2.95e8, took 17.5 s of CPU on one
+/// thread (1.7e7 per second, set-up and classification included), so it
+/// stays a thirtieth of the limit. [`REFERENCE_RATE`] quotes the limit at
+/// about 7 minutes for leaves (machines differ by 2×). Was 1e11 (75
+/// minutes), which let a run start unasked that a slip of a flag made long.
+/// `breed --max-work` raises it.
+pub const MAX_BREED_WORK: f64 = 1e10;
 /// Element-steps per second of one core (elements: particles, springs,
 /// triangles and hinges; what a step touches), for the time a message
 /// quotes. Measured here: a drop of prototype A with every spring at 1e8
@@ -773,8 +778,18 @@ impl WorkError {
             "raise the limit with `--max-work {:.1e}`",
             w.particle_steps() * 1.01
         ));
+        // The limit in the estimate's own time, so both read alike.
+        let per_step = w.core_seconds() / w.particle_steps();
+        let limit_time = if per_step.is_finite() && per_step > 0.0 {
+            format!(
+                " ({} of one core for this model)",
+                approximate_duration(self.limit * per_step)
+            )
+        } else {
+            String::new()
+        };
         format!(
-            "{what} needs about {} — more than the limit of {:.1e} particle-steps{why}. To run it: {}",
+            "{what} needs about {} — more than the limit of {:.1e} particle-steps{limit_time}{why}. To run it: {}",
             w.describe(),
             self.limit,
             remedies.join("; ")

@@ -79,6 +79,17 @@ impl ReadScope {
         })
     }
 
+    /// A scope with no folder, for a read of bytes that came without a
+    /// file (a `.glb` handed over in memory): it refuses every reference
+    /// and still holds the read to the default memory budget.
+    pub fn unanchored() -> ReadScope {
+        ReadScope {
+            roots: Vec::new(),
+            max_memory: DEFAULT_READ_MEMORY,
+            used: Cell::new(0),
+        }
+    }
+
     /// Opens `dir` to references too (`--allow-references DIR`).
     pub fn allow(mut self, dir: &Path) -> Result<ReadScope, String> {
         let root = fs::canonicalize(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -202,6 +213,7 @@ impl ReadScope {
     fn describe_roots(&self) -> String {
         let names: Vec<String> = self.roots.iter().map(|r| r.display().to_string()).collect();
         match names.as_slice() {
+            [] => "any folder (this read has none)".to_string(),
             [one] => format!("the file's folder {one}"),
             _ => format!("the folders {}", names.join(", ")),
         }

@@ -1,8 +1,9 @@
-//! Utilities beneath every layer: atomic writes, numbers in messages, plot
+//! Utilities beneath every layer: atomic writes and folder swaps, enum names in files, numbers in messages, plot
 //! helpers and a quiet exit when stdout's reader goes away. Imports nothing of leafmagic.
 
 pub mod confined;
 pub mod io;
+pub mod named;
 pub mod number;
 pub mod pipe;
 pub mod svg;

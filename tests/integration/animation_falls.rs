@@ -68,6 +68,7 @@ fn written(dir: &Path, file: &str, object: export::ClipObject, fps: f64) -> (Cli
         objects: vec![object],
         ground: None,
         wind: vec![],
+        warnings: vec![],
     };
     let path = dir.join(file);
     if file.ends_with(".usda") {
@@ -694,6 +695,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         objects: vec![a, b],
         ground: None,
         wind: vec![],
+        warnings: vec![],
     };
     let path = dir.join("two.glb");
     glb::write_glb(&two, &path).unwrap();

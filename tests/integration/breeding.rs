@@ -580,3 +580,42 @@ fn a_breeds_estimate_counts_its_variants_steps() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The default breed limit is about ten minutes of one core: the README's
+/// quick start (100 leaves × 8 generations, 4 drops of 10 s) is a small
+/// part of it, whose estimate the work it creates says exactly; a breed of
+/// 4,000 leaves (some 40 quick starts) is refused before anything is
+/// written, naming its estimate in particle-steps and in minutes of one
+/// core, the limit, and `--max-work`.
+#[test]
+fn the_default_breed_limit_is_about_ten_minutes_and_the_quick_start_fits() {
+    use leafmagic::breed::{BreedSettings, Run};
+    use leafmagic::physics::run::MAX_BREED_WORK;
+    let dir = scratch("limit");
+    let run = Run::create(&dir.join("quick"), BreedSettings::default_run()).unwrap();
+    let work = run.work().unwrap();
+    assert!(
+        work.particle_steps() < MAX_BREED_WORK / 20.0,
+        "the quick start: {}",
+        work.describe()
+    );
+    let big = dir.join("big");
+    let out = leafmagic()
+        .args(["breed", "--population", "4000", "--out"])
+        .arg(&big)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{stderr}");
+    for w in [
+        "this breeding run needs about",
+        "particle-steps (7 particles",
+        "minutes of one core",
+        "more than the limit of 1.0e10 particle-steps (about",
+        "--max-work",
+    ] {
+        assert!(stderr.contains(w), "{w:?} not in: {stderr}");
+    }
+    assert!(!big.exists(), "a refused breed wrote {}", big.display());
+    let _ = std::fs::remove_dir_all(&dir);
+}

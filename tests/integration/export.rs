@@ -663,6 +663,7 @@ fn pc2_is_byte_for_byte_the_specified_layout() {
         }],
         ground: None,
         wind: vec![],
+        warnings: vec![],
     };
     let dir = scratch("pc2-hand");
     // In a 30 fps scene a 30 fps cache has a sample every frame.
@@ -1054,6 +1055,7 @@ fn bad_input_is_refused_with_the_file_and_the_reason() {
         objects: vec![],
         ground: None,
         wind: vec![],
+        warnings: vec![],
     };
     assert!(
         matches!(glb::glb_bytes(&empty), Err(ExportError::Data(m)) if m.contains("no objects"))
@@ -1552,6 +1554,7 @@ fn a_rigid_plate_is_exported_as_a_rigid_object() {
             objects: vec![o],
             ground: None,
             wind: Vec::new(),
+            warnings: vec![],
         })
         .unwrap()
     };

@@ -588,8 +588,9 @@ fn the_cases_of_issue_22_end_as_they_should() {
 }
 
 /// The bounds refuse none of today's valid work: every shipped scene is far
-/// below the work and memory limits, and so is the default breed of either
-/// prototype (its 800 drops in all).
+/// below the work and memory limits, and the default breed of either
+/// prototype (its 800 leaves, each from every release) well below the
+/// breed's limit of about ten minutes of one core.
 #[test]
 fn the_bounds_refuse_no_shipped_scene_and_not_the_default_breed() {
     use leafmagic::physics::run::{MAX_BREED_WORK, MAX_WORK};
@@ -616,7 +617,7 @@ fn the_bounds_refuse_no_shipped_scene_and_not_the_default_breed() {
         // 100 leaves × 8 generations, each dropped from the default releases.
         let releases = leafmagic::breed::settings::DEFAULT_RELEASES as f64;
         let breed = one.particle_steps() * 800.0 * releases;
-        assert!(breed < MAX_BREED_WORK / 100.0, "{p}: {breed:.2e}");
+        assert!(breed < MAX_BREED_WORK / 20.0, "{p}: {breed:.2e}");
         assert!(!one.is_long(), "{p}: {}", one.describe());
     }
 }

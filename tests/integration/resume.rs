@@ -24,15 +24,35 @@ fn copy_dir(from: &Path, to: &Path) {
     }
 }
 
-/// The checkpoint as JSON, edited by `edit`, written back (its digest, now
-/// wrong, kept unless `keep_digest` is false: then it reads as a checkpoint
-/// of a run written before digests, checked field by field).
-fn edit_checkpoint(dir: &Path, keep_digest: bool, edit: impl FnOnce(&mut Value)) {
+/// What becomes of the checkpoint's digest when it is edited.
+#[derive(Clone, Copy)]
+enum Digest {
+    /// Kept as it was, so now wrong.
+    Kept,
+    /// Recomputed for the edited content: what only leafmagic's own checks
+    /// of every field can catch.
+    Resealed,
+    /// Removed.
+    Removed,
+}
+
+/// The checkpoint as JSON, edited by `edit`, written back compactly with
+/// its digest as `digest` says.
+fn edit_checkpoint(dir: &Path, digest: Digest, edit: impl FnOnce(&mut Value)) {
     let path = dir.join("checkpoint.json");
     let mut v: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
     edit(&mut v);
-    if !keep_digest {
-        v.as_object_mut().unwrap().remove("digest");
+    let map = v.as_object_mut().unwrap();
+    match digest {
+        Digest::Kept => {}
+        Digest::Removed => {
+            map.remove("digest");
+        }
+        Digest::Resealed => {
+            map.remove("digest");
+            let sealed = leafmagic::breed::verify::checkpoint_digest(&v);
+            v["digest"] = sealed.into();
+        }
     }
     std::fs::write(&path, serde_json::to_string(&v).unwrap()).unwrap();
 }
@@ -58,58 +78,141 @@ fn damaged_runs_are_recomputed_to_the_bytes_of_an_uninterrupted_run() {
         (
             "population []",
             "digest",
-            Box::new(|d| edit_checkpoint(d, true, |v| v["population"] = Value::Array(vec![]))),
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Kept, |v| v["population"] = Value::Array(vec![]))
+            }),
         ),
         (
             "scale 1e308",
             "digest",
-            Box::new(|d| edit_checkpoint(d, true, |v| v["scale"] = 1e308.into())),
+            Box::new(|d| edit_checkpoint(d, Digest::Kept, |v| v["scale"] = 1e308.into())),
         ),
         (
             "generation 9",
             "digest",
-            Box::new(|d| edit_checkpoint(d, true, |v| v["generation"] = 9.into())),
+            Box::new(|d| edit_checkpoint(d, Digest::Kept, |v| v["generation"] = 9.into())),
         ),
         (
-            "size_factor 1e300, no digest",
+            "size_factor 1e300, resealed",
             "population[0].genome.size_factor",
             Box::new(|d| {
-                edit_checkpoint(d, false, |v| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
                     v["population"][0]["genome"]["size_factor"] = 1e300.into()
                 })
             }),
         ),
         (
-            "mass_factor -1, no digest",
+            "mass_factor -1, resealed",
             "population[2].genome.mass_factor[1]",
             Box::new(|d| {
-                edit_checkpoint(d, false, |v| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
                     v["population"][2]["genome"]["mass_factor"][1] = (-1.0).into()
                 })
             }),
         ),
         (
-            "population [], no digest",
+            "population [], resealed",
             "population",
-            Box::new(|d| edit_checkpoint(d, false, |v| v["population"] = Value::Array(vec![]))),
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["population"] = Value::Array(vec![])
+                })
+            }),
         ),
         (
-            "generation 9, no digest",
+            "generation 9, resealed",
             "generation",
-            Box::new(|d| edit_checkpoint(d, false, |v| v["generation"] = 9.into())),
+            Box::new(|d| edit_checkpoint(d, Digest::Resealed, |v| v["generation"] = 9.into())),
         ),
         (
-            "cmaes sigma 0, no digest",
+            "cmaes sigma 0, resealed",
             "cmaes.sigma",
-            Box::new(|d| edit_checkpoint(d, false, |v| v["cmaes"]["sigma"] = 0.0.into())),
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| v["cmaes"]["sigma"] = 0.0.into())
+            }),
         ),
         (
-            "cmaes covariance asymmetric, no digest",
+            "cmaes covariance asymmetric, resealed",
             "cmaes.covariance",
             Box::new(|d| {
-                edit_checkpoint(d, false, |v| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
                     let c = &mut v["cmaes"]["covariance"][1];
                     *c = (c.as_f64().unwrap() + 0.25).into();
+                })
+            }),
+        ),
+        (
+            "re-saved with spaces, a score edited",
+            "digest",
+            Box::new(|d| {
+                let p = d.join("checkpoint.json");
+                let mut v: Value =
+                    serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+                v["population"][0]["eval"]["score"] = 1000.0.into();
+                let text = serde_json::to_string_pretty(&v).unwrap();
+                assert!(text.contains("\"digest\": \""), "{text}");
+                std::fs::write(&p, text).unwrap();
+            }),
+        ),
+        (
+            "re-saved with spaces, nothing edited",
+            "content is intact",
+            Box::new(|d| {
+                let p = d.join("checkpoint.json");
+                let v: Value = serde_json::from_str(&std::fs::read_to_string(&p).unwrap()).unwrap();
+                std::fs::write(&p, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+            }),
+        ),
+        (
+            "digest removed",
+            "digest: missing",
+            Box::new(|d| edit_checkpoint(d, Digest::Removed, |_| {})),
+        ),
+        (
+            "gen-001.csv's hash removed, resealed",
+            "fnv1a64.\"gen-001.csv\": missing",
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["fnv1a64"].as_object_mut().unwrap().remove("gen-001.csv");
+                })
+            }),
+        ),
+        (
+            "gen-002.csv's hash removed, resealed",
+            "fnv1a64.\"gen-002.csv\": missing",
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["fnv1a64"].as_object_mut().unwrap().remove("gen-002.csv");
+                })
+            }),
+        ),
+        (
+            "run.toml's hash removed, resealed",
+            "fnv1a64.\"run.toml\": missing",
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["fnv1a64"].as_object_mut().unwrap().remove("run.toml");
+                })
+            }),
+        ),
+        // The checkpoint's own generation: its file is rewritten, and the
+        // hash recorded is the file's true one again (the comparison with
+        // the uninterrupted run's checkpoint.json below says so).
+        (
+            "gen-002.csv's hash zeroed, resealed",
+            "rewriting it from checkpoint.json",
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["fnv1a64"]["gen-002.csv"] = "0000000000000000".into();
+                })
+            }),
+        ),
+        (
+            "gen-000.csv's hash zeroed, resealed",
+            "gen-000.csv",
+            Box::new(|d| {
+                edit_checkpoint(d, Digest::Resealed, |v| {
+                    v["fnv1a64"]["gen-000.csv"] = "0000000000000000".into();
                 })
             }),
         ),
@@ -218,7 +321,7 @@ fn what_cannot_be_recomputed_or_is_not_a_driver_refuses_the_damage() {
     // the file and field, and say what repairs it.
     let run = dir.join("bad-genome");
     copy_dir(&whole, &run);
-    edit_checkpoint(&run, false, |v| {
+    edit_checkpoint(&run, Digest::Resealed, |v| {
         v["population"][0]["genome"]["mass_factor"][0] = (-1.0).into();
         v["generation"] = 1.into();
         v["history"].as_array_mut().unwrap().pop();

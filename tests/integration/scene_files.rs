@@ -129,6 +129,179 @@ fn errors_name_the_file_the_line_and_the_field() {
     assert_eq!(e.line, Some(line_of(&text, "[[leaf]]")), "{e}");
 }
 
+/// A name given as a number (a rigid shape, a wind kind, a bound's shape,
+/// a pin, a vortex core) says that a string was wanted and which, naming
+/// the file, the line and the field.
+#[test]
+fn a_number_where_a_name_belongs_says_the_names() {
+    let wind = "\n[[wind]]\nkind = \"line_vortex\"\npoint = [0.0, 0.0, 0.0]\naxis = [0.0, 0.0, 1.0]\ncirculation = 1.0\ncore_radius = 0.1\n";
+    let cases: Vec<(String, &str, &str, &str)> = vec![
+        (
+            format!(
+                "{MINIMAL}\n[[rigid]]\nname = \"b\"\nshape = 3\nsize = [1.0, 1.0, 1.0]\nmass = 2.0\n"
+            ),
+            "shape = 3",
+            "rigid[0].shape",
+            "expected a string: one of box, cylinder",
+        ),
+        (
+            format!(
+                "{MINIMAL}{}",
+                wind.replace("kind = \"line_vortex\"", "kind = 3")
+            ),
+            "kind = 3",
+            "wind[0].kind",
+            "expected a string: one of uniform, point_source,",
+        ),
+        (
+            format!("{MINIMAL}{wind}core = 2\n"),
+            "core = 2",
+            "wind[0].core",
+            "expected a string: one of lamb_oseen, rankine",
+        ),
+        (
+            format!(
+                "{MINIMAL}{wind}bounds = {{ shape = 3, center = [0.0, 0.0, 0.0], radius = 1.0, falloff = 0.1 }}\n"
+            ),
+            "bounds = ",
+            "wind[0].bounds.shape",
+            "expected a string: one of sphere, box, cylinder",
+        ),
+        (
+            format!(
+                "{MINIMAL}\n[[sheet]]\nname = \"s\"\nsize = [1.0, 1.0]\ncells = [2, 2]\nmass = 0.1\nstiffness = 10.0\npin = 1\n"
+            ),
+            "pin = 1",
+            "sheet[0].pin",
+            "expected a string: one of none, top_edge, top_corners, corners, border",
+        ),
+    ];
+    for (text, needle, field, words) in cases {
+        let e = error(&text);
+        let shown = e.to_string();
+        let line = line_of(&text, needle);
+        assert_eq!(e.field, field, "{shown}");
+        assert_eq!(e.line, Some(line), "{shown}");
+        assert!(
+            shown.starts_with(&format!("test.toml:{line}: {field}: ")),
+            "{shown}"
+        );
+        assert!(shown.contains(words), "{words:?} not in: {shown}");
+        assert!(!shown.contains("wanted string or table"), "{shown}");
+    }
+}
+
+/// A scene far past the limits (65,536 leaves) is refused from the parsed
+/// file, before its objects are built (which took 11 s and 0.6 GB), with
+/// the estimate, the limit and the flag that raises it; with the memory
+/// raised, the work is refused in the same way.
+#[test]
+fn a_scene_past_its_limits_is_refused_from_the_file_within_a_second() {
+    let dir = std::env::temp_dir().join(format!("leafmagic-scene-bounds-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("many.toml");
+    std::fs::write(
+        &file,
+        "name = \"many\"\nduration = 10.0\n\n[[leaf]]\nname = \"l\"\nleaf = \"a\"\ncount = 65536\nposition = [0.0, 0.0, 5.0]\nspread = [50.0, 50.0, 2.0]\n",
+    )
+    .unwrap();
+    let cases: [(&[&str], &[&str]); 2] = [
+        (
+            &[],
+            &[
+                "many.toml:7: leaf[0].count: the scene would record about",
+                "65536 poses",
+                "more than the limit of 2.0e9 bytes",
+                "before anything was built",
+                "--max-memory",
+            ],
+        ),
+        (
+            &["--max-memory", "1e12"],
+            &[
+                "many.toml:7: leaf[0].count: the scene needs at least",
+                "458752 particles",
+                "of one core",
+                "past the limit of 1.0e9 particle-steps",
+                "--max-work",
+            ],
+        ),
+    ];
+    for (flags, words) in cases {
+        let start = std::time::Instant::now();
+        let out = leafmagic()
+            .arg("scene")
+            .arg(&file)
+            .args(flags)
+            .arg("--out")
+            .arg(dir.join("out"))
+            .output()
+            .unwrap();
+        let took = start.elapsed().as_secs_f64();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{stderr}");
+        for w in words {
+            assert!(stderr.contains(w), "{w:?} not in: {stderr}");
+        }
+        assert!(took < 2.0, "refused only after {took:.1} s: {stderr}");
+        assert!(!dir.join("out").exists());
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Staging folders of a scene run killed mid-write (`.NAME.partial-PID`,
+/// the process gone) are removed by the next run into the same place; one
+/// whose process still runs is kept; the output is replaced whole.
+#[test]
+fn the_next_run_removes_staging_folders_of_killed_runs_only() {
+    let work = std::env::temp_dir().join(format!("leafmagic-scene-stale-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&work);
+    std::fs::create_dir_all(&work).unwrap();
+    let out = work.join("x");
+    let mut ended = Command::new("true").spawn().unwrap();
+    let dead = ended.id();
+    ended.wait().unwrap();
+    let mut live = Command::new("sleep").arg("60").spawn().unwrap();
+    let stale = work.join(format!(".x.partial-{dead}"));
+    let kept = work.join(format!(".x.partial-{}", live.id()));
+    for d in [&stale, &kept] {
+        std::fs::create_dir_all(d).unwrap();
+        std::fs::write(d.join("half.csv"), "t\n").unwrap();
+    }
+    for _ in 0..2 {
+        let r = leafmagic()
+            .arg("scene")
+            .arg(scene_path("swings"))
+            .args(["--seconds", "0.1", "--out"])
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert!(r.status.success(), "{}", String::from_utf8_lossy(&r.stderr));
+        assert!(!stale.exists(), "a dead run's staging folder is left");
+        assert!(kept.is_dir(), "a live run's staging folder was removed");
+        assert!(out.join("summary.toml").is_file());
+        // The previous run's folder is replaced whole: nothing of it stays.
+        assert!(!out.join("old.csv").exists());
+        std::fs::write(out.join("old.csv"), "t\n").unwrap();
+    }
+    let _ = live.kill();
+    let _ = live.wait();
+    let mut left: Vec<String> = std::fs::read_dir(&work)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        [
+            kept.file_name().unwrap().to_string_lossy().into_owned(),
+            "x".to_string()
+        ]
+    );
+    let _ = std::fs::remove_dir_all(&work);
+}
+
 #[test]
 fn the_compiler_keeps_what_each_scene_uses() {
     let kept = |scene: &Scene, term: &str| {

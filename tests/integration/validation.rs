@@ -152,6 +152,31 @@ fn unknown_keys_and_syntax_errors_name_the_place() {
     expect_error("name = \"x\"\n[aero\nalpha_n = 1", &["line 2"]);
 }
 
+/// A name given as a number says that a string was wanted, and which
+/// (serde's own message, "wanted string or table", said neither), on the
+/// key's line.
+#[test]
+fn a_number_where_a_name_belongs_says_the_names() {
+    let text = edited(|t| {
+        t["aero"]
+            .as_table_mut()
+            .unwrap()
+            .insert("law".into(), 3.into());
+    });
+    expect_error(
+        &text,
+        &[
+            "line",
+            "law = 3",
+            "expected a string: one of linear, quadratic, unsteady",
+        ],
+    );
+    let err = LeafSpec::from_toml(&text, "bad-leaf.toml")
+        .unwrap_err()
+        .to_string();
+    assert!(!err.contains("wanted string or table"), "{err}");
+}
+
 fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
 }

@@ -251,6 +251,9 @@ pub struct Clip {
     pub ground: Option<f64>,
     /// The wind primitives as glyphs.
     pub wind: Vec<WindGlyph>,
+    /// What the reader of a file left out or doubted without refusing the
+    /// file, one sentence each, for the user to see (`warning: FILE: …`).
+    pub warnings: Vec<String>,
 }
 
 impl Clip {
@@ -294,6 +297,7 @@ impl Clip {
             objects,
             ground: None,
             wind: Vec::new(),
+            warnings: Vec::new(),
         }
     }
 
@@ -385,6 +389,7 @@ impl Clip {
             objects,
             ground: self.ground,
             wind: self.wind.clone(),
+            warnings: self.warnings.clone(),
         }
     }
 

@@ -97,6 +97,9 @@ pub struct AnimationFall {
     /// one that lives only a part of the file (a PointInstancer's leaf
     /// born during it), whose trajectory's times start at 0 there.
     pub appears_s: f64,
+    /// What reading the file left out without refusing it
+    /// ([`Clip::warnings`]).
+    pub warnings: Vec<String>,
 }
 
 /// Reads the fall of `object` (or of the only object that moves) from a
@@ -188,6 +191,7 @@ pub fn read_fall_in(
             .collect(),
         no_orientation,
         appears_s: objects[chosen].first_frame as f64 / clip.fps,
+        warnings: clip.warnings.clone(),
     })
 }
 

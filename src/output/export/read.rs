@@ -7,7 +7,7 @@
 use super::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count};
 use super::error::ExportError;
 use super::glb::from_gltf;
-use super::gltf_data::{buffer_data, check_accessor, check_sampler, open_gltf, vec3s};
+use super::gltf_data::{Reading, buffer_data, check_accessor, check_sampler, open_gltf, vec3s};
 use super::scene::build_scene_clip;
 use super::skin::{self, Influences};
 use super::wind::WindGlyph;
@@ -446,8 +446,21 @@ fn read_gltf(
     animation: Option<&str>,
 ) -> Result<Clip, ExportError> {
     let gltf = open_gltf(bytes)?;
-    let buffers = buffer_data(&gltf, files)?;
-    let get = |b: gltf::Buffer<'_>| buffers.get(b.index()).and_then(|d| d.as_deref());
+    // A read without files (the bytes of a .glb) is charged to a budget
+    // of its own, as a file's read is to its scope's.
+    let unanchored;
+    let budget = match files {
+        Some((_, scope)) => scope,
+        None => {
+            unanchored = ReadScope::unanchored();
+            &unanchored
+        }
+    };
+    let buffers = buffer_data(&gltf, files, budget)?;
+    let data = Reading {
+        buffers: &buffers,
+        budget,
+    };
     let doc = &gltf.document;
     let scene = doc
         .default_scene()
@@ -466,6 +479,28 @@ fn read_gltf(
             None
         }
     };
+    let tree = NodeTree::of(doc, &scene).map_err(ExportError::Data)?;
+    let nodes: Vec<gltf::Node<'_>> = tree
+        .scene_order
+        .iter()
+        .filter_map(|&i| doc.nodes().nth(i))
+        .filter(|n| n.mesh().is_some())
+        .collect();
+    // The nodes whose motion moves a mesh read: the mesh nodes, their
+    // skins' joints, and every node above them.
+    let mut moves_a_mesh = vec![false; tree.parents.len()];
+    for node in &nodes {
+        let skin = node.skin();
+        let joints = skin.iter().flat_map(|s| s.joints().map(|j| j.index()));
+        for start in std::iter::once(node.index()).chain(joints) {
+            let mut up = Some(start);
+            while let Some(i) = up.filter(|&i| !moves_a_mesh[i]) {
+                moves_a_mesh[i] = true;
+                up = tree.parents[i];
+            }
+        }
+    }
+    let mut warnings = Vec::new();
     // Tracks per (node, property).
     let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
     let mut t_end = 0.0f64;
@@ -475,77 +510,34 @@ fn read_gltf(
         .filter(|a| only.is_none_or(|k| a.index() == k))
     {
         for ch in anim.channels() {
-            check_sampler(&ch)?;
-            let reader = ch.reader(get);
-            let Some(times) = reader.read_inputs().map(|i| i.collect::<Vec<f32>>()) else {
-                continue;
-            };
-            let (values, width): (Vec<f32>, usize) = match reader.read_outputs() {
-                Some(ReadOutputs::Translations(it)) => (it.flatten().collect(), 3),
-                Some(ReadOutputs::Rotations(r)) => (r.into_f32().flatten().collect(), 4),
-                Some(ReadOutputs::Scales(it)) => (it.flatten().collect(), 3),
-                Some(ReadOutputs::MorphTargetWeights(w)) => {
-                    // gltf's accessor iterator applies sparse substitution
-                    // (zeros, or the buffer view, with `sparse.values` at
-                    // `sparse.indices`), as leafmagic writes these weights.
-                    let v: Vec<f32> = w.into_f32().collect();
-                    let width = v.len() / times.len().max(1);
-                    (v, width)
+            let node = ch.target().node();
+            let track = match read_track(&ch, &data) {
+                Ok(track) => track,
+                Err(why) => {
+                    let label = format!(
+                        "animation {}{}, channel {} (node {}{}, {}), sampler {}: {why}",
+                        anim.index(),
+                        anim.name().map_or(String::new(), |n| format!(" `{n}`")),
+                        ch.index(),
+                        node.index(),
+                        node.name().map_or(String::new(), |n| format!(" `{n}`")),
+                        property_name(ch.target().property()),
+                        ch.sampler().index(),
+                    );
+                    // A broken channel of a node that moves no mesh read
+                    // changes nothing read: said, and left out.
+                    if moves_a_mesh[node.index()] {
+                        return Err(ExportError::Data(label));
+                    }
+                    warnings.push(format!("{label}; left out, as the node moves no mesh"));
+                    continue;
                 }
-                None => continue,
             };
-            let cubic = ch.sampler().interpolation() == Interpolation::CubicSpline;
-            let per_key = width * if cubic { 3 } else { 1 };
-            let sampler = || {
-                format!(
-                    "animation {}, sampler {}",
-                    anim.index(),
-                    ch.sampler().index()
-                )
-            };
-            if times.is_empty() || per_key == 0 || values.len() != times.len() * per_key {
-                return Err(ExportError::Data(format!(
-                    "{}: {} key times and {} values, not {} a key",
-                    sampler(),
-                    times.len(),
-                    values.len(),
-                    per_key.max(1)
-                )));
-            }
-            if times
-                .windows(2)
-                .any(|w| w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less))
-                || !(times[0].is_finite() && times[times.len() - 1].is_finite())
-            {
-                return Err(ExportError::Data(format!(
-                    "{}: its key times are not finite and increasing",
-                    sampler()
-                )));
-            }
-            // Cubic splines store (in-tangent, value, out-tangent) per key:
-            // keep the values (the motion through the keys, not between them).
-            let values = if cubic {
-                values
-                    .chunks(3 * width)
-                    .flat_map(|c| c[width..2 * width].to_vec())
-                    .collect()
-            } else {
-                values
-            };
-            if let (Some(&first), Some(&last)) = (times.first(), times.last()) {
+            if let (Some(&first), Some(&last)) = (track.times.first(), track.times.last()) {
                 t_start = t_start.min(first as f64);
                 t_end = t_end.max(last as f64);
             }
-            tracks.push((
-                ch.target().node().index(),
-                ch.target().property(),
-                Track {
-                    times,
-                    values,
-                    width,
-                    step: ch.sampler().interpolation() == Interpolation::Step,
-                },
-            ));
+            tracks.push((node.index(), ch.target().property(), track));
         }
     }
     let (start, fps) = match grid {
@@ -563,15 +555,11 @@ fn read_gltf(
         },
     };
     let frames = sampled_frames(start, t_end, fps).map_err(ExportError::Data)?;
-    let parents = parents(doc);
-    let mut nodes = Vec::new();
-    for root in scene.nodes() {
-        mesh_nodes(root, &mut nodes);
-    }
+    let parents = &tree.parents;
     // World transforms of every node at frame k, for meshes below animated
     // parents and for skins' joints: computed frame by frame, not held for
     // all frames (a long bake of a deep rig would hold gigabytes).
-    let worlds_at = |k: usize| world_matrices(doc, &parents, &tracks, start + k as f64 / fps);
+    let worlds_at = |k: usize| world_matrices(doc, &tree, &tracks, start + k as f64 / fps);
     let mut objects = Vec::new();
     for node in nodes {
         let Some(mesh) = node.mesh() else { continue };
@@ -586,8 +574,13 @@ fn read_gltf(
             segments,
             targets,
             influences,
-        }) = mesh_data(&node, &mesh, get)?
+        }) = mesh_data(&node, &mesh, &data)?
         else {
+            warnings.push(format!(
+                "node {} has mesh {}, which has no primitive: left out",
+                node.index(),
+                mesh.index()
+            ));
             continue;
         };
         let track = |p: Property| track_of(&tracks, node.index(), p);
@@ -632,7 +625,7 @@ fn read_gltf(
                 worlds_at,
                 points_at,
                 influences.as_ref(),
-                get,
+                &data,
             )?
         } else {
             let mut translation = Vec::with_capacity(frames);
@@ -684,7 +677,7 @@ fn read_gltf(
         };
         objects.push(ClipObject {
             first_frame: 0,
-            name: object_name(doc, &parents, &node, &objects),
+            name: object_name(doc, parents, &node, &objects),
             kind: if node_extras.kind.is_empty() {
                 "mesh".to_string()
             } else {
@@ -712,32 +705,197 @@ fn read_gltf(
         objects,
         ground: extras.ground,
         wind: extras.wind,
+        warnings,
     };
     clip.validate()?;
     Ok(clip)
 }
 
-/// Each node's parent in the document's node tree (`None` for a root).
-fn parents(doc: &gltf::Document) -> Vec<Option<usize>> {
-    let mut parent = vec![None; doc.nodes().len()];
-    for node in doc.nodes() {
-        for child in node.children() {
-            parent[child.index()] = Some(node.index());
-        }
-    }
-    parent
+/// A glTF node tree, checked to be one: every node below at most one
+/// parent, no node its own ancestor, none reached twice from the scene.
+/// Walked without recursion, as every traversal of it here: a file
+/// chooses its depth (a chain of 100,000 nodes is 2 MB of JSON).
+struct NodeTree {
+    /// Each node's parent (`None` for a root).
+    parents: Vec<Option<usize>>,
+    /// Every node, each after its parent.
+    order: Vec<usize>,
+    /// The nodes of the scene's trees, depth first in the scene's order.
+    scene_order: Vec<usize>,
 }
 
-/// The nodes at and below `node` that carry a mesh, depth first (glTF's
-/// node tree: a mesh under an animated parent, as Blender writes a leaf
-/// parented to an empty, or a skinned mesh under its armature).
-fn mesh_nodes<'a>(node: gltf::Node<'a>, out: &mut Vec<gltf::Node<'a>>) {
-    if node.mesh().is_some() {
-        out.push(node.clone());
+impl NodeTree {
+    /// `doc`'s node tree and `scene`'s part of it, or why it is no tree:
+    /// a node that is its own ancestor (named with its loop), a child of
+    /// two parents, or reached twice from the scene. glTF forbids each;
+    /// left in, a loop would be walked for ever and a node reached twice
+    /// (a scene listing one node 400,000 times) read as that many objects.
+    fn of(doc: &gltf::Document, scene: &gltf::Scene<'_>) -> Result<NodeTree, String> {
+        let n = doc.nodes().len();
+        let mut parents: Vec<Option<usize>> = vec![None; n];
+        for node in doc.nodes() {
+            for child in node.children() {
+                let (c, p) = (child.index(), node.index());
+                if c == p {
+                    return Err(format!(
+                        "node {p} is its own ancestor: {p} → {p} (it lists itself as a child)"
+                    ));
+                }
+                if let Some(q) = parents[c] {
+                    return Err(if q == p {
+                        format!("node {p} lists node {c} twice as a child")
+                    } else {
+                        format!(
+                            "node {c} is a child of both node {q} and node {p} (a glTF node has one parent)"
+                        )
+                    });
+                }
+                parents[c] = Some(p);
+            }
+        }
+        // Each node's parent chain followed once: 1 while on the chain
+        // being followed, 2 when known to end at a root.
+        let mut state = vec![0u8; n];
+        for start in 0..n {
+            let mut chain = Vec::new();
+            let mut at = Some(start);
+            while let Some(i) = at {
+                match state[i] {
+                    2 => break,
+                    1 => {
+                        let from = chain.iter().position(|&c| c == i).unwrap_or(0);
+                        // Parent first, each node a child of the one before.
+                        let names: Vec<String> = std::iter::once(i)
+                            .chain(chain[from..].iter().rev().copied())
+                            .map(|k| k.to_string())
+                            .collect();
+                        return Err(format!(
+                            "node {i} is its own ancestor: {}",
+                            names.join(" → ")
+                        ));
+                    }
+                    _ => {
+                        state[i] = 1;
+                        chain.push(i);
+                        at = parents[i];
+                    }
+                }
+            }
+            for i in chain {
+                state[i] = 2;
+            }
+        }
+        let children: Vec<Vec<usize>> = doc
+            .nodes()
+            .map(|node| node.children().map(|c| c.index()).collect())
+            .collect();
+        // Depth first from `roots`, a node's children in their order.
+        let walk = |roots: &mut dyn Iterator<Item = usize>| -> Vec<usize> {
+            let mut out = Vec::new();
+            for root in roots {
+                let mut stack = vec![root];
+                while let Some(i) = stack.pop() {
+                    out.push(i);
+                    stack.extend(children[i].iter().rev());
+                }
+            }
+            out
+        };
+        let order = walk(&mut (0..n).filter(|&i| parents[i].is_none()));
+        let scene_order = walk(&mut scene.nodes().map(|r| r.index()));
+        let mut reached: Vec<Option<usize>> = vec![None; n];
+        for (k, &i) in scene_order.iter().enumerate() {
+            if reached[i].is_some() {
+                let listed = scene.nodes().filter(|r| r.index() == i).count();
+                return Err(match (listed, parents[i]) {
+                    (2.., _) => format!(
+                        "the scene lists node {i} {listed} times (glTF lists each root once)"
+                    ),
+                    (_, Some(p)) => format!(
+                        "node {i} is reached twice from the scene: listed in it, and a child of node {p}"
+                    ),
+                    _ => format!("node {i} is reached twice from the scene"),
+                });
+            }
+            reached[i] = Some(k);
+        }
+        Ok(NodeTree {
+            parents,
+            order,
+            scene_order,
+        })
     }
-    for child in node.children() {
-        mesh_nodes(child, out);
+}
+
+/// A glTF animation property in words.
+fn property_name(property: Property) -> &'static str {
+    match property {
+        Property::Translation => "translation",
+        Property::Rotation => "rotation",
+        Property::Scale => "scale",
+        Property::MorphTargetWeights => "weights",
     }
+}
+
+/// The keys of one animation channel, every accessor checked before it is
+/// read ([`check_sampler`]), or why they cannot be read.
+fn read_track(ch: &gltf::animation::Channel<'_>, data: &Reading<'_>) -> Result<Track, String> {
+    let text = |e: ExportError| e.to_string();
+    check_sampler(ch, data).map_err(text)?;
+    let reader = ch.reader(data.get());
+    let input = ch.sampler().input().index();
+    let output = ch.sampler().output().index();
+    let times: Vec<f32> = reader
+        .read_inputs()
+        .ok_or_else(|| format!("accessor {input} (key times) cannot be read"))?
+        .collect();
+    let (values, width): (Vec<f32>, usize) = match reader.read_outputs() {
+        Some(ReadOutputs::Translations(it)) => (it.flatten().collect(), 3),
+        Some(ReadOutputs::Rotations(r)) => (r.into_f32().flatten().collect(), 4),
+        Some(ReadOutputs::Scales(it)) => (it.flatten().collect(), 3),
+        Some(ReadOutputs::MorphTargetWeights(w)) => {
+            // gltf's accessor iterator applies sparse substitution
+            // (zeros, or the buffer view, with `sparse.values` at
+            // `sparse.indices`), as leafmagic writes these weights.
+            let v: Vec<f32> = w.into_f32().collect();
+            let width = v.len() / times.len().max(1);
+            (v, width)
+        }
+        None => return Err(format!("accessor {output} (key values) cannot be read")),
+    };
+    let cubic = ch.sampler().interpolation() == Interpolation::CubicSpline;
+    let per_key = width * if cubic { 3 } else { 1 };
+    if times.is_empty() || per_key == 0 || values.len() != times.len() * per_key {
+        return Err(format!(
+            "{} key times and {} values, not {} a key",
+            times.len(),
+            values.len(),
+            per_key.max(1)
+        ));
+    }
+    if times
+        .windows(2)
+        .any(|w| w[0].partial_cmp(&w[1]) != Some(std::cmp::Ordering::Less))
+        || !(times[0].is_finite() && times[times.len() - 1].is_finite())
+    {
+        return Err("its key times are not finite and increasing".into());
+    }
+    // Cubic splines store (in-tangent, value, out-tangent) per key: keep
+    // the values (the motion through the keys, not between them).
+    let values = if cubic {
+        values
+            .chunks(3 * width)
+            .flat_map(|c| c[width..2 * width].to_vec())
+            .collect()
+    } else {
+        values
+    };
+    Ok(Track {
+        times,
+        values,
+        width,
+        step: ch.sampler().interpolation() == Interpolation::Step,
+    })
 }
 
 /// The track animating `property` of node `node`, if any.
@@ -786,31 +944,21 @@ fn local_matrix(node: &gltf::Node<'_>, tracks: &[(usize, Property, Track)], t: f
 }
 
 /// Every node's world transform at time `t`: its parents' composed with
-/// its own, root first.
+/// its own, each parent's before its children's ([`NodeTree::order`]).
 fn world_matrices(
     doc: &gltf::Document,
-    parents: &[Option<usize>],
+    tree: &NodeTree,
     tracks: &[(usize, Property, Track)],
     t: f64,
 ) -> Vec<M4> {
     let local: Vec<M4> = doc.nodes().map(|n| local_matrix(&n, tracks, t)).collect();
-    let mut world: Vec<Option<M4>> = vec![None; local.len()];
-    fn resolve(i: usize, parents: &[Option<usize>], local: &[M4], world: &mut [Option<M4>]) -> M4 {
-        if let Some(m) = world[i] {
-            return m;
+    let mut world = local.clone();
+    for &i in &tree.order {
+        if let Some(p) = tree.parents[i] {
+            world[i] = world[p] * local[i];
         }
-        // A valid glTF node tree has no cycle; a parent chain longer than
-        // the node count would be one, and is cut there.
-        let m = match parents[i] {
-            Some(p) if p != i => resolve(p, parents, local, world) * local[i],
-            _ => local[i],
-        };
-        world[i] = Some(m);
-        m
     }
-    (0..local.len())
-        .map(|i| resolve(i, parents, &local, &mut world))
-        .collect()
+    world
 }
 
 /// A point in glTF's axes (y up) in the simulator's (z up), in f64.
@@ -830,14 +978,12 @@ struct MeshData {
 }
 
 /// The geometry of `node`'s `mesh` (`None` if it has no primitive).
-fn mesh_data<'a, 's, F>(
+fn mesh_data<'a>(
     node: &gltf::Node<'a>,
     mesh: &gltf::Mesh<'a>,
-    get: F,
-) -> Result<Option<MeshData>, ExportError>
-where
-    F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
-{
+    reading: &Reading<'_>,
+) -> Result<Option<MeshData>, ExportError> {
+    let get = reading.get();
     let mut data = MeshData {
         base: Vec::new(),
         triangles: Vec::new(),
@@ -852,21 +998,41 @@ where
     for (k, prim) in mesh.primitives().enumerate() {
         any = true;
         let reader = prim.reader(get.clone());
-        let at = data.base.len() as u32;
+        let at = u32::try_from(data.base.len()).map_err(|_| {
+            ExportError::Data(format!(
+                "mesh of node {} has more vertices than 32-bit indices reach",
+                node.index()
+            ))
+        })?;
         let base = prim
             .get(&gltf::Semantic::Positions)
-            .map(|a| vec3s(a, get.clone()))
+            .map(|a| vec3s(a, reading))
             .transpose()?
             .ok_or_else(|| {
                 ExportError::Data(format!("mesh of node {} has no POSITION", node.index()))
             })?;
         let n = base.len();
+        let Some(end) = u32::try_from(n).ok().and_then(|n| n.checked_add(at)) else {
+            return Err(ExportError::Data(format!(
+                "mesh of node {} has more vertices than 32-bit indices reach",
+                node.index()
+            )));
+        };
         if let Some(a) = prim.indices() {
-            check_accessor(&a, &[U8, U16, U32], Dimensions::Scalar, "indices")?;
+            check_accessor(&a, &[U8, U16, U32], Dimensions::Scalar, "indices", reading)?;
         }
-        let indices: Vec<u32> = match reader.read_indices() {
-            Some(i) => i.into_u32().map(|i| i + at).collect(),
-            None => (at..at + n as u32).collect(),
+        let indices: Vec<u32> = match (prim.indices(), reader.read_indices()) {
+            // An index past the vertices is refused by the clip's check;
+            // added without wrapping, it cannot pass for another vertex.
+            (_, Some(i)) => i.into_u32().map(|i| i.saturating_add(at)).collect(),
+            (Some(a), None) => {
+                return Err(ExportError::Data(format!(
+                    "mesh of node {}: accessor {} (indices) cannot be read",
+                    node.index(),
+                    a.index()
+                )));
+            }
+            (None, None) => (at..end).collect(),
         };
         match prim.mode() {
             gltf::mesh::Mode::Triangles => data
@@ -884,7 +1050,7 @@ where
             .morph_targets()
             .map(|t| {
                 t.positions()
-                    .map(|a| vec3s(a, get.clone()))
+                    .map(|a| vec3s(a, reading))
                     .transpose()
                     .map(Option::unwrap_or_default)
             })
@@ -911,8 +1077,8 @@ where
                 prim.get(&gltf::Semantic::Joints(set)),
                 prim.get(&gltf::Semantic::Weights(set)),
             ) {
-                check_accessor(&ja, &[U8, U16], Dimensions::Vec4, "joints")?;
-                check_accessor(&wa, &[U8, U16, F32], Dimensions::Vec4, "weights")?;
+                check_accessor(&ja, &[U8, U16], Dimensions::Vec4, "joints", reading)?;
+                check_accessor(&wa, &[U8, U16, F32], Dimensions::Vec4, "weights", reading)?;
                 let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set))
                 else {
                     return Err(ExportError::Data(format!(
@@ -963,29 +1129,33 @@ where
 /// its own node's transform ignored as glTF says. `points_at(k)` gives the
 /// mesh's own vertices at frame k (morph targets applied, in its space),
 /// `worlds_at(k)` every node's world transform then.
-fn composed_motion<'a, 's, F>(
-    node: &gltf::Node<'a>,
+fn composed_motion(
+    node: &gltf::Node<'_>,
     frames: usize,
     worlds_at: impl Fn(usize) -> Vec<M4>,
     points_at: impl Fn(usize) -> Vec<V3>,
     influences: Option<&Influences>,
-    get: F,
-) -> Result<Motion, ExportError>
-where
-    F: Clone + for<'b> Fn(gltf::Buffer<'b>) -> Option<&'s [u8]>,
-{
+    reading: &Reading<'_>,
+) -> Result<Motion, ExportError> {
     let skin = match (node.skin(), influences) {
         (Some(skin), Some(inf)) => {
             let joints: Vec<usize> = skin.joints().map(|j| j.index()).collect();
             if let Some(a) = skin.inverse_bind_matrices() {
-                check_accessor(&a, &[F32], Dimensions::Mat4, "inverse bind matrices")?;
+                check_accessor(
+                    &a,
+                    &[F32],
+                    Dimensions::Mat4,
+                    "inverse bind matrices",
+                    reading,
+                )?;
             }
-            let inverse_bind: Vec<M4> = match skin.reader(get).read_inverse_bind_matrices() {
-                Some(m) => m
-                    .map(|columns| M4::from_fn(|r, c| columns[c][r] as f64))
-                    .collect(),
-                None => vec![M4::identity(); joints.len()],
-            };
+            let inverse_bind: Vec<M4> =
+                match skin.reader(reading.get()).read_inverse_bind_matrices() {
+                    Some(m) => m
+                        .map(|columns| M4::from_fn(|r, c| columns[c][r] as f64))
+                        .collect(),
+                    None => vec![M4::identity(); joints.len()],
+                };
             if inverse_bind.len() < joints.len() {
                 return Err(ExportError::Data(format!(
                     "skin {} has {} joints but {} inverse bind matrices",

@@ -111,6 +111,7 @@ pub(crate) fn build_scene_clip(
             .iter()
             .map(WindGlyph::of)
             .collect(),
+        warnings: Vec::new(),
     };
     clip.validate()?;
     Ok(clip)

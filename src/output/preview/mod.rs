@@ -341,6 +341,7 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         objects,
         ground: None,
         wind: Vec::new(),
+        warnings: Vec::new(),
     };
     clip.validate_read()?;
     Ok(Preview {
@@ -451,6 +452,7 @@ pub fn from_record(
         objects: vec![object, trail],
         ground: None,
         wind: Vec::new(),
+        warnings: Vec::new(),
     };
     clip.validate_read()?;
     Ok(clip)
@@ -686,6 +688,7 @@ mod tests {
             }],
             ground: Some(0.0),
             wind: vec![],
+            warnings: vec![],
         }
     }
 

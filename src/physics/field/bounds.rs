@@ -180,10 +180,15 @@ enum Shape {
     Cylinder,
 }
 
+fn shape_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Shape, D::Error> {
+    crate::util::named::by_name(d, &["sphere", "box", "cylinder"])
+}
+
 /// The `bounds` table of a `[[wind]]` primitive.
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct BoundsSpec {
+    #[serde(deserialize_with = "shape_name")]
     shape: Shape,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     center: Option<[f64; 3]>,

@@ -228,9 +228,23 @@ impl Compiled {
 // keys), and keys that belong to another kind are rejected in the conversion.
 // The flow keys are those of `FlowKeys`, in its order.
 
+fn kind_name<'de, D: Deserializer<'de>>(d: D) -> Result<Kind, D::Error> {
+    crate::util::named::by_name(d, Kind::NAMES)
+}
+
+// Called only when the key is there (the field's default is None).
+fn core_name<'de, D: Deserializer<'de>>(d: D) -> Result<Option<VortexCore>, D::Error> {
+    crate::util::named::by_name(d, &["lamb_oseen", "rankine"]).map(Some)
+}
+
+fn interpolation_name<'de, D: Deserializer<'de>>(d: D) -> Result<Option<Interpolation>, D::Error> {
+    crate::util::named::by_name(d, &["linear", "step"]).map(Some)
+}
+
 #[derive(Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct PrimitiveSpec {
+    #[serde(deserialize_with = "kind_name")]
     kind: Kind,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     velocity: Option<[f64; 3]>,
@@ -244,11 +258,19 @@ struct PrimitiveSpec {
     circulation: Option<f64>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     core_radius: Option<f64>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "core_name"
+    )]
     core: Option<VortexCore>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     keys: Option<Vec<(f64, f64)>>,
-    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[serde(
+        default,
+        skip_serializing_if = "Option::is_none",
+        deserialize_with = "interpolation_name"
+    )]
     interpolation: Option<Interpolation>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     bounds: Option<BoundsSpec>,

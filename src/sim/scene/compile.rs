@@ -4,8 +4,9 @@
 //! one aerodynamic law for the whole scene, and the model built with its
 //! errors naming the object that made the item.
 
+use super::bounds::Limits;
 use super::builder::Builder;
-use super::compiled::{MAX_MEMORY, ObjectKind, Scene};
+use super::compiled::{ObjectKind, Scene};
 use super::error::{Ctx, SceneError, check_name};
 use super::locate;
 use super::objects::{SplitMix, add_leaf, add_rigid, add_rope, add_sheet};
@@ -28,6 +29,13 @@ impl Scene {
     /// Reads and compiles a scene file; leaf paths are relative to its
     /// directory.
     pub fn load(path: &Path) -> Result<Scene, SceneError> {
+        Scene::load_within(path, &Limits::default())
+    }
+
+    /// [`Scene::load`] held to `limits`: a scene whose estimated memory or
+    /// work passes them is refused from the parsed file, before any object
+    /// is built ([`super::bounds`]); the scene keeps them for its run.
+    pub fn load_within(path: &Path, limits: &Limits) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
             file: file.clone(),
@@ -36,12 +44,22 @@ impl Scene {
             message: format!("cannot read: {e}"),
         })?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
-        Scene::from_toml(&text, &file, &base)
+        Scene::from_toml_within(&text, &file, &base, limits)
     }
 
     /// Parses and compiles scene text; `file` names it in errors and leaf
     /// paths are relative to `base`.
     pub fn from_toml(text: &str, file: &str, base: &Path) -> Result<Scene, SceneError> {
+        Scene::from_toml_within(text, file, base, &Limits::default())
+    }
+
+    /// [`Scene::from_toml`] held to `limits` ([`Scene::load_within`]).
+    pub fn from_toml_within(
+        text: &str,
+        file: &str,
+        base: &Path,
+        limits: &Limits,
+    ) -> Result<Scene, SceneError> {
         let spec: SceneSpec = toml::from_str(text).map_err(|e| {
             let (mut line, mut field) = match e.span() {
                 Some(span) => (
@@ -65,7 +83,7 @@ impl Scene {
                 message: e.message().trim_end().to_string(),
             }
         })?;
-        compile(&spec, &Ctx { text, file, base })
+        compile(&spec, &Ctx { text, file, base }, limits)
     }
 
     /// Compiles an already parsed scene (for programs that build or edit
@@ -78,6 +96,7 @@ impl Scene {
                 file,
                 base,
             },
+            &Limits::default(),
         )
     }
 }
@@ -98,7 +117,7 @@ fn inert(p: &crate::physics::field::Primitive) -> Option<&'static str> {
     zero.then_some("zero strength")
 }
 
-fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
+fn compile(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<Scene, SceneError> {
     // The scene's name becomes a directory name.
     check_name(ctx, "name", &spec.name, &mut HashMap::new())?;
     ctx.positive("duration", spec.duration)?;
@@ -121,6 +140,7 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
     spec.wind
         .validate()
         .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
+    super::bounds::check(spec, ctx, limits)?;
 
     let mut b = Builder::default();
     let mut names: HashMap<String, String> = HashMap::new();
@@ -263,7 +283,7 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>) -> Result<Scene, SceneError> {
         duration: spec.duration,
         frame_rate: spec.frame_rate,
         pruned: b.pruned,
-        max_work: crate::physics::run::MAX_WORK,
-        max_memory: MAX_MEMORY,
+        max_work: limits.max_work,
+        max_memory: limits.max_memory,
     })
 }

@@ -15,7 +15,8 @@
 //! Errors name the file, the line and the field (`scene.toml:12: leaf[0].count: ...`).
 //!
 //! Its files, one job each: `spec` (the file as written), `compile` (reading
-//! and compiling it), `objects` (placing each kind of object), `shapes` (the
+//! and compiling it), `bounds` (its cost estimated from the file, before
+//! anything is built), `objects` (placing each kind of object), `shapes` (the
 //! built-in shapes' particles), `builder` (the model's parts as they
 //! accumulate, with each item's owner), `error` (errors and the checks that
 //! raise them), `locate` (their line numbers), `compiled` (the compiled
@@ -25,6 +26,7 @@
 //! [`Model`]: crate::physics::model::Model
 //! [`Terms::needed`]: crate::physics::terms::Terms::needed
 
+mod bounds;
 mod builder;
 mod compile;
 mod compiled;
@@ -36,6 +38,7 @@ mod shapes;
 mod skips;
 mod spec;
 
+pub use bounds::Limits;
 pub use builder::{MAX_PARTICLES, MAX_SPRINGS};
 pub use compiled::{MAX_MEMORY, ObjectKind, PoseFrame, Scene, SceneObject};
 pub use error::SceneError;

@@ -310,7 +310,7 @@ pub struct OutputError {
 }
 
 /// An output directory written as a whole: files go into a temporary
-/// sibling (`.<name>.<pid>.tmp`), which [`Staged::commit`] renames into
+/// sibling (`.<name>.partial-<pid>`), which [`Staged::commit`] renames into
 /// place once everything is written. A failure, or a drop without commit,
 /// removes the sibling and leaves the directory as it was: the previous
 /// run's files, or nothing. A directory is replaced only if it is empty or
@@ -355,22 +355,10 @@ impl Staged {
                 ));
             }
         }
-        let name = dir
-            .file_name()
-            .map_or_else(|| "out".to_string(), |n| n.to_string_lossy().into_owned());
-        let parent = match dir.parent() {
-            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
-            _ => PathBuf::from("."),
-        };
-        std::fs::create_dir_all(&parent).map_err(|e| OutputError {
-            path: parent.clone(),
-            message: format!("cannot create the directory: {e}"),
-        })?;
-        let tmp = parent.join(format!(".{name}.{}.tmp", std::process::id()));
-        let _ = std::fs::remove_dir_all(&tmp);
-        std::fs::create_dir(&tmp).map_err(|e| OutputError {
-            path: tmp.clone(),
-            message: format!("cannot create the temporary directory: {e}"),
+        // Staging folders of killed runs go; a live one's stays.
+        let tmp = crate::util::io::staging_dir(dir).map_err(|e| OutputError {
+            path: dir.to_path_buf(),
+            message: format!("cannot create a staging folder beside it: {e}"),
         })?;
         Ok(Staged {
             dir: dir.to_path_buf(),
@@ -409,8 +397,9 @@ impl Staged {
         }
     }
 
-    /// Renames the written directory into place (the previous one, if any,
-    /// is moved aside first and removed after).
+    /// Puts the written directory in place of the previous one, if any, in
+    /// one exchange where the file system allows
+    /// ([`crate::util::io::swap_dir`]), and removes the previous one.
     ///
     /// # Errors
     /// A rename failed; the previous directory is put back if it can be.
@@ -419,22 +408,8 @@ impl Staged {
             path: self.dir.clone(),
             message: format!("cannot be replaced: {e}"),
         };
-        let old = self.tmp.with_extension("old");
-        let had = self.dir.exists();
-        if had {
-            let _ = std::fs::remove_dir_all(&old);
-            std::fs::rename(&self.dir, &old).map_err(fail)?;
-        }
-        if let Err(e) = std::fs::rename(&self.tmp, &self.dir) {
-            if had {
-                let _ = std::fs::rename(&old, &self.dir);
-            }
-            return Err(fail(e));
-        }
+        crate::util::io::swap_dir(&self.tmp, &self.dir).map_err(fail)?;
         self.committed = true;
-        if had {
-            let _ = std::fs::remove_dir_all(&old);
-        }
         Ok(())
     }
 }

@@ -90,6 +90,14 @@ fn integrator_name<'de, D: Deserializer<'de>>(d: D) -> Result<Integrator, D::Err
     d.deserialize_any(V)
 }
 
+fn shape_name<'de, D: Deserializer<'de>>(d: D) -> Result<Shape, D::Error> {
+    crate::util::named::by_name(d, &["box", "cylinder"])
+}
+
+fn pin_name<'de, D: Deserializer<'de>>(d: D) -> Result<Pin, D::Error> {
+    crate::util::named::by_name(d, &["none", "top_edge", "top_corners", "corners", "border"])
+}
+
 fn one() -> usize {
     1
 }
@@ -191,6 +199,7 @@ pub struct RigidObject {
     /// Object name.
     pub name: String,
     /// The shape.
+    #[serde(deserialize_with = "shape_name")]
     pub shape: Shape,
     /// Box: edge lengths along local x, y, z, m.
     #[serde(default)]
@@ -281,7 +290,7 @@ pub struct SheetObject {
     #[serde(default)]
     pub alpha_t: f64,
     /// Fixed particles.
-    #[serde(default)]
+    #[serde(default, deserialize_with = "pin_name")]
     pub pin: Pin,
     /// Where the sheet's centre goes, m.
     #[serde(default)]

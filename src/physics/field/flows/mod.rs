@@ -61,6 +61,11 @@ macro_rules! flows {
             $(#[serde(rename = $kind)] $variant,)+
         }
 
+        impl Kind {
+            /// Every kind's name, as files write it.
+            pub(in crate::physics::field) const NAMES: &'static [&'static str] = &[$($kind,)+];
+        }
+
         impl fmt::Display for Kind {
             fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
                 f.write_str(match self {
