@@ -5,9 +5,10 @@
 //! of hundreds of thousands of particles (65,536 leaves took 11 s and 0.6
 //! GB before the run's own checks refused them).
 
-use super::error::Ctx;
+use super::builder::MAX_PARTICLES;
+use super::compiled::MAX_MEMORY;
+use super::error::{Ctx, SceneError};
 use super::spec::{DtSpec, SceneSpec, Shape};
-use super::{MAX_MEMORY, MAX_PARTICLES, SceneError};
 use crate::leaf::LeafSpec;
 use crate::physics::run::{MAX_WORK, REFERENCE_RATE, approximate_duration};
 use crate::physics::stability;
