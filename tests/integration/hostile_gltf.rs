@@ -356,6 +356,22 @@ fn a_broken_channel_of_a_node_that_moves_nothing_read_is_a_warning() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+#[test]
+fn a_strip_whose_faces_are_not_read_is_a_warning() {
+    let mut doc = falling();
+    // TRIANGLE_STRIP: its vertices move, its faces are not read.
+    doc["meshes"][0]["primitives"][0]["mode"] = json!(5);
+    let dir = scratch("strip");
+    let clip = read_clip(&write(&dir, "strip.gltf", &doc), None).unwrap();
+    assert_eq!(clip.warnings.len(), 1, "{:?}", clip.warnings);
+    assert!(
+        clip.warnings[0].contains("primitive 0 is drawn as TriangleStrip"),
+        "{:?}",
+        clip.warnings
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 /// `doc` with morph target weights animated by accessor 3, a sparse
 /// accessor of `count` zeros without a buffer view.
 fn sparse_weights(count: u64, sparse_count: u64) -> Value {

@@ -574,6 +574,7 @@ fn read_gltf(
             segments,
             targets,
             influences,
+            unread,
         }) = mesh_data(&node, &mesh, &data)?
         else {
             warnings.push(format!(
@@ -583,6 +584,7 @@ fn read_gltf(
             ));
             continue;
         };
+        warnings.extend(unread);
         let track = |p: Property| track_of(&tracks, node.index(), p);
         let default_weights: Vec<f64> = mesh
             .weights()
@@ -975,6 +977,10 @@ struct MeshData {
     segments: Vec<[u32; 2]>,
     targets: Vec<Vec<[f32; 3]>>,
     influences: Option<Influences>,
+    /// What of it was not read, for a warning: primitives drawn as
+    /// strips, fans or loops, whose vertices are read but not their
+    /// triangles or segments.
+    unread: Vec<String>,
 }
 
 /// The geometry of `node`'s `mesh` (`None` if it has no primitive).
@@ -990,6 +996,7 @@ fn mesh_data<'a>(
         segments: Vec::new(),
         targets: Vec::new(),
         influences: None,
+        unread: Vec::new(),
     };
     let mut joints: Vec<usize> = Vec::new();
     let mut weights: Vec<f64> = Vec::new();
@@ -1044,7 +1051,13 @@ fn mesh_data<'a>(
             gltf::mesh::Mode::LineStrip => data
                 .segments
                 .extend(indices.windows(2).map(|c| [c[0], c[1]])),
-            _ => {}
+            // Points have no topology to read.
+            gltf::mesh::Mode::Points => {}
+            mode => data.unread.push(format!(
+                "mesh {} of node {}: primitive {k} is drawn as {mode:?}, whose faces are not read (its vertices are)",
+                mesh.index(),
+                node.index()
+            )),
         }
         let targets: Vec<Vec<[f32; 3]>> = prim
             .morph_targets()
