@@ -17,6 +17,7 @@ mod corpus;
 mod export;
 mod fuzz;
 mod genome;
+mod hostile_usd;
 mod integrators;
 mod invariants;
 mod k8s;
