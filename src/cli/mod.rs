@@ -78,6 +78,16 @@ pub enum Command {
     ComposeUsd {
         /// The USD file.
         file: std::path::PathBuf,
+        /// A folder its layers may come from besides its own (the
+        /// reader's --allow-references); repeated.
+        #[arg(long = "root")]
+        roots: Vec<std::path::PathBuf>,
+        /// The process that asked: when it is gone, this one ends.
+        #[arg(long)]
+        parent: Option<u32>,
+        /// Wall-clock bound, seconds.
+        #[arg(long = "timeout-s")]
+        timeout_s: Option<f64>,
     },
 }
 
@@ -97,6 +107,18 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Preview(args) => output::preview(args),
         Command::Shard(args) => breed::shard(args),
         Command::Merge(args) => breed::merge(args),
-        Command::ComposeUsd { file } => output::compose_usd(&file),
+        Command::ComposeUsd {
+            file,
+            roots,
+            parent,
+            timeout_s,
+        } => output::compose_usd(leafmagic::output::export::ComposeRequest {
+            file,
+            roots,
+            parent,
+            timeout: timeout_s
+                .filter(|s| s.is_finite() && *s > 0.0 && *s < 1e9)
+                .map(std::time::Duration::from_secs_f64),
+        }),
     }
 }

@@ -345,24 +345,29 @@ fn preview_record(
     })
 }
 
-/// The hidden `compose-usd FILE`: the flat layer of a USD stage, in JSON on
-/// stdout, for the parent process that reads it
+/// The hidden `compose-usd FILE [--root DIR]… [--parent PID] [--timeout-s
+/// S]`: the flat layer of a USD stage, in JSON on stdout, for the parent
+/// process that reads it
 /// ([`leafmagic::output::export::compose_usd_stage`]). Its error, alone on
 /// stderr, exit 1; a panic of the USD library is one too.
-pub fn compose_usd(file: &Path) -> Result<()> {
+pub fn compose_usd(request: leafmagic::output::export::ComposeRequest) -> Result<()> {
     use std::io::Write;
+    // Before anything can block: a child its parent no longer waits for,
+    // or past its time, ends itself.
+    leafmagic::output::export::watch_parent(request.parent, request.timeout);
     // This process exists to read one file; the parent reports what went
     // wrong, in its words, naming the file.
     std::panic::set_hook(Box::new(|_| {}));
-    let composed = std::panic::catch_unwind(|| leafmagic::output::export::compose_usd_stage(file))
-        .unwrap_or_else(|panic| {
-            let said = panic
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| panic.downcast_ref::<String>().cloned())
-                .unwrap_or_default();
-            Err(format!("the USD library (openusd) failed on it: {said}"))
-        });
+    let composed =
+        std::panic::catch_unwind(|| leafmagic::output::export::compose_usd_stage(&request))
+            .unwrap_or_else(|panic| {
+                let said = panic
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| panic.downcast_ref::<String>().cloned())
+                    .unwrap_or_default();
+                Err(format!("the USD library (openusd) failed on it: {said}"))
+            });
     match composed {
         Ok(json) => {
             std::io::stdout()

@@ -18,6 +18,7 @@ mod export;
 mod fuzz;
 mod genome;
 mod hostile_gltf;
+mod hostile_usd;
 mod integrators;
 mod invariants;
 mod k8s;

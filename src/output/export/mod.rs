@@ -50,6 +50,6 @@ pub use frame::{Body, Framed};
 pub use read::{from_glb, from_glb_bytes, from_scene_dir, read_gltf_keys};
 pub use render_mesh::RenderMesh;
 pub use scene::from_scene_run;
-pub use usd_stage::compose_usd_stage;
+pub use usd_stage::{ComposeRequest, compose_usd_stage, watch_parent};
 pub use usda_read::read_usda_keys;
 pub use wind::WindGlyph;

@@ -298,17 +298,45 @@ impl Prim {
                 .unwrap_or_default()
         };
         let (counts, indices) = (numbers("faceVertexCounts"), numbers("faceVertexIndices"));
-        let mut triangles = Vec::new();
+        // Every count and index is checked before anything is sized by
+        // them: a cast alone turns -1 into 0 and 1e300 into a huge count.
+        let mut total = 0usize;
+        for (k, &c) in counts.iter().enumerate() {
+            if !(c.fract() == 0.0 && (3.0..=u32::MAX as f64).contains(&c)) {
+                return Err(format!(
+                    "mesh `{}`: `faceVertexCounts` [{k}] is {}; a face has a whole number \
+                     of vertices, at least 3",
+                    self.name,
+                    shown(c)
+                ));
+            }
+            total = total.saturating_add(c as usize);
+        }
+        if total != indices.len() {
+            return Err(format!(
+                "mesh `{}`: `faceVertexCounts` add up to {total} vertices but \
+                 `faceVertexIndices` holds {}",
+                self.name,
+                indices.len()
+            ));
+        }
+        if let Some((k, i)) = indices
+            .iter()
+            .enumerate()
+            .find(|(_, i)| !(i.fract() == 0.0 && (0.0..=u32::MAX as f64).contains(*i)))
+        {
+            return Err(format!(
+                "mesh `{}`: `faceVertexIndices` [{k}] is {}, not a point's index",
+                self.name,
+                shown(*i)
+            ));
+        }
+        // A fan of c - 2 triangles a face: fewer than the indices.
+        let mut triangles = Vec::with_capacity(indices.len());
         let mut at = 0usize;
         for c in counts {
             let c = c as usize;
-            if at + c > indices.len() {
-                return Err(format!(
-                    "mesh `{}`: faceVertexCounts run past faceVertexIndices",
-                    self.name
-                ));
-            }
-            for k in 1..c.saturating_sub(1) {
+            for k in 1..c - 1 {
                 triangles.push([
                     indices[at] as u32,
                     indices[at + k] as u32,
@@ -318,6 +346,15 @@ impl Prim {
             at += c;
         }
         Ok(triangles)
+    }
+}
+
+/// A number read from a file, for an error: short even when huge (`1e300`).
+fn shown(x: f64) -> String {
+    if x.abs() < 1e9 {
+        x.to_string()
+    } else {
+        format!("{x:e}")
     }
 }
 
@@ -707,6 +744,39 @@ pub(super) fn composes(text: &str) -> bool {
     })
 }
 
+/// The deepest nesting of brackets (`( [ {`, a prim's body among them)
+/// USD text may have. The parser recurses once a level, and so do the
+/// walks over the prims read; 25,000 levels overflowed the stack. Real
+/// layers nest prims a few dozen deep and values three or four.
+pub(super) const MAX_NESTING: usize = 128;
+
+/// `Err` naming the line where `tokens` nest deeper than [`MAX_NESTING`].
+fn check_nesting(tokens: &[(Token, usize)]) -> Result<(), String> {
+    let mut depth = 0usize;
+    for (t, line) in tokens {
+        match t {
+            Token::Punct('(' | '[' | '{') => {
+                depth += 1;
+                if depth > MAX_NESTING {
+                    return Err(format!(
+                        "nesting deeper than {MAX_NESTING} levels at line {line} \
+                         (prims and brackets inside one another)"
+                    ));
+                }
+            }
+            Token::Punct(')' | ']' | '}') => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// [`check_nesting`] of USD text, for text handed to the composing reader
+/// (whose own parser recurses likewise).
+pub(super) fn check_text_nesting(text: &str) -> Result<(), String> {
+    check_nesting(&tokens(text)?)
+}
+
 pub(super) fn parse(text: &str) -> Result<Layer, String> {
     if let Some(what) = stored_binary(text.as_bytes()) {
         return Err(what.to_string());
@@ -714,10 +784,9 @@ pub(super) fn parse(text: &str) -> Result<Layer, String> {
     if !text.starts_with("#usda") {
         return Err("not USD text: its first line is not `#usda 1.0`".to_string());
     }
-    let mut p = Parser {
-        tokens: tokens(text)?,
-        at: 0,
-    };
+    let tokens = tokens(text)?;
+    check_nesting(&tokens)?;
+    let mut p = Parser { tokens, at: 0 };
     let mut meta = StageMetadata::default();
     if p.is('(') {
         for (key, v) in p.metadata()? {
@@ -928,6 +997,65 @@ pub(super) fn local_transform(prim: &Prim, t: f64) -> Result<(M4, bool), String>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn nesting_is_bounded_with_the_line_named() {
+        let deep = format!(
+            "#usda 1.0\n\ndef \"a\" {{ double[] x = {}1{} }}\n",
+            "[".repeat(25_000),
+            "]".repeat(25_000)
+        );
+        let e = parse(&deep).unwrap_err();
+        assert!(
+            e.contains("nesting deeper than 128 levels at line 3"),
+            "{e}"
+        );
+        let mut defs = String::from("#usda 1.0\n");
+        for k in 0..20_000 {
+            defs.push_str(&format!("def \"p{k}\" {{\n"));
+        }
+        defs.push_str(&"}\n".repeat(20_000));
+        let e = parse(&defs).unwrap_err();
+        assert!(
+            e.contains("nesting deeper than 128 levels at line 130"),
+            "{e}"
+        );
+        // Up to the bound, read.
+        let mut ok = String::from("#usda 1.0\n");
+        for k in 0..MAX_NESTING {
+            ok.push_str(&format!("def \"p{k}\" {{\n"));
+        }
+        ok.push_str(&"}\n".repeat(MAX_NESTING));
+        assert!(parse(&ok).is_ok());
+    }
+
+    #[test]
+    fn face_counts_are_checked_before_use() {
+        let mesh = |counts: &str, indices: &str| {
+            let text = format!(
+                "#usda 1.0\ndef Mesh \"m\" {{ int[] faceVertexCounts = {counts}\n int[] faceVertexIndices = {indices} }}\n"
+            );
+            parse(&text).unwrap().roots[0].triangles()
+        };
+        assert_eq!(mesh("[4]", "[0, 1, 2, 3]").unwrap(), [[0, 1, 2], [0, 2, 3]]);
+        assert!(mesh("[]", "[]").unwrap().is_empty());
+        for (counts, indices, want) in [
+            ("[-3]", "[0, 1, 2]", "`faceVertexCounts` [0] is -3"),
+            ("[3, 2]", "[0, 1, 2, 0, 1]", "`faceVertexCounts` [1] is 2"),
+            ("[3.5]", "[0, 1, 2]", "is 3.5"),
+            ("[1e300]", "[0, 1, 2]", "is 1e300"),
+            (
+                "[3]",
+                "[0, 1, 2, 3]",
+                "add up to 3 vertices but `faceVertexIndices` holds 4",
+            ),
+            ("[3]", "[0, -1, 2]", "`faceVertexIndices` [1] is -1"),
+            ("[3]", "[0, 1, 5e9]", "`faceVertexIndices` [2] is 5e9"),
+        ] {
+            let e = mesh(counts, indices).unwrap_err();
+            assert!(e.contains("mesh `m`") && e.contains(want), "{counts}: {e}");
+        }
+    }
 
     #[test]
     fn rotate_xyz_turns_about_x_first_and_matrices_are_row_vectors() {

@@ -31,25 +31,64 @@
 
 use super::usd_layer::{Attribute, IdListOp, Layer, Prim, StageMetadata, Value, edit_id_list};
 use crate::util::confined::ReadScope;
+use openusd::ar::{self, Resolver};
 use openusd::{gf, sdf, usd};
-use std::path::Path;
-use std::process::Command;
+use std::cell::RefCell;
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::rc::Rc;
+use std::time::{Duration, Instant};
+
+/// How long reading one USD file may take by default, seconds, wall
+/// clock: the child stops itself past it and the parent stops the child.
+/// The largest point cache of the test data composes in 3 s.
+pub const DEFAULT_USD_TIMEOUT_S: u64 = 120;
+
+/// The environment variable that sets that bound (seconds), for tests and
+/// for stages larger than any seen.
+pub const USD_TIMEOUT_VAR: &str = "LEAFMAGIC_USD_TIMEOUT_S";
+
+/// The wall-clock bound on reading one USD file: [`USD_TIMEOUT_VAR`] if
+/// it holds a positive number of seconds, else [`DEFAULT_USD_TIMEOUT_S`].
+pub fn usd_timeout() -> Duration {
+    std::env::var(USD_TIMEOUT_VAR)
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|s| s.is_finite() && *s > 0.0 && *s < 1e9)
+        .map_or(
+            Duration::from_secs(DEFAULT_USD_TIMEOUT_S),
+            Duration::from_secs_f64,
+        )
+}
 
 /// The composed stage at `path` as one flat layer, read in a child process
-/// (the module docs say why), or why it cannot be read.
-pub(super) fn flatten(path: &Path, _scope: &ReadScope) -> Result<Layer, String> {
+/// (the module docs say why) whose layers may come only from inside
+/// `scope`'s folders, or why it cannot be read.
+pub(super) fn flatten(path: &Path, scope: &ReadScope) -> Result<Layer, String> {
     let program = std::env::current_exe()
         .map_err(|e| format!("cannot find the leafmagic executable to read USD with: {e}"))?;
-    let out = reader(&program, path)
+    let timeout = usd_timeout();
+    let child = reader(&program, path, scope.roots(), timeout)
         .env("RUST_BACKTRACE", "0")
-        .output()
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
         .map_err(|e| format!("cannot start {} to read USD: {e}", program.display()))?;
+    let out = wait_bounded(child, timeout)?;
     let stderr = String::from_utf8_lossy(&out.stderr);
     let said = stderr.trim();
     match out.status.code() {
         Some(0) => serde_json::from_slice(&out.stdout)
             .map_err(|e| format!("the USD reader's answer did not read back: {e}")),
         Some(1) if !said.is_empty() => Err(said.to_string()),
+        _ if said.contains("has overflowed its stack") => Err(format!(
+            "the USD library (openusd) ran out of stack composing it: its composition arcs \
+             (inherits, specializes, references) form a cycle or nest too deeply ({})",
+            out.status
+        )),
         _ => Err(format!(
             "the USD library (openusd) stopped on it ({}{}): it is probably damaged; \
              Pixar's `usdcat --flatten IN -o OUT.usda` (pip install usd-core) says what is \
@@ -64,6 +103,73 @@ pub(super) fn flatten(path: &Path, _scope: &ReadScope) -> Result<Layer, String> 
     }
 }
 
+/// What a child said and how it ended.
+struct Finished {
+    status: std::process::ExitStatus,
+    stdout: Vec<u8>,
+    stderr: Vec<u8>,
+}
+
+/// Waits for `child` at most `timeout`, reading its stdout and stderr on
+/// threads meanwhile (a child that fills one pipe while the other is read
+/// would wait for ever); past it, stops the child and says so.
+fn wait_bounded(mut child: std::process::Child, timeout: Duration) -> Result<Finished, String> {
+    let drain = |pipe: Option<Box<dyn Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut pipe) = pipe {
+                let _ = pipe.read_to_end(&mut bytes);
+            }
+            bytes
+        })
+    };
+    let stdout = drain(
+        child
+            .stdout
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let stderr = drain(
+        child
+            .stderr
+            .take()
+            .map(|p| Box::new(p) as Box<dyn Read + Send>),
+    );
+    let start = Instant::now();
+    let mut pause = Duration::from_millis(1);
+    let status = loop {
+        match child.try_wait() {
+            Ok(Some(status)) => break status,
+            Ok(None) if start.elapsed() < timeout => {
+                std::thread::sleep(pause);
+                pause = (pause * 2).min(Duration::from_millis(50));
+            }
+            Ok(None) => {
+                let _ = child.kill();
+                let _ = child.wait();
+                return Err(format!(
+                    "reading it took longer than {} s, so it was stopped \
+                     ({USD_TIMEOUT_VAR}=SECONDS sets the bound)",
+                    timeout.as_secs_f64()
+                ));
+            }
+            Err(e) => {
+                let _ = child.kill();
+                return Err(format!("lost the USD reader process: {e}"));
+            }
+        }
+    };
+    // The child has ended, so its pipes close and the threads finish
+    // (unless it left a process of its own holding them; it starts none).
+    let stdout = stdout.join().unwrap_or_default();
+    let stderr = stderr.join().unwrap_or_default();
+    Ok(Finished {
+        status,
+        stdout,
+        stderr,
+    })
+}
+
 /// Address space the child may take: [`MEMORY_BASE`] and
 /// [`MEMORY_PER_BYTE`] times the file's size. A damaged crate file of
 /// 1 kB otherwise had openusd fill gigabytes before failing (25 s); with
@@ -76,47 +182,326 @@ const MEMORY_BASE: u64 = 2 << 30;
 const MEMORY_PER_BYTE: u64 = 400;
 
 /// The command that reads `path` in a child process: `program compose-usd
-/// PATH`, under a cap on its address space where a POSIX shell can set one
-/// (`ulimit -v`).
-fn reader(program: &Path, path: &Path) -> Command {
+/// PATH --root DIR… --parent PID --timeout-s S`, under a cap on its address
+/// space where a POSIX shell can set one (`ulimit -v`).
+fn reader(program: &Path, path: &Path, roots: &[PathBuf], timeout: Duration) -> Command {
+    let mut args: Vec<std::ffi::OsString> = vec!["compose-usd".into(), path.into()];
+    for root in roots {
+        args.push("--root".into());
+        args.push(root.into());
+    }
+    args.push("--parent".into());
+    args.push(std::process::id().to_string().into());
+    args.push("--timeout-s".into());
+    args.push(timeout.as_secs_f64().to_string().into());
     let shell = Path::new("/bin/sh");
     if cfg!(unix) && shell.exists() {
         let size = std::fs::metadata(path).map_or(0, |m| m.len());
         let cap_kib = MEMORY_BASE.saturating_add(size.saturating_mul(MEMORY_PER_BYTE)) / 1024;
         let mut cmd = Command::new(shell);
+        // `exec`: the reader replaces the shell, so its parent is this
+        // process, as its watchdog expects.
         cmd.arg("-c")
-            .arg(r#"ulimit -v "$1" 2>/dev/null; exec "$2" compose-usd "$3""#)
+            .arg(r#"ulimit -v "$1" 2>/dev/null; shift; exec "$@""#)
             .arg("sh")
             .arg(cap_kib.to_string())
             .arg(program)
-            .arg(path);
+            .args(args);
         cmd
     } else {
         let mut cmd = Command::new(program);
-        cmd.arg("compose-usd").arg(path);
+        cmd.args(args);
         cmd
     }
 }
 
-/// The composed stage at `path` as one flat layer, in JSON: what the
-/// hidden `leafmagic compose-usd FILE` prints, in the child process that
-/// reads a binary, packaged or composed USD file (the module docs say
-/// why). Errors are openusd's own words for a file it cannot open or
-/// compose.
-pub fn compose_usd_stage(path: &Path) -> Result<String, String> {
-    let layer = compose(path)?;
+/// What the hidden `compose-usd` child is told: the file, the folders its
+/// layers may come from, who started it and for how long it may run.
+#[derive(Clone, Debug, Default)]
+pub struct ComposeRequest {
+    /// The USD file.
+    pub file: PathBuf,
+    /// Folders its layers may come from besides its own (the parent's
+    /// [`ReadScope::roots`]).
+    pub roots: Vec<PathBuf>,
+    /// The process that started it: when that is gone, the child ends.
+    pub parent: Option<u32>,
+    /// Wall-clock bound on the child.
+    pub timeout: Option<Duration>,
+}
+
+/// Ends this process, with a word on stderr, when the process `parent`
+/// is no longer its parent (it ended, even by `kill -9`: the child is
+/// given to another) or when `timeout` has passed: a child blocked in
+/// openusd would otherwise outlive the reader that wanted its answer.
+pub fn watch_parent(parent: Option<u32>, timeout: Option<Duration>) {
+    let start = Instant::now();
+    std::thread::spawn(move || {
+        loop {
+            #[cfg(unix)]
+            if let Some(pid) = parent
+                && std::os::unix::process::parent_id() != pid
+            {
+                eprintln!("the leafmagic process that asked for this USD file is gone");
+                std::process::exit(3);
+            }
+            if let Some(limit) = timeout
+                && start.elapsed() > limit
+            {
+                eprintln!(
+                    "reading it took longer than {} s, so it was stopped \
+                     ({USD_TIMEOUT_VAR}=SECONDS sets the bound)",
+                    limit.as_secs_f64()
+                );
+                std::process::exit(1);
+            }
+            std::thread::sleep(Duration::from_millis(100));
+        }
+    });
+}
+
+/// The composed stage of `request.file` as one flat layer, in JSON: what
+/// the hidden `leafmagic compose-usd FILE` prints, in the child process
+/// that reads a binary, packaged or composed USD file (the module docs say
+/// why). Its layers come only from the file's folder and `request.roots`.
+/// Errors are openusd's own words for a file it cannot open or compose, or
+/// ours for a layer refused.
+pub fn compose_usd_stage(request: &ComposeRequest) -> Result<String, String> {
+    let mut scope = ReadScope::of_file(&request.file)?;
+    for root in &request.roots {
+        scope = scope.allow(root)?;
+    }
+    // The child's address space is capped (`ulimit -v`); a budget here
+    // would count each re-read of one layer by openusd again.
+    let layer = compose(&request.file, scope.with_max_memory(u64::MAX))?;
     serde_json::to_string(&layer).map_err(|e| e.to_string())
 }
 
-/// The composed stage at `path` as one flat layer, in this process.
-fn compose(path: &Path) -> Result<Layer, String> {
+/// An asset openusd asked for and we did not give it, and why.
+#[derive(Clone, Debug)]
+struct Refusal {
+    /// The asset path as written in the layer that names it.
+    written: String,
+    /// That layer, where known.
+    anchor: Option<String>,
+    /// Why it was refused.
+    reason: String,
+}
+
+impl std::fmt::Display for Refusal {
+    fn fmt(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        match &self.anchor {
+            Some(anchor) => write!(
+                f,
+                "`{}`, named in {anchor}, is refused: {}",
+                self.written, self.reason
+            ),
+            None => write!(f, "`{}` is refused: {}", self.written, self.reason),
+        }
+    }
+}
+
+/// openusd's filesystem resolver, confined to a [`ReadScope`]: every
+/// layer of a sublayer, reference or payload (and every asset openusd
+/// resolves) must be a regular file inside the scope's folders, and a path
+/// inside a `.usdz` package must stay inside it. What it refuses it
+/// records, for [`compose`] to report instead of openusd's bare
+/// "unresolved".
+struct ConfinedResolver {
+    inner: ar::DefaultResolver,
+    scope: ReadScope,
+    /// Each identifier openusd made, with the asset path and anchor it was
+    /// made from, to name a refusal as the file wrote it.
+    written: RefCell<HashMap<String, (String, Option<String>)>>,
+    refusals: Rc<RefCell<Vec<Refusal>>>,
+}
+
+impl ConfinedResolver {
+    /// The resolved location of `identifier` if the scope allows it.
+    fn confine(&self, identifier: &str) -> Result<ar::ResolvedPath, String> {
+        if let Some((package, inner)) = package_relative(identifier) {
+            let real = self.scope.check(Path::new(&package))?;
+            check_packaged_path(&inner)?;
+            let real = real
+                .to_str()
+                .ok_or("its package's path is not UTF-8, which the USD reader needs")?;
+            return self
+                .inner
+                .resolve(&ar::join_package_relative_path(real, &inner))
+                .ok_or_else(|| format!("the package {real} holds no `{inner}`"));
+        }
+        if !Path::new(identifier).is_absolute() {
+            return Err("it is not anchored to a layer's folder".to_string());
+        }
+        self.scope
+            .check(Path::new(identifier))
+            .map(ar::ResolvedPath::new)
+    }
+
+    fn refuse(&self, identifier: &str, reason: String) {
+        let (written, anchor) = self
+            .written
+            .borrow()
+            .get(identifier)
+            .cloned()
+            .unwrap_or_else(|| (identifier.to_string(), None));
+        let mut refusals = self.refusals.borrow_mut();
+        // openusd asks again on each composition pass.
+        if !refusals
+            .iter()
+            .any(|r| r.written == written && r.anchor == anchor)
+        {
+            refusals.push(Refusal {
+                written,
+                anchor,
+                reason,
+            });
+        }
+    }
+}
+
+/// `pkg.usdz[inner]` split into its package and the path inside it.
+fn package_relative(identifier: &str) -> Option<(String, String)> {
+    if ar::is_package_relative_path(identifier) {
+        ar::split_package_relative_path_outer(identifier)
+    } else {
+        None
+    }
+}
+
+/// `Err` unless `inner`, a path inside a package, stays inside it: no
+/// absolute path, no `..`, no package inside the package.
+fn check_packaged_path(inner: &str) -> Result<(), String> {
+    if inner.starts_with(['/', '\\']) || inner.contains(':') {
+        return Err(format!("`{inner}` inside its package is an absolute path"));
+    }
+    if inner.split(['/', '\\']).any(|part| part == "..") {
+        return Err(format!("`{inner}` climbs out of its package with `..`"));
+    }
+    if inner.contains('[') {
+        return Err(format!(
+            "`{inner}` is a package inside a package, which is not read"
+        ));
+    }
+    Ok(())
+}
+
+impl ar::Resolver for ConfinedResolver {
+    fn create_identifier(&self, asset_path: &str, anchor: Option<&ar::ResolvedPath>) -> String {
+        let identifier = self.inner.create_identifier(asset_path, anchor);
+        self.written
+            .borrow_mut()
+            .entry(identifier.clone())
+            .or_insert_with(|| (asset_path.to_string(), anchor.map(|a| a.to_string())));
+        identifier
+    }
+
+    fn resolve(&self, asset_path: &str) -> Option<ar::ResolvedPath> {
+        self.confine(asset_path)
+            .map_err(|reason| self.refuse(asset_path, reason))
+            .ok()
+    }
+
+    fn resolve_for_new_asset(&self, _asset_path: &str) -> Option<ar::ResolvedPath> {
+        // This reader writes nothing.
+        None
+    }
+
+    fn open_asset(&self, resolved_path: &ar::ResolvedPath) -> std::io::Result<Box<dyn ar::Asset>> {
+        let text = resolved_path.to_string_lossy().into_owned();
+        let refused = |reason: String| {
+            self.refuse(&text, reason.clone());
+            std::io::Error::other(reason)
+        };
+        if let Some((package, inner)) = package_relative(&text) {
+            // Checked again as opened: a file swapped after resolving.
+            self.scope.check(Path::new(&package)).map_err(refused)?;
+            check_packaged_path(&inner).map_err(refused)?;
+            return self.inner.open_asset(resolved_path);
+        }
+        let real = self.scope.check(resolved_path).map_err(refused)?;
+        // Opened without blocking and read no further than its size: a
+        // FIFO swapped in after the check cannot hang the read.
+        let bytes = self.scope.read_checked(&real).map_err(refused)?;
+        Ok(Box::new(std::io::Cursor::new(bytes)))
+    }
+
+    fn identity(&self) -> String {
+        format!("leafmagic-confined{:?}", self.scope.roots())
+    }
+}
+
+/// The deepest prim nesting the child hands back: the parent reads its
+/// JSON with serde_json, which refuses more than 128 levels of arrays and
+/// objects (two a prim, up to eight for an attribute's value).
+const MAX_COMPOSED_DEPTH: usize = 50;
+
+/// The composed stage at `path` as one flat layer, in this process, its
+/// layers read only inside `scope`.
+fn compose(path: &Path, scope: ReadScope) -> Result<Layer, String> {
     let file = path
         .to_str()
         .ok_or_else(|| "its path is not UTF-8, which the USD reader needs".to_string())?;
-    let stage = usd::Stage::open(file).map_err(|e| format!("{e:#}"))?;
+    let refusals = Rc::new(RefCell::new(Vec::new()));
+    let resolver = ConfinedResolver {
+        inner: ar::DefaultResolver::new(),
+        scope,
+        written: RefCell::new(HashMap::new()),
+        refusals: Rc::clone(&refusals),
+    };
+    // A refused layer is why composing failed, in our words; openusd's
+    // own ("unresolved sublayer @x@") where nothing was refused but
+    // missing files, which it names well.
+    let refused = |fallback: String| -> String {
+        let refusals: Vec<Refusal> = refusals
+            .borrow()
+            .iter()
+            .filter(|r| !r.reason.starts_with(NOT_FOUND))
+            .cloned()
+            .collect();
+        match refusals.as_slice() {
+            [] => fallback,
+            [one] => format!("a layer it names is not read: {one}"),
+            [first, rest @ ..] => format!(
+                "a layer it names is not read: {first} (and {} more refused)",
+                rest.len()
+            ),
+        }
+    };
+    let stage = usd::Stage::builder()
+        .resolver(resolver)
+        .open(file)
+        .map_err(|e| refused(format!("{e:#}")))?;
     if let Some(e) = stage.composition_errors().first() {
-        return Err(format!("it does not compose: {e}"));
+        return Err(refused(format!("it does not compose: {e}")));
     }
+    if let Some(cycle) = arc_cycle(&stage) {
+        return Err(format!("its composition arcs form a cycle: {cycle}"));
+    }
+    let layer = flat_layer(&stage);
+    // References and payloads resolve as the prims are composed, so what
+    // was refused is known only now. A layer left out would change what
+    // is read, so any refusal fails the read; only an asset that is
+    // merely missing (a texture) without a composition error does not.
+    if let Some(e) = stage.composition_errors().first() {
+        return Err(refused(format!("it does not compose: {e}")));
+    }
+    if refusals
+        .borrow()
+        .iter()
+        .any(|r| !r.reason.starts_with(NOT_FOUND))
+    {
+        return Err(refused(String::new()));
+    }
+    layer
+}
+
+/// How [`ReadScope::check`] begins its reason for a path that does not
+/// exist.
+const NOT_FOUND: &str = "it cannot be found";
+
+/// The composed `stage` as one flat layer.
+fn flat_layer(stage: &usd::Stage) -> Result<Layer, String> {
     let meta = {
         let root = stage.root_layer();
         let data = root.data();
@@ -140,7 +525,174 @@ fn compose(path: &Path) -> Result<Layer, String> {
             frames_per_second: number("framesPerSecond"),
         }
     };
-    meta.layer(children(&stage.prim(sdf::Path::abs_root()))?)
+    meta.layer(children(&stage.prim(sdf::Path::abs_root()), 1)?)
+}
+
+/// The items a list op adds, whatever its edits (deletions are left out:
+/// a cycle that a deletion breaks in one layer may close in another).
+fn list_items<T: Default + Clone + PartialEq>(op: &sdf::ListOp<T>) -> impl Iterator<Item = &T> {
+    op.explicit_items
+        .iter()
+        .chain(&op.added_items)
+        .chain(&op.prepended_items)
+        .chain(&op.appended_items)
+}
+
+/// A cycle of inherits, specializes or internal references among the prims
+/// of one of `stage`'s layer stacks, in words (`</A> inherits </B>, which
+/// inherits </A>`), found before composing those prims: openusd 0.6
+/// follows an inherit cycle until its stack overflows. A prim also takes
+/// the arcs of its ancestors (`/A` inheriting `/B` makes `/A/c` take
+/// `/B/c`), and an arc to a prim's own ancestor or descendant is a cycle.
+fn arc_cycle(stage: &usd::Stage) -> Option<String> {
+    let stack = stage.layer_stack();
+    let mut groups = vec![stack.clone()];
+    for id in stage.layer_identifiers() {
+        if !stack.contains(&id) {
+            groups.push(vec![id]);
+        }
+    }
+    for group in groups {
+        // Each prim spec's own arcs: (verb, target).
+        let mut arcs: HashMap<String, Vec<Arc>> = HashMap::new();
+        for id in &group {
+            let Some(layer) = stage.layer(id) else {
+                continue;
+            };
+            let data = layer.data();
+            for path in data.spec_paths() {
+                if data.spec_type(&path) != Some(sdf::SpecType::Prim) {
+                    continue;
+                }
+                let mut found = Vec::new();
+                for (field, verb) in [("inheritPaths", "inherits"), ("specializes", "specializes")]
+                {
+                    if let Ok(Some(v)) = data.try_field(&path, field)
+                        && let sdf::Value::PathListOp(op) = &*v
+                    {
+                        found.extend(list_items(op).map(|t| (verb, t.as_str().to_string())));
+                    }
+                }
+                if let Ok(Some(v)) = data.try_field(&path, "references")
+                    && let sdf::Value::ReferenceListOp(op) = &*v
+                {
+                    found.extend(
+                        list_items(op)
+                            .filter(|r| r.asset_path.is_empty() && !r.prim_path.is_empty())
+                            .map(|r| ("references", r.prim_path.as_str().to_string())),
+                    );
+                }
+                arcs.entry(path.as_str().to_string())
+                    .or_default()
+                    .extend(found);
+            }
+        }
+        if let Some(cycle) = find_cycle(&arcs) {
+            return Some(cycle);
+        }
+    }
+    None
+}
+
+/// Whether `path` is `prefix` or lies below it.
+fn is_within(path: &str, prefix: &str) -> bool {
+    path == prefix
+        || (path.starts_with(prefix)
+            && (prefix.ends_with('/') || path[prefix.len()..].starts_with('/')))
+}
+
+/// A composition arc: its verb (`inherits`) and the prim it reaches.
+type Arc = (&'static str, String);
+
+/// A cycle among `arcs` (prim path → its own arcs), followed with an
+/// explicit stack (a file's cycle may be as long as it likes), in words.
+fn find_cycle(arcs: &HashMap<String, Vec<Arc>>) -> Option<String> {
+    // The arcs `path` takes: its own, and each ancestor's carried down to
+    // it; only to prims that have specs (others add no arcs of their own).
+    let edges = |path: &str| -> Vec<Arc> {
+        let mut out = Vec::new();
+        let mut at = path.to_string();
+        loop {
+            if let Some(own) = arcs.get(&at) {
+                let rest = &path[at.len()..];
+                for (verb, target) in own {
+                    out.push((*verb, format!("{target}{rest}")));
+                }
+            }
+            match at.rfind('/') {
+                Some(0) | None => break,
+                Some(k) => at.truncate(k),
+            }
+        }
+        out
+    };
+    // 0 unvisited, 1 on the path being followed, 2 done.
+    let mut state: HashMap<String, u8> = HashMap::new();
+    let mut starts: Vec<&String> = arcs.keys().collect();
+    starts.sort();
+    for start in starts {
+        if state.get(start.as_str()).copied().unwrap_or(0) != 0 {
+            continue;
+        }
+        // The path followed: each prim with its arcs and the next to try.
+        let mut trail: Vec<(String, Vec<Arc>, usize)> = vec![(start.clone(), edges(start), 0)];
+        state.insert(start.clone(), 1);
+        while let Some((node, out, next)) = trail.last_mut() {
+            let Some((verb, target)) = out.get(*next).cloned() else {
+                state.insert(node.clone(), 2);
+                trail.pop();
+                continue;
+            };
+            *next += 1;
+            // An arc within a prim's own namespace: a cycle by itself.
+            if target == *node {
+                return Some(format!("<{node}> {verb} itself"));
+            }
+            let side = if is_within(&target, node) {
+                Some("below")
+            } else if is_within(node, &target) {
+                Some("above")
+            } else {
+                None
+            };
+            if let Some(side) = side {
+                return Some(format!("<{node}> {verb} <{target}>, which lies {side} it"));
+            }
+            if !arcs.contains_key(&target) {
+                continue;
+            }
+            match state.get(&target).copied().unwrap_or(0) {
+                1 => {
+                    let from = trail.iter().position(|(n, _, _)| *n == target)?;
+                    let cycle = &trail[from..];
+                    // A long cycle by its first arcs and the one that
+                    // closes it: the message stays a line.
+                    const SHOWN: usize = 6;
+                    let mut words = format!("<{}>", cycle[0].0);
+                    for (k, (_, out, next)) in cycle.iter().enumerate() {
+                        let (verb, to) = &out[*next - 1];
+                        let which = if k == 0 { "" } else { ", which" };
+                        if k < SHOWN || k + 1 == cycle.len() {
+                            words.push_str(&format!("{which} {verb} <{to}>"));
+                        } else if k == SHOWN {
+                            words.push_str(", …");
+                        }
+                    }
+                    if cycle.len() > SHOWN + 1 {
+                        words.push_str(&format!(" ({} arcs in all)", cycle.len()));
+                    }
+                    return Some(words);
+                }
+                2 => {}
+                _ => {
+                    state.insert(target.clone(), 1);
+                    let out = edges(&target);
+                    trail.push((target, out, 0));
+                }
+            }
+        }
+    }
+    None
 }
 
 /// An openusd call's error in our words.
@@ -148,15 +700,22 @@ fn failed(e: anyhow::Error) -> String {
     format!("{e:#}")
 }
 
-/// The composed children of `prim` that a default traversal visits.
-fn children(prim: &usd::Prim) -> Result<Vec<Prim>, String> {
+/// The composed children of `prim`, at nesting `depth`, that a default
+/// traversal visits.
+fn children(prim: &usd::Prim, depth: usize) -> Result<Vec<Prim>, String> {
     let mut out = Vec::new();
     for child in prim.children().map_err(failed)? {
         let shown = child.is_defined().map_err(failed)?
             && child.is_active().map_err(failed)?
             && !child.is_abstract().map_err(failed)?;
         if shown {
-            out.push(flat_prim(&child)?);
+            if depth > MAX_COMPOSED_DEPTH {
+                return Err(format!(
+                    "prim `{}`: prims nest deeper than {MAX_COMPOSED_DEPTH} levels",
+                    child.path()
+                ));
+            }
+            out.push(flat_prim(&child, depth)?);
         }
     }
     Ok(out)
@@ -203,8 +762,8 @@ fn inactive_ids(prim: &usd::Prim) -> Result<Vec<i64>, String> {
     Ok(ids)
 }
 
-/// One composed prim and those below it.
-fn flat_prim(prim: &usd::Prim) -> Result<Prim, String> {
+/// One composed prim, at nesting `depth`, and those below it.
+fn flat_prim(prim: &usd::Prim, depth: usize) -> Result<Prim, String> {
     let path = prim.path();
     let mut flat = Prim {
         name: path.name().unwrap_or_default().to_string(),
@@ -273,7 +832,7 @@ fn flat_prim(prim: &usd::Prim) -> Result<Prim, String> {
             },
         ));
     }
-    flat.children = children(prim)?;
+    flat.children = children(prim, depth + 1)?;
     Ok(flat)
 }
 
@@ -538,6 +1097,90 @@ impl<'de> serde::de::Visitor<'de> for ValueVisitor {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arc_cycles_are_found_and_named_without_recursing() {
+        let arcs = |list: &[(&str, &[(&'static str, &str)])]| {
+            list.iter()
+                .map(|(p, out)| {
+                    let out = out.iter().map(|(v, t)| (*v, t.to_string())).collect();
+                    (p.to_string(), out)
+                })
+                .collect::<HashMap<_, _>>()
+        };
+        let two = arcs(&[("/A", &[("inherits", "/B")]), ("/B", &[("inherits", "/A")])]);
+        assert_eq!(
+            find_cycle(&two).unwrap(),
+            "</A> inherits </B>, which inherits </A>"
+        );
+        let none = arcs(&[
+            ("/A", &[("inherits", "/B")]),
+            ("/B", &[("specializes", "/C")]),
+            ("/C", &[]),
+            ("/A/c", &[("references", "/C")]),
+        ]);
+        assert_eq!(find_cycle(&none), None);
+        // A chain of 100,000 prims closing on itself: followed without
+        // recursion, named from where it was entered.
+        let n = 100_000;
+        let mut long = HashMap::new();
+        for k in 0..n {
+            long.insert(
+                format!("/P{k}"),
+                vec![("inherits", format!("/P{}", (k + 1) % n))],
+            );
+        }
+        let found = find_cycle(&long).unwrap();
+        assert_eq!(
+            found,
+            "</P0> inherits </P1>, which inherits </P2>, which inherits </P3>, which inherits \
+             </P4>, which inherits </P5>, which inherits </P6>, …, which inherits </P0> \
+             (100000 arcs in all)"
+        );
+        let below = arcs(&[("/A", &[("references", "/A/x")]), ("/A/x", &[])]);
+        assert_eq!(
+            find_cycle(&below).unwrap(),
+            "</A> references </A/x>, which lies below it"
+        );
+    }
+
+    #[test]
+    fn paths_inside_a_package_stay_inside_it() {
+        assert!(check_packaged_path("geo/leaf.usda").is_ok());
+        for bad in [
+            "../x.usda",
+            "a/../../x.usda",
+            "/etc/x.usda",
+            "C:/x.usda",
+            "in.usdz[x.usda]",
+        ] {
+            assert!(check_packaged_path(bad).is_err(), "{bad}");
+        }
+    }
+
+    #[cfg(unix)]
+    #[test]
+    fn a_child_past_its_time_is_stopped() {
+        let child = Command::new("sleep")
+            .arg("30")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = Instant::now();
+        let Err(e) = wait_bounded(child, Duration::from_millis(300)) else {
+            panic!("sleep 30 ended within 0.3 s");
+        };
+        assert!(start.elapsed() < Duration::from_secs(5));
+        assert!(e.contains("longer than 0.3 s"), "{e}");
+        let child = Command::new("echo")
+            .arg("hi")
+            .stdout(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = wait_bounded(child, Duration::from_secs(30)).unwrap();
+        assert_eq!(out.stdout, b"hi\n");
+    }
 
     #[test]
     fn values_take_the_text_reader_s_shapes() {

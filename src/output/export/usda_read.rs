@@ -14,7 +14,8 @@ use super::error::ExportError;
 use super::read::{check_points, key_rate, sampled_frames};
 use super::usd_instancer::instanced;
 use super::usd_layer::{
-    Layer, Prim, Value, composes, parse, sample, stored_binary, world_transform,
+    Layer, MAX_NESTING, Prim, Value, check_text_nesting, composes, parse, sample, stored_binary,
+    world_transform,
 };
 use super::usd_skel::{BlendShapes, Paths, Skinning};
 use super::usd_stage::flatten;
@@ -82,7 +83,12 @@ pub fn read_usd_file(
         let text = String::from_utf8_lossy(bytes);
         match parse(&text) {
             Ok(layer) => Some(layer),
-            Err(_) if composes(&text) => None,
+            // The composing reader's parser recurses as ours does: deep
+            // nesting is refused here, where the line can be named.
+            Err(_) if composes(&text) => {
+                check_text_nesting(&text).map_err(ExportError::Data)?;
+                None
+            }
             Err(e) => return Err(ExportError::Data(e)),
         }
     };
@@ -97,7 +103,25 @@ fn read(text: &str, name: &str) -> Result<Clip, String> {
     read_layer(&parse(text)?, name)
 }
 
+/// `Err` if the prims of `layer` nest deeper than [`MAX_NESTING`], found
+/// without recursing: the walks below recurse a level a prim, and a
+/// layer from the composing child is bounded only by its JSON.
+fn check_depth(layer: &Layer) -> Result<(), String> {
+    let mut stack: Vec<(&Prim, usize)> = layer.roots.iter().map(|p| (p, 1)).collect();
+    while let Some((prim, depth)) = stack.pop() {
+        if depth > MAX_NESTING {
+            return Err(format!(
+                "prim `{}`: prims nest deeper than {MAX_NESTING} levels",
+                prim.name
+            ));
+        }
+        stack.extend(prim.children.iter().map(|c| (c, depth + 1)));
+    }
+    Ok(())
+}
+
 fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
+    check_depth(layer)?;
     let mut codes = Vec::new();
     for r in &layer.roots {
         sample_times(r, &mut codes);
@@ -183,9 +207,9 @@ fn read_layer(layer: &Layer, name: &str) -> Result<Clip, String> {
                 mesh.name
             ));
         }
-        if triangles.iter().flatten().any(|&i| i as usize >= n) {
+        if let Some(i) = triangles.iter().flatten().find(|&&i| i as usize >= n) {
             return Err(format!(
-                "mesh `{}`: a face index is past its points",
+                "mesh `{}`: `faceVertexIndices` holds {i}, past its {n} points",
                 mesh.name
             ));
         }
