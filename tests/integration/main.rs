@@ -34,6 +34,7 @@ mod scenes;
 mod shards;
 mod skipping;
 mod stability;
+mod studio;
 mod tearing;
 mod unsteady;
 mod usd;
