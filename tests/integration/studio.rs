@@ -400,3 +400,196 @@ fn studio_sessions_with_the_same_seed_and_picks_write_the_same_bytes() {
     }
     drop((a, b));
 }
+
+/// The pinned Playwright release of the browser test (driving the system's
+/// Chromium: no browser download).
+const PLAYWRIGHT: &str = "playwright==1.56.0";
+
+/// The system's Chromium, if installed.
+fn chromium_path() -> Option<PathBuf> {
+    ["/usr/bin/chromium", "/usr/bin/chromium-browser"]
+        .into_iter()
+        .map(PathBuf::from)
+        .find(|p| p.is_file())
+}
+
+/// A Python with Playwright importable, set up once per target directory
+/// (a venv under it, pip with a 30 s network timeout), or why there is none.
+fn playwright_python() -> Result<PathBuf, String> {
+    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("playwright-venv");
+    let python = venv.join("bin/python3");
+    let has = |p: &Path| {
+        Command::new(p)
+            .args(["-c", "import playwright.sync_api"])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if has(&python) {
+        return Ok(python);
+    }
+    let o = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&venv)
+        .output()
+        .map_err(|e| format!("python3 is not available: {e}"))?;
+    if !o.status.success() {
+        return Err(format!(
+            "python3 -m venv failed: {}",
+            String::from_utf8_lossy(&o.stderr).trim()
+        ));
+    }
+    let o = Command::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+            "--timeout",
+            "30",
+            "--retries",
+            "1",
+            PLAYWRIGHT,
+        ])
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !o.status.success() || !has(&python) {
+        return Err(format!(
+            "pip install {PLAYWRIGHT} failed: {}",
+            String::from_utf8_lossy(&o.stderr).trim()
+        ));
+    }
+    Ok(python)
+}
+
+/// Opens the studio in headless Chromium, waits for the grid, picks the
+/// second candidate by a click and the third by its key, breeds with
+/// Enter, screenshots the new grid (clock held at 1.5 s), goes back with
+/// Backspace. Prints what the Rust side checks, as JSON. Any request to
+/// another server is recorded (the page must need none).
+const BROWSER_PY: &str = r##"
+import json, sys
+from playwright.sync_api import sync_playwright
+url, chromium, shot = sys.argv[1:4]
+with sync_playwright() as p:
+    browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox", "--disable-gpu"])
+    page = browser.new_page(viewport={"width": 1000, "height": 760}, device_scale_factor=1)
+    errors, foreign = [], []
+    page.on("pageerror", lambda e: errors.append(str(e)))
+    origin = url.split("/?")[0]
+    page.on("request", lambda r: None if r.url.startswith(origin) else foreign.append(r.url))
+    page.goto(url + "&t=1.5")
+    page.wait_for_selector('body[data-drawn="0"]', timeout=120000)
+    ids = page.eval_on_selector_all(".cell", "els => els.map(e => +e.dataset.id)")
+    page.click(".cell:nth-child(2) canvas")
+    page.keyboard.press("3")
+    picked = page.eval_on_selector_all(".cell.picked", "els => els.map(e => +e.dataset.id)")
+    page.keyboard.press("Enter")
+    page.wait_for_selector('body[data-drawn="1"]', timeout=600000)
+    page.wait_for_timeout(500)
+    page.screenshot(path=shot)
+    boxes = page.eval_on_selector_all(".cell canvas",
+        "els => els.map(e => { const r = e.getBoundingClientRect(); return [r.x, r.y, r.width, r.height]; })")
+    status = page.inner_text("#status")
+    page.keyboard.press("Backspace")
+    page.wait_for_selector('body[data-generation="0"]', timeout=60000)
+    browser.close()
+print(json.dumps({"ids": ids, "picked": picked, "boxes": boxes, "errors": errors,
+                  "foreign": foreign, "status": status}))
+"##;
+
+/// Skips (with the reason) where no browser or driver can be had, but
+/// fails under CI, which must run the test.
+fn unavailable(what: &str) {
+    assert!(
+        std::env::var("CI").as_deref() != Ok("true"),
+        "CI=true: the browser test must run, but {what}"
+    );
+    eprintln!("skipped: studio browser test: {what}");
+}
+
+#[test]
+fn studio_in_a_real_browser_picks_breeds_and_draws_every_candidate() {
+    let Some(chromium) = chromium_path() else {
+        return unavailable("no Chromium (apt-get install chromium)");
+    };
+    let python = match playwright_python() {
+        Ok(p) => p,
+        Err(e) => return unavailable(&e),
+    };
+    let dir = scratch("studio-browser");
+    let s = start_in(&dir, "5");
+    let url = format!("http://127.0.0.1:{}/?token={}", s.port, s.token);
+    let shot = dir.with_extension("png");
+    let out = Command::new(&python)
+        .args(["-c", BROWSER_PY, &url])
+        .arg(&chromium)
+        .arg(&shot)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["errors"], Value::Array(vec![]), "{report}");
+    assert_eq!(report["foreign"], Value::Array(vec![]), "offline: {report}");
+    let g0: Vec<u64> = report["ids"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(g0.len(), 4);
+    let two = vec![g0[1], g0[2]];
+    assert_eq!(report["picked"], serde_json::json!(two));
+
+    // The run directory: generation 1 bred from exactly those two, and
+    // the page went back to generation 0.
+    let session = s.session();
+    assert_eq!(session["generations"][1]["parent"], 0);
+    assert_eq!(session["generations"][1]["picks"], serde_json::json!(two));
+    assert_eq!(session["current"], 0);
+
+    // Every cell of the new grid drew its leaf and its trail.
+    let mut decoder =
+        png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.line_size / info.width as usize;
+    let pixel = |x: usize, y: usize| {
+        let k = y * info.line_size + x * channels;
+        [buf[k], buf[k + 1], buf[k + 2]]
+    };
+    let boxes = report["boxes"].as_array().unwrap();
+    assert_eq!(boxes.len(), 4, "{report}");
+    for (k, b) in boxes.iter().enumerate() {
+        let b: Vec<usize> = (0..4).map(|i| b[i].as_f64().unwrap() as usize).collect();
+        let (mut drawn, mut trail, mut leaf) = (0, 0, 0);
+        for y in b[1] + 2..(b[1] + b[3]).min(info.height as usize) - 2 {
+            for x in b[0] + 2..(b[0] + b[2]).min(info.width as usize) - 2 {
+                let [r, g, bl] = pixel(x, y).map(i32::from);
+                // The canvas background is #10161f.
+                if (r - 0x10).abs() + (g - 0x16).abs() + (bl - 0x1f).abs() > 12 {
+                    drawn += 1;
+                }
+                // The trail is orange, faded: red well above blue and green.
+                if r > bl + 40 && r > g + 15 {
+                    trail += 1;
+                }
+                // The leaf is green.
+                if g > r + 40 && g > bl + 40 {
+                    leaf += 1;
+                }
+            }
+        }
+        assert!(
+            drawn > 500 && trail > 20 && leaf > 20,
+            "cell {k}: {drawn} drawn, {trail} trail and {leaf} leaf pixels ({})",
+            shot.display()
+        );
+    }
+}
