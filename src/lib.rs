@@ -21,6 +21,8 @@
 //!   evaluation, selection, the run directory, shards and executors.
 //! - [`output`]: what leaves leafmagic for other tools: glTF, PC2 + OBJ,
 //!   and the HTML preview.
+//! - [`studio`]: choosing leaves by eye in the browser: a session of
+//!   generations bred from a person's picks, and its local web server.
 //!
 //! The command line (`src/cli/`) sits on top, in the binary.
 #![warn(missing_docs)]
@@ -31,4 +33,5 @@ pub mod motion;
 pub mod output;
 pub mod physics;
 pub mod sim;
+pub mod studio;
 pub mod util;

@@ -120,7 +120,7 @@ fn start_places(available: usize, slots: usize) -> Vec<usize> {
 /// A genome drawn uniformly over the unit box of `template`'s coordinates
 /// ([`Genome::coordinates`]): fold angles uniform in degrees, factors
 /// log-uniform.
-fn uniform<R: rand::Rng + ?Sized>(template: &Genome, bounds: &Bounds, rng: &mut R) -> Genome {
+pub fn uniform<R: rand::Rng + ?Sized>(template: &Genome, bounds: &Bounds, rng: &mut R) -> Genome {
     let n = template.values().len();
     let u: Vec<f64> = (0..n).map(|_| rng.random_range(0.0..=1.0)).collect();
     template.with_coordinates(bounds, &u)

@@ -612,3 +612,35 @@ fn parse_tilt(s: &str) -> Result<[f64; 2], String> {
 fn parse_policy(s: &str) -> Result<ExplicitPolicy, leafmagic::sim::stress::UnknownPolicy> {
     s.parse()
 }
+
+/// Arguments of `studio`.
+#[derive(clap::Args, Debug)]
+pub struct StudioArgs {
+    /// Prototype: `a`, `b` (embedded) or a leaf file.
+    #[arg(long, default_value = "a")]
+    pub prototype: String,
+    /// The class each fall is scored against (what "kept k of K" counts).
+    #[arg(long, default_value = "floater")]
+    pub target: MotionClass,
+    /// Seed of every random stream (same seed and same picks, same files).
+    #[arg(long, default_value_t = 1991)]
+    pub seed: u64,
+    /// Port on 127.0.0.1 [default: any free one].
+    #[arg(long, default_value_t = 0)]
+    pub port: u16,
+    /// Candidates per generation, 4 to 20.
+    #[arg(long, default_value_t = 12)]
+    pub grid: usize,
+    /// Simulated seconds of each drop.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// The session directory [default: runs/studio-<prototype>-s<seed>].
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Reopen the session in DIR where it was (its own settings apply).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["prototype", "target", "seed", "grid", "seconds", "out"])]
+    pub resume: Option<PathBuf>,
+    /// Open the page in the desktop's browser (xdg-open).
+    #[arg(long)]
+    pub open: bool,
+}

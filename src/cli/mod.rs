@@ -18,11 +18,12 @@ mod plate;
 mod progress;
 mod report;
 mod scene;
+mod studio;
 
 use anyhow::Result;
 use args::{
     AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, FallArgs,
-    MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs,
+    MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs, StudioArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -65,6 +66,9 @@ pub enum Command {
     /// Write one self-contained HTML page that plays a breeding run's best
     /// leaves, a scene's output or a .glb file in 3-D (works offline).
     Preview(PreviewArgs),
+    /// Choose leaves by eye in the browser and breed from the picks: a local web server
+    /// with a grid of falling candidates (see docs/studio.md).
+    Studio(StudioArgs),
     /// Evaluate one shard of a generation of a breeding run and write its shard file
     /// (what `breed --executor processes|slurm` starts; see the README, "Beyond one machine").
     Shard(ShardArgs),
@@ -105,6 +109,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scene(args) => scene::scene(args),
         Command::Compare(args) => motion::compare(args),
         Command::Preview(args) => output::preview(args),
+        Command::Studio(args) => studio::studio(args),
         Command::Shard(args) => breed::shard(args),
         Command::Merge(args) => breed::merge(args),
         Command::ComposeUsd {

@@ -14,7 +14,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first, with what each may import.
-const LAYERS: [(&str, &[&str]); 7] = [
+const LAYERS: [(&str, &[&str]); 8] = [
     ("util", &[]),
     ("physics", &["util"]),
     ("motion", &["util"]),
@@ -24,6 +24,12 @@ const LAYERS: [(&str, &[&str]); 7] = [
     (
         "output",
         &["breed", "sim", "leaf", "motion", "physics", "util"],
+    ),
+    (
+        "studio",
+        &[
+            "output", "breed", "sim", "leaf", "motion", "physics", "util",
+        ],
     ),
 ];
 

@@ -36,6 +36,7 @@ mod scenes;
 mod shards;
 mod skipping;
 mod stability;
+mod studio;
 mod tearing;
 mod unsteady;
 mod usd;

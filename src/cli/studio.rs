@@ -1,0 +1,67 @@
+//! `leafmagic studio`: opens or creates a session and serves it.
+
+use super::args::StudioArgs;
+use anyhow::{Context, Result};
+use leafmagic::leaf::LeafSpec;
+use leafmagic::studio::{Server, Session, StudioSettings};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Runs the studio until the process is stopped.
+pub fn studio(args: StudioArgs) -> Result<()> {
+    let session = match &args.resume {
+        Some(dir) => Session::open(dir)?,
+        None => {
+            let proto = LeafSpec::load(&args.prototype)
+                .with_context(|| format!("--prototype {}", args.prototype))?;
+            let settings = StudioSettings {
+                grid: args.grid,
+                seconds: args.seconds,
+                ..StudioSettings::new(&args.prototype, args.target, args.seed)
+            };
+            settings.validate()?;
+            let dir = args
+                .out
+                .clone()
+                .unwrap_or_else(|| default_dir(&args.prototype, args.seed));
+            eprintln!(
+                "studio: breeding generation 0 ({} candidates) in {}",
+                settings.grid,
+                dir.display()
+            );
+            Session::create(&dir, settings, proto)?
+        }
+    };
+    let server = Server::bind(args.port).context("could not listen on 127.0.0.1")?;
+    let url = server.url();
+    // The URL on stdout, alone on its line and last, for a person or a
+    // script (which may stop reading after it).
+    let mut out = std::io::stdout().lock();
+    writeln!(out, "session: {}", session.dir().display())?;
+    writeln!(out, "studio: {url}")?;
+    out.flush()?;
+    drop(out);
+    if args.open {
+        // Best effort: without a desktop the URL above is the way in.
+        let _ = std::process::Command::new("xdg-open").arg(&url).spawn();
+    }
+    server.serve(session).context("the studio's server stopped")
+}
+
+/// `runs/studio-<prototype>-s<seed>`, a file prototype by its stem.
+fn default_dir(prototype: &str, seed: u64) -> PathBuf {
+    let stem = Path::new(prototype)
+        .file_stem()
+        .map_or("leaf".into(), |s| s.to_string_lossy());
+    let name: String = stem
+        .chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect();
+    PathBuf::from("runs").join(format!("studio-{name}-s{seed}"))
+}

@@ -1,0 +1,17 @@
+//! The studio: the paper's section 4.1 loop with a person as the eye. A
+//! grid of candidates falls in the browser; the person picks the ones that
+//! move well and the next generation is bred from the picks
+//! ([`variation`]): variations at a shrinking scale, crossovers of two
+//! picks and wild cards. A session ([`session`]) is a tree of generations
+//! recorded in a run directory; [`server`] is the local web server and
+//! its page.
+//!
+//! May use: [`crate::output`], [`crate::breed`], [`crate::sim`],
+//! [`crate::leaf`], [`crate::motion`], [`crate::physics`], [`crate::util`].
+
+pub mod server;
+pub mod session;
+pub mod variation;
+
+pub use server::Server;
+pub use session::{Session, StudioError, StudioSettings};

@@ -1,0 +1,285 @@
+// leafmagic studio: a grid of falling candidates, each in its own canvas,
+// drawn with a plain 2-D projection (as the preview's fallback renderer
+// does); picks go to the server, which breeds the next generation.
+// URL query: token=TOKEN (required), t=SECONDS (clock held there, for
+// screenshots).
+'use strict';
+(function () {
+  const query = new URLSearchParams(location.search);
+  const token = query.get('token') || '';
+  const heldAt = query.has('t') && isFinite(parseFloat(query.get('t'))) ? parseFloat(query.get('t')) : null;
+  const $ = function (id) { return document.getElementById(id); };
+  const gridEl = $('grid'), statusEl = $('status'), scaleEl = $('scale'), treeEl = $('tree');
+  const TRAIL_S = 2.0;        // trail length, seconds
+  const YAW = -0.9, PITCH = 0.45;
+  let state = null, cells = [], picks = [], busy = false, start = performance.now();
+
+  function api(path, body) {
+    const headers = { 'X-Leafmagic-Token': token };
+    const opt = { headers: headers };
+    if (body !== undefined) {
+      opt.method = 'POST';
+      headers['Content-Type'] = 'application/json';
+      opt.body = JSON.stringify(body);
+    }
+    return fetch(path, opt).then(function (r) {
+      return r.ok ? r.json() : r.text().then(function (t) { throw new Error(t); });
+    });
+  }
+
+  function f32(b64) {
+    const bin = atob(b64);
+    const bytes = new Uint8Array(bin.length);
+    for (let i = 0; i < bin.length; i++) bytes[i] = bin.charCodeAt(i);
+    return new Float32Array(bytes.buffer);
+  }
+
+  function fmt(x, d) { return Number(x).toFixed(d); }
+
+  function originText(c) {
+    if (c.origin === 'variation') return 'variation of #' + c.parents[0];
+    if (c.origin === 'crossover') return 'crossover of #' + c.parents.join(' × #');
+    if (c.origin === 'wild') return 'wild card';
+    if (c.origin === 'prototype') return 'varied prototype';
+    return 'uniform draw';
+  }
+
+  // Per candidate: vertices per frame, centre per frame, extent.
+  function prepare(c) {
+    const m = c.motion;
+    const o = { c: c, n: m.vertices, F: m.frames, tris: m.triangles, P: m.frames ? f32(m.positions) : null };
+    if (!o.P) return o;
+    o.com = new Float32Array(o.F * 3);
+    let zmin = Infinity, ext = 0;
+    for (let f = 0; f < o.F; f++) {
+      let x = 0, y = 0, z = 0;
+      for (let i = 0; i < o.n; i++) {
+        const k = (f * o.n + i) * 3;
+        x += o.P[k]; y += o.P[k + 1]; z += o.P[k + 2];
+        zmin = Math.min(zmin, o.P[k + 2]);
+      }
+      o.com[f * 3] = x / o.n; o.com[f * 3 + 1] = y / o.n; o.com[f * 3 + 2] = z / o.n;
+    }
+    for (let i = 0; i < o.n; i++) {
+      for (let j = 0; j < 3; j++) ext = Math.max(ext, Math.abs(o.P[i * 3 + j] - o.com[j]));
+    }
+    o.ground = zmin;
+    // The view spans a few chords (at least 15 cm): the sway shows, and a
+    // small leaf is not lost in it.
+    o.span = Math.max(0.15, 6 * ext);
+    return o;
+  }
+
+  function build() {
+    gridEl.innerHTML = '';
+    const n = state.candidates.length;
+    const cols = Math.ceil(Math.sqrt(n * 4 / 3));
+    gridEl.style.gridTemplateColumns = 'repeat(' + cols + ', minmax(0, 1fr))';
+    cells = state.candidates.map(function (c, k) {
+      const el = document.createElement('div');
+      el.className = 'cell';
+      el.dataset.id = c.id;
+      const canvas = document.createElement('canvas');
+      const key = document.createElement('span');
+      key.className = 'key';
+      key.textContent = k < 10 ? String((k + 1) % 10) : '';
+      const info = document.createElement('div');
+      info.className = 'info';
+      const rate = c.class === 'diverged' ? c.error :
+        fmt(c.descent_m_s, 2) + ' m/s · drift ' + fmt(c.drift_ratio, 2) + ' · ' +
+        fmt(c.spin_rad_s, 1) + ' rad/s · kept ' + c.kept + '/' + c.releases;
+      info.innerHTML = '<b>#' + c.id + ' ' + c.class + '</b> ' + (c.regime || '') + '<br>' + rate +
+        '<br><span class="origin">' + originText(c) + '</span>';
+      el.appendChild(key); el.appendChild(canvas); el.appendChild(info);
+      el.addEventListener('click', function () { toggle(k); });
+      gridEl.appendChild(el);
+      const o = prepare(c);
+      o.el = el; o.canvas = canvas; o.drawn = false;
+      return o;
+    });
+    picks = [];
+    start = performance.now();
+    showTree();
+    showStatus();
+    document.body.dataset.generation = state.generation.index;
+  }
+
+  function showTree() {
+    treeEl.innerHTML = 'history: ';
+    state.tree.forEach(function (g) {
+      const s = document.createElement('span');
+      s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + g.picks.map(function (p) { return '#' + p; }).join(', ') + ')');
+      if (g.index === state.generation.index) s.className = 'here';
+      s.addEventListener('click', function () { act('/api/goto', { generation: g.index }); });
+      treeEl.appendChild(s);
+    });
+  }
+
+  function showStatus(text) {
+    if (text) { statusEl.textContent = text; return; }
+    const g = state.generation;
+    statusEl.textContent = 'generation ' + g.index + (g.parent === null ? '' : ' (from g' + g.parent + ')') +
+      ' · its variation ' + fmt(g.scale, 2) + ' · picked: ' +
+      (picks.length ? picks.map(function (k) { return '#' + cells[k].c.id; }).join(', ') : 'none (click or 1–9, 0)') +
+      ' · Enter breeds, Backspace goes back · ' + state.dir;
+    $('back').disabled = busy || g.parent === null;
+    $('breed').disabled = busy || picks.length === 0;
+  }
+
+  function toggle(k) {
+    if (busy || k >= cells.length) return;
+    const i = picks.indexOf(k);
+    if (i < 0) picks.push(k); else picks.splice(i, 1);
+    cells[k].el.classList.toggle('picked', i < 0);
+    showStatus();
+  }
+
+  function act(path, body, what) {
+    if (busy) return;
+    busy = true;
+    showStatus(what || 'working…');
+    api(path, body).then(function (s) {
+      busy = false; state = s; build();
+      scaleEl.value = fmt(state.next_scale, 2);
+    }).catch(function (e) {
+      busy = false; showStatus('refused: ' + e.message);
+    });
+  }
+
+  function breed() {
+    if (!picks.length) return;
+    const ids = picks.map(function (k) { return cells[k].c.id; });
+    const scale = parseFloat(scaleEl.value);
+    const body = { picks: ids };
+    if (isFinite(scale)) body.scale = scale;
+    act('/api/breed', body, 'breeding ' + state.settings.grid + ' candidates × ' +
+      state.settings.releases + ' releases from ' + ids.map(function (i) { return '#' + i; }).join(', ') + '…');
+  }
+
+  function back() { if (state.generation.parent !== null) act('/api/back', {}, 'going back…'); }
+
+  $('breed').addEventListener('click', breed);
+  $('back').addEventListener('click', back);
+  document.addEventListener('keydown', function (e) {
+    if (e.target === scaleEl) { if (e.key === 'Enter') breed(); return; }
+    if (e.key >= '0' && e.key <= '9') toggle((parseInt(e.key, 10) + 9) % 10);
+    else if (e.key === 'Enter') breed();
+    else if (e.key === 'Backspace') { e.preventDefault(); back(); }
+  });
+
+  // ----- drawing -----
+  const cy = Math.cos(YAW), sy = Math.sin(YAW), cp = Math.cos(PITCH), sp = Math.sin(PITCH);
+  // Screen coordinates (right, up) and depth of a point relative to the view centre.
+  function project(x, y, z) {
+    const r = x * cy + y * sy, f = -x * sy + y * cy;
+    return [r, z * cp + f * sp, f * cp - z * sp];
+  }
+
+  function frameAt(o, t) { return Math.min(Math.max(t * state.fps, 0), o.F - 1); }
+
+  function comAt(o, g) {
+    const k = Math.min(Math.floor(g), o.F - 2), a = o.F > 1 ? g - k : 0, C = o.com;
+    if (o.F < 2) return [C[0], C[1], C[2]];
+    return [0, 1, 2].map(function (j) { return C[k * 3 + j] * (1 - a) + C[(k + 1) * 3 + j] * a; });
+  }
+
+  function draw(o, t) {
+    const cv = o.canvas, dpr = window.devicePixelRatio || 1;
+    const w = Math.max(1, Math.round(cv.clientWidth * dpr)), h = Math.max(1, Math.round(cv.clientHeight * dpr));
+    if (cv.width !== w || cv.height !== h) { cv.width = w; cv.height = h; }
+    const ctx = cv.getContext('2d');
+    ctx.fillStyle = '#10161f';
+    ctx.fillRect(0, 0, w, h);
+    if (!o.P) {
+      ctx.fillStyle = '#c06060';
+      ctx.fillText('no fall to show', 10, 20);
+      return;
+    }
+    const g = frameAt(o, t), c = comAt(o, g);
+    const s = Math.min(w, h) / o.span;
+    const sx = function (p) { return w / 2 + s * p[0]; }, syy = function (p) { return h / 2 - s * p[1]; };
+    const rel = function (x, y, z) { return project(x - c[0], y - c[1], z - c[2]); };
+    // Scale: a back wall of 10 cm squares, fixed in the world, so the fall
+    // is seen against it; and the ground (the fall's lowest point) as a grid.
+    ctx.lineWidth = 1;
+    ctx.strokeStyle = 'rgba(120,140,170,0.25)';
+    ctx.beginPath();
+    const half = o.span, step = 0.1, wallY = c[1] + half;
+    for (let z = Math.floor((c[2] - half) / step) * step; z <= c[2] + half; z += step) {
+      const a = rel(c[0] - half, wallY, z), b = rel(c[0] + half, wallY, z);
+      ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
+    }
+    for (let x = Math.floor((c[0] - half) / step) * step; x <= c[0] + half; x += step) {
+      const a = rel(x, wallY, c[2] - half), b = rel(x, wallY, c[2] + half);
+      ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
+    }
+    ctx.stroke();
+    if (o.ground > c[2] - half) {
+      ctx.strokeStyle = 'rgba(150,170,120,0.5)';
+      ctx.beginPath();
+      for (let k = -10; k <= 10; k++) {
+        let a = rel(c[0] + k * step, c[1] - half, o.ground), b = rel(c[0] + k * step, c[1] + half, o.ground);
+        ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
+        a = rel(c[0] - half, c[1] + k * step, o.ground); b = rel(c[0] + half, c[1] + k * step, o.ground);
+        ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
+      }
+      ctx.stroke();
+    }
+    // The trail: the centre over the last TRAIL_S seconds, fading with age.
+    const first = Math.max(0, Math.floor(g - TRAIL_S * state.fps));
+    ctx.lineWidth = Math.max(1.5, 2 * dpr);
+    let prev = null;
+    for (let f = first; f <= Math.floor(g); f++) {
+      const p = rel(o.com[f * 3], o.com[f * 3 + 1], o.com[f * 3 + 2]);
+      if (prev) {
+        ctx.strokeStyle = 'rgba(255,150,40,' + fmt(0.9 * (1 - (g - f) / (TRAIL_S * state.fps)), 3) + ')';
+        ctx.beginPath(); ctx.moveTo(sx(prev), syy(prev)); ctx.lineTo(sx(p), syy(p)); ctx.stroke();
+      }
+      prev = p;
+    }
+    // The leaf: its triangles, far first, shaded by how they face the light.
+    const k0 = Math.min(Math.floor(g), o.F - 1), k1 = Math.min(k0 + 1, o.F - 1), a = g - k0;
+    const V = [];
+    for (let i = 0; i < o.n; i++) {
+      const p0 = (k0 * o.n + i) * 3, p1 = (k1 * o.n + i) * 3, P = o.P;
+      V.push([P[p0] * (1 - a) + P[p1] * a, P[p0 + 1] * (1 - a) + P[p1 + 1] * a, P[p0 + 2] * (1 - a) + P[p1 + 2] * a]);
+    }
+    const tris = [];
+    for (let i = 0; i + 2 < o.tris.length; i += 3) {
+      const A = V[o.tris[i]], B = V[o.tris[i + 1]], C = V[o.tris[i + 2]];
+      const u = [B[0] - A[0], B[1] - A[1], B[2] - A[2]], v = [C[0] - A[0], C[1] - A[1], C[2] - A[2]];
+      const nz = u[0] * v[1] - u[1] * v[0], nl = Math.hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], nz) || 1;
+      const pa = rel(A[0], A[1], A[2]), pb = rel(B[0], B[1], B[2]), pc = rel(C[0], C[1], C[2]);
+      tris.push({ p: [pa, pb, pc], d: pa[2] + pb[2] + pc[2], light: 0.45 + 0.55 * Math.abs(nz / nl) });
+    }
+    tris.sort(function (x, y) { return y.d - x.d; });
+    tris.forEach(function (tr) {
+      const l = tr.light;
+      ctx.fillStyle = 'rgb(' + Math.round(70 * l) + ',' + Math.round(200 * l) + ',' + Math.round(90 * l) + ')';
+      ctx.strokeStyle = 'rgba(20,60,30,0.8)';
+      ctx.beginPath();
+      ctx.moveTo(sx(tr.p[0]), syy(tr.p[0])); ctx.lineTo(sx(tr.p[1]), syy(tr.p[1])); ctx.lineTo(sx(tr.p[2]), syy(tr.p[2]));
+      ctx.closePath(); ctx.fill(); ctx.stroke();
+    });
+    o.drawn = true;
+  }
+
+  function tick() {
+    if (state && cells.length) {
+      // One clock for all: every candidate falls in sync, looping over the
+      // longest fall with a second's pause at the end.
+      const F = cells.reduce(function (m, o) { return Math.max(m, o.F || 1); }, 1);
+      const T = (F - 1) / state.fps;
+      const t = heldAt !== null ? Math.min(heldAt, T) : ((performance.now() - start) / 1000) % (T + 1);
+      cells.forEach(function (o) { draw(o, t); });
+      if (cells.every(function (o) { return o.drawn; })) document.body.dataset.drawn = state.generation.index;
+    }
+    requestAnimationFrame(tick);
+  }
+
+  api('/api/state').then(function (s) {
+    state = s; build();
+    scaleEl.value = fmt(state.next_scale, 2);
+    requestAnimationFrame(tick);
+  }).catch(function (e) { showStatus('could not load the session: ' + e.message); });
+})();
