@@ -94,7 +94,7 @@ const EXTREMES: [&str; 14] = [
 ];
 
 /// One seeded mutation of `text`.
-fn mutate(text: &[u8], rng: &mut Xoshiro256PlusPlus) -> Vec<u8> {
+pub(super) fn mutate(text: &[u8], rng: &mut Xoshiro256PlusPlus) -> Vec<u8> {
     let mut out = text.to_vec();
     let lines =
         |b: &[u8]| -> Vec<Vec<u8>> { b.split(|&c| c == b'\n').map(<[u8]>::to_vec).collect() };

@@ -17,6 +17,7 @@ mod corpus;
 mod export;
 mod fuzz;
 mod genome;
+mod hostile;
 mod hostile_gltf;
 mod hostile_usd;
 mod integrators;
