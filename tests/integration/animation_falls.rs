@@ -442,7 +442,7 @@ fn usd_skinning_matches_pixar_s() {
     let python = match crate::usd::pixar_python() {
         Ok(p) => p,
         Err(why) => {
-            eprintln!("SKIPPED usd_skinning_matches_pixar_s: {why}");
+            crate::common::missing_tool("usd_skinning_matches_pixar_s", &why);
             return;
         }
     };

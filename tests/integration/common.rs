@@ -6,6 +6,17 @@ use nalgebra::Vector3;
 
 pub type V3 = Vector3<f64>;
 
+/// A test whose outside tool is missing: skipped with a message on a
+/// developer's machine, a failure under `CI=true`, where `.ci/run`
+/// installs every tool the tests use, so a skip there would hide a check
+/// that never ran.
+pub fn missing_tool(test: &str, why: &str) {
+    if std::env::var("CI").is_ok_and(|v| v == "true") {
+        panic!("{test}: {why} (CI=true, and .ci/run should have installed it)");
+    }
+    eprintln!("SKIPPED {test}: {why}");
+}
+
 /// Parts with `n` free unit-mass particles at the origin, no gravity.
 pub fn parts(n: usize) -> ModelParts {
     ModelParts {

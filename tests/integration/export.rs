@@ -811,7 +811,7 @@ fn exported_glb_files_pass_the_khronos_validator() {
     let tool = match validator() {
         Ok(t) => t,
         Err(why) => {
-            eprintln!("SKIPPED exported_glb_files_pass_the_khronos_validator: {why}");
+            crate::common::missing_tool("exported_glb_files_pass_the_khronos_validator", &why);
             return;
         }
     };
@@ -1165,8 +1165,9 @@ fn leafy(p: [u8; 3]) -> bool {
 #[test]
 fn the_preview_page_draws_the_leaves_at_two_times_in_headless_chromium() {
     let Some(browser) = chromium() else {
-        eprintln!(
-            "SKIPPED the_preview_page_draws_the_leaves...: no chromium (apt-get install chromium)"
+        crate::common::missing_tool(
+            "the_preview_page_draws_the_leaves...",
+            "no chromium (apt-get install chromium)",
         );
         return;
     };
@@ -1270,8 +1271,9 @@ random_yaw = true
 #[test]
 fn the_preview_page_shows_particles_only_while_they_live_in_headless_chromium() {
     let Some(browser) = chromium() else {
-        eprintln!(
-            "SKIPPED the_preview_page_shows_particles...: no chromium (apt-get install chromium)"
+        crate::common::missing_tool(
+            "the_preview_page_shows_particles...",
+            "no chromium (apt-get install chromium)",
         );
         return;
     };

@@ -138,7 +138,10 @@ fn validator() -> Result<PathBuf, String> {
 #[test]
 fn manifests_pass_the_kubernetes_schemas_and_the_restricted_level() {
     if !have("envsubst") {
-        eprintln!("skipped: no envsubst (Debian: gettext-base) to render the manifests");
+        crate::common::missing_tool(
+            "k8s manifests",
+            "no envsubst (Debian: gettext-base) to render the manifests",
+        );
         return;
     }
     let dir = scratch("manifests");
@@ -183,7 +186,7 @@ fn manifests_pass_the_kubernetes_schemas_and_the_restricted_level() {
     let bin = match validator() {
         Ok(bin) => bin,
         Err(why) => {
-            eprintln!("skipped the schema checks: {why}");
+            crate::common::missing_tool("k8s schema checks", &why);
             return;
         }
     };
@@ -317,7 +320,10 @@ fn drive(dir: &Path, fail_index: Option<usize>) -> (std::process::Output, Durati
 #[test]
 fn breed_sh_completes_a_run_and_stops_on_a_failed_index_with_its_log() {
     if !have("envsubst") {
-        eprintln!("skipped: no envsubst (Debian: gettext-base) to render the Jobs");
+        crate::common::missing_tool(
+            "k8s jobs",
+            "no envsubst (Debian: gettext-base) to render the Jobs",
+        );
         return;
     }
     // A run driven to the end: the same bytes as a local run.

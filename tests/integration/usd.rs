@@ -243,7 +243,7 @@ fn usd_files_open_in_pixars_library_comply_and_hold_the_simulation() {
     let python = match pixar_python() {
         Ok(p) => p,
         Err(why) => {
-            eprintln!("SKIPPED usd_files_open_in_pixars_library...: {why}");
+            crate::common::missing_tool("usd_files_open_in_pixars_library...", &why);
             return;
         }
     };
