@@ -34,7 +34,7 @@ impl Scene {
 
     /// [`Scene::load`] held to `limits`: a scene whose estimated memory or
     /// work passes them is refused from the parsed file, before any object
-    /// is built ([`super::bounds`]); the scene keeps them for its run.
+    /// is built (`sim/scene/bounds.rs`); the scene keeps them for its run.
     pub fn load_within(path: &Path, limits: &Limits) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
         let text = std::fs::read_to_string(path).map_err(|e| SceneError {
