@@ -6,6 +6,58 @@ use nalgebra::Vector3;
 
 pub type V3 = Vector3<f64>;
 
+/// A Python in a venv `name` under the target directory in which
+/// `import_check` (a module path) imports, made once with `pip install
+/// package`, or why there is none. Pip has a 30 s network timeout: a
+/// network that hangs fails the install instead of stalling CI.
+pub fn venv_python(
+    name: &str,
+    import_check: &str,
+    package: &str,
+) -> Result<std::path::PathBuf, String> {
+    use std::process::Command;
+    let venv = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(name);
+    let python = venv.join("bin/python3");
+    let has = |p: &std::path::Path| {
+        Command::new(p)
+            .args(["-c", &format!("import {import_check}")])
+            .output()
+            .is_ok_and(|o| o.status.success())
+    };
+    if has(&python) {
+        return Ok(python);
+    }
+    let o = Command::new("python3")
+        .args(["-m", "venv"])
+        .arg(&venv)
+        .output()
+        .map_err(|e| format!("python3 is not available: {e}"))?;
+    if !o.status.success() {
+        return Err(format!(
+            "python3 -m venv failed: {}",
+            String::from_utf8_lossy(&o.stderr).trim()
+        ));
+    }
+    let o = Command::new(&python)
+        .args([
+            "-m",
+            "pip",
+            "install",
+            "--quiet",
+            "--disable-pip-version-check",
+        ])
+        .args(["--timeout", "30", "--retries", "1", package])
+        .output()
+        .map_err(|e| e.to_string())?;
+    if !o.status.success() || !has(&python) {
+        return Err(format!(
+            "pip install {package} failed: {}",
+            String::from_utf8_lossy(&o.stderr).trim()
+        ));
+    }
+    Ok(python)
+}
+
 /// A test whose outside tool is missing: skipped with a message on a
 /// developer's machine, a failure under `CI=true`, where `.ci/run`
 /// installs every tool the tests use, so a skip there would hide a check

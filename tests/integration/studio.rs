@@ -414,52 +414,9 @@ fn chromium_path() -> Option<PathBuf> {
 }
 
 /// A Python with Playwright importable, set up once per target directory
-/// (a venv under it, pip with a 30 s network timeout), or why there is none.
+/// ([`crate::common::venv_python`]), or why there is none.
 fn playwright_python() -> Result<PathBuf, String> {
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("playwright-venv");
-    let python = venv.join("bin/python3");
-    let has = |p: &Path| {
-        Command::new(p)
-            .args(["-c", "import playwright.sync_api"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if has(&python) {
-        return Ok(python);
-    }
-    let o = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .output()
-        .map_err(|e| format!("python3 is not available: {e}"))?;
-    if !o.status.success() {
-        return Err(format!(
-            "python3 -m venv failed: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ));
-    }
-    let o = Command::new(&python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            "--timeout",
-            "30",
-            "--retries",
-            "1",
-            PLAYWRIGHT,
-        ])
-        .output()
-        .map_err(|e| e.to_string())?;
-    if !o.status.success() || !has(&python) {
-        return Err(format!(
-            "pip install {PLAYWRIGHT} failed: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ));
-    }
-    Ok(python)
+    crate::common::venv_python("playwright-venv", "playwright.sync_api", PLAYWRIGHT)
 }
 
 /// Opens the studio in headless Chromium, waits for the grid, picks the

@@ -25,52 +25,7 @@ const USD_CORE: &str = "usd-core==26.11";
 /// A Python with `pxr` (usd-core) importable, set up once per target
 /// directory, or why there is none.
 pub fn pixar_python() -> Result<PathBuf, String> {
-    let venv = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("usd-core-venv");
-    let python = venv.join("bin/python");
-    let has_pxr = |p: &Path| {
-        Command::new(p)
-            .args(["-c", "import pxr.Usd"])
-            .output()
-            .is_ok_and(|o| o.status.success())
-    };
-    if has_pxr(&python) {
-        return Ok(python);
-    }
-    let o = Command::new("python3")
-        .args(["-m", "venv"])
-        .arg(&venv)
-        .output()
-        .map_err(|e| format!("python3 is not available: {e}"))?;
-    if !o.status.success() {
-        return Err(format!(
-            "python3 -m venv failed: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ));
-    }
-    let o = Command::new(&python)
-        .args([
-            "-m",
-            "pip",
-            "install",
-            "--quiet",
-            "--disable-pip-version-check",
-            // A network that hangs fails the install (and the test skips)
-            // instead of stalling CI.
-            "--timeout",
-            "30",
-            "--retries",
-            "1",
-            USD_CORE,
-        ])
-        .output()
-        .map_err(|e| e.to_string())?;
-    if !o.status.success() || !has_pxr(&python) {
-        return Err(format!(
-            "pip install {USD_CORE} failed: {}",
-            String::from_utf8_lossy(&o.stderr).trim()
-        ));
-    }
-    Ok(python)
+    crate::common::venv_python("usd-core-venv", "pxr.Usd", USD_CORE)
 }
 
 /// Reads each file with pxr and reports, as JSON, the compliance checker's
