@@ -28,7 +28,7 @@ pub struct BreedArgs {
     pub start_from: Option<PathBuf>,
     /// Motion class to breed toward: floater, spinner or lilter [default: floater; with
     /// --target-features, none: any class may come close].
-    #[arg(long)]
+    #[arg(long, value_parser = parse_target)]
     pub target: Option<MotionClass>,
     /// Individuals per generation.
     #[arg(long, default_value_t = 100)]
@@ -302,7 +302,7 @@ impl ReadingArgs {
 pub struct FallArgs {
     /// Fall CSV, columns by header name in any order: t,x,y,z required (or t, the vertical and one horizontal: one camera's view, read in its vertical plane); qw,qx,qy,qz (body to world, w first) and area columns (area, area1, ...) optional. Or an animation file (glTF .glb/.gltf, USD .usd/.usda/.usdc/.usdz, Alembic .abc: leafmagic's export, a Blender, Houdini or game-engine bake), read at its keys: the moving mesh's centre and principal axes, whether its own keys, parents, morph targets or bones move it.
     pub trajectory: PathBuf,
-    /// The leaf's chord (longest extent), metres; sets the length scale of the tests [default: 0.05, or an animation file's mesh's own].
+    /// The leaf's size, metres: a square's side or a leaf's length, as the tracked records give it; sets the length scale of the tests [default: 0.05, or an animation file's mesh's longest extent].
     #[arg(long)]
     pub size: Option<f64>,
     /// A CSV's vertical axis: z (leafmagic's), y (turned to z up on reading), or -y (a y that points down, as image rows do; write --up=-y); glTF is y up by its specification, USD says its own.
@@ -349,8 +349,8 @@ pub struct AccuracyArgs {
     /// Simulated seconds T [default: 1, or 10 with --long].
     #[arg(long)]
     pub seconds: Option<f64>,
-    /// Directory for accuracy.csv and accuracy.svg (accuracy-long.csv with --long); created if missing.
-    #[arg(long, default_value = ".")]
+    /// Directory for accuracy.csv and accuracy.svg (accuracy-long.csv with --long); created if missing. Output goes under runs/, as every command's does, not into the current folder.
+    #[arg(long, default_value = "runs/accuracy")]
     pub out: PathBuf,
     /// Compare motion classes and statistics (descent speed, rotation rate) across steps for a long fall.
     #[arg(long)]
@@ -517,7 +517,7 @@ pub struct PreviewArgs {
     /// Metres per unit of an Alembic archive, which carries no unit (0.01 for Maya's centimetres), or of a CSV record's x, y, z [default: 1].
     #[arg(long)]
     pub scale: Option<f64>,
-    /// A CSV record's chord (the leaf's longest extent), metres: the plate drawn and the length scale of its classification [default: 0.05].
+    /// A CSV record's leaf size, metres (a square's side or a leaf's length): the plate drawn and the length scale of its classification [default: 0.05].
     #[arg(long)]
     pub size: Option<f64>,
     /// A CSV record's vertical axis: z, y, or -y (write --up=-y) [default: z].
@@ -591,6 +591,17 @@ fn parse_work(s: &str) -> Result<f64, String> {
     }
 }
 
+/// `--target`: a class a leaf can be bred toward; `undetermined` is what
+/// a fall is called when it is none of them, so it is no target.
+fn parse_target(s: &str) -> Result<MotionClass, String> {
+    match s.parse::<MotionClass>() {
+        Ok(MotionClass::Undetermined) | Err(_) => {
+            Err(format!("expected floater, spinner or lilter, got '{s}'"))
+        }
+        Ok(class) => Ok(class),
+    }
+}
+
 /// `--tilt`: `X,Y` degrees, or `X` alone (Y is then 0).
 fn parse_tilt(s: &str) -> Result<[f64; 2], String> {
     let parts: Vec<&str> = s.split(',').collect();
@@ -619,8 +630,8 @@ pub struct StudioArgs {
     /// Prototype: `a`, `b` (embedded) or a leaf file.
     #[arg(long, default_value = "a")]
     pub prototype: String,
-    /// The class each fall is scored against (what "kept k of K" counts).
-    #[arg(long, default_value = "floater")]
+    /// The class each fall is scored against (what "kept k of K" counts): floater, spinner or lilter.
+    #[arg(long, default_value = "floater", value_parser = parse_target)]
     pub target: MotionClass,
     /// Seed of every random stream (same seed and same picks, same files).
     #[arg(long, default_value_t = 1991)]

@@ -13,9 +13,44 @@ use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
 use std::path::Path;
 
-/// A leaf file, or `a` / `b` for the embedded prototypes, and its model.
+/// A leaf file, or `a` / `b` for the embedded prototypes, and its model;
+/// a scene file given instead is named as one, with the command it wants.
 pub fn leaf(arg: &str) -> Result<(LeafSpec, Model)> {
-    Ok(LeafSpec::load_with_model(arg)?)
+    LeafSpec::load_with_model(arg).map_err(|e| {
+        let hint = (toml_kind(Path::new(arg)) == Some(TomlKind::Scene)).then(|| {
+            format!(
+                "\nhint: {arg} is a scene file ([[leaf]], [[rigid]], [[wind]] ... tables), not a leaf: run it with `leafmagic scene {arg}`"
+            )
+        });
+        anyhow::anyhow!("{e}{}", hint.unwrap_or_default())
+    })
+}
+
+/// Which of leafmagic's TOML files a file looks like, by its top-level
+/// tables: what a wrong-file error can name.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum TomlKind {
+    /// A leaf file (`[[particle]]`, `[[triangle]]`, `[[spring]]`).
+    Leaf,
+    /// A scene file (`[[leaf]]`, `[[rigid]]`, `[[sheet]]`, `[[rope]]`, `duration`).
+    Scene,
+}
+
+/// The kind of TOML file at `path`, if it parses and says; files over
+/// 64 MiB are not looked at.
+pub fn toml_kind(path: &Path) -> Option<TomlKind> {
+    if std::fs::metadata(path).ok()?.len() > 64 << 20 {
+        return None;
+    }
+    let table: toml::Table = std::fs::read_to_string(path).ok()?.parse().ok()?;
+    let has = |keys: &[&str]| keys.iter().any(|k| table.contains_key(*k));
+    if has(&["leaf", "rigid", "sheet", "rope", "duration", "frame_rate"]) {
+        Some(TomlKind::Scene)
+    } else if has(&["particle", "triangle", "spring"]) {
+        Some(TomlKind::Leaf)
+    } else {
+        None
+    }
 }
 
 /// What `accuracy` and `check --stress` run: a named model and its initial

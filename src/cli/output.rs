@@ -17,6 +17,13 @@ use std::time::Instant;
 /// as a whole: into a temporary sibling first, renamed into place when
 /// complete, so a failure leaves what was there before.
 pub fn export(args: ExportArgs) -> Result<()> {
+    if args.run.join("summary.toml").is_file() {
+        bail!(
+            "{}: a scene's output (it holds summary.toml), not a breeding run; a scene is \
+             exported as it runs: `leafmagic scene SCENE.toml --export glb|usd|pc2|abc`",
+            args.run.display()
+        );
+    }
     let run = Run::open(&args.run)?;
     let Some(cp) = &run.checkpoint else {
         bail!(

@@ -2,7 +2,7 @@
 //! asked, an export of the run), or explains what the compiled scene keeps.
 
 use super::args::SceneArgs;
-use super::{output, report};
+use super::{input, output, report};
 use anyhow::Result;
 use leafmagic::physics::model::AeroLaw;
 use leafmagic::physics::params::TimeStep;
@@ -20,7 +20,16 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         max_memory: args.max_memory,
         seconds: args.seconds,
     };
-    let scene = Scene::load_within(&args.file, &limits)?;
+    let scene = Scene::load_within(&args.file, &limits).map_err(|e| {
+        let hint = (input::toml_kind(&args.file) == Some(input::TomlKind::Leaf)).then(|| {
+            format!(
+                "\nhint: {} is a leaf file ([[particle]] and [[triangle]] tables), not a scene: `leafmagic drop {}` drops it, and a scene places it with [[leaf]] file = \"...\"",
+                args.file.display(),
+                args.file.display()
+            )
+        });
+        anyhow::anyhow!("{e}{}", hint.unwrap_or_default())
+    })?;
     let decisions = scene.explain();
     let frame = 1.0 / scene.frame_rate;
     if args.explain {

@@ -26,6 +26,7 @@ mod k8s;
 mod layers;
 mod leaves;
 mod like;
+mod newcomer;
 mod particles;
 mod plate_cli;
 mod real_falls;
