@@ -312,7 +312,7 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
 
 /// Fastest mean descent through air a leaf-like fall is taken to have,
 /// m/s: a paper card diving edge-on falls at a few metres per second,
-/// leafmagic's fastest divers at 8 (README, the archive), raindrops at 9.
+/// leafmagic's fastest divers at 8 (docs/reference.md, the archive), raindrops at 9.
 /// A record faster than this on average is more likely written in
 /// millimetres, centimetres or pixels than in metres (our choice, with
 /// room).

@@ -70,7 +70,7 @@ pub enum Command {
     /// with a grid of falling candidates (see docs/studio.md).
     Studio(StudioArgs),
     /// Evaluate one shard of a generation of a breeding run and write its shard file
-    /// (what `breed --executor processes|slurm` starts; see the README, "Beyond one machine").
+    /// (what `breed --executor processes|slurm` starts; see docs/reference.md, "Beyond one machine").
     Shard(ShardArgs),
     /// Merge the shard files of a generation that something else evaluated (a Kubernetes
     /// Indexed Job, a Slurm array) into the run: its files and checkpoint, as breed would.
