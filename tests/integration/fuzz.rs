@@ -36,43 +36,55 @@ fn scratch(name: &str) -> PathBuf {
 }
 
 /// What a case ended with.
-struct Ended {
-    code: Option<i32>,
-    stderr: String,
-    took: Duration,
+pub(super) struct Ended {
+    pub(super) code: Option<i32>,
+    pub(super) stdout: String,
+    pub(super) stderr: String,
+    pub(super) took: Duration,
 }
 
 /// Runs `cmd`, killing it past [`TIMEOUT`].
-fn run(mut cmd: Command) -> Ended {
-    let err = tempfile_path("stderr");
-    let file = std::fs::File::create(&err).unwrap();
+fn run(cmd: Command) -> Ended {
+    run_within(cmd, TIMEOUT)
+}
+
+/// Runs `cmd`, its output read on threads (a full pipe cannot stall it),
+/// killing it past `limit`: a case that hangs ends with no exit code.
+pub(super) fn run_within(mut cmd: Command, limit: Duration) -> Ended {
     let start = Instant::now();
-    let mut child = cmd.stdout(Stdio::null()).stderr(file).spawn().unwrap();
+    let mut child = cmd
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let drain = |pipe: Option<Box<dyn std::io::Read + Send>>| {
+        std::thread::spawn(move || {
+            let mut bytes = Vec::new();
+            if let Some(mut pipe) = pipe {
+                let _ = pipe.read_to_end(&mut bytes);
+            }
+            String::from_utf8_lossy(&bytes).into_owned()
+        })
+    };
+    let stdout = drain(child.stdout.take().map(|p| Box::new(p) as _));
+    let stderr = drain(child.stderr.take().map(|p| Box::new(p) as _));
     let code = loop {
         if let Some(status) = child.try_wait().unwrap() {
             break status.code();
         }
-        if start.elapsed() > TIMEOUT {
+        if start.elapsed() > limit {
             let _ = child.kill();
             let _ = child.wait();
             break None;
         }
         std::thread::sleep(Duration::from_millis(2));
     };
-    let took = start.elapsed();
-    let stderr = String::from_utf8_lossy(&std::fs::read(&err).unwrap_or_default()).into_owned();
-    let _ = std::fs::remove_file(&err);
-    Ended { code, stderr, took }
-}
-
-fn tempfile_path(tag: &str) -> PathBuf {
-    use std::sync::atomic::{AtomicUsize, Ordering};
-    static N: AtomicUsize = AtomicUsize::new(0);
-    std::env::temp_dir().join(format!(
-        "leafmagic-fuzz-{}-{tag}-{}",
-        std::process::id(),
-        N.fetch_add(1, Ordering::Relaxed)
-    ))
+    Ended {
+        code,
+        stdout: stdout.join().unwrap(),
+        stderr: stderr.join().unwrap(),
+        took: start.elapsed(),
+    }
 }
 
 /// Numbers a hostile or unlucky file might hold.

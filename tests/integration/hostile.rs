@@ -12,15 +12,16 @@
 //! same bytes from inside the folder, and through `--allow-references`,
 //! and must succeed, so the refusals are for the place, not the bytes.
 //!
-//! The same corpus seeds mutations (`LEAFMAGIC_FUZZ_CASES` per file,
-//! default 6) for the fuzz budget of CI.
+//! The same corpus seeds mutations for the fuzz budget of CI: a sixth of
+//! `LEAFMAGIC_FUZZ_CASES` per file, rounded up (6 when it is unset).
 
 use super::breeding::leafmagic;
+use super::fuzz::{Ended, run_within};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
+use std::process::Command;
+use std::time::Duration;
 
 /// Longest a case may run.
 const TIMEOUT: Duration = Duration::from_secs(20);
@@ -300,48 +301,8 @@ fn usd_arc(arc: &str, asset: &str) -> Vec<u8> {
     .into_bytes()
 }
 
-struct Ended {
-    code: Option<i32>,
-    out: String,
-    err: String,
-    took: Duration,
-}
-
-fn run(mut cmd: Command) -> Ended {
-    let start = Instant::now();
-    let mut child = cmd
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let (mut out, mut err) = (child.stdout.take().unwrap(), child.stderr.take().unwrap());
-    let reader = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        std::io::Read::read_to_end(&mut out, &mut s).ok();
-        s
-    });
-    let err_reader = std::thread::spawn(move || {
-        let mut s = Vec::new();
-        std::io::Read::read_to_end(&mut err, &mut s).ok();
-        s
-    });
-    let code = loop {
-        if let Some(status) = child.try_wait().unwrap() {
-            break status.code();
-        }
-        if start.elapsed() > TIMEOUT {
-            let _ = child.kill();
-            let _ = child.wait();
-            break None;
-        }
-        std::thread::sleep(Duration::from_millis(5));
-    };
-    Ended {
-        code,
-        out: String::from_utf8_lossy(&reader.join().unwrap()).into_owned(),
-        err: String::from_utf8_lossy(&err_reader.join().unwrap()).into_owned(),
-        took: start.elapsed(),
-    }
+fn run(cmd: Command) -> Ended {
+    run_within(cmd, TIMEOUT)
 }
 
 /// Hands `file` to every reader and checks each outcome against `expect`;
@@ -366,7 +327,7 @@ fn judge(file: &Path, expect: Expect, extra: &[String]) -> Vec<String> {
         cmd.args(&args).arg(file).args(extra);
         let e = run(cmd);
         let what = format!("{name} ({})", args.join(" "));
-        let said = format!("{}{}", e.out, e.err);
+        let said = format!("{}{}", e.stdout, e.stderr);
         if e.code.is_none() {
             wrong.push(format!(
                 "{what}: no exit code after {:?} (killed or signalled)",
@@ -381,7 +342,7 @@ fn judge(file: &Path, expect: Expect, extra: &[String]) -> Vec<String> {
             "memory allocation of",
         ] {
             if said.contains(bad) {
-                wrong.push(format!("{what}: says `{bad}`: {}", e.err.trim()));
+                wrong.push(format!("{what}: says `{bad}`: {}", e.stderr.trim()));
             }
         }
         if expect != Expect::Read && said.contains(CANARY) {
@@ -396,19 +357,20 @@ fn judge(file: &Path, expect: Expect, extra: &[String]) -> Vec<String> {
         // others must read it.
         let must_read = expect == Expect::Read && args[0] != "describe";
         match expect {
-            _ if must_read && refused => {
-                wrong.push(format!("{what}: refused a readable file: {}", e.err.trim()))
-            }
+            _ if must_read && refused => wrong.push(format!(
+                "{what}: refused a readable file: {}",
+                e.stderr.trim()
+            )),
             Expect::Refused(words) if !refused => {
                 wrong.push(format!("{what}: exit 0, expected a refusal ({words})"))
             }
-            Expect::Refused(words) if !e.err.contains(words) => wrong.push(format!(
+            Expect::Refused(words) if !e.stderr.contains(words) => wrong.push(format!(
                 "{what}: the refusal does not say `{words}`: {}",
-                e.err.trim()
+                e.stderr.trim()
             )),
-            _ if refused && !e.err.contains(&name) => wrong.push(format!(
+            _ if refused && !e.stderr.contains(&name) => wrong.push(format!(
                 "{what}: the refusal does not name the file: {}",
-                e.err.trim()
+                e.stderr.trim()
             )),
             _ => {}
         }
@@ -463,7 +425,7 @@ fn names_cannot_break_the_preview_page() {
             c.arg("preview").arg(&file).arg("--out").arg(&page);
             c
         });
-        assert_eq!(e.code, Some(0), "{node:?}: {}", e.err);
+        assert_eq!(e.code, Some(0), "{node:?}: {}", e.stderr);
         std::fs::read_to_string(&page).unwrap()
     };
     let plain = page_of("card");
@@ -517,16 +479,16 @@ fn mutated_hostile_files_end_cleanly_and_never_read_the_canary() {
             cmd.arg("classify").arg(&file);
             let e = run(cmd);
             ran += 1;
-            let said = format!("{}{}", e.out, e.err);
+            let said = format!("{}{}", e.stdout, e.stderr);
             let name = file.file_name().unwrap().to_string_lossy().into_owned();
             if e.code.is_none() {
                 wrong.push(format!("{name}: no exit code after {:?}", e.took));
             } else if said.contains("panicked") || said.contains("overflow") {
-                wrong.push(format!("{name}: {}", e.err.trim()));
-            } else if e.code != Some(0) && !e.err.contains(&name) {
+                wrong.push(format!("{name}: {}", e.stderr.trim()));
+            } else if e.code != Some(0) && !e.stderr.contains(&name) {
                 wrong.push(format!(
                     "{name}: the error does not name it: {}",
-                    e.err.trim()
+                    e.stderr.trim()
                 ));
             }
             let outside = case.expect != Expect::Read;

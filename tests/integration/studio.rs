@@ -354,27 +354,6 @@ fn studio_breeds_from_picks_and_keeps_a_tree() {
     assert_eq!(back["generation"]["index"], 0);
 }
 
-/// Every file under `dir`, by relative path, with its bytes.
-fn files(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
-    let mut out = Vec::new();
-    let mut stack = vec![dir.to_path_buf()];
-    while let Some(d) = stack.pop() {
-        for e in std::fs::read_dir(&d).unwrap() {
-            let p = e.unwrap().path();
-            if p.is_dir() {
-                stack.push(p);
-            } else {
-                out.push((
-                    p.strip_prefix(dir).unwrap().to_path_buf(),
-                    std::fs::read(&p).unwrap(),
-                ));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
 #[test]
 fn studio_sessions_with_the_same_seed_and_picks_write_the_same_bytes() {
     let (da, db) = (scratch("studio-same-a"), scratch("studio-same-b"));
@@ -391,13 +370,8 @@ fn studio_sessions_with_the_same_seed_and_picks_write_the_same_bytes() {
         });
         (a.join().unwrap(), b.join().unwrap())
     });
-    let (fa, fb) = (files(&da), files(&db));
-    let names = |f: &[(PathBuf, Vec<u8>)]| f.iter().map(|(p, _)| p.clone()).collect::<Vec<_>>();
-    assert_eq!(names(&fa), names(&fb));
-    assert!(fa.len() > 10, "{:?}", names(&fa));
-    for ((p, x), (_, y)) in fa.iter().zip(&fb) {
-        assert!(x == y, "{} differs", p.display());
-    }
+    let files = super::breeding::same_files(&da, &db, "two studio sessions");
+    assert!(files.len() > 10, "{:?}", files.keys().collect::<Vec<_>>());
     drop((a, b));
 }
 

@@ -755,7 +755,10 @@ mod tests {
                 frames[1][2].y = bad;
             }
             let e = html(&c, false).unwrap_err().to_string();
-            assert!(e.contains("object") && e.contains('o'), "{bad}: {e}");
+            assert!(
+                e.contains("object o:") || e.contains("object `o`: vertex 2 at key 1"),
+                "{bad}: {e}"
+            );
         }
         let mut c = clip();
         c.ground = Some(f64::NAN);
