@@ -22,6 +22,7 @@
 //! and the split, so running a shard twice writes the same file.
 
 use super::population::{Child, Evaluation, Plan};
+use crate::util::hash::fnv1a64_hex;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -101,17 +102,6 @@ pub fn remove_merged(run_dir: &Path, merged: Option<usize>) {
     let _ = std::fs::remove_dir(&root);
 }
 
-/// FNV-1a, 64 bits: a small checksum that catches truncation and corrupted
-/// bytes (not an adversary).
-pub fn fnv1a64(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
 /// Hash of what a shard evaluates (ids, parents, genomes), hex: ties a
 /// shard file to the checkpoint it was planned from.
 pub fn plan_hash(members: &[&Child]) -> String {
@@ -130,7 +120,7 @@ pub fn plan_hash(members: &[&Child]) -> String {
         })
         .collect();
     let json = serde_json::to_string(&planned).expect("genomes serialise");
-    format!("{:016x}", fnv1a64(json.as_bytes()))
+    fnv1a64_hex(json.as_bytes())
 }
 
 #[derive(Serialize, Deserialize)]
@@ -201,7 +191,7 @@ pub fn encode(shard: &ShardFile) -> Result<String, ShardFileError> {
     }
     let footer = Footer {
         rows: shard.rows.len(),
-        fnv1a64: format!("{:016x}", fnv1a64(out.as_bytes())),
+        fnv1a64: fnv1a64_hex(out.as_bytes()),
     };
     out.push_str(&serde_json::to_string(&footer).map_err(|e| e.to_string())?);
     out.push('\n');
@@ -224,7 +214,7 @@ pub fn decode(text: &str) -> Result<ShardFile, ShardFileError> {
     };
     let footer: Footer = serde_json::from_str(footer_line)
         .map_err(|e| format!("truncated or corrupt: the last line is not the footer ({e})"))?;
-    let sum = format!("{:016x}", fnv1a64(before.as_bytes()));
+    let sum = fnv1a64_hex(before.as_bytes());
     if sum != footer.fnv1a64 {
         return Err(ShardFileError(format!(
             "corrupt: checksum {sum} differs from the footer's {}",

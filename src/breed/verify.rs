@@ -7,7 +7,7 @@
 //! recomputed, everything else refuses the directory.
 //!
 //! The checkpoint's text ends with `,"digest":"<16 hex digits>"}`: the
-//! FNV-1a 64 hash ([`super::shard::fnv1a64`]) of the checkpoint's other
+//! FNV-1a 64 hash ([`crate::util::hash::fnv1a64`]) of the checkpoint's other
 //! fields in a canonical form ([`checkpoint_digest`]: keys sorted, no
 //! spaces). A checkpoint re-saved by another JSON writer (spaces, key
 //! order) is checked all the same, and one without a digest is refused.
@@ -15,8 +15,8 @@
 use super::population::{Checkpoint, Individual};
 use super::selection::{MAX_SCALE, MIN_SCALE};
 use super::settings::BreedSettings;
-use super::shard::fnv1a64;
 use crate::leaf::LeafSpec;
+use crate::util::hash::fnv1a64_hex;
 use crate::util::number::shown;
 use std::path::{Path, PathBuf};
 
@@ -52,7 +52,7 @@ pub(crate) const RUN_FILE: &str = "run.toml";
 
 /// A content hash as the run directory records it: 16 hex digits of FNV-1a 64.
 pub fn content_hash(bytes: &[u8]) -> String {
-    format!("{:016x}", fnv1a64(bytes))
+    fnv1a64_hex(bytes)
 }
 
 /// The digest of a checkpoint's JSON (its `digest` field, if any, left

@@ -475,9 +475,7 @@ pub fn write_abc(clip: &Clip, path: &Path) -> Result<usize, ExportError> {
     let root = f.group(&[version, file_version, top, metadata, samplings, DATA]);
     f.0[8..16].copy_from_slice(&root.to_le_bytes());
     let size = f.0.len();
-    let tmp = path.with_extension("abc.part");
-    std::fs::write(&tmp, &f.0).map_err(|e| ExportError::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| ExportError::io(path, e))?;
+    crate::util::io::write_atomic(path, &f.0).map_err(|e| ExportError::io(path, e))?;
     Ok(size)
 }
 

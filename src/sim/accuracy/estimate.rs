@@ -21,6 +21,7 @@ use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::stability;
 use crate::physics::state::State;
+use crate::util::hash::fnv1a64_hex;
 use serde::{Deserialize, Serialize};
 use std::collections::{HashMap, VecDeque};
 use std::sync::{LazyLock, Mutex};
@@ -117,7 +118,7 @@ pub fn compute(
                 reference_self_difference: self_difference,
                 reference_valid: valid,
                 breaking_disabled,
-                key: hex(fnv1a(&key_bytes(model, initial, integrator, dt, seconds))),
+                key: fnv1a64_hex(&key_bytes(model, initial, integrator, dt, seconds)),
             });
         }
         coarse = fine;
@@ -363,31 +364,9 @@ pub fn key_bytes(
     k
 }
 
-/// 64-bit FNV-1a: simple, and stable across Rust versions and platforms
-/// (unlike the standard library's hasher), so recorded keys stay comparable.
-pub fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
-    for &b in bytes {
-        h ^= u64::from(b);
-        h = h.wrapping_mul(0x0000_0100_0000_01b3);
-    }
-    h
-}
-
-fn hex(h: u64) -> String {
-    format!("{h:016x}")
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fnv1a_matches_the_published_vectors() {
-        assert_eq!(fnv1a(b""), 0xcbf2_9ce4_8422_2325);
-        assert_eq!(fnv1a(b"a"), 0xaf63_dc4c_8601_ec8c);
-        assert_eq!(fnv1a(b"foobar"), 0x8594_4171_f739_67e8);
-    }
 
     #[test]
     fn steps_must_divide_the_duration() {
