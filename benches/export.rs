@@ -21,7 +21,7 @@ fn bench(c: &mut Criterion) {
     let dir = std::env::temp_dir().join(format!("leafmagic-bench-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let glb_size = glb::glb_bytes(&clip).unwrap().len();
-    let usd_size = usd::usd_bytes(&clip).unwrap().len();
+    let usd_size = usd::usd_bytes(&clip, clip.fps).unwrap().len();
     let page_size = leafmagic::output::preview::html(&clip, false)
         .unwrap()
         .len();
@@ -47,7 +47,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("usd (clip + write .usda)", |b| {
         b.iter(|| {
             let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
-            usd::write_usd(&clip, &dir.join("scene.usda")).unwrap()
+            usd::write_usd(&clip, &dir.join("scene.usda"), clip.fps).unwrap()
         })
     });
     g.bench_function("pc2 + obj (clip + write 200 files)", |b| {

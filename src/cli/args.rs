@@ -183,8 +183,9 @@ pub struct ExportArgs {
     /// coordinates) to export in place of the simulated one, bound to it.
     #[arg(long)]
     pub render_mesh: Option<PathBuf>,
-    /// The frame rate of the scene a PC2 cache is played in (its samples
-    /// are spaced host-fps / fps frames apart, so it plays in real time).
+    /// The frame rate of the scene the export is played in: USD's time
+    /// codes count its frames, and a PC2 cache's samples are spaced
+    /// host-fps / fps of them apart, so both play in real time.
     #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
     pub host_fps: f64,
 }
@@ -387,7 +388,8 @@ pub struct SceneArgs {
     /// Frames per second of the exported motion.
     #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
     pub export_fps: f64,
-    /// The frame rate of the scene a PC2 export is played in.
+    /// The frame rate of the scene a USD or PC2 export is played in (USD
+    /// time codes count its frames).
     #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
     pub export_host_fps: f64,
     /// Print one JSON object instead of a table.

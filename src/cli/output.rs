@@ -161,8 +161,8 @@ fn replace_dir(staging: &Path, out: &Path) -> Result<()> {
     })
 }
 
-/// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, `<stem>.abc`, or a `.pc2` and an `.obj` per object, the cache's samples
-/// spaced for a scene at `host_fps`); returns the paths.
+/// Writes `clip` into `dir` in `format` (`<stem>.glb`, `<stem>.usda`, `<stem>.abc`, or a `.pc2` and an `.obj` per object; USD's time
+/// codes and the cache's samples spaced for a scene at `host_fps`); returns the paths.
 pub fn write_clip(
     clip: &Clip,
     format: Format,
@@ -179,7 +179,7 @@ pub fn write_clip(
         }
         Format::Usd => {
             let path = dir.join(format!("{stem}.usda"));
-            usd::write_usd(clip, &path)?;
+            usd::write_usd(clip, &path, host_fps)?;
             vec![path]
         }
         Format::Pc2 => pc2::write_pc2(clip, dir, host_fps)?,

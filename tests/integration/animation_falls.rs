@@ -72,7 +72,7 @@ fn written(dir: &Path, file: &str, object: export::ClipObject, fps: f64) -> (Cli
     };
     let path = dir.join(file);
     if file.ends_with(".usda") {
-        export::usd::write_usd(&clip, &path).unwrap();
+        export::usd::write_usd(&clip, &path, clip.fps).unwrap();
     } else {
         glb::write_glb(&clip, &path).unwrap();
     }

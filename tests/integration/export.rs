@@ -686,11 +686,18 @@ fn pc2_is_byte_for_byte_the_specified_layout() {
     }
     assert_eq!(got, want);
     assert_eq!(got.len(), 32 + 3 * 2 * 12);
-    // In a 24 fps scene its samples are 24/30 = 0.8 frames apart.
+    // For a 24 fps scene the cache holds the host's frames: t = 0 and
+    // 1/24 s (the clip's frame 1.25: a quarter of the way from sample 1 to
+    // 2), one sample a frame.
     pc2::write_pc2(&clip, &dir, 24.0).unwrap();
     let got = std::fs::read(dir.join("pair.pc2")).unwrap();
-    assert_eq!(le_f32(&got, 24), 0.8);
-    assert_eq!(got[32..], want[32..]);
+    assert_eq!(le_f32(&got, 24), 1.0);
+    assert_eq!(got[28..32], [2, 0, 0, 0], "numSamples = 2");
+    assert_eq!(got[32..56], want[32..56], "t = 0 unchanged");
+    let at_1_24: Vec<f32> = (0..6).map(|i| le_f32(&got, 56 + 4 * i)).collect();
+    for (got, want) in at_1_24.iter().zip([0.625f32, 1.0, 2.0, -1.5, 0.5625, 6.75]) {
+        assert!((got - want).abs() < 1e-6, "{at_1_24:?}");
+    }
     let obj = std::fs::read_to_string(dir.join("pair.obj")).unwrap();
     let body: Vec<&str> = obj.lines().filter(|l| !l.starts_with('#')).collect();
     assert_eq!(body, ["o pair", "v 0 1 2", "v -1.5 0.25 8", "l 1 2"]);
@@ -721,7 +728,10 @@ fn scene_export_to_pc2_keeps_the_obj_vertex_order_of_the_cache() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let clip = mixed_clip(DEFAULT_FPS);
+    // The cache holds the host's frames (24 fps), resampled from the
+    // export's 30.
+    let clip = mixed_clip(DEFAULT_FPS).resampled(pc2::DEFAULT_HOST_FPS);
+    assert_eq!(clip.frames, 25, "1 s on a 24 fps host");
     for obj in &clip.objects {
         let cache = std::fs::read(out.join(format!("{}.pc2", obj.name))).unwrap();
         assert_eq!(&cache[..12], pc2::SIGNATURE);
@@ -966,7 +976,8 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
                 );
             } else {
                 let cache = std::fs::read(stem.with_extension("pc2")).unwrap();
-                assert_eq!(le_i32(&cache, 28), 91);
+                // 3 s on the frames of a 24 fps host.
+                assert_eq!(le_i32(&cache, 28), 73);
                 assert!(stem.with_extension("obj").is_file());
             }
         }

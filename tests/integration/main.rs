@@ -7,6 +7,7 @@ mod alloc;
 mod animation_falls;
 mod batch;
 mod bending;
+mod blender;
 mod breeding;
 mod classes;
 mod common;

@@ -189,7 +189,7 @@ fn usd_files_open_in_pixars_library_comply_and_hold_the_simulation() {
     let mut files = Vec::new();
     for (i, clip) in clips.iter().enumerate() {
         let f = dir.join(format!("clip{i}.usda"));
-        usd::write_usd(clip, &f).unwrap();
+        usd::write_usd(clip, &f, clip.fps).unwrap();
         files.push((i, f.clone()));
         files.push((i, f.with_extension("usdc")));
     }

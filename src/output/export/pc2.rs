@@ -109,9 +109,12 @@ pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
 
 /// Writes `<object>.pc2` and `<object>.obj` for every object of `clip` into
 /// `dir` (created if missing), atomically; returns the paths written. The
-/// cache's samples are the clip's frames from frame 0, spaced `host_fps /
-/// fps` frames of a scene at `host_fps` apart (the header's sampleRate), so
-/// that it plays in real time there.
+/// cache holds one sample per frame of a scene at `host_fps` from frame 0
+/// (sampleRate 1): a clip at another rate is resampled onto the host's
+/// frames first ([`Clip::resampled`]). Blender's Mesh Cache modifier, in
+/// its default Frame mode, reads sample n at frame n whatever the header
+/// says (measured with Blender's Python module), so only a cache on the
+/// host's own frames plays in real time there without settings.
 pub fn write_pc2(clip: &Clip, dir: &Path, host_fps: f64) -> Result<Vec<PathBuf>, ExportError> {
     clip.validate()?;
     if !(host_fps > 0.0 && host_fps.is_finite()) {
@@ -120,7 +123,14 @@ pub fn write_pc2(clip: &Clip, dir: &Path, host_fps: f64) -> Result<Vec<PathBuf>,
         )));
     }
     std::fs::create_dir_all(dir).map_err(|e| ExportError::io(dir, e))?;
-    let sample_rate = (host_fps / clip.fps) as f32;
+    let on_host;
+    let clip = if clip.fps == host_fps {
+        clip
+    } else {
+        on_host = clip.resampled(host_fps);
+        &on_host
+    };
+    let sample_rate = 1.0;
     // Objects in parallel: each atomic write waits for its fsync, and a
     // scene of a hundred leaves is two hundred files.
     use rayon::prelude::*;

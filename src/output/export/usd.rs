@@ -13,9 +13,15 @@
 //! ```
 //!
 //! Stage metadata: `upAxis = "Z"`, `metersPerUnit = 1` (the simulator's axes
-//! and units), `timeCodesPerSecond` = `framesPerSecond` = the clip's rate,
-//! `startTimeCode = 0`, `endTimeCode` = the last frame: time code k is frame
-//! k, t = k / fps.
+//! and units), `timeCodesPerSecond` = `framesPerSecond` = the host's frame
+//! rate (24 by default, [`super::pc2::DEFAULT_HOST_FPS`]), `startTimeCode =
+//! 0`, `endTimeCode` = the last sample's: sample k of a clip at `fps` sits at
+//! time code k · host / fps, t = k / fps. Time codes count the host's frames
+//! because Blender 4.5's importer plays time code n at scene frame n and
+//! keeps its scene's rate (24 unless changed): a stage whose time codes
+//! counted 30 fps samples played 25 % slow there (measured with Blender's
+//! Python module). USD players interpolate between samples, and Houdini
+//! converts by `timeCodesPerSecond`, so any clip rate plays right.
 //!
 //! USD names are identifiers (`[A-Za-z_][A-Za-z0-9_]*`): an object's name
 //! has every other character replaced by `_` (`leaf-003` → `leaf_003`), and
@@ -145,6 +151,11 @@ fn extent(points: &[V3]) -> String {
 struct Text {
     s: String,
     depth: usize,
+    /// Host frames per sample: sample k is written at time code k × this.
+    /// Kept as the ratio's two rates so that time codes are computed as
+    /// (k · host) / fps, exact whenever they are whole numbers.
+    host_fps: f64,
+    fps: f64,
 }
 
 impl Text {
@@ -183,12 +194,22 @@ impl Text {
         Ok(())
     }
 
-    /// `DECL.timeSamples = { k: value, ... }`, one line per time code.
+    /// Sample `k`'s time code, as text.
+    fn time_code(&self, k: usize) -> String {
+        if self.host_fps == self.fps {
+            k.to_string()
+        } else {
+            d(k as f64 * self.host_fps / self.fps)
+        }
+    }
+
+    /// `DECL.timeSamples = { code: value, ... }`, one line per sample.
     fn samples(&mut self, decl: &str, values: impl Iterator<Item = String>) {
         self.line(&format!("{decl}.timeSamples = {{"));
         self.depth += 1;
         for (k, v) in values.enumerate() {
-            self.line(&format!("{k}: {v},"));
+            let code = self.time_code(k);
+            self.line(&format!("{code}: {v},"));
         }
         self.depth -= 1;
         self.line("}");
@@ -196,8 +217,13 @@ impl Text {
 }
 
 /// The `.usda` text of `clip` (see the module doc).
-fn usda(clip: &Clip) -> Result<String, ExportError> {
+fn usda(clip: &Clip, host_fps: f64) -> Result<String, ExportError> {
     clip.validate()?;
+    if !(host_fps > 0.0 && host_fps.is_finite()) {
+        return Err(ExportError::Data(format!(
+            "the host frame rate must be positive, got {host_fps}"
+        )));
+    }
     let mut taken = BTreeSet::new();
     let root_id = identifier(&format!("{}_scene", clip.name));
     taken.insert(root_id.clone());
@@ -206,6 +232,8 @@ fn usda(clip: &Clip) -> Result<String, ExportError> {
     let mut t = Text {
         s: String::with_capacity(1 << 16),
         depth: 0,
+        host_fps,
+        fps: clip.fps,
     };
     t.line("#usda 1.0");
     t.line("(");
@@ -213,20 +241,27 @@ fn usda(clip: &Clip) -> Result<String, ExportError> {
     t.line(&format!(
         "doc = {}",
         quoted(&format!(
-            "leafmagic {}: {} ({} objects, {} frames at {} fps; time code k is frame k, t = k / fps)",
+            "leafmagic {}: {} ({} objects, {} samples at {} fps on time codes of a {} fps host: sample k at time code k * {} / {}, t = k / {})",
             env!("CARGO_PKG_VERSION"),
             clip.name,
             clip.objects.len(),
             clip.frames,
-            clip.fps
+            clip.fps,
+            d(host_fps),
+            d(host_fps),
+            d(clip.fps),
+            d(clip.fps)
         ))
     ));
     t.line(&format!("defaultPrim = \"{root_id}\""));
-    t.line(&format!("endTimeCode = {}", clip.frames.saturating_sub(1)));
-    t.line(&format!("framesPerSecond = {}", d(clip.fps)));
+    t.line(&format!(
+        "endTimeCode = {}",
+        t.time_code(clip.frames.saturating_sub(1))
+    ));
+    t.line(&format!("framesPerSecond = {}", d(host_fps)));
     t.line("metersPerUnit = 1");
     t.line("startTimeCode = 0");
-    t.line(&format!("timeCodesPerSecond = {}", d(clip.fps)));
+    t.line(&format!("timeCodesPerSecond = {}", d(host_fps)));
     t.line("upAxis = \"Z\"");
     t.depth -= 1;
     t.line(")");
@@ -277,6 +312,8 @@ fn usda(clip: &Clip) -> Result<String, ExportError> {
                 let mut part = Text {
                     s: String::new(),
                     depth,
+                    host_fps,
+                    fps: clip.fps,
                 };
                 object(&mut part, clip, o, &root_id, id).map(|()| part.s)
             })
@@ -397,17 +434,20 @@ fn object(
     })
 }
 
-/// The `.usda` bytes of `clip`.
+/// The `.usda` bytes of `clip`, on the time codes of a host scene at
+/// `host_fps` frames per second (see the module doc).
 ///
 /// # Errors
-/// [`ExportError::Data`] if the clip is inconsistent ([`Clip::validate`]).
-pub fn usd_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
-    Ok(usda(clip)?.into_bytes())
+/// [`ExportError::Data`] if the clip is inconsistent ([`Clip::validate`])
+/// or `host_fps` is not a positive number.
+pub fn usd_bytes(clip: &Clip, host_fps: f64) -> Result<Vec<u8>, ExportError> {
+    Ok(usda(clip, host_fps)?.into_bytes())
 }
 
-/// Writes `clip` to `path` as `.usda`, atomically; returns the byte count.
-pub fn write_usd(clip: &Clip, path: &Path) -> Result<usize, ExportError> {
-    let bytes = usd_bytes(clip)?;
+/// Writes `clip` to `path` as `.usda` for a host at `host_fps`,
+/// atomically; returns the byte count.
+pub fn write_usd(clip: &Clip, path: &Path, host_fps: f64) -> Result<usize, ExportError> {
+    let bytes = usd_bytes(clip, host_fps)?;
     crate::util::io::write_atomic(path, &bytes).map_err(|e| ExportError::io(path, e))?;
     Ok(bytes.len())
 }
