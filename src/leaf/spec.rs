@@ -8,6 +8,7 @@ use crate::physics::model::{
     AeroLaw, Hinge, Model, ModelError, ModelParts, RigidGroup, STANDARD_GRAVITY, Spring, Triangle,
 };
 use crate::physics::model::{QuadraticAero, UnsteadyAero};
+use crate::util::bad_input::BadInput;
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
@@ -599,15 +600,9 @@ fn is_zero(x: &f64) -> bool {
     *x == 0.0
 }
 
-/// A leaf file that could not be read or is invalid.
-#[derive(Debug, thiserror::Error)]
-#[error("{file}: {message}")]
-pub struct LeafError {
-    /// The file (or embedded prototype) name.
-    pub file: String,
-    /// What is wrong, naming the item.
-    pub message: String,
-}
+/// A leaf file that could not be read or is invalid: the file, the line,
+/// the field and the reason, as every input's error ([`BadInput`]).
+pub type LeafError = BadInput;
 
 impl LeafSpec {
     /// Parses and validates TOML text; `source` names it in errors.
@@ -619,14 +614,11 @@ impl LeafSpec {
     /// model measures every plate's chords (O(triangles²), most of a fine
     /// plate's load), so a caller that needs both builds it once.
     pub fn from_toml_with_model(text: &str, source: &str) -> Result<(LeafSpec, Model), LeafError> {
-        let spec: LeafSpec = toml::from_str(text).map_err(|e| LeafError {
-            file: source.to_string(),
-            message: e.to_string().trim_end().to_string(),
-        })?;
-        let model = spec.model().map_err(|e| LeafError {
-            file: source.to_string(),
-            message: e.to_string(),
-        })?;
+        let spec: LeafSpec =
+            toml::from_str(text).map_err(|e| BadInput::toml_parse(source, text, &e))?;
+        let model = spec
+            .model()
+            .map_err(|e| BadInput::in_toml(source, text, e.item, e.reason))?;
         Ok((spec, model))
     }
 
@@ -637,10 +629,8 @@ impl LeafSpec {
 
     /// Reads a leaf file, with its model ([`LeafSpec::from_toml_with_model`]).
     pub fn read_with_model(path: &Path) -> Result<(LeafSpec, Model), LeafError> {
-        let text = std::fs::read_to_string(path).map_err(|e| LeafError {
-            file: path.display().to_string(),
-            message: format!("cannot read: {e}"),
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| BadInput::file(path.display().to_string(), format!("cannot read: {e}")))?;
         LeafSpec::from_toml_with_model(&text, &path.display().to_string())
     }
 

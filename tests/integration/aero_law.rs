@@ -61,7 +61,9 @@ fn quadratic_law_reads_with_defaults_and_overrides() {
 fn each_law_rejects_the_other_laws_fields_by_name() {
     let msg = error(&with_aero("law = \"quadratic\"\nalpha_n = 0.47"));
     assert!(
-        msg.contains("leaf.toml: aero.alpha_n") && msg.contains("not used"),
+        msg.starts_with("leaf.toml:")
+            && msg.contains(": aero.alpha_n: ")
+            && msg.contains("not used"),
         "{msg}"
     );
     let msg = error(&with_aero(

@@ -125,7 +125,7 @@ fn errors_name_the_file_the_line_and_the_field() {
     // A missing required key: named, on its table's line.
     let text = MINIMAL.replace("leaf = \"a\"\n", "");
     let e = error(&text);
-    assert!(e.message.contains("leaf"), "{e}");
+    assert!(e.reason.contains("leaf"), "{e}");
     assert_eq!(e.line, Some(line_of(&text, "[[leaf]]")), "{e}");
 }
 

@@ -20,7 +20,21 @@ fn item<'a>(table: &'a mut toml::Table, key: &str, index: usize) -> &'a mut toml
 fn expect_error(text: &str, needles: &[&str]) {
     let err = LeafSpec::from_toml(text, "bad-leaf.toml").expect_err("must be rejected");
     let msg = err.to_string();
-    assert!(msg.starts_with("bad-leaf.toml: "), "no file name in: {msg}");
+    // File, line, field, reason: the line is the field's own (or, for a
+    // field left at its default, its table's header).
+    let line = err.line.unwrap_or_else(|| panic!("no line in: {msg}"));
+    assert!(
+        msg.starts_with(&format!("bad-leaf.toml:{line}: {}: ", err.field)),
+        "not file:line: field: in: {msg}"
+    );
+    let key = err.field.rsplit('.').next().unwrap();
+    let key = key.split('[').next().unwrap();
+    let at = text.lines().nth(line - 1).unwrap_or("");
+    assert!(
+        at.trim_start().starts_with(key) || at.starts_with('['),
+        "line {line} is `{at}`, not {}: {msg}",
+        err.field
+    );
     for n in needles {
         assert!(msg.contains(n), "'{n}' missing from: {msg}");
     }

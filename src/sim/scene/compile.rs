@@ -8,7 +8,6 @@ use super::bounds::Limits;
 use super::builder::Builder;
 use super::compiled::{ObjectKind, Scene};
 use super::error::{Ctx, SceneError, check_name};
-use super::locate;
 use super::objects::{SplitMix, add_leaf, add_rigid, add_rope, add_sheet};
 use super::shapes::Part;
 use super::spec::{DtSpec, SceneSpec};
@@ -19,6 +18,7 @@ use crate::physics::integrate::{RUNAWAY_DISTANCE, runaway_speed};
 use crate::physics::model::{AeroLaw, Model, ModelError};
 use crate::physics::params::TimeStep;
 use crate::physics::state::State;
+use crate::util::bad_input::BadInput;
 use nalgebra::{UnitQuaternion, Vector3};
 use std::collections::HashMap;
 use std::path::Path;
@@ -37,12 +37,8 @@ impl Scene {
     /// is built (`sim/scene/bounds.rs`); the scene keeps them for its run.
     pub fn load_within(path: &Path, limits: &Limits) -> Result<Scene, SceneError> {
         let file = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|e| SceneError {
-            file: file.clone(),
-            line: None,
-            field: String::new(),
-            message: format!("cannot read: {e}"),
-        })?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| BadInput::file(file.clone(), format!("cannot read: {e}")))?;
         let base = path.parent().map(Path::to_path_buf).unwrap_or_default();
         Scene::from_toml_within(&text, &file, &base, limits)
     }
@@ -60,29 +56,8 @@ impl Scene {
         base: &Path,
         limits: &Limits,
     ) -> Result<Scene, SceneError> {
-        let spec: SceneSpec = toml::from_str(text).map_err(|e| {
-            let (mut line, mut field) = match e.span() {
-                Some(span) => (
-                    Some(locate::line_of_offset(text, span.start)),
-                    locate::path_at(text, span.start).unwrap_or_else(|| "(document)".into()),
-                ),
-                None => (None, "(document)".to_string()),
-            };
-            // Errors raised for a whole table (a key that does not apply to
-            // its kind) name the key in backticks: point at that key.
-            if let Some(key) = e.message().split('`').nth(1) {
-                let path = format!("{field}.{key}");
-                if let Some(l) = locate::line_of_present(text, &path) {
-                    (line, field) = (Some(l), path);
-                }
-            }
-            SceneError {
-                file: file.to_string(),
-                line,
-                field,
-                message: e.message().trim_end().to_string(),
-            }
-        })?;
+        let spec: SceneSpec =
+            toml::from_str(text).map_err(|e| BadInput::toml_parse(file, text, &e))?;
         compile(&spec, &Ctx { text, file, base }, limits)
     }
 

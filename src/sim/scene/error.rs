@@ -1,25 +1,15 @@
 //! A scene file's errors: [`SceneError`] names the file, the line and the
 //! field, and the checks of the compiler's numbers and names raise it with
-//! the line found from the field's path (`locate`).
+//! the line found from the field's path.
 
-use super::locate;
+use crate::util::bad_input::BadInput;
 use std::collections::HashMap;
 use std::path::Path;
 
-/// A scene file that could not be read, parsed or compiled.
-#[derive(Clone, Debug, PartialEq, thiserror::Error)]
-#[error("{}{}: {}{}", .file, .line.map_or(String::new(), |l| format!(":{l}")), if .field.is_empty() { String::new() } else { format!("{}: ", .field) }, .message)]
-pub struct SceneError {
-    /// The scene file.
-    pub file: String,
-    /// 1-based line of the field, when known.
-    pub line: Option<usize>,
-    /// The field, as a path in the file (`rope[1].stiffness`); empty for
-    /// the file as a whole (it cannot be read).
-    pub field: String,
-    /// What is wrong.
-    pub message: String,
-}
+/// A scene file that could not be read, parsed or compiled: the file, the
+/// line, the field and the reason, as every input's error
+/// ([`BadInput`]).
+pub type SceneError = BadInput;
 
 /// Where errors are reported.
 pub(super) struct Ctx<'a> {
@@ -30,13 +20,7 @@ pub(super) struct Ctx<'a> {
 
 impl Ctx<'_> {
     pub(super) fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
-        let field = field.into();
-        SceneError {
-            file: self.file.to_string(),
-            line: locate::line_of_path(self.text, &field),
-            field,
-            message: message.into(),
-        }
+        BadInput::in_toml(self.file, self.text, field, message)
     }
 
     pub(super) fn finite(&self, field: &str, v: f64) -> Result<(), SceneError> {

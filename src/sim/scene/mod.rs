@@ -19,7 +19,7 @@
 //! anything is built), `objects` (placing each kind of object), `shapes` (the
 //! built-in shapes' particles), `builder` (the model's parts as they
 //! accumulate, with each item's owner), `error` (errors and the checks that
-//! raise them), `locate` (their line numbers), `compiled` (the compiled
+//! raise them, with line numbers from [`crate::util::toml_lines`]), `compiled` (the compiled
 //! scene), `run` (running and writing it), `skips` (what exact skipping
 //! leaves out, for `--explain`); this file re-exports what they make public.
 //!
@@ -31,7 +31,6 @@ mod builder;
 mod compile;
 mod compiled;
 mod error;
-mod locate;
 mod objects;
 mod run;
 mod shapes;

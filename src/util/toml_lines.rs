@@ -1,4 +1,4 @@
-//! Line numbers for scene errors: from a byte offset to the field path it
+//! Line numbers for errors in TOML files (leaves, scenes): from a byte offset to the field path it
 //! falls in, and from a field path (`leaf[2].count`) to its line.
 
 use toml::Spanned;
