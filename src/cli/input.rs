@@ -3,11 +3,11 @@
 //! several commands share.
 
 use anyhow::{Result, bail};
+use leafmagic::formats::fall;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, Classification};
 use leafmagic::motion::describe::Descriptors;
 use leafmagic::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
-use leafmagic::output::export;
 use leafmagic::physics::model::Model;
 use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
@@ -164,7 +164,7 @@ pub struct Pick<'a> {
 /// reading noticed goes to stderr.
 pub fn read_record(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
     units.check()?;
-    let record = if export::fall::AnimationFormat::of(path).is_some() {
+    let record = if fall::AnimationFormat::of(path).is_some() {
         read_animation(path, units, pick)?
     } else {
         for (flag, given, what) in [
@@ -242,11 +242,11 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
 }
 
 /// [`read_record`] of a glTF file: the fall of its moving object
-/// ([`export::fall`]).
+/// ([`fall`]).
 fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
     let default = leafmagic::util::confined::ReadPolicy::default();
     let policy = pick.policy.unwrap_or(&default);
-    let mut fall = export::fall::read_fall_in(path, pick.object, pick.animation, policy)?;
+    let mut fall = fall::read_fall_in(path, pick.object, pick.animation, policy)?;
     for warning in &fall.warnings {
         eprintln!("warning: {}: {warning}", path.display());
     }
@@ -258,8 +258,7 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
     }
     // Alembic carries no unit (metres are assumed, as Blender and Houdini
     // write; Maya writes centimetres): --scale says what one unit is.
-    let alembic =
-        export::fall::AnimationFormat::of(path) == Some(export::fall::AnimationFormat::Alembic);
+    let alembic = fall::AnimationFormat::of(path) == Some(fall::AnimationFormat::Alembic);
     if alembic && units.scale != 1.0 {
         fall.trajectory.rescale(units.scale, None);
         fall.chord *= units.scale;

@@ -32,10 +32,10 @@
 //! For `.usdc`, Pixar's library converts the text losslessly (see
 //! [`USDC_HINT`]).
 
-use super::clip::{Clip, ClipObject};
-use super::dress::vertex_normals;
-use super::error::ExportError;
-use super::look::{colour, material_name, shown};
+use crate::formats::clip::dress::vertex_normals;
+use crate::formats::clip::look::{colour, material_name, shown};
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
 use nalgebra::Vector3;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -68,7 +68,7 @@ pub fn identifier(name: &str) -> String {
 
 /// Unique identifiers for `names`, in order: a name whose identifier is
 /// already taken gets `_2`, `_3`, … appended.
-pub(super) fn unique_identifiers<'a>(
+pub(crate) fn unique_identifiers<'a>(
     names: impl Iterator<Item = &'a str>,
     taken: &mut BTreeSet<String>,
 ) -> Vec<String> {

@@ -25,15 +25,16 @@
 //! path classifier reads. The axes of a square or a disk are arbitrary in
 //! its plane (equal moments); the classifier needs only the normal there.
 //!
-//! The file is sampled at its own keys ([`super::read_gltf_keys`],
-//! [`super::read_usda_keys`]): from the first key to the last, at one frame
+//! The file is sampled at its own keys ([`crate::formats::gltf::read_gltf_keys`],
+//! [`crate::formats::usd::read_usda_keys`]): from the first key to the last, at one frame
 //! per shortest key interval.
 
-use super::clip::{Clip, ClipObject, Motion};
-use super::error::ExportError;
-use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
-use super::read::read_gltf_keys;
-use super::usda_read::read_usd_file;
+use crate::formats::alembic::read_abc;
+use crate::formats::clip::frame::{MAX_SOLVER_ITERATIONS, kabsch};
+use crate::formats::clip::{Clip, ClipObject, Motion, POINT_KIND};
+use crate::formats::error::ExportError;
+use crate::formats::gltf::read_gltf_keys;
+use crate::formats::usd::read_usd_file;
 use crate::motion::classify::{Classification, classify};
 use crate::motion::trajectory::Trajectory;
 use crate::util::confined::{ReadPolicy, ReadScope};
@@ -59,7 +60,7 @@ pub enum AnimationFormat {
     /// USD: `.usda`, `.usd`, `.usdc`, `.usdz` (text, binary crate files,
     /// packages; composed stages flattened first).
     Usd,
-    /// Alembic: `.abc` (Ogawa; [`super::read_abc`]).
+    /// Alembic: `.abc` (Ogawa; [`crate::formats::alembic::read_abc`]).
     Alembic,
 }
 
@@ -111,7 +112,7 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
 }
 
 /// [`read_fall`], of the glTF animation `animation` names where the file
-/// holds several ([`super::read_gltf_keys`]); a USD stage holds one, and
+/// holds several ([`crate::formats::gltf::read_gltf_keys`]); a USD stage holds one, and
 /// naming one there is refused.
 pub fn read_fall_of(
     path: &Path,
@@ -199,7 +200,7 @@ pub fn read_fall_in(
 /// its name; glTF if it names none), sampled at the file's own keys: what
 /// a fall is read from, and what `preview` plays of such a file. Of a glTF
 /// file with several animations, `animation` names the one to read
-/// ([`super::read_gltf_keys`]); a USD stage or an Alembic archive holds
+/// ([`crate::formats::gltf::read_gltf_keys`]); a USD stage or an Alembic archive holds
 /// one, and naming one there is refused. Errors name the file.
 pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportError> {
     read_clip_in(path, animation, &ReadPolicy::default())
@@ -232,7 +233,7 @@ pub fn read_clip_in(
     }
     match format {
         Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name, scope),
-        Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
+        Some(AnimationFormat::Alembic) => read_abc(&bytes, &name).map_err(ExportError::Data),
         _ => {
             let dir = path.parent().unwrap_or(Path::new("."));
             read_gltf_keys(&bytes, &name, Some((dir, scope)), animation)
@@ -249,7 +250,7 @@ pub fn read_clip_in(
 /// [`MAX_COORDINATE_M`]. Still objects, ropes and rigid props are not.
 fn is_fall(o: &ClipObject, chord: f64) -> bool {
     let kind = (!o.triangles.is_empty() && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
-        || o.kind == super::clip::POINT_KIND;
+        || o.kind == POINT_KIND;
     kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
 }
 
