@@ -1,7 +1,10 @@
-//! The fall of one object of an animation file (glTF 2.0, `.glb` or
-//! `.gltf`, or one USD text layer, `.usda`: what leafmagic exports, and
-//! what Blender, Houdini or a game engine bake) as a [`Trajectory`], for
-//! `classify`, `describe`, `compare` and `breed --like`.
+//! Any supported file as a fall: the one entry point, [`read_any_fall`],
+//! decides by the file's name how it becomes a [`Trajectory`] for
+//! `classify`, `describe`, `compare` and `breed --like`. A CSV record is
+//! read by [`crate::motion::trajectory`]; of an animation file (glTF 2.0,
+//! `.glb` or `.gltf`; USD; Alembic: what leafmagic exports, and what
+//! Blender, Houdini or a game engine bake) the fall of one object is
+//! measured here.
 //!
 //! A recorded fall is a centre and, where known, a body-to-world rotation
 //! whose body z is the plate's normal and body x its long axis
@@ -36,7 +39,7 @@ use crate::formats::error::ExportError;
 use crate::formats::gltf::read_gltf_keys;
 use crate::formats::usd::read_usd_file;
 use crate::motion::classify::{Classification, classify};
-use crate::motion::trajectory::Trajectory;
+use crate::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
 use crate::util::confined::{ReadPolicy, ReadScope};
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -194,6 +197,104 @@ pub fn read_fall_in(
         appears_s: objects[chosen].first_frame as f64 / clip.fps,
         warnings: clip.warnings.clone(),
     })
+}
+
+/// How a CSV record's numbers are read: its vertical axis, the metres in
+/// one of its length units (a tracker's pixel, once measured against a
+/// ruler in the frame), and the frame rate if its `t` counts frames.
+/// Animation files say their own, but for an Alembic archive's length unit:
+/// Alembic carries none (metres are assumed, as Blender and Houdini write;
+/// Maya writes centimetres), so `scale` says what one of its units is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordUnits {
+    /// The record's vertical axis.
+    pub up: UpAxis,
+    /// Metres per unit of its x, y, z (1 for metres).
+    pub scale: f64,
+    /// Frames per second when `t` is a frame number.
+    pub frame_rate: Option<f64>,
+}
+
+impl Default for RecordUnits {
+    /// A record in metres and seconds, z up.
+    fn default() -> RecordUnits {
+        RecordUnits {
+            up: UpAxis::Z,
+            scale: 1.0,
+            frame_rate: None,
+        }
+    }
+}
+
+/// A fall as read from any supported file ([`read_any_fall`]).
+#[derive(Clone, Debug)]
+pub enum RecordedFall {
+    /// A CSV record, in metres and seconds, z up.
+    Record {
+        /// The record.
+        trajectory: Trajectory,
+        /// What the CSV reader noticed without refusing the file.
+        notes: ReadNotes,
+    },
+    /// One object's fall of an animation file, in the file's own units
+    /// (an Alembic archive's scaled by [`RecordUnits::scale`]).
+    Animation {
+        /// The file's format.
+        format: AnimationFormat,
+        /// The fall, and what the file told of it.
+        fall: AnimationFall,
+    },
+}
+
+impl RecordedFall {
+    /// The fall's record.
+    pub fn trajectory(&self) -> &Trajectory {
+        match self {
+            RecordedFall::Record { trajectory, .. } => trajectory,
+            RecordedFall::Animation { fall, .. } => &fall.trajectory,
+        }
+    }
+}
+
+/// The one place that decides how a file becomes a fall, by its name
+/// ([`AnimationFormat::of`]): a glTF, USD or Alembic file gives the fall of
+/// `object` (or of the only object that moves; of the glTF animation
+/// `animation` names, [`read_fall_in`]), any other file is a CSV record
+/// read in `units` ([`Trajectory::read_csv_with`]), which holds one fall:
+/// an object or an animation asked of it is refused. Errors name the file.
+pub fn read_any_fall(
+    path: &Path,
+    units: RecordUnits,
+    object: Option<&str>,
+    animation: Option<&str>,
+    policy: &ReadPolicy,
+) -> Result<RecordedFall, ExportError> {
+    let Some(format) = AnimationFormat::of(path) else {
+        // Worded as the file's other refusals (see `read_fall_in`), by the
+        // option the command line takes.
+        for (option, given, what) in [
+            ("--object", object, "an object"),
+            ("--animation", animation, "an animation"),
+        ] {
+            if let Some(given) = given {
+                return Err(ExportError::input(
+                    path,
+                    format!(
+                        "{option} {given}: a CSV record holds one fall; {option} picks {what} of an animation file (.glb, .gltf, .usd, .abc)"
+                    ),
+                ));
+            }
+        }
+        let (mut trajectory, notes) = Trajectory::read_csv_with(path, units.up)?;
+        trajectory.rescale(units.scale, units.frame_rate);
+        return Ok(RecordedFall::Record { trajectory, notes });
+    };
+    let mut fall = read_fall_in(path, object, animation, policy)?;
+    if format == AnimationFormat::Alembic && units.scale != 1.0 {
+        fall.trajectory.rescale(units.scale, None);
+        fall.chord *= units.scale;
+    }
+    Ok(RecordedFall::Animation { format, fall })
 }
 
 /// Every object of a glTF, USD or Alembic file ([`AnimationFormat::of`]
@@ -547,6 +648,41 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A CSV record goes to the motion layer's reader, in the units asked,
+    /// and an object or animation asked of it is refused naming the file.
+    #[test]
+    fn any_fall_reads_a_csv_record_in_its_units_and_refuses_picks() {
+        let dir = std::env::temp_dir().join(format!("leafmagic-anyfall-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("fall.csv");
+        std::fs::write(&path, "t,x,y,z\n0,0,0,100\n1,3,4,90\n2,6,8,80\n").unwrap();
+        let units = RecordUnits {
+            up: UpAxis::Z,
+            scale: 0.01,
+            frame_rate: Some(50.0),
+        };
+        let policy = ReadPolicy::default();
+        let read = read_any_fall(&path, units, None, None, &policy).unwrap();
+        let (mut want, _) = Trajectory::read_csv_with(&path, UpAxis::Z).unwrap();
+        want.rescale(0.01, Some(50.0));
+        assert!(matches!(&read, RecordedFall::Record { .. }));
+        assert_eq!(read.trajectory(), &want);
+        assert!((read.trajectory().position[1].z - 0.9).abs() < 1e-12);
+        for (object, animation, option) in [
+            (Some("leaf"), None, "--object leaf"),
+            (None, Some("take"), "--animation take"),
+        ] {
+            let e = read_any_fall(&path, units, object, animation, &policy)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(path.to_str().unwrap()) && e.contains(option) && e.contains("CSV"),
+                "{e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn plate(n: usize, long: f64, wide: f64) -> (Vec<V3>, Vec<[u32; 3]>) {
         // A grid of n × n cells over long × wide, in the xz-plane (as a
