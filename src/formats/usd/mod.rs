@@ -12,6 +12,15 @@
 //! - `skel`, `instancer`: UsdSkel skinning and blend shapes, PointInstancers;
 //! - `stage`: composition (sublayers, references, payloads, variants,
 //!   crate files and packages) into one flat layer.
+//!
+//! The text grammar (`layer`) is our own and runs in this process; the
+//! `openusd` crate, pinned at 0.6 (`Cargo.toml`), runs only in the child,
+//! because 0.6 trusts the counts a damaged crate file gives and can abort
+//! the process that reads it. openusd 0.8 bounds those counts, but 0.7 and
+//! later need Rust 1.96; once the toolchain allows it, openusd could read
+//! text layers in this process too and take over `layer`'s hand-written
+//! grammar, leaving ours only what `read`, `skel` and `instancer` take
+//! from a flat stage.
 
 mod instancer;
 mod layer;
