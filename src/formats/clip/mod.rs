@@ -17,7 +17,7 @@
 //! every vertex's position per frame.
 //!
 //! The parts that read the clip ([`frame`], [`look`]) import it from here;
-//! this module uses only the parts that do not ([`render_mesh`], [`wind`]),
+//! this module uses only the parts that do not ([`render_mesh`], `wind`),
 //! so no import goes round in a circle.
 
 pub mod dress;

@@ -2,7 +2,7 @@
 //! reader of any glTF 2.0 file, `.glb` or `.gltf` ([`from_glb`] for what a
 //! player shows, [`read_gltf_keys`] at the file's own keys for a fall): its
 //! node tree composed, skinned meshes posed by their joints
-//! ([`crate::formats::skin`]), morph targets blended.
+//! (`formats::skin`), morph targets blended.
 //!
 //! The `gltf` crate parses and validates the document; what is written by
 //! hand here is what it leaves to its user: the layout of our own file, the
