@@ -5,7 +5,8 @@
 //! The target is under a second per export.
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use leafmagic::output::export::{self, glb, pc2, usd};
+use leafmagic::formats::{gltf, pc2, usd};
+use leafmagic::output::export;
 use leafmagic::sim::scene::Scene;
 use std::hint::black_box;
 use std::path::Path;
@@ -20,7 +21,7 @@ fn bench(c: &mut Criterion) {
     let clip = export::from_scene_run(&scene, &run, 30.0).unwrap();
     let dir = std::env::temp_dir().join(format!("leafmagic-bench-export-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let glb_size = glb::glb_bytes(&clip).unwrap().len();
+    let glb_size = gltf::glb_bytes(&clip).unwrap().len();
     let usd_size = usd::usd_bytes(&clip, clip.fps).unwrap().len();
     let page_size = leafmagic::output::preview::html(&clip, false)
         .unwrap()
@@ -41,7 +42,7 @@ fn bench(c: &mut Criterion) {
     g.bench_function("glb (clip + write file)", |b| {
         b.iter(|| {
             let clip = export::from_scene_run(&scene, black_box(&run), 30.0).unwrap();
-            glb::write_glb(&clip, &dir.join("scene.glb")).unwrap()
+            gltf::write_glb(&clip, &dir.join("scene.glb")).unwrap()
         })
     });
     g.bench_function("usd (clip + write .usda)", |b| {

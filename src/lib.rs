@@ -13,14 +13,17 @@
 //! - [`motion`]: trajectories and what they show: classification into the
 //!   paper's floaters, spinners and lilters, and motion descriptors. Knows
 //!   nothing of physics: it reads poses, from leafmagic or anywhere else.
+//! - [`formats`]: the files of other tools, read and written: the clip
+//!   every format shares, glTF, USD, Alembic, PC2 + OBJ, and the one entry
+//!   point that turns any supported file into a fall.
 //! - [`leaf`]: leaf files, the paper's prototypes, the genome that varies
 //!   them, recipes and flat plates.
 //! - [`sim`]: experiments built on the simulator: the drop test, scenes,
 //!   accuracy sweeps, the stress matrix.
 //! - [`breed`]: the paper's section 4.1 loop, automated: populations,
 //!   evaluation, selection, the run directory, shards and executors.
-//! - [`output`]: what leaves leafmagic for other tools: glTF, PC2 + OBJ,
-//!   and the HTML preview.
+//! - [`output`]: what leaves leafmagic: clips of its own drops and scene
+//!   runs (written through [`formats`]) and the HTML preview.
 //! - [`studio`]: choosing leaves by eye in the browser: a session of
 //!   generations bred from a person's picks, and its local web server.
 //!
@@ -28,6 +31,7 @@
 #![warn(missing_docs)]
 
 pub mod breed;
+pub mod formats;
 pub mod leaf;
 pub mod motion;
 pub mod output;

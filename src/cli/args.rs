@@ -171,9 +171,9 @@ pub struct ExportArgs {
     /// `glb` (leaf-<id>.glb), `pc2` (leaf-<id>.pc2 + leaf-<id>.obj), `usd`
     /// (leaf-<id>.usda) or `abc` (leaf-<id>.abc, Alembic).
     #[arg(long)]
-    pub format: Option<leafmagic::output::export::Format>,
+    pub format: Option<leafmagic::formats::Format>,
     /// Frames per second of the exported motion.
-    #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
+    #[arg(long, default_value_t = leafmagic::formats::clip::DEFAULT_FPS)]
     pub fps: f64,
     /// Release height of each exported fall, m (z up): the leaf starts
     /// here instead of at the origin.
@@ -186,7 +186,7 @@ pub struct ExportArgs {
     /// The frame rate of the scene the export is played in: USD's time
     /// codes count its frames, and a PC2 cache's samples are spaced
     /// host-fps / fps of them apart, so both play in real time.
-    #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
+    #[arg(long, default_value_t = leafmagic::formats::pc2::DEFAULT_HOST_FPS)]
     pub host_fps: f64,
 }
 
@@ -384,13 +384,13 @@ pub struct SceneArgs {
     /// Also export the run: `glb` (DIR/<scene>.glb), `pc2` (DIR/<object>.pc2
     /// + .obj), `usd` (DIR/<scene>.usda) or `abc` (DIR/<scene>.abc, Alembic).
     #[arg(long)]
-    pub export: Option<leafmagic::output::export::Format>,
+    pub export: Option<leafmagic::formats::Format>,
     /// Frames per second of the exported motion.
-    #[arg(long, default_value_t = leafmagic::output::export::DEFAULT_FPS)]
+    #[arg(long, default_value_t = leafmagic::formats::clip::DEFAULT_FPS)]
     pub export_fps: f64,
     /// The frame rate of the scene a USD or PC2 export is played in (USD
     /// time codes count its frames).
-    #[arg(long, default_value_t = leafmagic::output::export::pc2::DEFAULT_HOST_FPS)]
+    #[arg(long, default_value_t = leafmagic::formats::pc2::DEFAULT_HOST_FPS)]
     pub export_host_fps: f64,
     /// Print one JSON object instead of a table.
     #[arg(long)]

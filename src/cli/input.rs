@@ -3,11 +3,11 @@
 //! several commands share.
 
 use anyhow::{Result, bail};
+use leafmagic::formats::fall::{self, AnimationFall, AnimationFormat, RecordedFall};
 use leafmagic::leaf::LeafSpec;
 use leafmagic::motion::classify::{self, Classification};
 use leafmagic::motion::describe::Descriptors;
 use leafmagic::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
-use leafmagic::output::export;
 use leafmagic::physics::model::Model;
 use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
@@ -111,37 +111,24 @@ pub fn check_size(size: Option<f64>) -> Result<()> {
     }
 }
 
-/// How a CSV record's numbers are read: its vertical axis, the metres in
-/// one of its length units (a tracker's pixel, once measured against a
-/// ruler in the frame), and the frame rate if its `t` counts frames.
-/// Animation files say their own (glTF: y up, metres, seconds; USD its
-/// stage metadata).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CsvUnits {
-    /// The record's vertical axis (`--up`).
-    pub up: UpAxis,
-    /// Metres per unit of its x, y, z (`--scale`; 1 for metres).
-    pub scale: f64,
-    /// Frames per second when `t` is a frame number (`--frame-rate`).
-    pub frame_rate: Option<f64>,
-}
+/// How a CSV record's numbers are read (`--up`, `--scale`, `--frame-rate`):
+/// the library's [`fall::RecordUnits`].
+pub use leafmagic::formats::fall::RecordUnits as CsvUnits;
 
-impl CsvUnits {
-    /// Checks the flags: a finite, positive scale and frame rate.
-    fn check(&self) -> Result<()> {
-        if !(self.scale > 0.0 && self.scale.is_finite()) {
-            bail!(
-                "--scale must be a positive number of metres per unit of the file's lengths, got {}",
-                self.scale
-            );
-        }
-        if let Some(r) = self.frame_rate
-            && !(r > 0.0 && r.is_finite())
-        {
-            bail!("--frame-rate must be a positive number of frames per second, got {r}");
-        }
-        Ok(())
+/// Checks the flags: a finite, positive scale and frame rate.
+fn check_units(units: &CsvUnits) -> Result<()> {
+    if !(units.scale > 0.0 && units.scale.is_finite()) {
+        bail!(
+            "--scale must be a positive number of metres per unit of the file's lengths, got {}",
+            units.scale
+        );
     }
+    if let Some(r) = units.frame_rate
+        && !(r > 0.0 && r.is_finite())
+    {
+        bail!("--frame-rate must be a positive number of frames per second, got {r}");
+    }
+    Ok(())
 }
 
 /// Which fall of an animation file to read: the object where several move
@@ -160,25 +147,26 @@ pub struct Pick<'a> {
 
 /// Reads a recorded fall: a CSV record read in `units`, or an animation
 /// file (glTF, y up by its specification; USD, as its stage says), of
-/// which `pick` names the fall to read where it holds several. What the
-/// reading noticed goes to stderr.
+/// which `pick` names the fall to read where it holds several
+/// ([`fall::read_any_fall`] decides which). What the reading noticed goes
+/// to stderr.
 pub fn read_record(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
-    units.check()?;
-    let record = if export::fall::AnimationFormat::of(path).is_some() {
-        read_animation(path, units, pick)?
-    } else {
-        for (flag, given, what) in [
-            ("--object", pick.object, "an object"),
-            ("--animation", pick.animation, "an animation"),
-        ] {
-            if let Some(given) = given {
-                bail!(
-                    "{flag} {given}: {} is a CSV record, which holds one fall; {flag} picks {what} of an animation file (.glb, .gltf, .usd, .abc)",
-                    path.display()
-                );
+    check_units(&units)?;
+    let default = leafmagic::util::confined::ReadPolicy::default();
+    let policy = pick.policy.unwrap_or(&default);
+    let read = fall::read_any_fall(path, units, pick.object, pick.animation, policy)?;
+    let record = match read {
+        RecordedFall::Record { trajectory, notes } => {
+            note_csv(path, &notes);
+            Record {
+                trajectory,
+                notes,
+                object: None,
+                chord: None,
+                warnings: Vec::new(),
             }
         }
-        read_csv_record(path, units)?
+        RecordedFall::Animation { format, fall } => note_animation(path, units, format, fall),
     };
     for note in implausible_units(&record.trajectory) {
         eprintln!("note: {}: {note}", path.display());
@@ -200,10 +188,8 @@ pub fn read_fall(path: &Path, size: Option<f64>, units: CsvUnits, pick: Pick<'_>
     })
 }
 
-/// [`read_record`] of a CSV record.
-fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
-    let (mut traj, notes) = Trajectory::read_csv_with(path, units.up)?;
-    traj.rescale(units.scale, units.frame_rate);
+/// What reading a CSV record noticed, to stderr.
+fn note_csv(path: &Path, notes: &ReadNotes) {
     if !notes.ignored_columns.is_empty() {
         eprintln!(
             "note: {}: ignored column{} {}",
@@ -232,21 +218,16 @@ fn read_csv_record(path: &Path, units: CsvUnits) -> Result<Record> {
             lost.last_line
         );
     }
-    Ok(Record {
-        trajectory: traj,
-        notes,
-        object: None,
-        chord: None,
-        warnings: Vec::new(),
-    })
 }
 
-/// [`read_record`] of a glTF file: the fall of its moving object
-/// ([`export::fall`]).
-fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record> {
-    let default = leafmagic::util::confined::ReadPolicy::default();
-    let policy = pick.policy.unwrap_or(&default);
-    let mut fall = export::fall::read_fall_in(path, pick.object, pick.animation, policy)?;
+/// [`read_record`] of an animation file: what reading it noticed, to
+/// stderr, and its fall as a record.
+fn note_animation(
+    path: &Path,
+    units: CsvUnits,
+    format: AnimationFormat,
+    fall: AnimationFall,
+) -> Record {
     for warning in &fall.warnings {
         eprintln!("warning: {}: {warning}", path.display());
     }
@@ -256,14 +237,9 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
             path.display()
         );
     }
-    // Alembic carries no unit (metres are assumed, as Blender and Houdini
-    // write; Maya writes centimetres): --scale says what one unit is.
-    let alembic =
-        export::fall::AnimationFormat::of(path) == Some(export::fall::AnimationFormat::Alembic);
-    if alembic && units.scale != 1.0 {
-        fall.trajectory.rescale(units.scale, None);
-        fall.chord *= units.scale;
-    }
+    // Alembic carries no unit: --scale says what one is (the library
+    // applied it).
+    let alembic = format == AnimationFormat::Alembic;
     if (units.scale != 1.0 && !alembic) || units.frame_rate.is_some() {
         eprintln!(
             "note: {}: {} not apply to an animation file, which says its own units (glTF: metres and seconds; USD: metersPerUnit and timeCodesPerSecond; Alembic: seconds, and metres unless --scale says otherwise): read as such",
@@ -301,13 +277,13 @@ fn read_animation(path: &Path, units: CsvUnits, pick: Pick<'_>) -> Result<Record
     if let Some(why) = &fall.no_orientation {
         eprintln!("note: {}: {why}", path.display());
     }
-    Ok(Record {
+    Record {
         trajectory: fall.trajectory,
         notes: ReadNotes::default(),
         object: Some(fall.object),
         chord: Some(fall.chord),
         warnings: fall.warnings,
-    })
+    }
 }
 
 /// Fastest mean descent through air a leaf-like fall is taken to have,

@@ -117,7 +117,7 @@ pub fn run(cli: Cli) -> Result<()> {
             roots,
             parent,
             timeout_s,
-        } => output::compose_usd(leafmagic::output::export::ComposeRequest {
+        } => output::compose_usd(leafmagic::formats::usd::ComposeRequest {
             file,
             roots,
             parent,

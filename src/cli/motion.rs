@@ -40,10 +40,10 @@ pub fn classify(args: ClassifyArgs) -> Result<()> {
 }
 
 /// `classify --all`: every fall of an animation file, each classified as
-/// `classify FILE --object NAME` classifies it ([`export::fall::classify_objects`]).
+/// `classify FILE --object NAME` classifies it ([`fall::classify_objects`]).
 fn classify_all(args: &FallArgs) -> Result<()> {
+    use leafmagic::formats::fall::{self, AnimationFormat};
     use leafmagic::motion::trajectory::UpAxis;
-    use leafmagic::output::export::{self, fall::AnimationFormat};
     let path = &args.trajectory;
     let Some(format) = AnimationFormat::of(path) else {
         bail!(
@@ -71,15 +71,14 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             args.scale
         );
     }
-    let mut clip =
-        export::fall::read_clip_in(path, args.animation.as_deref(), &args.reading.policy())?;
+    let mut clip = fall::read_clip_in(path, args.animation.as_deref(), &args.reading.policy())?;
     for warning in &clip.warnings {
         eprintln!("warning: {}: {warning}", path.display());
     }
     if args.scale != 1.0 {
         clip.objects.iter_mut().for_each(|o| o.scale(args.scale));
     }
-    let classes = export::fall::classify_objects(&clip, args.size, |_| true);
+    let classes = fall::classify_objects(&clip, args.size, |_| true);
     if args.json {
         let objects: Vec<serde_json::Value> = clip
             .objects

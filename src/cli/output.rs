@@ -6,8 +6,10 @@ use super::args::{ExportArgs, PreviewArgs};
 use super::{input, report};
 use anyhow::{Context, Result, bail};
 use leafmagic::breed::{self, Run};
-use leafmagic::output::export::render_mesh::{RenderMesh, read_obj};
-use leafmagic::output::export::{Clip, Format, abc, glb, pc2, usd};
+use leafmagic::formats::Format;
+use leafmagic::formats::clip::Clip;
+use leafmagic::formats::clip::render_mesh::{RenderMesh, read_obj};
+use leafmagic::formats::{alembic, gltf, pc2, usd};
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -174,7 +176,7 @@ pub fn write_clip(
     Ok(match format {
         Format::Glb => {
             let path = dir.join(format!("{stem}.glb"));
-            glb::write_glb(clip, &path)?;
+            gltf::write_glb(clip, &path)?;
             vec![path]
         }
         Format::Usd => {
@@ -185,7 +187,7 @@ pub fn write_clip(
         Format::Pc2 => pc2::write_pc2(clip, dir, host_fps)?,
         Format::Abc => {
             let path = dir.join(format!("{stem}.abc"));
-            abc::write_abc(clip, &path)?;
+            alembic::write_abc(clip, &path)?;
             vec![path]
         }
     })
@@ -298,8 +300,8 @@ fn preview_one(
             input.display()
         );
     }
-    let alembic = leafmagic::output::export::fall::AnimationFormat::of(input)
-        == Some(leafmagic::output::export::fall::AnimationFormat::Alembic);
+    let alembic = leafmagic::formats::fall::AnimationFormat::of(input)
+        == Some(leafmagic::formats::fall::AnimationFormat::Alembic);
     Ok(leafmagic::output::preview::load(
         input,
         args.top,
@@ -355,18 +357,18 @@ fn preview_record(
 /// The hidden `compose-usd FILE [--root DIR]… [--parent PID] [--timeout-s
 /// S]`: the flat layer of a USD stage, in JSON on stdout, for the parent
 /// process that reads it
-/// ([`leafmagic::output::export::compose_usd_stage`]). Its error, alone on
+/// ([`leafmagic::formats::usd::compose_usd_stage`]). Its error, alone on
 /// stderr, exit 1; a panic of the USD library is one too.
-pub fn compose_usd(request: leafmagic::output::export::ComposeRequest) -> Result<()> {
+pub fn compose_usd(request: leafmagic::formats::usd::ComposeRequest) -> Result<()> {
     use std::io::Write;
     // Before anything can block: a child its parent no longer waits for,
     // or past its time, ends itself.
-    leafmagic::output::export::watch_parent(request.parent, request.timeout);
+    leafmagic::formats::usd::watch_parent(request.parent, request.timeout);
     // This process exists to read one file; the parent reports what went
     // wrong, in its words, naming the file.
     std::panic::set_hook(Box::new(|_| {}));
     let composed =
-        std::panic::catch_unwind(|| leafmagic::output::export::compose_usd_stage(&request))
+        std::panic::catch_unwind(|| leafmagic::formats::usd::compose_usd_stage(&request))
             .unwrap_or_else(|panic| {
                 let said = panic
                     .downcast_ref::<&str>()

@@ -7,7 +7,8 @@
 //! its page.
 //!
 //! May use: [`crate::output`], [`crate::breed`], [`crate::sim`],
-//! [`crate::leaf`], [`crate::motion`], [`crate::physics`], [`crate::util`].
+//! [`crate::leaf`], [`crate::formats`], [`crate::motion`], [`crate::physics`],
+//! [`crate::util`].
 
 pub mod server;
 pub mod session;

@@ -4,12 +4,15 @@
 //! The oracle is the fall the file was made from: the same keys, the same
 //! normal, the same class.
 
+use leafmagic::formats::clip::{Clip, ClipObject, Motion};
+use leafmagic::formats::fall::{self, read_fall};
+use leafmagic::formats::{alembic, gltf, usd};
 use leafmagic::leaf::AeroSpec;
 use leafmagic::leaf::LeafSpec;
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::motion::classify::{Classification, classify};
 use leafmagic::motion::trajectory::Trajectory;
-use leafmagic::output::export::{self, Clip, fall::read_fall, glb};
+use leafmagic::output::export;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use nalgebra::Vector3;
 use serde_json::Value;
@@ -56,10 +59,10 @@ fn scratch(name: &str) -> PathBuf {
 
 /// A one-object clip at `fps` (as many frames as the object has), written
 /// as `dir/file` (.glb or .usda by its extension).
-fn written(dir: &Path, file: &str, object: export::ClipObject, fps: f64) -> (Clip, PathBuf) {
+fn written(dir: &Path, file: &str, object: ClipObject, fps: f64) -> (Clip, PathBuf) {
     let frames = match &object.motion {
-        export::Motion::Rigid { translation, .. } => translation.len(),
-        export::Motion::Deforming { frames } => frames.len(),
+        Motion::Rigid { translation, .. } => translation.len(),
+        Motion::Deforming { frames } => frames.len(),
     };
     let clip = Clip {
         name: file.to_string(),
@@ -72,9 +75,9 @@ fn written(dir: &Path, file: &str, object: export::ClipObject, fps: f64) -> (Cli
     };
     let path = dir.join(file);
     if file.ends_with(".usda") {
-        export::usd::write_usd(&clip, &path, clip.fps).unwrap();
+        usd::write_usd(&clip, &path, clip.fps).unwrap();
     } else {
-        glb::write_glb(&clip, &path).unwrap();
+        gltf::write_glb(&clip, &path).unwrap();
     }
     (clip, path)
 }
@@ -267,11 +270,11 @@ fn same_points(what: &str, got: &[V3], want: &[V3], tol: f64) {
 fn keys_of(file: &str) -> Clip {
     let path = data(file);
     if file.ends_with(".abc") {
-        export::read_abc(&std::fs::read(&path).unwrap(), file).unwrap()
+        alembic::read_abc(&std::fs::read(&path).unwrap(), file).unwrap()
     } else if file.ends_with(".usda") {
-        export::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
+        usd::read_usda_keys(&std::fs::read_to_string(&path).unwrap(), file).unwrap()
     } else {
-        export::fall::read_clip(&path, None).unwrap()
+        fall::read_clip(&path, None).unwrap()
     }
 }
 
@@ -698,7 +701,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         warnings: vec![],
     };
     let path = dir.join("two.glb");
-    glb::write_glb(&two, &path).unwrap();
+    gltf::write_glb(&two, &path).unwrap();
     let p = path.to_str().unwrap();
     let (ok, err) = run(&["classify", p]);
     assert!(!ok);
@@ -912,7 +915,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
     assert!(ok, "{err}");
     // Nothing moves: every frame the first.
     let mut held = two.objects[0].clone();
-    if let export::Motion::Deforming { frames } = &mut held.motion {
+    if let Motion::Deforming { frames } = &mut held.motion {
         let first = frames[0].clone();
         frames.iter_mut().for_each(|f| *f = first.clone());
     }
@@ -921,7 +924,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         ..two
     };
     let path = dir.join("still.glb");
-    glb::write_glb(&still, &path).unwrap();
+    gltf::write_glb(&still, &path).unwrap();
     let (ok, err) = run(&["classify", path.to_str().unwrap()]);
     assert!(!ok && err.contains("nothing in it moves"), "{err}");
     let _ = std::fs::remove_dir_all(&dir);
@@ -963,12 +966,12 @@ fn breed_like_takes_a_gltf_example() {
 #[test]
 fn blender_usd_reads_as_its_gltf() {
     for name in FALLS {
-        let usd = export::read_usda_keys(
+        let usd = usd::read_usda_keys(
             &std::fs::read_to_string(data(&format!("blender/{name}.usda"))).unwrap(),
             name,
         )
         .unwrap();
-        let glb = export::read_gltf_keys(
+        let glb = gltf::read_gltf_keys(
             &std::fs::read(data(&format!("blender/{name}.glb"))).unwrap(),
             name,
             None,
@@ -1085,7 +1088,7 @@ fn a_file_with_several_takes_is_read_by_the_one_named() {
         ("1", "blender/tumble_thick.glb"),
         ("steady", "blender/steady_fall.glb"),
     ] {
-        let got = export::fall::read_fall_of(&takes, None, Some(pick)).unwrap();
+        let got = fall::read_fall_of(&takes, None, Some(pick)).unwrap();
         let want = read_fall(&data(original), None).unwrap();
         let (g, w) = (&got.trajectory, &want.trajectory);
         assert_eq!(g.time, w.time, "{pick}");
@@ -1154,7 +1157,7 @@ fn a_file_with_several_takes_is_read_by_the_one_named() {
 #[test]
 fn a_point_instancer_s_leaves_read_where_pixar_places_them() {
     let file = "usd/instanced/leaves.usda";
-    let clip = export::read_usda_keys(&std::fs::read_to_string(data(file)).unwrap(), file).unwrap();
+    let clip = usd::read_usda_keys(&std::fs::read_to_string(data(file)).unwrap(), file).unwrap();
     let lives: std::collections::BTreeMap<&str, (usize, usize)> = clip
         .objects
         .iter()
@@ -1374,7 +1377,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
         } else {
             path.clone()
         };
-        let keys = export::fall::read_clip(&twin, None).unwrap();
+        let keys = fall::read_clip(&twin, None).unwrap();
         let (data, objects) = page_objects(&html);
         let mut classified = 0;
         for (index, (page, read)) in objects.iter().zip(&keys.objects).enumerate() {
@@ -1401,7 +1404,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
             // A particle's page holds its centre and its size.
             let marker = data["objects"][index]["marker"].as_f64();
             if read.is_marker() {
-                let size = export::fall::chord(&read.positions(0));
+                let size = fall::chord(&read.positions(0));
                 assert!((marker.unwrap() - size).abs() < 1e-12 * size);
             } else {
                 assert_eq!(marker, None);
@@ -1449,7 +1452,7 @@ fn preview_plays_every_animation_file_with_its_falls_classified() {
     assert!(ok, "{err}");
     let (data12, objects) = page_objects(&html);
     assert_eq!(data12["frames"], 121);
-    let keys = export::fall::read_clip(&leaves, None).unwrap();
+    let keys = fall::read_clip(&leaves, None).unwrap();
     let born = objects.iter().find(|o| o.name == "leaves[42]").unwrap();
     let read = keys
         .objects

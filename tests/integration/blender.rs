@@ -7,7 +7,7 @@
 
 use super::breeding::leafmagic;
 use super::common::{missing_tool, venv_python};
-use leafmagic::output::export::from_glb;
+use leafmagic::formats::gltf::from_glb;
 use nalgebra::Vector3;
 use std::path::{Path, PathBuf};
 

@@ -3,10 +3,10 @@
 //! specification and the OBJ in the same vertex order, resampling exact for
 //! linear motion, the HTML page drawn by headless Chromium at two times.
 
+use leafmagic::formats::clip::{self, Clip, ClipObject, DEFAULT_FPS, Motion};
+use leafmagic::formats::{ExportError, Format, alembic, gltf, pc2, usd};
 use leafmagic::leaf::LeafSpec;
-use leafmagic::output::export::{
-    self, Clip, ClipObject, DEFAULT_FPS, ExportError, Format, Motion, glb, pc2,
-};
+use leafmagic::output::export;
 use leafmagic::sim::scene::Scene;
 use nalgebra::Vector3;
 use serde_json::Value;
@@ -236,7 +236,7 @@ fn glb_layout_accessors_targets_and_quaternions_follow_the_specification() {
         3,
         "leaf, box, rope; the fixed point is not exported"
     );
-    let bytes = glb::glb_bytes(&clip).unwrap();
+    let bytes = gltf::glb_bytes(&clip).unwrap();
     let (doc, bin) = split_glb(&bytes);
     assert_eq!(doc["asset"]["version"], "2.0");
     assert_eq!(
@@ -481,7 +481,7 @@ fn client_positions(doc: &Value, bin: &[u8], k: usize) -> Vec<(String, Vec<V3>)>
 /// The largest distance over every frame and vertex between what a client
 /// shows of `clip`'s .glb and the simulation (each object's shown mesh).
 fn client_error(clip: &Clip) -> f64 {
-    let (doc, bin) = split_glb(&glb::glb_bytes(clip).unwrap());
+    let (doc, bin) = split_glb(&gltf::glb_bytes(clip).unwrap());
     let mut worst = 0.0f64;
     for k in 0..clip.frames {
         for (o, (name, shown)) in clip.objects.iter().zip(client_positions(&doc, &bin, k)) {
@@ -533,8 +533,7 @@ fn glb_reads_back_to_the_exported_positions_at_every_frame() {
     // base + Σ weight × target): every vertex at every frame within f32
     // rounding of what was exported, in the simulator's z-up axes.
     let clip = mixed_clip(30.0);
-    let back =
-        export::from_glb_bytes(&glb::glb_bytes(&clip).unwrap(), "mixed", None, None).unwrap();
+    let back = gltf::from_glb_bytes(&gltf::glb_bytes(&clip).unwrap(), "mixed", None, None).unwrap();
     assert_eq!(back.frames, clip.frames);
     assert_eq!(back.fps, 30.0, "the frame rate travels in the extras");
     assert_eq!(back.ground, Some(0.0));
@@ -601,7 +600,7 @@ velocity = [0.75, 0.5, -1.25]
             assert!(rotation[k].angle() < 1e-12);
         }
         // And the file keys hold it to f32 rounding, in glTF axes (x, z, −y).
-        let (doc, bin) = split_glb(&glb::glb_bytes(&clip).unwrap());
+        let (doc, bin) = split_glb(&gltf::glb_bytes(&clip).unwrap());
         let anim = &doc["animations"][0];
         let ch = anim["channels"]
             .as_array()
@@ -808,16 +807,16 @@ const v = require('gltf-validator');
 fn exported_glb_files_pass_the_khronos_validator() {
     let dir = scratch("validator");
     let mixed = dir.join("mixed.glb");
-    glb::write_glb(&mixed_clip(30.0), &mixed).unwrap();
+    gltf::write_glb(&mixed_clip(30.0), &mixed).unwrap();
     // A bred-leaf style export: one leaf dropped for 10 s at 30 fps.
     let model = LeafSpec::load("b").unwrap().model().unwrap();
     let leaf = export::drop_clip("leaf-b", "spinner", &model, 10.0, 30.0).unwrap();
     let single = export::side_by_side("leaf-b", vec![leaf], 30.0, 0.0).unwrap();
     assert_eq!(single.frames, 301);
     let drop_glb = dir.join("leaf-b.glb");
-    glb::write_glb(&single, &drop_glb).unwrap();
+    gltf::write_glb(&single, &drop_glb).unwrap();
     let dressed_glb = dir.join("leaf-b-dressed.glb");
-    glb::write_glb(&super::usd::leaf_clip(10.0, true), &dressed_glb).unwrap();
+    gltf::write_glb(&super::usd::leaf_clip(10.0, true), &dressed_glb).unwrap();
     let tool = match validator() {
         Ok(t) => t,
         Err(why) => {
@@ -877,7 +876,7 @@ fn a_deforming_object_grows_linearly_with_its_frame_count() {
         let leaf = export::drop_clip("leaf-b", "spinner", &model, 10.0, fps).unwrap();
         let clip = export::side_by_side("leaf-b", vec![leaf], fps, 0.0).unwrap();
         let n = clip.frames;
-        let bytes = glb::glb_bytes(&clip).unwrap();
+        let bytes = gltf::glb_bytes(&clip).unwrap();
         let (doc, bin) = split_glb(&bytes);
         let k = doc["meshes"][0]["primitives"][0]["targets"]
             .as_array()
@@ -961,7 +960,7 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
             let stem = out.join(format!("leaf-{id}"));
             assert!(stem.with_extension("toml").is_file());
             if format == "glb" {
-                let clip = export::from_glb(&stem.with_extension("glb"), None, None).unwrap();
+                let clip = gltf::from_glb(&stem.with_extension("glb"), None, None).unwrap();
                 // 3 s at 30 fps; the leaf falls (it was re-dropped, not posed).
                 assert_eq!(clip.frames, 91);
                 let o = &clip.objects[0];
@@ -998,8 +997,8 @@ fn the_export_command_re_drops_bred_leaves_into_glb_and_pc2() {
     // …released as that drop was (its release attitude, drawn per
     // individual), not at the drop's default 10°, 2°.
     let exported = export::drop_individuals(&opened, &[best], 30.0).unwrap();
-    let frames = |o: &export::ClipObject| match &o.motion {
-        export::Motion::Deforming { frames } => frames.clone(),
+    let frames = |o: &ClipObject| match &o.motion {
+        Motion::Deforming { frames } => frames.clone(),
         _ => panic!("a leaf deforms"),
     };
     let released =
@@ -1069,7 +1068,7 @@ fn bad_input_is_refused_with_the_file_and_the_reason() {
         warnings: vec![],
     };
     assert!(
-        matches!(glb::glb_bytes(&empty), Err(ExportError::Data(m)) if m.contains("no objects"))
+        matches!(gltf::glb_bytes(&empty), Err(ExportError::Data(m)) if m.contains("no objects"))
     );
 }
 
@@ -1541,7 +1540,7 @@ fn a_rigid_plate_is_exported_as_a_rigid_object() {
         },
     )
     .unwrap();
-    let particles = export::resample_positions(
+    let particles = clip::resample_positions(
         &fall.trajectory.time,
         fall.particles.as_ref().unwrap(),
         fps,
@@ -1560,7 +1559,7 @@ fn a_rigid_plate_is_exported_as_a_rigid_object() {
         ..object.clone()
     };
     let bytes = |o: ClipObject| {
-        glb::glb_bytes(&Clip {
+        gltf::glb_bytes(&Clip {
             name: "plate".into(),
             fps,
             frames,
@@ -1611,7 +1610,7 @@ fn scene_particles(dir: &Path, fps: f64) -> std::collections::HashMap<(String, u
             }
             let n: Vec<f64> = row.iter().skip(1).map(|x| x.parse().unwrap()).collect();
             let points = n.chunks(3).map(|c| V3::new(c[0], c[1], c[2])).collect();
-            out.insert((export::usd::identifier(leaf), k as usize), points);
+            out.insert((usd::identifier(leaf), k as usize), points);
         }
     }
     out
@@ -1628,7 +1627,7 @@ fn scene_particles(dir: &Path, fps: f64) -> std::collections::HashMap<(String, u
 #[test]
 fn alembic_export_reads_back_as_the_simulation_and_as_blender_reads_it() {
     let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let read = |path: &Path| export::read_abc(&std::fs::read(path).unwrap(), "scene").unwrap();
+    let read = |path: &Path| alembic::read_abc(&std::fs::read(path).unwrap(), "scene").unwrap();
     for (scene, seconds, frames, objects) in
         [("ground-blow", "0.5", 16, 16), ("rocking-bin", "1", 31, 1)]
     {
@@ -1784,9 +1783,7 @@ fn alembic_export_writes_rigid_and_deforming_objects_and_refuses_a_rope() {
     let dir = scratch("abc-mixed");
     let mut clip = mixed_clip(DEFAULT_FPS);
     let path = dir.join("mixed.abc");
-    let err = export::abc::write_abc(&clip, &path)
-        .unwrap_err()
-        .to_string();
+    let err = alembic::write_abc(&clip, &path).unwrap_err().to_string();
     assert!(
         err.contains("object rope has no faces") && err.contains("glb or usd"),
         "{err}"
@@ -1802,8 +1799,8 @@ fn alembic_export_writes_rigid_and_deforming_objects_and_refuses_a_rope() {
     assert_eq!(clip.objects.len(), 2);
     clip.objects[0].name = "card-1".into();
     clip.objects[1].name = "card_1".into();
-    export::abc::write_abc(&clip, &path).unwrap();
-    let back = export::read_abc(&std::fs::read(&path).unwrap(), "mixed").unwrap();
+    alembic::write_abc(&clip, &path).unwrap();
+    let back = alembic::read_abc(&std::fs::read(&path).unwrap(), "mixed").unwrap();
     assert_eq!((back.frames, back.fps), (clip.frames, clip.fps));
     assert_eq!(back.objects.len(), clip.objects.len());
     let mut rigid = 0;

@@ -6,7 +6,7 @@
 //! overflow, a panic, or an allocation for bytes the file does not hold.
 
 use base64::Engine as _;
-use leafmagic::output::export::{self, ExportError, fall::read_clip};
+use leafmagic::formats::{ExportError, fall::read_clip, gltf};
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -480,7 +480,7 @@ fn glb(doc: &Value) -> Vec<u8> {
 }
 
 fn glb_error(bytes: &[u8]) -> String {
-    match export::from_glb_bytes(bytes, "hostile", None, None) {
+    match gltf::from_glb_bytes(bytes, "hostile", None, None) {
         Err(ExportError::Data(why)) => why,
         other => panic!("not refused as data: {other:?}"),
     }
@@ -489,7 +489,7 @@ fn glb_error(bytes: &[u8]) -> String {
 #[test]
 fn glb_bytes_are_checked_as_files_are() {
     // The valid file reads from bytes too.
-    let clip = export::from_glb_bytes(&glb(&falling()), "ok", None, None).unwrap();
+    let clip = gltf::from_glb_bytes(&glb(&falling()), "ok", None, None).unwrap();
     assert_eq!(clip.objects.len(), 1);
 
     let mut doc = falling();
@@ -512,7 +512,7 @@ fn glb_bytes_are_checked_as_files_are() {
     // A buffer that is a file: from bytes, there is no folder to read.
     let mut doc = falling();
     doc["buffers"][0]["uri"] = json!("leaf.bin");
-    let why = match export::from_glb_bytes(&serde_json::to_vec(&doc).unwrap(), "x", None, None) {
+    let why = match gltf::from_glb_bytes(&serde_json::to_vec(&doc).unwrap(), "x", None, None) {
         Err(ExportError::Data(why)) => why,
         other => panic!("{other:?}"),
     };

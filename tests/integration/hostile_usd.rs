@@ -307,7 +307,7 @@ fn face_counts_that_lie_are_refused_by_prim_and_attribute() {
         let text = MESH.replace("[3]", counts).replace("[0, 1, 2]", indices);
         let file = shared.join(format!("counts{k}.usda"));
         std::fs::write(&file, format!("#usda 1.0\n{text}")).unwrap();
-        let e = leafmagic::output::export::fall::read_clip(&file, None)
+        let e = leafmagic::formats::fall::read_clip(&file, None)
             .unwrap_err()
             .to_string();
         assert!(

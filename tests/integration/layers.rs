@@ -14,21 +14,24 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first, with what each may import.
-const LAYERS: [(&str, &[&str]); 8] = [
+const LAYERS: [(&str, &[&str]); 9] = [
     ("util", &[]),
     ("physics", &["util"]),
     ("motion", &["util"]),
+    ("formats", &["motion", "physics", "util"]),
     ("leaf", &["physics", "util"]),
     ("sim", &["physics", "motion", "leaf", "util"]),
     ("breed", &["sim", "leaf", "motion", "physics", "util"]),
     (
         "output",
-        &["breed", "sim", "leaf", "motion", "physics", "util"],
+        &[
+            "breed", "sim", "leaf", "formats", "motion", "physics", "util",
+        ],
     ),
     (
         "studio",
         &[
-            "output", "breed", "sim", "leaf", "motion", "physics", "util",
+            "output", "breed", "sim", "leaf", "formats", "motion", "physics", "util",
         ],
     ),
 ];

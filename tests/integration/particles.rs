@@ -4,7 +4,9 @@
 //! where Blender's particle system holds it at every frame, through births
 //! and deaths that make Blender's exporter renumber the living ones.
 
-use leafmagic::output::export::{DEFAULT_POINT_WIDTH_M, POINT_KIND, fall};
+use leafmagic::formats::alembic::DEFAULT_POINT_WIDTH_M;
+use leafmagic::formats::clip::POINT_KIND;
+use leafmagic::formats::fall;
 use nalgebra::Vector3;
 use serde_json::Value;
 use std::collections::BTreeMap;

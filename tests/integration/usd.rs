@@ -7,10 +7,11 @@
 //! per class, UVs and normals, and their points, composed through the Xforms
 //! as USD composes them, are the simulation's at every time code.
 
+use leafmagic::formats::clip::Clip;
+use leafmagic::formats::clip::render_mesh::{ObjMesh, RenderMesh};
+use leafmagic::formats::usd;
 use leafmagic::leaf::LeafSpec;
-use leafmagic::output::export::render_mesh::{ObjMesh, RenderMesh};
-use leafmagic::output::export::usd;
-use leafmagic::output::export::{self, Clip};
+use leafmagic::output::export;
 use leafmagic::sim::scene::Scene;
 use nalgebra::Vector3;
 use serde_json::Value;
@@ -248,7 +249,7 @@ fn usd_files_open_in_pixars_library_comply_and_hold_the_simulation() {
                     worst = worst.max((a - b).norm());
                 }
             }
-            let rgb = leafmagic::output::export::glb::colour(o);
+            let rgb = leafmagic::formats::clip::look::colour(o);
             let colour: Vec<f32> = u["color"]
                 .as_array()
                 .unwrap()
@@ -259,7 +260,7 @@ fn usd_files_open_in_pixars_library_comply_and_hold_the_simulation() {
             let want_material = format!(
                 "/{}/Looks/{}",
                 usd::identifier(&format!("{}_scene", clip.name)),
-                usd::identifier(&leafmagic::output::export::glb::material_name(o))
+                usd::identifier(&leafmagic::formats::clip::look::material_name(o))
             );
             assert_eq!(u["material"], want_material.as_str(), "{f}");
             if u["type"] == "Mesh" {

@@ -100,7 +100,7 @@ pub fn classified(path: &Path, samples: usize, c: &Classification) -> String {
 /// out.
 pub fn classified_each(
     path: &Path,
-    clip: &leafmagic::output::export::Clip,
+    clip: &leafmagic::formats::clip::Clip,
     classes: &[Option<Classification>],
 ) -> String {
     text(|out| {

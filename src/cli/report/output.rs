@@ -1,6 +1,6 @@
 //! The human reports of `export` and `preview`: what was written, and where.
 
-use leafmagic::output::export::Format;
+use leafmagic::formats::Format;
 use leafmagic::output::preview::Preview;
 use std::collections::BTreeMap;
 use std::path::Path;

@@ -2,7 +2,8 @@
 //! out (`--explain`), and the summary of a run.
 
 use super::text;
-use leafmagic::output::export::{Clip, Format};
+use leafmagic::formats::Format;
+use leafmagic::formats::clip::Clip;
 use leafmagic::physics::run::StepError;
 use leafmagic::physics::terms::Decision;
 use leafmagic::sim::scene::{RunStats, Scene};

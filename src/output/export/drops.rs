@@ -2,10 +2,10 @@
 //! dropped again as breeding dropped them (neither a run nor a leaf file
 //! keeps a motion), and falls laid side by side as one clip.
 
-use super::clip::{
+use crate::formats::ExportError;
+use crate::formats::clip::{
     Body, Clip, ClipObject, Motion, frame_count, resample_positions, rigid_motion, to_u32,
 };
-use super::error::ExportError;
 use crate::physics::model::Model;
 use crate::sim::drop::{DropParams, drop_leaf};
 use nalgebra::Vector3;

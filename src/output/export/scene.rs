@@ -2,11 +2,11 @@
 //! their pose and everything else by its particles, from a run in memory or
 //! from the frames the scene-directory reader gives back.
 
-use super::clip::{
+use crate::formats::ExportError;
+use crate::formats::clip::WindGlyph;
+use crate::formats::clip::{
     Body, Clip, ClipObject, Motion, frame_count, resample_positions, rigid_motion, to_u32,
 };
-use super::error::ExportError;
-use super::wind::WindGlyph;
 use crate::motion::trajectory::Trajectory;
 use crate::sim::scene::{ObjectKind, Scene, SceneRun};
 use nalgebra::Vector3;

@@ -6,11 +6,13 @@
 //! keeps 100 leaves × 10 s × 30 fps near 3.4 MB.
 
 use crate::breed::{self, Run};
+use crate::formats::ExportError;
+use crate::formats::clip::look::colour;
+use crate::formats::clip::{Clip, ClipObject, DEFAULT_FPS, MARKER_KIND, Motion};
+use crate::formats::fall::{self, AnimationFormat};
+use crate::formats::gltf;
 use crate::motion::trajectory::Trajectory;
-use crate::output::export::fall::{self, AnimationFormat};
-use crate::output::export::{
-    self, Clip, ClipObject, DEFAULT_FPS, ExportError, MARKER_KIND, Motion, glb::colour,
-};
+use crate::output::export;
 use crate::util::confined::ReadPolicy;
 use base64::Engine as _;
 use nalgebra::Vector3;
@@ -65,8 +67,8 @@ pub struct FileOptions<'a> {
 ///   ([`export::drop_individuals`]), side by side with their classes;
 /// - a scene output directory (`summary.toml`), see [`export::from_scene_dir`];
 /// - an animation file: a `.glb` sampled from 0 at the page's rate
-///   ([`export::from_glb`]), a `.gltf`, USD or Alembic file at its own keys
-///   ([`export::fall::read_clip`]), resampled where `file.fps` asks; each
+///   ([`gltf::from_glb`]), a `.gltf`, USD or Alembic file at its own keys
+///   ([`fall::read_clip`]), resampled where `file.fps` asks; each
 ///   object over its own life (a particle born or killed during the shot),
 ///   and each falling one the file does not label labelled with the class
 ///   `classify` gives its fall ([`label_falls`]).
@@ -207,7 +209,7 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
     // which can turn a 24 fps tumble into another class.
     let default = ReadPolicy::default();
     let policy = file.policy.unwrap_or(&default);
-    let mut keys = export::fall::read_clip_in(input, file.animation, policy)?;
+    let mut keys = fall::read_clip_in(input, file.animation, policy)?;
     if let Some(scale) = file.scale {
         keys.objects.iter_mut().for_each(|o| o.scale(scale));
     }
@@ -217,7 +219,7 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
     let clip = if glb {
         // The same nodes in the same order, on the page's grid.
-        let mut page = export::from_glb(input, file.fps, file.animation)?;
+        let mut page = gltf::from_glb(input, file.fps, file.animation)?;
         for &k in &classified {
             let from = &keys.objects[k];
             if let Some(to) = page.objects.get_mut(k).filter(|to| to.name == from.name) {
@@ -821,7 +823,7 @@ mod tests {
                 let path = (0..240).map(|f| V3::new(k as f64, 0.0, -0.01 * f as f64));
                 ClipObject::marker(
                     format!("leaves/{k}"),
-                    export::POINT_KIND,
+                    crate::formats::clip::POINT_KIND,
                     0.04,
                     path.collect(),
                 )

@@ -1,7 +1,7 @@
 //! Meshes skinned to a UsdSkel skeleton, posed as UsdSkel defines it
 //! (Pixar, "UsdSkel: Skinning" and "Joint Transforms"): what Blender's USD
 //! exporter writes for a leaf bent by an armature. For
-//! [`super::usda_read`], which finds the meshes.
+//! [`super::read`], which finds the meshes.
 //!
 //! A skinned point's world position at time t is
 //!
@@ -36,8 +36,8 @@
 //! the mesh's `skel:blendShapes` by name (a shape the animation does not
 //! name weighs 0). Refused by name: inbetween shapes.
 
-use super::skin::{Influences, blend, trs_matrix};
-use super::usd_layer::{Attribute, Prim, Value, sample, world_transform};
+use super::layer::{Attribute, Prim, Value, sample, world_transform};
+use crate::formats::skin::{Influences, blend, trs_matrix};
 use nalgebra::{Matrix4, Vector3};
 use std::collections::HashMap;
 
@@ -616,7 +616,7 @@ fn influences(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::output::export::usd_layer::parse;
+    use crate::formats::usd::layer::parse;
 
     /// Two shapes of a four-point mesh weighed by an animation that names
     /// them in its own order (and one more), a third shape it does not name.

@@ -1,7 +1,10 @@
-//! The fall of one object of an animation file (glTF 2.0, `.glb` or
-//! `.gltf`, or one USD text layer, `.usda`: what leafmagic exports, and
-//! what Blender, Houdini or a game engine bake) as a [`Trajectory`], for
-//! `classify`, `describe`, `compare` and `breed --like`.
+//! Any supported file as a fall: the one entry point, [`read_any_fall`],
+//! decides by the file's name how it becomes a [`Trajectory`] for
+//! `classify`, `describe`, `compare` and `breed --like`. A CSV record is
+//! read by [`crate::motion::trajectory`]; of an animation file (glTF 2.0,
+//! `.glb` or `.gltf`; USD; Alembic: what leafmagic exports, and what
+//! Blender, Houdini or a game engine bake) the fall of one object is
+//! measured here.
 //!
 //! A recorded fall is a centre and, where known, a body-to-world rotation
 //! whose body z is the plate's normal and body x its long axis
@@ -25,17 +28,18 @@
 //! path classifier reads. The axes of a square or a disk are arbitrary in
 //! its plane (equal moments); the classifier needs only the normal there.
 //!
-//! The file is sampled at its own keys ([`super::read_gltf_keys`],
-//! [`super::read_usda_keys`]): from the first key to the last, at one frame
+//! The file is sampled at its own keys ([`crate::formats::gltf::read_gltf_keys`],
+//! [`crate::formats::usd::read_usda_keys`]): from the first key to the last, at one frame
 //! per shortest key interval.
 
-use super::clip::{Clip, ClipObject, Motion};
-use super::error::ExportError;
-use super::frame::{MAX_SOLVER_ITERATIONS, kabsch};
-use super::read::read_gltf_keys;
-use super::usda_read::read_usd_file;
+use crate::formats::alembic::read_abc;
+use crate::formats::clip::frame::{MAX_SOLVER_ITERATIONS, kabsch};
+use crate::formats::clip::{Clip, ClipObject, Motion, POINT_KIND};
+use crate::formats::error::ExportError;
+use crate::formats::gltf::read_gltf_keys;
+use crate::formats::usd::read_usd_file;
 use crate::motion::classify::{Classification, classify};
-use crate::motion::trajectory::Trajectory;
+use crate::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
 use crate::util::confined::{ReadPolicy, ReadScope};
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -59,7 +63,7 @@ pub enum AnimationFormat {
     /// USD: `.usda`, `.usd`, `.usdc`, `.usdz` (text, binary crate files,
     /// packages; composed stages flattened first).
     Usd,
-    /// Alembic: `.abc` (Ogawa; [`super::read_abc`]).
+    /// Alembic: `.abc` (Ogawa; [`crate::formats::alembic::read_abc`]).
     Alembic,
 }
 
@@ -111,7 +115,7 @@ pub fn read_fall(path: &Path, object: Option<&str>) -> Result<AnimationFall, Exp
 }
 
 /// [`read_fall`], of the glTF animation `animation` names where the file
-/// holds several ([`super::read_gltf_keys`]); a USD stage holds one, and
+/// holds several ([`crate::formats::gltf::read_gltf_keys`]); a USD stage holds one, and
 /// naming one there is refused.
 pub fn read_fall_of(
     path: &Path,
@@ -195,11 +199,109 @@ pub fn read_fall_in(
     })
 }
 
+/// How a CSV record's numbers are read: its vertical axis, the metres in
+/// one of its length units (a tracker's pixel, once measured against a
+/// ruler in the frame), and the frame rate if its `t` counts frames.
+/// Animation files say their own, but for an Alembic archive's length unit:
+/// Alembic carries none (metres are assumed, as Blender and Houdini write;
+/// Maya writes centimetres), so `scale` says what one of its units is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RecordUnits {
+    /// The record's vertical axis.
+    pub up: UpAxis,
+    /// Metres per unit of its x, y, z (1 for metres).
+    pub scale: f64,
+    /// Frames per second when `t` is a frame number.
+    pub frame_rate: Option<f64>,
+}
+
+impl Default for RecordUnits {
+    /// A record in metres and seconds, z up.
+    fn default() -> RecordUnits {
+        RecordUnits {
+            up: UpAxis::Z,
+            scale: 1.0,
+            frame_rate: None,
+        }
+    }
+}
+
+/// A fall as read from any supported file ([`read_any_fall`]).
+#[derive(Clone, Debug)]
+pub enum RecordedFall {
+    /// A CSV record, in metres and seconds, z up.
+    Record {
+        /// The record.
+        trajectory: Trajectory,
+        /// What the CSV reader noticed without refusing the file.
+        notes: ReadNotes,
+    },
+    /// One object's fall of an animation file, in the file's own units
+    /// (an Alembic archive's scaled by [`RecordUnits::scale`]).
+    Animation {
+        /// The file's format.
+        format: AnimationFormat,
+        /// The fall, and what the file told of it.
+        fall: AnimationFall,
+    },
+}
+
+impl RecordedFall {
+    /// The fall's record.
+    pub fn trajectory(&self) -> &Trajectory {
+        match self {
+            RecordedFall::Record { trajectory, .. } => trajectory,
+            RecordedFall::Animation { fall, .. } => &fall.trajectory,
+        }
+    }
+}
+
+/// The one place that decides how a file becomes a fall, by its name
+/// ([`AnimationFormat::of`]): a glTF, USD or Alembic file gives the fall of
+/// `object` (or of the only object that moves; of the glTF animation
+/// `animation` names, [`read_fall_in`]), any other file is a CSV record
+/// read in `units` ([`Trajectory::read_csv_with`]), which holds one fall:
+/// an object or an animation asked of it is refused. Errors name the file.
+pub fn read_any_fall(
+    path: &Path,
+    units: RecordUnits,
+    object: Option<&str>,
+    animation: Option<&str>,
+    policy: &ReadPolicy,
+) -> Result<RecordedFall, ExportError> {
+    let Some(format) = AnimationFormat::of(path) else {
+        // Worded as the file's other refusals (see `read_fall_in`), by the
+        // option the command line takes.
+        for (option, given, what) in [
+            ("--object", object, "an object"),
+            ("--animation", animation, "an animation"),
+        ] {
+            if let Some(given) = given {
+                return Err(ExportError::input(
+                    path,
+                    format!(
+                        "{option} {given}: a CSV record holds one fall; {option} picks {what} of an animation file (.glb, .gltf, .usd, .abc)"
+                    ),
+                ));
+            }
+        }
+        let (mut trajectory, notes) = Trajectory::read_csv_with(path, units.up)?;
+        trajectory.rescale(units.scale, units.frame_rate);
+        return Ok(RecordedFall::Record { trajectory, notes });
+    };
+    let mut fall = read_fall_in(path, object, animation, policy)?;
+    if format == AnimationFormat::Alembic && units.scale != 1.0 {
+        fall.trajectory.rescale(units.scale, None);
+        fall.chord *= units.scale;
+    }
+    Ok(RecordedFall::Animation { format, fall })
+}
+
 /// Every object of a glTF, USD or Alembic file ([`AnimationFormat::of`]
 /// its name; glTF if it names none), sampled at the file's own keys: what
 /// a fall is read from, and what `preview` plays of such a file. Of a glTF
 /// file with several animations, `animation` names the one to read
-/// ([`super::read_gltf_keys`]); a USD stage or an Alembic archive holds
+/// ([`crate::formats::gltf::read_gltf_keys`]); a USD stage or an Alembic archive holds
 /// one, and naming one there is refused. Errors name the file.
 pub fn read_clip(path: &Path, animation: Option<&str>) -> Result<Clip, ExportError> {
     read_clip_in(path, animation, &ReadPolicy::default())
@@ -232,7 +334,7 @@ pub fn read_clip_in(
     }
     match format {
         Some(AnimationFormat::Usd) => read_usd_file(path, &bytes, &name, scope),
-        Some(AnimationFormat::Alembic) => super::read_abc(&bytes, &name).map_err(ExportError::Data),
+        Some(AnimationFormat::Alembic) => read_abc(&bytes, &name).map_err(ExportError::Data),
         _ => {
             let dir = path.parent().unwrap_or(Path::new("."));
             read_gltf_keys(&bytes, &name, Some((dir, scope)), animation)
@@ -249,7 +351,7 @@ pub fn read_clip_in(
 /// [`MAX_COORDINATE_M`]. Still objects, ropes and rigid props are not.
 fn is_fall(o: &ClipObject, chord: f64) -> bool {
     let kind = (!o.triangles.is_empty() && matches!(o.kind.as_str(), "mesh" | "leaf" | "sheet"))
-        || o.kind == super::clip::POINT_KIND;
+        || o.kind == POINT_KIND;
     kind && o.frame_count() > 1 && moves(o, chord) && far_out(o).is_ok()
 }
 
@@ -546,6 +648,41 @@ pub fn fall_of(o: &ClipObject, fps: f64) -> (Trajectory, Option<String>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A CSV record goes to the motion layer's reader, in the units asked,
+    /// and an object or animation asked of it is refused naming the file.
+    #[test]
+    fn any_fall_reads_a_csv_record_in_its_units_and_refuses_picks() {
+        let dir = std::env::temp_dir().join(format!("leafmagic-anyfall-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("fall.csv");
+        std::fs::write(&path, "t,x,y,z\n0,0,0,100\n1,3,4,90\n2,6,8,80\n").unwrap();
+        let units = RecordUnits {
+            up: UpAxis::Z,
+            scale: 0.01,
+            frame_rate: Some(50.0),
+        };
+        let policy = ReadPolicy::default();
+        let read = read_any_fall(&path, units, None, None, &policy).unwrap();
+        let (mut want, _) = Trajectory::read_csv_with(&path, UpAxis::Z).unwrap();
+        want.rescale(0.01, Some(50.0));
+        assert!(matches!(&read, RecordedFall::Record { .. }));
+        assert_eq!(read.trajectory(), &want);
+        assert!((read.trajectory().position[1].z - 0.9).abs() < 1e-12);
+        for (object, animation, option) in [
+            (Some("leaf"), None, "--object leaf"),
+            (None, Some("take"), "--animation take"),
+        ] {
+            let e = read_any_fall(&path, units, object, animation, &policy)
+                .unwrap_err()
+                .to_string();
+            assert!(
+                e.contains(path.to_str().unwrap()) && e.contains(option) && e.contains("CSV"),
+                "{e}"
+            );
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn plate(n: usize, long: f64, wide: f64) -> (Vec<V3>, Vec<[u32; 3]>) {
         // A grid of n × n cells over long × wide, in the xz-plane (as a

@@ -12,7 +12,7 @@
 //! The OBJ is read in the leaf file's own coordinates (metres; z the plate
 //! normal, x the long axis), the frame its particles are given in.
 
-use super::error::ExportError;
+use crate::formats::error::ExportError;
 use nalgebra::Vector3;
 use std::collections::HashMap;
 use std::path::Path;

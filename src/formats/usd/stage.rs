@@ -1,4 +1,4 @@
-//! A USD stage that the text reader ([`super::usd_layer`]) does not read
+//! A USD stage that the text reader ([`super::layer`]) does not read
 //! alone: a binary crate file (`.usdc`, or a `.usd` holding one), a USDZ
 //! package, or layers that need composing (sublayers, references,
 //! payloads, inherits, specializes, variant sets). The openusd crate opens
@@ -29,7 +29,7 @@
 //! reader ends with an error that names the file.
 //! (openusd 0.8 bounds those counts, but needs Rust 1.96.)
 
-use super::usd_layer::{Attribute, IdListOp, Layer, Prim, StageMetadata, Value, edit_id_list};
+use super::layer::{Attribute, IdListOp, Layer, Prim, StageMetadata, Value, edit_id_list};
 use crate::util::confined::ReadScope;
 use openusd::ar::{self, Resolver};
 use openusd::{gf, sdf, usd};

@@ -24,11 +24,11 @@
 //! ground height, the wind glyphs, the frame rate), node `extras` the
 //! object's kind and label; the previewer reads them back.
 
-use super::clip::{Clip, ClipObject};
-use super::dress::{triangle_normals, vertex_normals};
-use super::error::ExportError;
-use super::frame::Framed;
-pub use super::look::{Shown, colour, material_name, shown};
+use crate::formats::clip::dress::{triangle_normals, vertex_normals};
+use crate::formats::clip::frame::Framed;
+use crate::formats::clip::look::{colour, material_name, shown};
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
 use gltf::json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};
@@ -250,7 +250,7 @@ fn sparse_vec3(
 /// particle i from its rest place along glTF axis a, and its target moves
 /// vertex i along a: base + Σ Δ · targets is then the local shape exactly.
 /// With a render mesh bound to the simulated triangles (Σ bᵢ pᵢ + h n, see
-/// [`super::render_mesh`]), target (i, a) moves each render vertex on a
+/// [`crate::formats::clip::render_mesh`]), target (i, a) moves each render vertex on a
 /// triangle of particle i by bᵢ along a, and target (T, a) moves each render
 /// vertex of triangle T by its offset h along a, driven by the change of T's
 /// unit normal: exact again, because the binding is linear in the corners

@@ -1,7 +1,7 @@
 //! The export formats by the names the command line takes (`glb`, `pc2`,
 //! `usd`), and the error for a name that is none of them.
 
-use super::usd;
+use crate::formats::usd;
 use std::fmt;
 use std::str::FromStr;
 

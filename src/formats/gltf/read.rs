@@ -1,18 +1,14 @@
-//! Clips read back from what leafmagic writes: a scene's output directory
-//! (`summary.toml`, pose and particle CSVs, plus the scene file it names for
-//! the shapes) and glTF files (ours, or any glTF 2.0 file: its node tree
-//! composed, skinned meshes posed by their joints ([`super::skin`]), the
-//! document opened and read through [`super::gltf_data`]).
+//! glTF 2.0 files read as clips (ours, or any glTF 2.0 file: its node tree
+//! composed, skinned meshes posed by their joints ([`crate::formats::skin`]),
+//! morph targets blended, the document opened and read through
+//! [`super::data`]).
 
-use super::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, frame_count};
-use super::error::ExportError;
-use super::glb::from_gltf;
-use super::gltf_data::{Reading, buffer_data, check_accessor, check_sampler, open_gltf, vec3s};
-use super::scene::build_scene_clip;
-use super::skin::{self, Influences};
-use super::wind::WindGlyph;
-use crate::motion::trajectory::Trajectory;
-use crate::sim::scene::Scene;
+use super::data::{Reading, buffer_data, check_accessor, check_sampler, open_gltf, vec3s};
+use super::write::from_gltf;
+use crate::formats::clip::{Clip, ClipObject, DEFAULT_FPS, Motion, WindGlyph};
+use crate::formats::error::ExportError;
+use crate::formats::sampling::{check_points, key_rate, sampled_frames};
+use crate::formats::skin::{self, Influences};
 use crate::util::confined::ReadScope;
 use gltf::accessor::DataType::{F32, U8, U16, U32};
 use gltf::accessor::Dimensions;
@@ -21,165 +17,10 @@ use gltf::animation::{Interpolation, Property};
 use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
 use serde::Deserialize;
 use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 type V3 = Vector3<f64>;
 type M4 = Matrix4<f64>;
-
-#[derive(Deserialize)]
-struct SummaryFile {
-    scene: String,
-    source: String,
-    #[serde(rename = "object", default)]
-    objects: Vec<SummaryObject>,
-}
-
-#[derive(Deserialize)]
-struct SummaryObject {
-    name: String,
-    pose: Option<String>,
-    positions: Option<String>,
-}
-
-/// Where the scene file named in a summary is: as written (relative to the
-/// working directory the scene ran in), else relative to the output
-/// directory or any directory above it (`runs/scene-x` under the repository
-/// that holds `scenes/x.toml`).
-fn find_source(dir: &Path, source: &str) -> Option<PathBuf> {
-    let p = PathBuf::from(source);
-    if p.is_file() {
-        return Some(p);
-    }
-    let abs = std::fs::canonicalize(dir).ok()?;
-    abs.ancestors().map(|a| a.join(&p)).find(|c| c.is_file())
-}
-
-/// Reads `t,x0,y0,z0,x1,...` as written by [`crate::util::io::particle_csv`].
-fn read_particles(path: &Path) -> Result<(Vec<f64>, Vec<Vec<V3>>), ExportError> {
-    let text = std::fs::read_to_string(path).map_err(|e| ExportError::io(path, e))?;
-    let mut lines = text.lines();
-    let header = lines
-        .next()
-        .ok_or_else(|| ExportError::input(path, "empty file, expected header `t,x0,y0,z0,...`"))?;
-    let columns = header.split(',').count();
-    if !header.starts_with("t,") || (columns - 1) % 3 != 0 {
-        return Err(ExportError::input(
-            path,
-            format!("line 1: expected header `t,x0,y0,z0,...`, found `{header}`"),
-        ));
-    }
-    let (mut time, mut frames) = (Vec::new(), Vec::new());
-    for (k, line) in lines.enumerate() {
-        let v: Vec<f64> = line
-            .split(',')
-            .map(|x| x.parse::<f64>())
-            .collect::<Result<_, _>>()
-            .map_err(|e| ExportError::input(path, format!("line {}: {e}", k + 2)))?;
-        if v.len() != columns {
-            return Err(ExportError::input(
-                path,
-                format!("line {}: {} fields, expected {columns}", k + 2, v.len()),
-            ));
-        }
-        time.push(v[0]);
-        frames.push(
-            v[1..]
-                .chunks(3)
-                .map(|c| V3::new(c[0], c[1], c[2]))
-                .collect(),
-        );
-    }
-    if time.is_empty() {
-        return Err(ExportError::input(path, "no data rows after the header"));
-    }
-    Ok((time, frames))
-}
-
-/// The clip of a scene's output directory (what `leafmagic scene` wrote),
-/// on the grid at `fps`. The shapes come from the scene file the summary
-/// names, which must still be there and compile to the same objects.
-pub fn from_scene_dir(dir: &Path, fps: f64) -> Result<Clip, ExportError> {
-    let summary_path = dir.join("summary.toml");
-    let text = std::fs::read_to_string(&summary_path).map_err(|e| {
-        ExportError::input(
-            dir,
-            format!("not a scene output directory (cannot read summary.toml: {e})"),
-        )
-    })?;
-    let summary: SummaryFile = toml::from_str(&text)
-        .map_err(|e| ExportError::input(&summary_path, e.message().to_string()))?;
-    let source = find_source(dir, &summary.source).ok_or_else(|| {
-        ExportError::input(
-            &summary_path,
-            format!(
-                "the scene file it names, {}, is not found (it holds the objects' shapes)",
-                summary.source
-            ),
-        )
-    })?;
-    let scene = Scene::load(&source).map_err(|e| ExportError::input(&source, e.to_string()))?;
-    if scene.name != summary.scene {
-        return Err(ExportError::input(
-            &summary_path,
-            format!(
-                "written by scene '{}', but {} is now scene '{}'",
-                summary.scene,
-                source.display(),
-                scene.name
-            ),
-        ));
-    }
-    let mut poses = Vec::new();
-    let mut particles = Vec::new();
-    let mut time: Option<Vec<f64>> = None;
-    for obj in &scene.objects {
-        let entry = summary.objects.iter().find(|o| o.name == obj.name);
-        let pose = match entry.and_then(|e| e.pose.as_ref()) {
-            Some(file) => {
-                let t = Trajectory::read_csv(&dir.join(file))
-                    .map_err(|e| ExportError::input(dir.join(file), e.to_string()))?;
-                time.get_or_insert_with(|| t.time.clone());
-                Some(t)
-            }
-            None => None,
-        };
-        let parts = match entry.and_then(|e| e.positions.as_ref()) {
-            Some(file) => {
-                let path = dir.join(file);
-                let (t, frames) = read_particles(&path)?;
-                if frames[0].len() != obj.particles.len() {
-                    return Err(ExportError::input(
-                        &path,
-                        format!(
-                            "{} particles per row, but object {} of {} has {}",
-                            frames[0].len(),
-                            obj.name,
-                            source.display(),
-                            obj.particles.len()
-                        ),
-                    ));
-                }
-                let t = time.get_or_insert(t).clone();
-                Some((t, frames))
-            }
-            None => None,
-        };
-        poses.push(pose);
-        particles.push(parts);
-    }
-    let Some(time) = time else {
-        return Err(ExportError::input(
-            dir,
-            "summary.toml lists no recorded object",
-        ));
-    };
-    let pose_refs: Vec<Option<&Trajectory>> = poses.iter().map(Option::as_ref).collect();
-    let particle_refs: Vec<Option<&[Vec<V3>]>> = particles
-        .iter()
-        .map(|p| p.as_ref().map(|(_, f)| f.as_slice()))
-        .collect();
-    build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)
-}
 
 /// Reads a `.glb` file as a clip (see [`from_glb_bytes`]).
 pub fn from_glb(
@@ -284,7 +125,7 @@ pub fn from_glb_bytes(
 /// A clip from the bytes of a glTF file (`.glb`, or `.gltf` whose buffers
 /// are data URIs or files in the folder `files` names, as far as its scope reaches), sampled at its own keys: from the
 /// first key to the last, one frame per shortest key interval (see
-/// `Grid::Keys`). What a fall is read from ([`super::fall`]).
+/// `Grid::Keys`). What a fall is read from ([`crate::formats::fall`]).
 /// Of a file with several animations, `animation` names the one to read
 /// (by name, or by index where none has that name); without it, animations
 /// that move different nodes are read together, and two that move the same
@@ -379,59 +220,6 @@ enum Grid {
     /// made-up hold before the first key (Blender's keys start at frame 1,
     /// 1/24 s) and no interpolation between keys it does not need.
     Keys,
-}
-
-/// Highest rate [`Grid::Keys`] samples at, Hz: keys closer than this (a
-/// duplicated key, a bake at a solver's substep) are not worth a frame each;
-/// ten times a 98 fps camera, twice the 240 Hz `drop` records at, still
-/// resolves every fall leafmagic classifies.
-pub const MAX_KEY_RATE_HZ: f64 = 1000.0;
-
-/// Most frames a clip is read at: 1000 s of keys at [`MAX_KEY_RATE_HZ`],
-/// or 11 hours at 24 fps; key times past it are in the wrong unit or
-/// corrupt, and would otherwise ask for more memory than any machine has.
-pub const MAX_FRAMES: usize = 1_000_000;
-
-/// Most vertex positions a deforming clip is read with (its frames times
-/// its vertices): 1.2 GB of them.
-pub const MAX_SAMPLED_POINTS: usize = 50_000_000;
-
-/// How many frames sample `start..=end` (s) at `fps`, or why not: at most
-/// [`MAX_FRAMES`].
-pub(super) fn sampled_frames(start: f64, end: f64, fps: f64) -> Result<usize, String> {
-    let span = (end - start) * fps;
-    if !(span.is_finite() && span < MAX_FRAMES as f64) {
-        return Err(format!(
-            "its keys run from {start} s to {end} s, {span:.0} frames at {fps} Hz: more than the {MAX_FRAMES} this reader samples (are its times in seconds?)"
-        ));
-    }
-    Ok(frame_count(start, end, fps))
-}
-
-/// Checks that `frames` frames of `vertices` vertices each stay within
-/// [`MAX_SAMPLED_POINTS`].
-pub(super) fn check_points(object: &str, frames: usize, vertices: usize) -> Result<(), String> {
-    if frames.saturating_mul(vertices) > MAX_SAMPLED_POINTS {
-        return Err(format!(
-            "`{object}`: {vertices} vertices at {frames} frames are more than the {MAX_SAMPLED_POINTS} positions this reader holds"
-        ));
-    }
-    Ok(())
-}
-
-/// The rate to sample keys at whose shortest interval (between consecutive
-/// keys of any channel) is `shortest` seconds: its reciprocal, at most
-/// [`MAX_KEY_RATE_HZ`], rounded to 1e-3 Hz (glTF stores times as f32, which
-/// keeps 7 digits: 1/24 s reads back as 0.041666668, whose reciprocal is
-/// 23.99999..), and at least 0.001 Hz; `None` without an interval (no key,
-/// or one).
-pub(super) fn key_rate(shortest: f64) -> Option<f64> {
-    if !(shortest.is_finite() && shortest > 0.0) {
-        return None;
-    }
-    let rate = (1.0 / shortest).min(MAX_KEY_RATE_HZ);
-    // Keys over 1000 s apart round to 0.001 Hz, not to 0.
-    Some(((rate * 1000.0).round() / 1000.0).max(1e-3))
 }
 
 /// A clip from the bytes of a glTF file (binary, or JSON whose buffers are

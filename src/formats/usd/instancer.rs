@@ -1,7 +1,7 @@
 //! Leaves scattered by a UsdGeom PointInstancer: what a particle or
 //! crowd simulation (Houdini's, a geometry-nodes scatter) writes for many
 //! falling leaves, one prototype mesh placed per instance and per time
-//! sample. For [`super::usda_read`], which finds the instancers.
+//! sample. For [`super::read`], which finds the instancers.
 //!
 //! Instance i of prototype `protoIndices[i]` is placed, per UsdGeom
 //! ("PointInstancer"; Pixar's `ComputeInstanceTransformsAtTime` with the
@@ -27,11 +27,11 @@
 //! particle's id is not reused). Velocities, which only motion-blur
 //! between samples, are not read.
 
-use super::clip::ClipObject;
-use super::read::check_points;
-use super::skin::trs_matrix;
-use super::usd_layer::{Attribute, Prim, held, sample, world_transform};
-use super::usd_skel::{Paths, targets};
+use super::layer::{Attribute, Prim, held, sample, world_transform};
+use super::skel::{Paths, targets};
+use crate::formats::clip::ClipObject;
+use crate::formats::sampling::check_points;
+use crate::formats::skin::trs_matrix;
 use nalgebra::{Matrix4, Vector3};
 use std::collections::HashMap;
 

@@ -1,7 +1,7 @@
 //! One USD text layer (`.usda`) as written: its prims with their
 //! attributes and relationships, and what a prim's values and transform are
-//! at a time code. What [`super::usda_read`] (meshes into a clip) and
-//! [`super::usd_skel`] (skinning) read a layer through.
+//! at a time code. What [`super::read`] (meshes into a clip) and
+//! [`super::skel`] (skinning) read a layer through.
 //!
 //! Of USD's text grammar (Pixar, "USD file formats"; the UsdGeom schemas):
 //! `def` prims and their nesting, attributes with a default value and/or
@@ -19,7 +19,7 @@
 //! refuses: the binary crate format, USDZ packages, and layers that need
 //! composing (sublayers, references, payloads, inherits, specializes,
 //! variant sets, `over` prims); [`composes`] tells the last apart from a
-//! malformed layer, and [`super::usd_stage`] reads all three.
+//! malformed layer, and [`super::stage`] reads all three.
 
 use nalgebra::{Matrix3, Matrix4, Quaternion, Rotation3, UnitQuaternion, Vector3};
 
@@ -168,7 +168,7 @@ fn tokens(text: &str) -> Result<Vec<(Token, usize)>, String> {
 
 /// A value of USD text: numbers, strings and tokens, tuples and arrays
 /// (both [`Value::List`]), and dictionaries (time samples or metadata).
-/// In JSON (how [`super::usd_stage`] carries a layer back from its child
+/// In JSON (how [`super::stage`] carries a layer back from its child
 /// process) as that module writes it.
 #[derive(Clone, Debug, PartialEq)]
 pub(super) enum Value {
@@ -686,7 +686,7 @@ pub(super) struct Layer {
 
 /// A stage's metadata as authored (`None` where unset), which
 /// [`StageMetadata::layer`] reads with USD's defaults: what the text reader
-/// and [`super::usd_stage`] each find in a layer's header.
+/// and [`super::stage`] each find in a layer's header.
 #[derive(Debug, Default)]
 pub(super) struct StageMetadata {
     pub(super) up_axis: Option<String>,
@@ -735,7 +735,7 @@ pub(super) fn stored_binary(bytes: &[u8]) -> Option<&'static str> {
 
 /// Whether `text` asks for a composition this reader refuses (a
 /// composition arc in any metadata, a variant set, an `over`): what
-/// [`super::usd_stage`] then composes.
+/// [`super::stage`] then composes.
 pub(super) fn composes(text: &str) -> bool {
     tokens(text).is_ok_and(|ts| {
         ts.iter().any(|(t, _)| {

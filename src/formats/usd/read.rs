@@ -1,24 +1,24 @@
 //! Animated meshes read from USD (a text layer, `.usda`, or through
-//! [`super::usd_stage`] a crate file, a package or a composed stage): what leafmagic's
-//! own USD export writes ([`super::usd`]) and what Blender's USD exporter
+//! [`super::stage`] a crate file, a package or a composed stage): what leafmagic's
+//! own USD export writes ([`super::write`]) and what Blender's USD exporter
 //! writes for an animated object, as a [`Clip`] whose objects deform (every
-//! vertex in world metres, z up, per key), for [`super::fall`].
+//! vertex in world metres, z up, per key), for [`crate::formats::fall`].
 //!
 //! Each `Mesh`'s `points`, `faceVertexCounts` and `faceVertexIndices` are
 //! read, placed by the transforms of the prims above it, or, if the mesh
-//! is skinned, by its UsdSkel skeleton ([`super::usd_skel`]). The layer's
-//! grammar, and what it refuses, are [`super::usd_layer`]'s.
+//! is skinned, by its UsdSkel skeleton ([`super::skel`]). The layer's
+//! grammar, and what it refuses, are [`super::layer`]'s.
 
-use super::clip::{Clip, ClipObject};
-use super::error::ExportError;
-use super::read::{check_points, key_rate, sampled_frames};
-use super::usd_instancer::instanced;
-use super::usd_layer::{
+use super::instancer::instanced;
+use super::layer::{
     Layer, MAX_NESTING, Prim, Value, check_text_nesting, composes, parse, sample, stored_binary,
     world_transform,
 };
-use super::usd_skel::{BlendShapes, Paths, Skinning};
-use super::usd_stage::flatten;
+use super::skel::{BlendShapes, Paths, Skinning};
+use super::stage::flatten;
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
+use crate::formats::sampling::{check_points, key_rate, sampled_frames};
 use crate::util::confined::ReadScope;
 use nalgebra::Vector3;
 use std::path::Path;
@@ -70,7 +70,7 @@ pub fn read_usda_keys(text: &str, name: &str) -> Result<Clip, ExportError> {
 /// The clip of the USD file at `path` (its bytes `bytes`), as
 /// [`read_usda_keys`] reads a text layer: one the text reader reads alone
 /// is read so; a binary crate file, a USDZ package or a layer that needs
-/// composing is composed and flattened first ([`super::usd_stage`]).
+/// composing is composed and flattened first ([`super::stage`]).
 pub fn read_usd_file(
     path: &Path,
     bytes: &[u8],
@@ -316,7 +316,7 @@ def Xform "root"
                 "0: (0, 0, 0),\n            0.001: (0, 0, 0),",
             );
         let clip = read(&text, "card").unwrap();
-        assert_eq!(clip.fps, super::super::read::MAX_KEY_RATE_HZ);
+        assert_eq!(clip.fps, crate::formats::sampling::MAX_KEY_RATE_HZ);
         assert_eq!(clip.frames, (10.0 / 24.0 * 1000.0f64).floor() as usize + 1);
     }
 }

@@ -2,10 +2,11 @@
 //! so that each format's writer and reader can name it without importing the
 //! folder module.
 
+use crate::motion::trajectory::TrajectoryError;
 use std::path::PathBuf;
 
-/// Why an export or a preview could not be made. Every message names the
-/// file or directory at fault.
+/// Why an export, a preview or a read fall could not be made. Every
+/// message names the file or directory at fault.
 #[derive(Debug, thiserror::Error)]
 pub enum ExportError {
     /// Reading or writing a file failed.
@@ -28,6 +29,9 @@ pub enum ExportError {
     /// The data cannot be exported (e.g. no frames, a simulation failed).
     #[error("{0}")]
     Data(String),
+    /// A CSV record of a fall could not be read ([`crate::formats::fall::read_any_fall`]).
+    #[error(transparent)]
+    Record(#[from] TrajectoryError),
 }
 
 impl ExportError {

@@ -3,7 +3,7 @@
 //! bound to joints j with weights w_j moves to Σ_j w_j M_j p, where M_j
 //! takes the bind pose to joint j's pose at that time. How a leaf rigged
 //! with bones (an animator bending it along its midrib) reaches the glTF
-//! and USD readers ([`super::read`], [`super::usda_read`]).
+//! and USD readers (`gltf::read`, `usd::read`).
 
 use nalgebra::{Matrix4, Point3, Quaternion, UnitQuaternion, Vector3};
 

@@ -7,7 +7,7 @@
 //! is checked first, since they meet a component type they do not expect
 //! with `unreachable!`.
 
-use super::error::ExportError;
+use crate::formats::error::ExportError;
 use crate::util::confined::ReadScope;
 use gltf::accessor::DataType::{F32, I8, I16, U8, U16};
 use gltf::accessor::{DataType, Dimensions};

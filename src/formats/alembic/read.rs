@@ -34,7 +34,7 @@
 //!   object of its own over its own life ([`points`]).
 //! - **Time**: seconds, from each property's time sampling (uniform,
 //!   cyclic or acyclic); the clip is sampled as a USD layer is
-//!   ([`super::usda_read`]), one frame per shortest interval between
+//!   ([`crate::formats::usd::read_usda_keys`]), one frame per shortest interval between
 //!   samples, each property at its nearest sample.
 //! - **Space**: Alembic is y up (Blender's exporter turns z up into it,
 //!   Maya and Houdini are y up) and carries no unit; metres are assumed,
@@ -44,8 +44,8 @@
 //! [`xform`]'s, the particles [`points`]'; the meshes and the clip are
 //! read here.
 
-use super::clip::{Clip, ClipObject};
-use super::read::{check_points, key_rate, sampled_frames};
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::sampling::{check_points, key_rate, sampled_frames};
 use archive::{
     Archive, Child, Cursor, Ogawa, Sample, indexed_metadata, meta, nearest, time_samplings,
 };

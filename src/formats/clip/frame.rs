@@ -13,10 +13,10 @@
 //! deformation small, so that what clients interpolate between keys is
 //! mostly the rigid motion.
 
-pub use super::clip::Body;
+pub use super::Body;
 pub use super::dress::{outline_uvs, triangle_normals, vertex_normals};
 
-use super::clip::{ClipObject, Motion};
+use super::{ClipObject, Motion};
 use crate::physics::pose::best_rotation;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -75,12 +75,12 @@ fn collinear(points: &[V3], tol: f64) -> bool {
 /// Sweeps the eigen and singular value solvers may take: they converge in
 /// a few dozen on any finite 3×3 matrix (nalgebra's default, 0, means no
 /// bound, and loops for ever on a matrix with an infinity in it).
-pub(super) const MAX_SOLVER_ITERATIONS: usize = 1000;
+pub(crate) const MAX_SOLVER_ITERATIONS: usize = 1000;
 
 /// The rotation R maximising Σ mᵢ (R rᵢ)·(pᵢ − c) with no previous frame to
 /// start from: by the singular value decomposition of A (Kabsch), with the
 /// sign fixed so that R is a proper rotation.
-pub(super) fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
+pub(crate) fn kabsch(a: &Matrix3<f64>) -> UnitQuaternion<f64> {
     // nalgebra's own tolerance for `svd` (5 ε), with a bound on sweeps.
     let Some(svd) = a.try_svd(true, true, 5.0 * f64::EPSILON, MAX_SOLVER_ITERATIONS) else {
         return UnitQuaternion::identity();

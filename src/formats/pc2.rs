@@ -19,8 +19,8 @@
 //! keep the simulator's axes (z up), so import the OBJ into Blender with
 //! Up = Z, Forward = Y, and keep the Mesh Cache modifier's default axes.
 
-use super::clip::{Clip, ClipObject};
-use super::error::ExportError;
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -72,7 +72,7 @@ pub fn object_samples(clip: &Clip, o: &ClipObject) -> Vec<Vec<[f32; 3]>> {
 /// The OBJ text of an object at its first sample: `v` lines in cache order
 /// (f32 values printed in their shortest round-trip form, so they read back
 /// bit for bit), `vt` lines (one UV per vertex, see
-/// [`super::frame::outline_uvs`], or the render mesh's own), then faces
+/// [`crate::formats::clip::frame::outline_uvs`], or the render mesh's own), then faces
 /// (`f v/vt`, 1-based) or lines (`l`).
 pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
     let mut s = format!(
@@ -89,7 +89,10 @@ pub fn obj_text(o: &ClipObject, first: &[[f32; 3]]) -> String {
         Some(r) => (r.triangles.clone(), r.uvs.clone()),
         None => {
             let body = o.body_or_first_frame();
-            (o.triangles.clone(), super::dress::outline_uvs(&body.rest))
+            (
+                o.triangles.clone(),
+                crate::formats::clip::dress::outline_uvs(&body.rest),
+            )
         }
     };
     if !triangles.is_empty() {

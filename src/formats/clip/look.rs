@@ -3,7 +3,7 @@
 //! on them), and its colour and material name by motion class or kind.
 //! Shared by the glTF and USD writers so that both dress an object alike.
 
-use super::clip::ClipObject;
+use super::ClipObject;
 use super::dress::outline_uvs;
 use super::frame::Framed;
 use nalgebra::Vector3;

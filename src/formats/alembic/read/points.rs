@@ -25,8 +25,8 @@
 
 use super::archive::{Archive, MAX_OBJECTS, Sample, nearest, nearest_index};
 use super::xform::{Xform, placed, world_matrix};
-use crate::output::export::clip::{ClipObject, POINT_KIND};
-use crate::output::export::read::MAX_SAMPLED_POINTS;
+use crate::formats::clip::{ClipObject, POINT_KIND};
+use crate::formats::sampling::MAX_SAMPLED_POINTS;
 use nalgebra::{Matrix4, Vector3};
 use std::collections::BTreeMap;
 
@@ -517,7 +517,7 @@ mod tests {
         // y up in the file: (0, 1.5, 0) is z = 1.5 halfway.
         assert_eq!(objects[0].centre(1), V3::new(0.0, 0.0, 1.5));
         assert_eq!(objects[0].positions(0).len(), 6);
-        let width = crate::output::export::fall::chord(&objects[0].positions(0));
+        let width = crate::formats::fall::chord(&objects[0].positions(0));
         assert!((width - DEFAULT_POINT_WIDTH_M).abs() < 1e-15);
         // One id twice in a sample is refused.
         let twice = vec![(0.0, Rc::new(vec![1.0, 1.0]))];

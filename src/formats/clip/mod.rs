@@ -1,14 +1,37 @@
 //! The format-free form every writer, reader and the previewer share: a
 //! [`Clip`], objects on one uniform time grid, each with its shape and
-//! motion, and the resampling of recorded frames onto that grid. Apart from
-//! the folder module so that each format can import it directly.
+//! motion, and the resampling of recorded frames onto that grid; with what
+//! the writers dress it in: each object's body frame ([`frame`]), normals
+//! and texture coordinates ([`dress`]), colour and material ([`look`]), the
+//! artist's render meshes bound to it ([`render_mesh`]) and the wind's
+//! glyphs ([`WindGlyph`]).
+//!
+//! A clip is a set of objects sampled on one uniform time grid at the
+//! output frame rate ([`DEFAULT_FPS`] unless asked otherwise). Recorded
+//! frames (240 Hz for drops, the scene's rate for scenes) are resampled onto
+//! it by linear interpolation of positions and spherical interpolation of
+//! rotations, so a player's linear interpolation between the exported keys
+//! stays close to the simulated motion. Objects that move rigidly (rigid
+//! bodies, rigid leaves) keep their shape in a body frame and carry a pose
+//! per frame; deforming objects (mass-spring leaves, sheets, ropes) carry
+//! every vertex's position per frame.
+//!
+//! The parts that read the clip ([`frame`], [`look`]) import it from here;
+//! this module uses only the parts that do not ([`render_mesh`], `wind`),
+//! so no import goes round in a circle.
 
-use super::error::ExportError;
-use super::render_mesh::RenderMesh;
-use super::wind::WindGlyph;
+pub mod dress;
+pub mod frame;
+pub mod look;
+pub mod render_mesh;
+mod wind;
+
+use crate::formats::error::ExportError;
 use crate::motion::trajectory::Trajectory;
 use crate::physics::model::Model;
 use nalgebra::{UnitQuaternion, Vector3};
+use render_mesh::RenderMesh;
+pub use wind::WindGlyph;
 
 type V3 = Vector3<f64>;
 
@@ -73,7 +96,7 @@ pub struct ClipObject {
     /// Line segments (vertex indices), for ropes.
     pub segments: Vec<[u32; 2]>,
     /// Its rest shape in its own body frame, when known (leaves, rigid
-    /// objects); else the first frame stands for it ([`super::frame`]).
+    /// objects); else the first frame stands for it ([`frame`]).
     pub body: Option<Body>,
     /// A finer textured mesh bound to this one, exported in its place.
     pub render: Option<RenderMesh>,
@@ -113,7 +136,7 @@ impl ClipObject {
     /// A marker: three crossed lines of length `size` along the world
     /// axes, centred on `translation` per frame, claiming no attitude (a
     /// path from video, a particle of an Alembic point cloud). `kind` says
-    /// which ([`POINT_KIND`] for a particle); [`super::fall::fall_of`]
+    /// which ([`POINT_KIND`] for a particle); [`crate::formats::fall::fall_of`]
     /// reads such an object's centre only.
     pub fn marker(name: String, kind: &str, size: f64, translation: Vec<V3>) -> Self {
         let h = 0.5 * size;
@@ -289,7 +312,7 @@ impl Clip {
 
     /// `objects` at `frames` frames of `fps`, named `name`, without ground
     /// or wind, unchecked.
-    pub(super) fn bare(name: &str, fps: f64, frames: usize, objects: Vec<ClipObject>) -> Clip {
+    pub(crate) fn bare(name: &str, fps: f64, frames: usize, objects: Vec<ClipObject>) -> Clip {
         Clip {
             name: name.to_string(),
             fps,
@@ -559,7 +582,7 @@ pub fn resample_positions(
         .collect()
 }
 
-pub(super) fn to_u32(t: &[usize; 3]) -> [u32; 3] {
+pub(crate) fn to_u32(t: &[usize; 3]) -> [u32; 3] {
     t.map(|i| i as u32)
 }
 

@@ -1,7 +1,7 @@
 //! Alembic (`.abc`) export: the point cache Maya, Houdini and Blender read
 //! natively (Maya reads no PC2 without a plug-in). One Ogawa file, laid out
 //! as the Alembic 1.8 library lays it out (the reader's module docs,
-//! [`super::read_abc`], describe the layout): per object an `AbcGeom_Xform`
+//! [`super::read`], describe the layout): per object an `AbcGeom_Xform`
 //! named as the object (its USD identifier, `_2`, `_3` … appended where two
 //! objects' identifiers are the same) carrying the moving
 //! frame as a matrix per frame, over an `AbcGeom_PolyMesh` `<name>_mesh`
@@ -14,10 +14,10 @@
 //! (a test checks it against the keys in a file Blender wrote), which
 //! readers use to share equal samples.
 
-use super::clip::{Clip, ClipObject};
-use super::error::ExportError;
-use super::look::shown;
-use super::usd::unique_identifiers;
+use crate::formats::clip::look::shown;
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
+use crate::formats::usd::unique_identifiers;
 use nalgebra::{Matrix4, Vector3};
 use std::path::Path;
 

@@ -14,7 +14,7 @@
 //!
 //! Stage metadata: `upAxis = "Z"`, `metersPerUnit = 1` (the simulator's axes
 //! and units), `timeCodesPerSecond` = `framesPerSecond` = the host's frame
-//! rate (24 by default, [`super::pc2::DEFAULT_HOST_FPS`]), `startTimeCode =
+//! rate (24 by default, [`crate::formats::pc2::DEFAULT_HOST_FPS`]), `startTimeCode =
 //! 0`, `endTimeCode` = the last sample's: sample k of a clip at `fps` sits at
 //! time code k · host / fps, t = k / fps. Time codes count the host's frames
 //! because Blender 4.5's importer plays time code n at scene frame n and
@@ -38,10 +38,10 @@
 //! For `.usdc`, Pixar's library converts the text losslessly (see
 //! [`USDC_HINT`]).
 
-use super::clip::{Clip, ClipObject};
-use super::dress::vertex_normals;
-use super::error::ExportError;
-use super::look::{colour, material_name, shown};
+use crate::formats::clip::dress::vertex_normals;
+use crate::formats::clip::look::{colour, material_name, shown};
+use crate::formats::clip::{Clip, ClipObject};
+use crate::formats::error::ExportError;
 use nalgebra::Vector3;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -74,7 +74,7 @@ pub fn identifier(name: &str) -> String {
 
 /// Unique identifiers for `names`, in order: a name whose identifier is
 /// already taken gets `_2`, `_3`, … appended.
-pub(super) fn unique_identifiers<'a>(
+pub(crate) fn unique_identifiers<'a>(
     names: impl Iterator<Item = &'a str>,
     taken: &mut BTreeSet<String>,
 ) -> Vec<String> {

@@ -3,7 +3,7 @@
 //! metadata, and properties with their headers and samples (the layout in
 //! the module docs of [`super`]).
 
-use crate::output::export::read::MAX_FRAMES;
+use crate::formats::sampling::MAX_FRAMES;
 use std::rc::Rc;
 
 /// Deepest nesting of groups followed (objects under objects, compounds
