@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The breeding benchmark of issue 19 (docs/breeding.md, "Results"): how close
+# The breeding benchmark of issue 19 (docs/design/breeding.md, "Results"): how close
 # each strategy gets to a target fall per number of leaves evaluated, on the
 # MuJoCo falls of tests/data/mujoco-falls/ and on leafmagic's own class
 # examples (tests/fixtures/a-{floater,spinner,lilter}.toml dropped for 10 s),
@@ -19,7 +19,7 @@
 # four against the distance it was selected at.
 # Runs two single-threaded breeds at a time (2 cores). Writes
 # OUT_DIR/results.csv (one row per run) and prints the tables that
-# docs/breeding.md shows.
+# docs/design/breeding.md shows.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bin=$(realpath "${1:-target/release/leafmagic}")

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Measures what the cost model of docs/scale-out.md needs:
+# Measures what the cost model of docs/guide/scale-out.md needs:
 #   1. per-generation overhead of each executor: generations of 3 children
 #      of 0.01 s falls (no work to speak of), median of generations 1-10;
 #   2. time per leaf and the throughput of 1, 2, 4 shards: one generation of

@@ -1,4 +1,4 @@
-//! The figures of docs/classes.md ("Floaters, spinners, lilters"), from
+//! The figures of docs/design/classes.md ("Floaters, spinners, lilters"), from
 //! real runs (10 s drops, Verlet, auto dt):
 //!
 //! ```sh

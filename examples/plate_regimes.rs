@@ -1,12 +1,12 @@
 //! The literature order of falling plates under the unsteady law: disks of
 //! 3 and 5 cm over a sweep of the dimensionless moment of inertia
 //! I*_disk = π σ / (64 ρ d) (Field et al. 1997: flutter below about 0.01,
-//! chaos between, tumbling above about 0.04; docs/falling-plates.md), each
+//! chaos between, tumbling above about 0.04; docs/design/falling-plates.md), each
 //! let go flat (5°, 2°) and at 30°, 8 s; then strips of aspect 5 over
 //! areal density ×8 and width ×4, let go at 60° about the long axis, each
 //! falling 8 s and over two equal scaled durations, with the fit
 //! Ω ∝ σ^p w^q over those that tumble (Mahadevan, Ryu & Samuel 1999:
-//! p = 1/2, q = −1; docs/real-falls.md, "The strips' exponents and the
+//! p = 1/2, q = −1; docs/lab/real-falls.md, "The strips' exponents and the
 //! protocol"). Coefficients as in a leaf file, `KEY=VALUE`.
 //!
 //! cargo run --release --example plate_regimes [-- KEY=VALUE ...]
@@ -172,7 +172,7 @@ fn main() -> ExitCode {
 
 /// The scaled durations τ = t √(σ g/ρ) / w over which the strips are
 /// compared besides 8 s: 150 (most strips still glide as they tumble) and
-/// [`SCALED_DURATION`], the one the law is held at (docs/real-falls.md).
+/// [`SCALED_DURATION`], the one the law is held at (docs/lab/real-falls.md).
 const SCALED_DURATIONS: [f64; 2] = [150.0, SCALED_DURATION];
 
 /// How long each strip falls: 8 s (`None`), then each of

@@ -1,12 +1,12 @@
 //! The real-falls experiment (Howison, Hughes & Iida 2020) in leafmagic:
 //! paper squares of each size bin's median side, 70 g/m², released flat
 //! and on edge, filmed and labelled as the experiment did, side by side
-//! with the real falls in tests/data/real-falls/squares (docs/real-falls.md),
+//! with the real falls in tests/data/real-falls/squares (docs/lab/real-falls.md),
 //! then the real side's bootstrap intervals with the simulated values that
 //! lie outside them marked.
 //! With `--shape circle|hexagon`, plates of that shape at
 //! the squares' bin sizes: the simulated side only, a prediction for the
-//! study's held-out shapes (docs/real-falls.md, "Predictions for the
+//! study's held-out shapes (docs/lab/real-falls.md, "Predictions for the
 //! held-out shapes"). `--films DIR` compares with the films in DIR instead
 //! of the squares, in the squares' format (`real_falls::read_films`), with
 //! plates of the films' own shape: the held-out shapes' check, once their
@@ -15,7 +15,7 @@
 //! medians mix the two in each side's own proportion. `--mix filmed` lets
 //! each bin go flat and on edge in its real proportion instead of half and
 //! half, `--flat-tilt LO,HI` tilts flat releases LO–HI° instead of 1–5°
-//! (docs/real-falls.md, "The release protocol"); that table also times when
+//! (docs/lab/real-falls.md, "The release protocol"); that table also times when
 //! each flat release departs from its flat fall ("When a flat release
 //! departs"). A line under it gives the like-for-like mismatch: each kind
 //! of release's median drift and Ω against the films' own of that kind
@@ -46,7 +46,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--films DIR] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--films DIR] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/lab/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.

@@ -1,4 +1,4 @@
-//! The tables of docs/classification.md: how the classifier from the path
+//! The tables of docs/guide/classification.md: how the classifier from the path
 //! (and projected areas) agrees with people's labels of real paper squares
 //! — in sample and by leave-one-out — and with the full classifier (with
 //! orientation) on leafmagic's own falls and the MuJoCo falls when it is
@@ -273,7 +273,7 @@ fn clean_cuts(f: &Fall) -> Vec<Trajectory> {
         .collect()
 }
 
-/// docs/classification.md, "Frame rates": the full classifier on pose
+/// docs/guide/classification.md, "Frame rates": the full classifier on pose
 /// records resampled to video and animation rates, against its own verdict
 /// at 240 Hz; the real squares' films decimated, against people; and
 /// video cuts of the corpus at those rates, against the full classifier.

@@ -7,7 +7,7 @@ use super::population::{ArchiveEntry, Individual};
 /// floaters at 0.2–0.5 m/s, edge-on divers at 3–10 m/s).
 pub const ARCHIVE_DESCENT_EDGES: [f64; 9] = [0.0, 0.25, 0.4, 0.6, 0.9, 1.4, 2.2, 3.5, 5.5];
 /// Edges of the archive's rotation-rate bins, rad/s (steady floaters below
-/// 0.5; autorotating spinners at 5–70, docs/falling-plates.md, "Folded
+/// 0.5; autorotating spinners at 5–70, docs/design/falling-plates.md, "Folded
 /// leaves under the linear law").
 pub const ARCHIVE_SPIN_EDGES: [f64; 9] = [0.0, 0.5, 1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0];
 

@@ -13,7 +13,7 @@
 //! is about μ_eff/n², some 70 generations for 16 genes and 24 samples).
 //! The residual vector says much more: with its Jacobian J a Gauss–Newton
 //! step solves the linearised problem at once. Measured on the spinner
-//! example of the breeding benchmark (docs/breeding.md), forward-difference
+//! example of the breeding benchmark (docs/design/breeding.md), forward-difference
 //! Levenberg–Marquardt from the hybrid's best leaf at 364 leaves (distance
 //! 0.021) reached 0.0057 in 18 drops and its floor, 0.0051, in 35; the
 //! hybrid without them reached 0.0056 on that seed only after 1,804 leaves.

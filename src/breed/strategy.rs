@@ -34,7 +34,7 @@ pub const START_STEP: f64 = 0.3;
 /// not inert: the bred fixtures (stiffness factors 0.55–2.0) put back to
 /// factor 1 lie 0.011 (floater), 0.059 (spinner) and 0.224 (lilter) from
 /// their own falls. Leaving them free moved the hybrid's medians on the two
-/// examples (3 seeds) within the spread between seeds (docs/breeding.md,
+/// examples (3 seeds) within the spread between seeds (docs/design/breeding.md,
 /// "Why 1,804 leaves stop near 0.005"), so they stay held; an example made
 /// by a much stiffer or softer leaf is then reached only as far as the
 /// other genes can stand in.

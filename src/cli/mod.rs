@@ -67,7 +67,7 @@ pub enum Command {
     /// leaves, a scene's output or a .glb file in 3-D (works offline).
     Preview(PreviewArgs),
     /// Choose leaves by eye in the browser and breed from the picks: a local web server
-    /// with a grid of falling candidates (see docs/studio.md).
+    /// with a grid of falling candidates (see docs/guide/studio.md).
     Studio(StudioArgs),
     /// Evaluate one shard of a generation of a breeding run and write its shard file
     /// (what `breed --executor processes|slurm` starts; see docs/reference.md, "Beyond one machine").

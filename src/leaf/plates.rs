@@ -1,6 +1,6 @@
 //! Plates for validation: a flat square card built as a leaf, and the
 //! dimensionless numbers the falling-plate literature sorts falls by
-//! (docs/falling-plates.md, "Dimensionless groups").
+//! (docs/design/falling-plates.md, "Dimensionless groups").
 
 use crate::leaf::{AeroSpec, BendingSpec, LeafSpec, ParticleSpec, SpringSpec, TriangleSpec};
 use crate::physics::model::AIR_DENSITY;
@@ -138,7 +138,7 @@ pub fn principal_moments(model: &Model) -> [f64; 3] {
 }
 
 /// Dimensionless moment of inertia I* = Ī / (ρ_f L⁵): Howison & Iida's I*_shape
-/// (docs/falling-plates.md, "Dimensionless groups") with Ī the mean of the two
+/// (docs/design/falling-plates.md, "Dimensionless groups") with Ī the mean of the two
 /// smaller principal moments (the in-plane axes of a flat leaf) and L the
 /// plate's size — the side of a square (then I* = σ/(12 ρ_f L), as there), the
 /// chord of a leaf. I*_APW = 12 I* and I*_disk ≈ 0.59 I* for a square at equal
@@ -290,7 +290,7 @@ impl std::str::FromStr for PlateShape {
     }
 }
 
-/// Areal density of 70 g/m² paper, the real falls' (docs/real-falls.md), kg/m².
+/// Areal density of 70 g/m² paper, the real falls' (docs/lab/real-falls.md), kg/m².
 pub const PAPER_AREAL_DENSITY: f64 = 0.070;
 
 /// Cells across the short side of a square or rectangular plate: its mass,
@@ -603,7 +603,7 @@ pub fn uniform_plate_moments(shape: PlateShape, size: f64, aspect: f64) -> [f64;
 /// paper, N·m: a middle value. Paper of that grammage is about 90 µm thick
 /// with Young's moduli of 3–6.5 GPa across and along the machine direction
 /// (Niskanen, *Paper Physics*, 2nd ed. 2008, ch. 5, as recalled), so D lies
-/// between about 1.5e-4 and 4e-4 N·m (docs/real-falls.md, "Paper that
+/// between about 1.5e-4 and 4e-4 N·m (docs/lab/real-falls.md, "Paper that
 /// bends").
 pub const PAPER_BENDING_STIFFNESS: f64 = 2.5e-4;
 

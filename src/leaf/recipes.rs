@@ -1,6 +1,6 @@
 //! The paper's three recipes (section 4.1) as leaves, and seeded families
 //! of variants around them, as leafmagic's predecessor tested them
-//! (docs/falling-plates.md, "Folded leaves under the linear law"):
+//! (docs/design/falling-plates.md, "Folded leaves under the linear law"):
 //!
 //! - **floater**: topology A, flaps 1, 2 and 3 folded up, centre of gravity
 //!   near the leaf centre;
@@ -92,7 +92,7 @@ impl Recipe {
     /// - floater: each flap up 20–45°, σ × 0.5–1.9 (40–150 g/m²);
     /// - spinner: flap 1 up β = 20–45°, flap 3 down (0.8–1.2) β, flap 2
     ///   within ±10°, σ × 0.5–1.9, then 15–35 % of the mass moved to the tip
-    ///   of flap 2 (docs/falling-plates.md, "Folded leaves under the linear
+    ///   of flap 2 (docs/design/falling-plates.md, "Folded leaves under the linear
     ///   law");
     /// - lilter: B's flaps each moved ±8°, σ × 0.7–1.4;
     ///

@@ -28,7 +28,7 @@ pub const REST_RADIUS_MIN_M: f64 = 0.005;
 
 /// Shortest stretch at rest that is cut, s: the films' flat releases sit
 /// still for their first 0.03–0.07 s (an artefact of their first frames,
-/// docs/real-falls.md), which is part of the record as filmed.
+/// docs/lab/real-falls.md), which is part of the record as filmed.
 pub const MIN_REST_S: f64 = 0.2;
 
 /// What was cut from a record as rest, s (0 when nothing).

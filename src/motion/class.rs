@@ -37,7 +37,7 @@ pub enum Regime {
     Autorotation,
     /// Lilter: rocks, then flips over, irregularly.
     Chaotic,
-    /// Edge-on fall without rotation (docs/falling-plates.md, "Folded leaves
+    /// Edge-on fall without rotation (docs/design/falling-plates.md, "Folded leaves
     /// under the linear law"); class `Undetermined`.
     Dive,
     /// No regime could be named.

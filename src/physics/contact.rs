@@ -24,9 +24,9 @@
 //! sequential impulses), first with the static cone μ_s and, if the body
 //! still slips, again with μ_k. A free particle's single contact is solved exactly
 //! in closed form. Events like these make any integrator first order at the
-//! steps where contacts change (docs/numerics.md, "Error against work",
+//! steps where contacts change (docs/design/numerics.md, "Error against work",
 //! step 6); the oracles are the first impact at √(2H/g) and bounce heights
-//! e^{2k} H (docs/numerics.md, "Oracles", O11).
+//! e^{2k} H (docs/design/numerics.md, "Oracles", O11).
 
 use crate::physics::model::{Ground, Model};
 use crate::physics::state::State;

@@ -2,7 +2,7 @@
 //! power iteration on M⁻¹K (with the block-Gershgorin bound as a guaranteed
 //! fallback), its damping, and the drag rate; then, for each integrator, the
 //! largest step whose amplification on that mode stays ≤ 1
-//! (docs/numerics.md, "Stability limits" and "Stable-step estimate").
+//! (docs/design/numerics.md, "Stability limits" and "Stable-step estimate").
 
 use crate::physics::model::Model;
 use crate::physics::params::Integrator;
@@ -11,7 +11,7 @@ use nalgebra::{Matrix3, Vector3};
 type V3 = Vector3<f64>;
 
 /// Fraction of the stability limit that `--dt auto` uses. Stay at or below
-/// about 0.7 × the limit (docs/numerics.md, "Auto step"; near it symplectic
+/// about 0.7 × the limit (docs/design/numerics.md, "Auto step"; near it symplectic
 /// Euler is stable but its invariant ellipse is very eccentric); the estimate
 /// is made at the rest shape and a deforming leaf measured 2–3 % stiffer.
 pub const AUTO_SAFETY: f64 = 0.7;
@@ -20,7 +20,7 @@ pub const AUTO_SAFETY: f64 = 0.7;
 /// step is at most this over [`StabilityEstimate::tumbling_rate`], so
 /// `--dt auto` turns a plate at most [`AUTO_SAFETY`] × 0.2 = 0.14 rad per
 /// step at that bound, and 0.02–0.09 rad at the rates real and simulated
-/// plates reach (docs/real-falls.md, "The step of a tumbling plate": at
+/// plates reach (docs/lab/real-falls.md, "The step of a tumbling plate": at
 /// 0.18 rad per step a 3.2 cm square tumbled 12 % too fast, and a 5 mm
 /// strip of 280 g/m² card diverged at 0.23).
 pub const MAX_TURN_PER_STEP: f64 = 0.2;
@@ -29,12 +29,12 @@ pub const MAX_TURN_PER_STEP: f64 = 0.2;
 /// multiples of its own mass. (m I + M) has condition number about 1 + M/m,
 /// and its solve keeps about 16 − log₁₀(1 + M/m) digits: at 10⁹ still 7, a
 /// few ulps of M beyond it as large as m itself. Real paper is far below:
-/// 10 g/m² paper's added mass is 2.6 times its own (docs/real-falls.md,
+/// 10 g/m² paper's added mass is 2.6 times its own (docs/lab/real-falls.md,
 /// "The law"); only a coefficient such as `added_mass = 1e30`, or a particle
 /// of 10⁻³⁰⁰ kg, comes near.
 pub const MAX_ADDED_MASS_RATIO: f64 = 1e9;
 
-/// Mass ratios above this make a network ill-conditioned (docs/numerics.md,
+/// Mass ratios above this make a network ill-conditioned (docs/design/numerics.md,
 /// "Conditioning warnings").
 pub const WARN_MASS_RATIO: f64 = 1e4;
 /// Spring rates k (1/mᵢ + 1/mⱼ) above this, s⁻², need tiny explicit steps.
@@ -59,7 +59,7 @@ pub struct StabilityEstimate {
     /// Whether the power iteration converged (else ω_max leans on the bounds).
     pub power_converged: bool,
     /// Whether the spring modes count the unsteady law's added mass, those
-    /// of (M + M_a)⁻¹K (docs/numerics.md, "Added mass").
+    /// of (M + M_a)⁻¹K (docs/design/numerics.md, "Added mass").
     pub with_added_mass: bool,
     /// Damping rate 2ζω of the top mode (dashpots plus air), 1/s.
     pub mode_damping_rate: f64,
@@ -878,7 +878,7 @@ fn norm(a: &[V3]) -> f64 {
 mod tests {
     use super::*;
 
-    /// The closed-form limits of docs/numerics.md, "Stability limits".
+    /// The closed-form limits of docs/design/numerics.md, "Stability limits".
     #[test]
     fn closed_form_limits_of_the_notes() {
         let w: f64 = 3.0;

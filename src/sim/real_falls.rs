@@ -1,7 +1,7 @@
 //! The real-falls experiment of Howison, Hughes & Iida (2020, *Nature
 //! Machine Intelligence* 2, 68) redone in the simulator, and the
 //! comparison with their tracked falls of paper squares
-//! (`tests/data/real-falls/squares/`, docs/real-falls.md).
+//! (`tests/data/real-falls/squares/`, docs/lab/real-falls.md).
 //!
 //! Both sides are measured the same way, as the experiment measured its
 //! drops (its `classifyBehaviour.m`, re-implemented from its description):
@@ -47,7 +47,7 @@ use crate::physics::model::STANDARD_GRAVITY;
 
 /// The score's four parts for one bin: |Δ fraction tumbling|, |ln v ratio|,
 /// |ln drift ratio|, |ln Ω ratio| (values floored at 0.01; a value the
-/// simulation cannot give costs 1), as docs/real-falls.md defines them.
+/// simulation cannot give costs 1), as docs/lab/real-falls.md defines them.
 pub fn bin_score(real: &BinStats, sim: &BinStats) -> [f64; 4] {
     let log_ratio = |a: f64, b: f64| {
         if a.is_finite() && b.is_finite() {
@@ -216,7 +216,7 @@ pub fn films_shape(real_segments: &[RealSegment]) -> Result<PlateShape, Experime
 /// centres): the simulated side of each bin, with no real side to score it
 /// against. The study's circles and hexagons are held back to check what
 /// was tuned on the squares, so this is a prediction for them, written
-/// down before they are seen (docs/real-falls.md, "Predictions for the
+/// down before they are seen (docs/lab/real-falls.md, "Predictions for the
 /// held-out shapes"). The plates are let go as `protocol` says (the
 /// recorded predictions: [`Protocol::default`]).
 pub fn predict(

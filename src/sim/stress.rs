@@ -1,4 +1,4 @@
-//! The stiff and extreme matrix (docs/numerics.md, "Stress matrix"): variants
+//! The stiff and extreme matrix (docs/design/numerics.md, "Stress matrix"): variants
 //! of a model that push the integrators to and past their limits, each run with
 //! every integrator. Every run ends either finite, with its energy drift and
 //! largest strain, or with a clear error naming the step, the particle, the
@@ -9,7 +9,7 @@
 //! ([`ExplicitPolicy`]). Sub-stepping splits each step into
 //! n = clamp(⌈h / (AUTO_SAFETY · dt_max)⌉, 1, cap) equal sub-steps — the
 //! rule of `--dt auto` — and warns when the cap clamps n, because the run
-//! may then be unstable (docs/numerics.md, "Stress matrix").
+//! may then be unstable (docs/design/numerics.md, "Stress matrix").
 
 use crate::physics::field::{Flow, LineVortex, Primitive, VortexCore, WindField};
 use crate::physics::forces;
@@ -136,7 +136,7 @@ fn best_connected(model: &Model) -> usize {
 }
 
 /// The stress cases for `model` started from `initial` (the table in
-/// docs/numerics.md, "Stress matrix"). Cases that need a spring or a
+/// docs/design/numerics.md, "Stress matrix"). Cases that need a spring or a
 /// triangle are left out when the model has none.
 ///
 /// # Errors

@@ -9,7 +9,7 @@
 //! `a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall`), and a
 //! strip's tumbling settles over hundreds of scaled times, so equal scaled
 //! durations compare like with like where a fixed 8 s would not
-//! (docs/real-falls.md, "The strips' exponents and the protocol").
+//! (docs/lab/real-falls.md, "The strips' exponents and the protocol").
 
 use crate::leaf::AeroSpec;
 use crate::leaf::plates::{PlateShape, plate};
@@ -28,7 +28,7 @@ pub const ASPECT: f64 = 5.0;
 /// every strip of the sweep starts turning.
 pub const RELEASE_TILT_DEG: f64 = 60.0;
 /// The scaled duration the law is held at: 300 (by then the lightest
-/// strips have stopped gliding; docs/real-falls.md).
+/// strips have stopped gliding; docs/lab/real-falls.md).
 pub const SCALED_DURATION: f64 = 300.0;
 
 /// What one strip's fall gives the fit.

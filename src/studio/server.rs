@@ -1,7 +1,7 @@
 //! The studio's local web server: the page and a small JSON API over one
 //! [`Session`].
 //!
-//! Security model (docs/studio.md): it listens on 127.0.0.1 only; every
+//! Security model (docs/guide/studio.md): it listens on 127.0.0.1 only; every
 //! request must carry the session's random token (`?token=` or the
 //! `X-Leafmagic-Token` header), a Host of `127.0.0.1:PORT` or
 //! `localhost:PORT` (so a page that rebinds its own name to 127.0.0.1

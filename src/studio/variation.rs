@@ -1,7 +1,7 @@
 //! The next generation from a person's picks: variations of the picks at
 //! the session's (shrinking) scale, crossovers between two picks, and a
 //! few wild cards so the grid does not collapse onto one lineage (the
-//! known failure of interactive evolution: docs/studio.md).
+//! known failure of interactive evolution: docs/guide/studio.md).
 //!
 //! Mutation and uniform draws are breeding's own
 //! ([`crate::leaf::genome::mutate`], [`crate::breed::selection::uniform`]);

@@ -39,7 +39,7 @@ fn settings(seconds: f64, ranges: &[(Integrator, u32, u32)], reference_j: u32) -
     }
 }
 
-/// O7 (docs/numerics.md, "Oracles") through the sweep: on a lightly damped
+/// O7 (docs/design/numerics.md, "Oracles") through the sweep: on a lightly damped
 /// oscillator (ω = 5 rad/s,
 /// ζ = 0.05, stretched by 0.1 m) the fitted orders are 1, 1, 2, 4, 1
 /// within ±0.15, and so is every pairwise order of the fit. (Not ω = 2π:
@@ -83,7 +83,7 @@ fn sweep_finds_the_theoretical_orders_on_an_oscillator() {
 
 /// The same on the leaf itself, for the schemes whose fit window lies in
 /// their asymptotic range (RK4 is stable only where its error is already
-/// near the reference's floor, see docs/accuracy.md).
+/// near the reference's floor, see docs/design/accuracy.md).
 #[test]
 fn sweep_finds_first_and_second_order_on_the_leaf() {
     let model = leaf_a();

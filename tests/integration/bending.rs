@@ -147,7 +147,7 @@ fn a_clamped_sheet_sags_as_a_cantilever() {
 /// The plate steps at a quarter of its auto step: at the auto step itself
 /// (9.4e-3 s) its sideways path after this steep release is 17 mm, at a
 /// half, a quarter and at the sheets' steps 11 mm (the experiment's table
-/// does not move: docs/real-falls.md, "Paper that bends").
+/// does not move: docs/lab/real-falls.md, "Paper that bends").
 #[test]
 fn a_sheet_holds_its_plane_and_a_stiff_one_falls_as_the_rigid_plate() {
     let side = 0.09;

@@ -26,7 +26,7 @@ elif kind == "usd":
 elif kind == "abc":
     bpy.ops.wm.alembic_import(filepath=path)
 elif kind == "pc2":
-    # The OBJ keeps the simulator's axes (z up), as docs/export.md says.
+    # The OBJ keeps the simulator's axes (z up), as docs/guide/export.md says.
     bpy.ops.wm.obj_import(filepath=path, up_axis='Z', forward_axis='Y')
     for o in bpy.context.scene.objects:
         if o.type == 'MESH':

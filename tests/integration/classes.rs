@@ -63,7 +63,7 @@ fn paper_floaters_flaps_up_centre_of_gravity_central() {
 /// Topology A, flaps 1 and 3 folded in opposite directions, centre of
 /// gravity off to one side: "spinners". The recipe leaf (±30°, a quarter of
 /// the mass on the tip of flap 2) spins about the vertical (autorotation,
-/// its plane steep), as leafmagic's predecessor found (docs/falling-plates.md,
+/// its plane steep), as leafmagic's predecessor found (docs/design/falling-plates.md,
 /// "Folded leaves under the linear law"). Measured: 13 of 16 variants spin (12
 /// about the vertical, 1 tumbles), 2 lilt, 1 floats.
 #[test]
@@ -169,7 +169,7 @@ fn fixtures_from_varying_prototype_a_keep_their_class() {
 }
 
 /// Under the paper's linear law a flat, uniform card has no pitching
-/// moment (docs/falling-plates.md, "Linear law: no pitching moment"):
+/// moment (docs/design/falling-plates.md, "Linear law: no pitching moment"):
 /// whatever its density it keeps its release attitude
 /// exactly and slides down along it — a floater, never a flutterer,
 /// tumbler or lilter. (Released 45° steep it would glide steeply, which the

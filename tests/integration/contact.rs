@@ -1,4 +1,4 @@
-//! Ground contact against closed forms (docs/numerics.md, "Oracles", O11): first impact at
+//! Ground contact against closed forms (docs/design/numerics.md, "Oracles", O11): first impact at
 //! √(2H/g), bounce heights e^{2k} H, a slide stopping at v₀²/(2 μ_k g), a
 //! block on a slope held by static friction below the friction angle and
 //! sliding at g (sin θ − μ_k cos θ) above it; for free particles and for rigid

@@ -112,7 +112,7 @@ fn new_genes_change_the_leaf_as_documented() {
 /// What each gene does to the motion: prototype A's fall (10 s, the default
 /// release) against the fall with one gene at an end of its bounds, as the
 /// descriptor distance of `compare` (class changes count as ∞). Measured
-/// (docs/breeding.md, "Genes"): aspect ratio 2 → 0.153, drag ratio ×4 →
+/// (docs/design/breeding.md, "Genes"): aspect ratio 2 → 0.153, drag ratio ×4 →
 /// 0.0065, camber 0.15 → another class, petiole 0.5 → 1.48; the stiffness
 /// genes at their bounds 0.0001–0.0013, which is why `--like` runs hold them
 /// at 1. Asserted: each new gene moves the fall at least 3× as far as any

@@ -1,4 +1,4 @@
-//! Discrete-exact oracles for each integrator (docs/numerics.md, "Oracles":
+//! Discrete-exact oracles for each integrator (docs/design/numerics.md, "Oracles":
 //! O1–O4, O7)
 //! and stability boundaries at 0.99 / 1.01 × the predicted limit.
 

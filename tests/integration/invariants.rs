@@ -1,4 +1,4 @@
-//! Conservation laws and invariances (docs/numerics.md, "Oracles": O4
+//! Conservation laws and invariances (docs/design/numerics.md, "Oracles": O4
 //! anisotropic, O5, O12, O13) and the force terms' edge cases.
 
 use crate::common::*;

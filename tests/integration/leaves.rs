@@ -21,7 +21,7 @@ fn dihedral(x: &[Vector3<f64>], a: usize, b: usize, p: usize, q: usize) -> f64 {
 
 /// Air load must not fold the flaps: every hinge angle stays within 5° of
 /// its rest value through a 3 s fall (soft springs would let a flap fold
-/// over by 40–70° and turn the leaf into a diver: docs/falling-plates.md,
+/// over by 40–70° and turn the leaf into a diver: docs/design/falling-plates.md,
 /// "Folded leaves under the linear law").
 /// Measured: prototype A under 1°, prototype B (which lilts, falling at
 /// about 1.8 m/s) about 4°.

@@ -66,7 +66,7 @@ fn breeding_like_a_tumbler_halves_the_distance_and_keeps_its_class() {
         "12",
         // One drop per leaf from prototype A, the default strategy: what
         // the search reaches on the fall it was selected on (robust fitness,
-        // the default 4 releases, is a harder aim: docs/breeding.md).
+        // the default 4 releases, is a harder aim: docs/design/breeding.md).
         "--prototype",
         "a",
         "--releases",

@@ -1,5 +1,5 @@
 //! Integration tests: one binary (one link on a 2-core machine), one module
-//! per topic. Oracles are exact where docs/numerics.md, "Oracles", gives one.
+//! per topic. Oracles are exact where docs/design/numerics.md, "Oracles", gives one.
 
 mod accuracy;
 mod aero_law;
@@ -15,6 +15,7 @@ mod contact;
 // Shared with examples/real_falls_classify.rs, which uses all of it.
 #[allow(dead_code)]
 mod corpus;
+mod docs_links;
 mod export;
 mod fuzz;
 mod genome;

@@ -3,7 +3,7 @@
 //! leave-one-out), leafmagic's and MuJoCo's falls with the orientation
 //! taken away against the full classifier, the CLI on such records, bad
 //! input, and breeding toward a real square. The figures are those of
-//! docs/classification.md (`cargo run --release --example
+//! docs/guide/classification.md (`cargo run --release --example
 //! real_falls_classify` prints them all).
 
 use crate::breeding::{breed, leafmagic, scratch};
@@ -107,7 +107,7 @@ fn people_agree_with_the_path_and_areas_on_held_out_squares() {
 /// names, measured: 151/158 (95.6 %) stripped, 272/316 (86.1 %) as video,
 /// 276/316 (87.3 %) as video with two cameras' areas; at 24 Hz with the
 /// orientation, all as at 240 Hz. Stripped meets the
-/// issue's 95 %; video does not (docs/classification.md: what a 1.5 s cut
+/// issue's 95 %; video does not (docs/guide/classification.md: what a 1.5 s cut
 /// can hold), and is held here so that it does not slip further.
 #[test]
 fn the_path_alone_mostly_agrees_with_the_full_classifier() {

@@ -1,12 +1,12 @@
-//! The real-falls experiment (docs/real-falls.md): the real side of the
+//! The real-falls experiment (docs/lab/real-falls.md): the real side of the
 //! table computed from tests/data/real-falls/squares, and the simulated
 //! side under the unsteady law with its one default set of coefficients.
 //! Of the issue's targets (score ≤ 0.6, descent within 10 %, drift within
 //! ×1.5, Ω within 15 % in every bin) the score and the descent are met
-//! (docs/real-falls.md); these tests hold what is reached, so a change that
+//! (docs/lab/real-falls.md); these tests hold what is reached, so a change that
 //! makes it worse fails. Like for like, against the films re-weighted to
 //! the simulated mix of releases, the drift bound holds in every bin too
-//! (docs/real-falls.md, "The films at the simulated mix"). Also the strips'
+//! (docs/lab/real-falls.md, "The films at the simulated mix"). Also the strips'
 //! scaling law (met over equal scaled times), the disks' regimes and the
 //! predictions for the held-out shapes.
 
@@ -51,7 +51,7 @@ fn simulate_squares(
 
 /// The real table: small squares tumble, large ones fall chaotically, all
 /// descend at 0.73–0.81 m/s and turn at 26 → 12.6 rad/s (Howison, Hughes
-/// & Iida 2020, as docs/real-falls.md summarises them).
+/// & Iida 2020, as docs/lab/real-falls.md summarises them).
 #[test]
 fn the_real_table_is_read_from_the_tracked_squares() {
     let real = squares();
@@ -132,7 +132,7 @@ fn the_real_sides_bootstrap_brackets_its_values_and_collapses_on_one_drop() {
 /// coefficients is held (measured at 4 releases, seed 1): the score no
 /// worse than 0.7 (0.56; 1.04 under the defaults before the refit at the
 /// coarser step; the issue's 0.6 is met at 24 releases on ten fresh seeds,
-/// docs/real-falls.md), small squares let go flat tumble as real ones do
+/// docs/lab/real-falls.md), small squares let go flat tumble as real ones do
 /// (3.2 cm: 1.00 of the simulated drops, real 0.79) and the largest mostly
 /// do not (9 cm: 0.25, one drop of the four, at the bound; real 0.04),
 /// descent within 10 % of real in every bin (the issue's per-bin target;
@@ -265,7 +265,7 @@ fn a_tumbling_plate_falls_at_the_auto_step_as_at_half_of_it() {
 /// the lag's couple along the unit in-plane direction, before it was made
 /// continuous); without the lagged centre of pressure
 /// (`pressure_lag_gain = 0`) 0.35 and −0.83, which this test would fail
-/// (docs/real-falls.md, "The defaults").
+/// (docs/lab/real-falls.md, "The defaults").
 #[test]
 fn strips_tumble_at_the_scaling_law_over_equal_scaled_times() {
     use leafmagic::sim::strips::{
@@ -304,7 +304,7 @@ fn strips_tumble_at_the_scaling_law_over_equal_scaled_times() {
 /// tumble at 0.02, falls chaotically at 0.025, inside Field's band (the
 /// lagged centre of pressure gives it: with `pressure_lag_gain = 0` it
 /// flutters there and the switch to tumbling is sharp), and tumbles at
-/// 0.04 and 0.16 (docs/real-falls.md).
+/// 0.04 and 0.16 (docs/lab/real-falls.md).
 #[test]
 fn disks_flutter_when_light_and_tumble_when_heavy() {
     let d = 0.03;
@@ -328,7 +328,7 @@ fn disks_flutter_when_light_and_tumble_when_heavy() {
 
 /// The prediction path for the held-out shapes is the experiment's own: for
 /// squares it gives, bit for bit, the simulated side that `compare` scores.
-/// For circles (held back; predicted in docs/real-falls.md) it holds what
+/// For circles (held back; predicted in docs/lab/real-falls.md) it holds what
 /// the law gives every shape: the smallest plates tumble at least as often
 /// as the largest, and every bin falls at a finite speed within 25 % of
 /// the squares' (a circle of diameter d has 0.79 of a square's area and
@@ -443,7 +443,7 @@ fn the_filmed_mix_and_the_split_by_release_follow_the_labels() {
 /// them by a few per cent): the steady cut times that artefact. Measured
 /// from where the silhouette is whole, the drops depart 0.2 r sideways
 /// later the larger they are, as a time of order side / descent speed
-/// would (docs/real-falls.md, "When a flat release departs").
+/// would (docs/lab/real-falls.md, "When a flat release departs").
 #[test]
 fn the_films_flat_drops_depart_past_their_first_frames_artefact() {
     let real = squares();
@@ -480,7 +480,7 @@ fn the_films_flat_drops_depart_past_their_first_frames_artefact() {
 /// A flat release's tilt sets how soon it departs from its flat fall: the
 /// cross-check's 1–5° from rest take 0.76–1.05 s, 20–40° about 0.1 s, and
 /// the films' flat drops, measured the same way past their first frames,
-/// fall between (0.13–0.37 s; docs/real-falls.md, "When a flat release
+/// fall between (0.13–0.37 s; docs/lab/real-falls.md, "When a flat release
 /// departs"). Measured on a 5.6 cm square, two flat releases each.
 #[test]
 fn a_more_tilted_flat_release_departs_sooner_and_the_films_fall_between() {
@@ -574,7 +574,7 @@ fn the_fastest_descent_is_exact_on_a_free_fall_and_a_steady_one() {
 /// over 1.5 times the fastest steady fall the unsteady law allows their
 /// plates (edge-on, its weight carried by in-plane drag), and the 9 cm
 /// ones over twice it, while no simulated drop gets past that speed by
-/// more than 5 % (docs/real-falls.md, "How fast real paper dives").
+/// more than 5 % (docs/lab/real-falls.md, "How fast real paper dives").
 #[test]
 fn real_paper_dives_faster_than_the_laws_steady_edge_on_fall() {
     use leafmagic::physics::forces::unsteady;
@@ -752,7 +752,7 @@ fn films_of_no_one_shape_are_refused_by_line_and_name() {
     assert!(err.contains("none to compare"), "{err}");
 }
 
-/// With the wake's couple on (`wake_couple = 1.25`, docs/real-falls.md,
+/// With the wake's couple on (`wake_couple = 1.25`, docs/lab/real-falls.md,
 /// "A wake that rocks the face-on fall"), a 5.6 cm square let go flat at
 /// the cross-check's 1–5° departs within half to one and a half times the
 /// films' 0.296 s, where without it it takes over twice as long.
@@ -780,7 +780,7 @@ fn the_wakes_couple_lets_a_flat_release_depart_as_the_films_do() {
     );
 }
 
-/// With the wake on, the Munk relief (`munk_relief = 1`; docs/real-falls.md,
+/// With the wake on, the Munk relief (`munk_relief = 1`; docs/lab/real-falls.md,
 /// "Munk relief near broadside") lets a departed flat release glide instead
 /// of rocking about face-on at the Munk couple's period: 4 cm squares let
 /// go flat (twelve, two seeds) drift at least 1.5 times as far as with the
@@ -925,7 +925,7 @@ fn the_path_turn_reads_a_line_as_none_and_an_arc_as_two_thirds_of_it() {
 /// the on-edge drops of the three smallest bins turns a median 16–43°
 /// (each bin; 110–125° in the two largest, which fall chaotically), and
 /// the flat drops' too (20–116°). The law's plates tumble in one plane and
-/// turn 0° at its defaults (docs/real-falls.md, "How far a tumbling path
+/// turn 0° at its defaults (docs/lab/real-falls.md, "How far a tumbling path
 /// turns").
 #[test]
 fn the_films_paths_turn_as_they_fall() {
@@ -950,7 +950,7 @@ fn the_films_paths_turn_as_they_fall() {
 /// whose paths turn most: the straighter half's median Ω c/U (c the side,
 /// U the segment's descent) is within 10 % of the wandering half's, and
 /// both are above 1.35, where the law's planar swing gives 1.2
-/// (docs/real-falls.md, "Paper that bends, and a draught in the room").
+/// (docs/lab/real-falls.md, "Paper that bends, and a draught in the room").
 /// The faster swing does not come with the wandering.
 #[test]
 fn the_films_large_squares_swing_as_fast_whether_or_not_their_paths_turn() {
@@ -1018,7 +1018,7 @@ fn the_weighted_median_is_the_median_at_equal_weights_and_follows_the_weights() 
 /// medians and below two thirds of the pooled value: a law that fell
 /// exactly as each kind of the films' releases does would miss the issue's
 /// ×1.5 drift bound in that bin against the films' pooled median
-/// (docs/real-falls.md, "The films at the simulated mix").
+/// (docs/lab/real-falls.md, "The films at the simulated mix").
 #[test]
 fn the_films_at_their_own_mix_are_their_table_and_at_halves_drift_less() {
     let real = squares();
@@ -1085,7 +1085,7 @@ fn the_per_bin_bounds_name_each_statistic_outside_them() {
 /// of the 3.2 cm bin at the cross-check's protocol (half flat, half on
 /// edge) drift within ×1.5 of the films re-weighted to the same mix, at two
 /// seeds, where against the films' own pooled median (9 on-edge drops to 5
-/// flat ones) they drift under 2/3 of it (docs/real-falls.md, "The films at
+/// flat ones) they drift under 2/3 of it (docs/lab/real-falls.md, "The films at
 /// the simulated mix").
 #[test]
 fn the_smallest_squares_drift_as_the_films_do_at_the_same_mix() {
@@ -1120,7 +1120,7 @@ fn the_smallest_squares_drift_as_the_films_do_at_the_same_mix() {
 /// the 5.6 cm and 9 cm squares (the transition and the chaotic bins), 12
 /// each, on `leafmagic plate`'s mesh and on one twice as fine across, fall
 /// at the same speed within 2 %, turn at the same rate within 5 % and
-/// drift within 10 % (docs/real-falls.md, "Is the experiment converged?";
+/// drift within 10 % (docs/lab/real-falls.md, "Is the experiment converged?";
 /// over ten seeds of 24 releases the scores agree to 0.001). A refinement
 /// of 0 is refused.
 #[test]
@@ -1223,7 +1223,7 @@ fn a_draught_is_an_ornstein_uhlenbeck_wind_of_its_speed_and_correlation() {
 
 /// In still air the law's 3.2 cm squares let go on edge tumble in one plane
 /// and their paths do not turn; in a draught of 5 cm/s they turn, as the
-/// films' do (16° on edge) and more (docs/real-falls.md, "Paper that bends,
+/// films' do (16° on edge) and more (docs/lab/real-falls.md, "Paper that bends,
 /// and a draught in the room").
 #[test]
 fn a_draught_turns_the_small_squares_paths() {
@@ -1301,7 +1301,7 @@ fn the_rotation_of_a_fall_reads_tumbling_fluttering_and_both() {
 /// both, as a chaotic fall would. The experiment's rule still labels the
 /// tumbling ones chaotic: they turn at about 3.3 area maxima per second,
 /// nearer the films' chaotic centre (4.3) than their tumbling one (7.2),
-/// because a large plate turns slowly (docs/real-falls.md, "What the law's
+/// because a large plate turns slowly (docs/lab/real-falls.md, "What the law's
 /// falls are, by their rotation").
 #[test]
 fn the_laws_large_squares_tumble_or_flutter_and_the_rule_calls_the_tumbles_chaotic() {

@@ -1,5 +1,5 @@
 //! The stable-step estimate against the dense eigenvalue problem, and the
-//! auto step in use (docs/numerics.md, "Stable-step estimate" and "Auto
+//! auto step in use (docs/design/numerics.md, "Stable-step estimate" and "Auto
 //! step").
 
 use leafmagic::leaf::LeafSpec;
@@ -371,7 +371,7 @@ fn full_map_is_stable(k: &DMatrix<f64>, c: &DMatrix<f64>, integrator: Integrator
 /// damping that is not modal. On prototypes A and B under the paper's law
 /// the two agree within 0.5 % for Verlet and symplectic Euler, so
 /// `--dt auto` (0.7 × dt_max) leaves the margin it says
-/// (docs/accuracy.md, "Stable limits").
+/// (docs/design/accuracy.md, "Stable limits").
 #[test]
 fn the_estimate_is_the_limit_of_the_full_linearised_step() {
     for name in ["a", "b"] {

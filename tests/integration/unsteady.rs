@@ -767,7 +767,7 @@ fn drag_sees_the_plates_translation_and_strip_theory_its_rotation() {
 /// over its second second its mean descent stays under twice the face-on
 /// terminal speed √(2σg/(ρ C_D⊥)) (0.67 m/s). Drag on each triangle's own
 /// velocity (`rotation_drag = 1`) damped the turn enough that the strip
-/// sliced down end-on at about 8 m/s (docs/real-falls.md).
+/// sliced down end-on at about 8 m/s (docs/lab/real-falls.md).
 #[test]
 fn a_strip_let_go_end_on_turns_broadside_and_falls_slowly() {
     use leafmagic::sim::drop::{DropParams, drop_leaf};
@@ -806,7 +806,7 @@ fn a_strip_let_go_end_on_turns_broadside_and_falls_slowly() {
 /// dimensional constant slipped into the law fails it. This is why the
 /// strips' Ω ∝ σ^p w^q depends on when it is measured: strips compared at
 /// one duration in seconds are at different points of their scaled falls
-/// (docs/real-falls.md, "The strips' exponents and the protocol").
+/// (docs/lab/real-falls.md, "The strips' exponents and the protocol").
 #[test]
 fn a_plate_scaled_by_powers_of_two_falls_the_same_scaled_fall() {
     use leafmagic::physics::integrate::Simulator;

@@ -15,7 +15,7 @@ use std::path::Path;
 /// estimated stable step of `integrator` (one line, without its newline).
 /// Above the limit the stiffest mode grows every step; it may run away, or
 /// the springs' nonlinearity may hold it in a bounded ringing that no
-/// divergence check stops (docs/accuracy.md, "Stable limits").
+/// divergence check stops (docs/design/accuracy.md, "Stable limits").
 pub fn step_warning(h: f64, integrator: Integrator, limit: f64) -> String {
     format!(
         "warning: dt = {h:.3e} s exceeds the estimated stable step of {integrator} ({limit:.3e} s); \

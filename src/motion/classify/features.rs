@@ -10,13 +10,13 @@ use crate::motion::trajectory::Trajectory;
 
 /// Hysteresis of a normal flip, degrees: the normal must go from ≥ 30° above
 /// the horizontal plane to ≥ 30° below it (or back). The APW ODE's largest
-/// flutter reaches ±96° without flipping over (docs/falling-plates.md, "APW
+/// flutter reaches ±96° without flipping over (docs/design/falling-plates.md, "APW
 /// quasi-steady model"), and an edge-on diver wobbling a few degrees must not
 /// count flips.
 pub const FLIP_HYSTERESIS_DEG: f64 = 30.0;
 
 /// Smallest pitch swing counted as a reversal, degrees peak to peak.
-/// docs/falling-plates.md, "Classifier rules", step 4, calls θ within ~±10°
+/// docs/design/falling-plates.md, "Classifier rules", step 4, calls θ within ~±10°
 /// steady; we read that as amplitude, so a swing must at least equal that
 /// band's width to count as a rock rather than jitter.
 pub const REVERSAL_MIN_SWING_DEG: f64 = 10.0;
@@ -253,7 +253,7 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     // either in the body or in the world, whichever explains more of the
     // horizontal rotation (ties go to the body). A body-fixed axis follows a
     // leaf that rocks or tumbles about its own span while yawing (lilters in
-    // docs/falling-plates.md, "Folded leaves under the linear law"; the
+    // docs/design/falling-plates.md, "Folded leaves under the linear law"; the
     // precessing MuJoCo card); a world-fixed one suits a plate that spins about
     // its normal while rocking.
     let world = SymmetricEigen::new(s_world);

@@ -28,12 +28,12 @@
 //!    orientation) or in the world, whichever frame concentrates more of the
 //!    horizontal rotation on one axis: a body-fixed axis follows a leaf that
 //!    rocks or tumbles about its own span while yawing (most lilters,
-//!    docs/falling-plates.md, "Folded leaves under the linear law"; the
+//!    docs/design/falling-plates.md, "Folded leaves under the linear law"; the
 //!    precessing MuJoCo card). The pitch angle θ(t) is the integral of ω_h
 //!    about that axis; its turning points (swings ≥ 10°) are the reversals.
 //!    The plate normal is body z; a flip is the normal crossing the
 //!    horizontal plane with ±30° hysteresis.
-//! 4. **Rules**, first match wins (docs/falling-plates.md, "Classifier rules",
+//! 4. **Rules**, first match wins (docs/design/falling-plates.md, "Classifier rules",
 //!    reordered as the boundary cases in "Folded leaves under the linear law"
 //!    demand: flips and reversals are looked at before a *slow* turn about the
 //!    vertical — lilters yaw at 1–9 rad/s — but a rotation that is mostly
@@ -51,7 +51,7 @@
 //! | 6 | floater / flutter | rocking amplitude ≥ 10°, ≥ 3 periods, 10th percentile tilt < 30° (swings through flat) |
 //! | 7 | undetermined | rocking amplitude ≥ 10° but < 3 periods (too transient) |
 //! | 8 | undetermined | rocking ≥ 10° about a steep attitude (10th percentile tilt ≥ 30°) |
-//! | 9 | undetermined | mean tilt ≥ 30° without rocking: between glide and dive (docs/falling-plates.md, "Folded leaves under the linear law") |
+//! | 9 | undetermined | mean tilt ≥ 30° without rocking: between glide and dive (docs/design/falling-plates.md, "Folded leaves under the linear law") |
 //! | 10 | floater / glide | drift ratio ≥ 0.1 |
 //! | 11 | floater / steady | otherwise |
 //!
@@ -106,7 +106,7 @@ pub const DEFAULT_CHORD_M: f64 = 0.05;
 /// seconds, turns and degrees, not in samples, and measured so: the 245
 /// falls of the classifier's corpus and its held-out falls get at 24 Hz
 /// the class they get at 240 Hz (`cargo run --release
-/// --example real_falls_classify`, docs/classification.md, "Frame rates"). What a
+/// --example real_falls_classify`, docs/guide/classification.md, "Frame rates"). What a
 /// slow rate cannot follow, a rotation near half a turn per sample, is
 /// checked on the record itself ([`MAX_SAMPLE_TURN_DEG`]).
 pub const MIN_SAMPLE_RATE_HZ: f64 = 24.0;
@@ -130,7 +130,7 @@ pub const MAX_GAP_S: f64 = 1.5 / MIN_SAMPLE_RATE_HZ;
 pub const MAX_SAMPLE_TURN_DEG: f64 = 160.0;
 
 /// Fraction of the record's duration discarded as start-up transient.
-/// Classify only the last 50–70 % of the fall (docs/falling-plates.md,
+/// Classify only the last 50–70 % of the fall (docs/design/falling-plates.md,
 /// "Classifier rules", step 1); we keep 60 %.
 pub const TRANSIENT_FRACTION: f64 = 0.4;
 
@@ -152,7 +152,7 @@ pub fn window_is_long_enough(f: &Features) -> bool {
 }
 
 /// Fewest chord lengths of descent in the analysis window
-/// (docs/falling-plates.md, "Classifier rules", step 1; Howison & Iida 2020
+/// (docs/design/falling-plates.md, "Classifier rules", step 1; Howison & Iida 2020
 /// drops are ≈ 10–30 sizes).
 pub const MIN_DESCENT_CHORDS: f64 = 10.0;
 

@@ -11,11 +11,11 @@ use crate::motion::path::{Inputs, PathFeatures};
 use crate::motion::rules::{self, Cond};
 
 /// Fewest oscillation periods needed to call a rocking fall a flutter
-/// (docs/falling-plates.md, "Classifier rules", step 1).
+/// (docs/design/falling-plates.md, "Classifier rules", step 1).
 pub const MIN_OSCILLATION_PERIODS: f64 = 3.0;
 
 /// Fewest net turns about the dominant horizontal axis for a tumble
-/// (docs/falling-plates.md, "Classifier rules", step 4: N_turn ≥ 1); a
+/// (docs/design/falling-plates.md, "Classifier rules", step 4: N_turn ≥ 1); a
 /// floater cannot turn past ±90° (Belmonte, Eisenberg & Moses 1998, Phys.
 /// Rev. Lett. 81, 345; Andersen, Pesavento & Wang 2005, J. Fluid Mech. 541,
 /// 65).
@@ -23,21 +23,21 @@ pub const SPIN_MIN_NET_TURNS: f64 = 1.0;
 
 /// Least rotation consistency |∫ω dt| / ∫|ω| dt about the horizontal axis for
 /// a tumble: "ω keeps its sign" (Belmonte 1998, APW 2005); s > 0.9 in
-/// docs/falling-plates.md, "Classifier rules", step 4.
+/// docs/design/falling-plates.md, "Classifier rules", step 4.
 pub const TUMBLE_MIN_CONSISTENCY: f64 = 0.9;
 
 /// Fewest pitch reversals (rocks) for a lilter: Field et al. 1997 chaotic =
 /// oscillation, then a flip, irregularly; "reversals between flips" in
-/// docs/falling-plates.md, "Classifier rules", step 4.
+/// docs/design/falling-plates.md, "Classifier rules", step 4.
 pub const LILT_MIN_REVERSALS: usize = 2;
 
 /// Smallest rocking amplitude of a flutter, degrees (half the mean swing).
-/// Steady if θ stays within ~10°, flutter otherwise (docs/falling-plates.md,
+/// Steady if θ stays within ~10°, flutter otherwise (docs/design/falling-plates.md,
 /// "Classifier rules", step 4).
 pub const FLUTTER_MIN_AMPLITUDE_DEG: f64 = 10.0;
 
 /// Fewest turns about the vertical for autorotation (N_z ≥ 1:
-/// docs/falling-plates.md, "Classifier rules", step 4).
+/// docs/design/falling-plates.md, "Classifier rules", step 4).
 pub const AUTOROTATION_MIN_YAW_TURNS: f64 = 1.0;
 
 /// Least yaw consistency |∫ω_z dt| / ∫|ω_z| dt for autorotation (the
@@ -46,30 +46,30 @@ pub const AUTOROTATION_MIN_YAW_CONSISTENCY: f64 = 0.9;
 
 /// Least |mean ω_z| / rms |ω| for autorotation: the spin axis lies on
 /// average within ~45° of the vertical. Lilters also yaw at 1–9 rad/s
-/// (docs/falling-plates.md, "Folded leaves under the linear law") but their
+/// (docs/design/falling-plates.md, "Folded leaves under the linear law") but their
 /// rocking and flips dominate ω.
 pub const AUTOROTATION_MIN_VERTICAL_SHARE: f64 = 0.7;
 
 /// Least mean plate tilt for autorotation, degrees. Autorotating spinners'
-/// planes sat 42–103° from horizontal (docs/falling-plates.md, "Folded leaves
+/// planes sat 42–103° from horizontal (docs/design/falling-plates.md, "Folded leaves
 /// under the linear law"); a flat leaf turning about its own normal is still a
 /// floater ("did not rotate" visibly).
 pub const AUTOROTATION_MIN_TILT_DEG: f64 = 30.0;
 
 /// Dive: the plate spends 90 % of the window within 30° of edge-on (10th
 /// percentile of tilt ≥ 60°). Divers fall edge-on; planes 30–60° from
-/// edge-on are "neither clearly floater nor diver" (docs/falling-plates.md,
+/// edge-on are "neither clearly floater nor diver" (docs/design/falling-plates.md,
 /// "Folded leaves under the linear law").
 pub const DIVE_MIN_TILT_DEG: f64 = 60.0;
 
 /// Mean tilt above which a non-rocking, non-rotating fall is neither a clear
-/// floater nor a diver, degrees (30–60° from edge-on: docs/falling-plates.md,
+/// floater nor a diver, degrees (30–60° from edge-on: docs/design/falling-plates.md,
 /// "Folded leaves under the linear law").
 pub const STEEP_TILT_DEG: f64 = 30.0;
 
 /// Least drift ratio (horizontal displacement / fall) for a glide: a path
 /// ≥ 5.7° from vertical. Our choice: steady fallers and flutterers have zero
-/// mean drift (Field 1997, APW 2005), tumblers 0.5–2.3 (docs/falling-plates.md,
+/// mean drift (Field 1997, APW 2005), tumblers 0.5–2.3 (docs/design/falling-plates.md,
 /// "Measured regimes", row 4, and "Classifier rules").
 pub const GLIDE_MIN_DRIFT_RATIO: f64 = 0.1;
 

@@ -79,7 +79,7 @@ fn autorotation() -> Trajectory {
 }
 /// Rocking that grows between irregularly spaced flips (some forwards,
 /// some back), while the leaf also turns slowly about the vertical
-/// (3 rad/s, a boundary case of docs/falling-plates.md, "Folded leaves
+/// (3 rad/s, a boundary case of docs/design/falling-plates.md, "Folded leaves
 /// under the linear law").
 fn chaotic_pitch(t: f64) -> f64 {
     const FLIPS: [(f64, f64); 6] = [
@@ -180,7 +180,7 @@ fn steep_rocking() -> Trajectory {
     )
 }
 /// Steady at 45°: "neither clearly floater nor diver"
-/// (docs/falling-plates.md, "Folded leaves under the linear law").
+/// (docs/design/falling-plates.md, "Folded leaves under the linear law").
 fn steep_steady() -> Trajectory {
     synth(
         240.0,
@@ -302,7 +302,7 @@ fn synthetic_features_measure_what_was_built() {
 
 #[test]
 fn lilter_that_also_yaws_is_not_a_spinner() {
-    // Lilters turn about the vertical at 1–9 rad/s (docs/falling-plates.md,
+    // Lilters turn about the vertical at 1–9 rad/s (docs/design/falling-plates.md,
     // "Folded leaves under the linear law").
     for yaw_rate in [1.0, 3.0, 9.0] {
         let c = classify(&chaotic_yawing(yaw_rate), CHORD);

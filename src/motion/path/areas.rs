@@ -10,7 +10,7 @@ use crate::motion::trajectory::Trajectory;
 /// the signal's range over the window: the authors' own rate of tumbling
 /// counted maxima of at least 5 % prominence on clean signals; tracked
 /// silhouettes flicker by more, 20 % keeps the turns and drops the flicker
-/// (calibrated, docs/classification.md).
+/// (calibrated, docs/guide/classification.md).
 pub const AREA_MIN_SWING: f64 = 0.2;
 
 /// Smallest swing of an area signal counted as a maximum, as a fraction of
@@ -19,7 +19,7 @@ pub const AREA_MIN_SWING: f64 = 0.2;
 /// from edge-on to face-on), a steady plate's only by the silhouette's
 /// flicker, whose range alone would otherwise set the swing (our choice:
 /// five times the corpus cameras' 2 % flicker; no verdict at 98 fps
-/// changes, docs/classification.md, "Frame rates").
+/// changes, docs/guide/classification.md, "Frame rates").
 pub const AREA_MIN_SWING_OF_LEVEL: f64 = 0.1;
 
 /// Half-width of the moving average applied to area signals before

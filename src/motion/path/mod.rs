@@ -41,7 +41,7 @@
 //!    maxima per second — and the periodicity of the signal (its
 //!    autocorrelation at the first peak after the first zero).
 //! 5. **Rules**, first match wins (the thresholds and where they come from
-//!    are the constants below; docs/classification.md reports how they
+//!    are the constants below; docs/guide/classification.md reports how they
 //!    were calibrated and checked).
 //!
 //! "Steady" is a modulation below

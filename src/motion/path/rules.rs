@@ -25,7 +25,7 @@ pub const GLIDE_MIN_DRIFT: f64 = 0.1;
 /// … gently down", Haumann et al. §4.1), a leaf spinning about the vertical
 /// or diving edge-on fast. Our choice, from leafmagic's own falls: its
 /// steady floaters fall at Fr 0.3–1.9, its spinners that fall straight
-/// down at 2.0–9 (docs/classification.md).
+/// down at 2.0–9 (docs/guide/classification.md).
 pub const STEADY_MAX_FROUDE: f64 = 2.0;
 
 /// Least Froude number of a fall straight down (drift below
@@ -34,7 +34,7 @@ pub const STEADY_MAX_FROUDE: f64 = 2.0;
 /// leafmagic's own falls three spinners autorotating with a modulated
 /// descent fall at Fr 4.7–5.2, but two lilters at Fr 4.6–4.7 too; the rule
 /// gains one fall net on the corpus and three on the held-out falls, which
-/// were not looked at when it was chosen (docs/classification.md).
+/// were not looked at when it was chosen (docs/guide/classification.md).
 pub const PLUNGE_MIN_FROUDE: f64 = 2.0 * STEADY_MAX_FROUDE;
 
 /// Least straightness |∫v_h dt| / ∫|v_h| dt of a tumble: the path is a
@@ -42,12 +42,12 @@ pub const PLUNGE_MIN_FROUDE: f64 = 2.0 * STEADY_MAX_FROUDE;
 /// path at a nearly constant incline"; people labelling the real squares:
 /// tumbling paper glides off on a straight slanted line, chaotic paper
 /// swings, reverses and wanders). Calibrated on the real squares
-/// (docs/classification.md).
+/// (docs/guide/classification.md).
 pub const TUMBLE_MIN_STRAIGHTNESS: f64 = 0.65;
 
 /// Least area maxima per second of a tumble when area signals are given:
 /// two maxima per turn, so a turn rate of at least 11 rad/s. Calibrated on
-/// the real squares (docs/classification.md).
+/// the real squares (docs/guide/classification.md).
 pub const TUMBLE_MIN_AREA_MAXIMA_PER_S: f64 = 3.5;
 
 /// Least periodicity of the area signals of a regular tumble, the second
@@ -59,7 +59,7 @@ pub const TUMBLE_MIN_AREA_MAXIMA_PER_S: f64 = 3.5;
 /// square cards of 100–500 g/m² tumble at 2.7–3.3 maxima/s, under
 /// [`TUMBLE_MIN_AREA_MAXIMA_PER_S`], most at a periodicity of 0.8–1.0,
 /// while no chaotic real square on a straight path reaches 0.8
-/// (docs/classification.md).
+/// (docs/guide/classification.md).
 pub const TUMBLE_MIN_AREA_PERIODICITY: f64 = FLUTTER_MIN_PERIODICITY;
 
 /// Least area maxima per second of a regular tumble: one turn a second, so
@@ -97,14 +97,14 @@ pub const HELIX_MIN_CONSISTENCY: f64 = 0.9;
 /// the vertical drags its centre round a circle of about its own size,
 /// while a floater gliding in a turn describes a wide one (our choice:
 /// leafmagic's autorotating spinners circle at 0.2–3 chords, most of its
-/// turning floaters at 3–7; docs/classification.md).
+/// turning floaters at 3–7; docs/guide/classification.md).
 pub const HELIX_MAX_RADIUS_CHORDS: f64 = 3.0;
 /// See [`HELIX_MIN_TURNS`] (our choice: leafmagic's autorotating spinners
 /// modulate their descent by at most 9 %, chaotic paper by 13 % and more).
 pub const HELIX_MAX_MODULATION: f64 = 0.1;
 
 /// The two thresholds calibrated on people's labels of the real paper
-/// squares (docs/classification.md): the rest are physical or taken from
+/// squares (docs/guide/classification.md): the rest are physical or taken from
 /// the full classifier and are not refitted.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Calibration {
@@ -224,7 +224,7 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
     };
     // A glide turns no plate: where the record's jitter is too large to
     // tell a steady descent from a modulated one (at video rates it holds
-    // a tumble's own modulation, docs/classification.md, "Frame rates"),
+    // a tumble's own modulation, docs/guide/classification.md, "Frame rates"),
     // the areas must not show a plate turning at a tumble's rate either.
     let mut glide = vec![
         steady(),
@@ -318,7 +318,7 @@ fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId
         // one spinner (autorotating at 12 rad/s, its path turning 5 times
         // at consistency 0.67) the rules above left chaotic, and changes
         // no other verdict there or on the real squares; on the held-out
-        // falls it changes one, wrong either way (docs/classification.md).
+        // falls it changes one, wrong either way (docs/guide/classification.md).
         rule(
             RuleId::TurningPlunge,
             C::Spinner,

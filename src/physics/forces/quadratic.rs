@@ -4,7 +4,7 @@
 //! # Why
 //!
 //! The paper's linear law (eq. 9–10) applied at the corners of a flat leaf of
-//! uniform mass has no pitching moment (docs/falling-plates.md, "Linear law:
+//! uniform mass has no pitching moment (docs/design/falling-plates.md, "Linear law:
 //! no pitching moment"): such a leaf can only float. Real plates flutter,
 //! tumble or do both (Field et al. 1997) because the force on a plate is
 //! quadratic in speed and, at small angles of attack, acts ahead of the
@@ -68,7 +68,7 @@
 //! off by default: with APW's C_R = π the square card of
 //! [`crate::leaf::plates::square_card`] tumbles in a narrow band of densities
 //! *between* fluttering and chaotic falls (flutter → tumble → chaos →
-//! tumble, as APW's own ODE does: docs/falling-plates.md, "APW quasi-steady
+//! tumble, as APW's own ODE does: docs/design/falling-plates.md, "APW quasi-steady
 //! model"), instead of the experiments' flutter → chaos → tumble (Field et
 //! al. 1997); without it the card follows the experiments' order.
 //!
@@ -77,7 +77,7 @@
 //! ρ = 1.2 kg/m³ (air at 20 °C). A flat plate falling face-down reaches
 //! σ g = ½ ρ C_D⊥ V², V = √(2 σ g / (ρ C_D⊥)): 0.74 m/s at σ = 80 g/m², close
 //! to the 0.72–0.78 m/s measured for 70 g/m² paper shapes
-//! (docs/falling-plates.md, "Measured regimes", row 4), whereas the linear
+//! (docs/design/falling-plates.md, "Measured regimes", row 4), whereas the linear
 //! law's V = σ g /(3 αⁿ) is set by the chosen αⁿ.
 //!
 //! # Integrators

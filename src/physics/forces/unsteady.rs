@@ -7,7 +7,7 @@
 //! # Why
 //!
 //! The quasi-steady laws miss what makes real paper flutter and tumble
-//! (docs/real-falls.md): the air a plate sets moving (added mass, 0.2–0.6
+//! (docs/lab/real-falls.md): the air a plate sets moving (added mass, 0.2–0.6
 //! of a paper card's own), the torque that comes with it (the Munk moment,
 //! which is also what puts a thin aerofoil's centre of pressure at its
 //! quarter chord), the lift from the plate's own rotation that Andersen,
@@ -64,7 +64,7 @@
 //!   the rotation; drag on each triangle's own velocity (κ = 1, strip
 //!   theory) adds ρ C_D⊥ U ω ∫r² dA on top, 2.5 times APW's μ₁ term for a
 //!   plate falling face-on, and keeps a flat-released square from ever
-//!   tumbling (docs/real-falls.md). A flexible leaf's deformation still
+//!   tumbling (docs/lab/real-falls.md). A flexible leaf's deformation still
 //!   enters drag in full: only the plate's mean rotation is taken out;
 //! - drag and translational lift, APW's C_D(α) = C_D∥ cos²α + C_D⊥ sin²α
 //!   and translational circulation C_L = C_T sin 2α (APW 2005; Wang, Birch
@@ -76,7 +76,7 @@
 //!   `cd_parallel` (default 0.65; APW's edge-on C_D(0) is 0.4). For paper a thousandth as
 //!   thick as it is wide this is not edge thickness but what the 2-D law
 //!   leaves out of a finite plate's separated flow; without it the real
-//!   squares glide up to 6 times too far (docs/real-falls.md, "The defaults");
+//!   squares glide up to 6 times too far (docs/lab/real-falls.md, "The defaults");
 //! - rotational circulation Γ = ½ C_R c² ω (APW: C_R = π; default 1.5,
 //!   fitted with the other defaults to the real squares), c the plate's
 //!   chord through the triangle across the rotation axis and ω = n × ṅ the
@@ -86,7 +86,7 @@
 //!   τ = −(π/2) ρ A a² (μ₁ |u| + μ₂ a |ω|) ω with a = c/2, applied as a
 //!   couple. APW's μ₂ = 0.2 damps a plate turning in place; measured on
 //!   the real squares it stops the tumbling ones gliding (score 1.88 against
-//!   1.29 without, docs/real-falls.md), so μ₂ defaults to 0, and μ₁ to 0.1,
+//!   1.29 without, docs/lab/real-falls.md), so μ₂ defaults to 0, and μ₁ to 0.1,
 //!   half APW's 0.2 (fitted with the other defaults; with `rotation_drag = 1`, drag on each triangle's own velocity
 //!   damps rotation quadratically about as much as APW's μ₂: for a 2-D
 //!   plate of half-chord a, ρ C_D⊥ a⁴ ω|ω|/4 = 0.60 ρ a⁴ ω|ω| per span
@@ -119,7 +119,7 @@
 //! evaluation reads it at its own time by a second-order exponential
 //! integrator and each step commits its last evaluation's. The stability
 //! estimate leaves the term out. Screened on the real squares,
-//! the strips and the disks in docs/real-falls.md, "A lagged centre of
+//! the strips and the disks in docs/lab/real-falls.md, "A lagged centre of
 //! pressure".
 //!
 //! # Wake
@@ -129,14 +129,14 @@
 //! default 0.15), and the uneven pressure rocks it; the quasi-steady terms
 //! above have no such thing, and a plate let go at 1–5° rocks about
 //! face-on for 0.76–1.05 s where real paper leaves its flat fall in
-//! 0.13–0.37 s (docs/real-falls.md, "When a flat release departs"). With
+//! 0.13–0.37 s (docs/lab/real-falls.md, "When a flat release departs"). With
 //! the term on, each plate carries a wake phase φ turning at 2π St U / c
 //! and each of its triangles the normal force C_W ½ ρ U² sin φ sin⁴α A
 //! (d / c) n, d its distance from the plate's centre along an axis fixed
 //! in the plate: a couple that acts only near face-on. The equations,
 //! their integration and what the term leaves out are in
 //! `src/physics/forces/unsteady/wake.rs`; what it does to the real falls
-//! in docs/real-falls.md, "A wake that rocks the face-on fall".
+//! in docs/lab/real-falls.md, "A wake that rocks the face-on fall".
 //!
 //! # Munk relief
 //!
@@ -157,10 +157,10 @@
 //! added inertia, are untouched; the relieved couple no longer conserves
 //! the fluid's kinetic energy, so the energy identity holds at β = 0 only.
 //! The power 6 was chosen on the real squares among sin⁴–sin¹⁶ and
-//! cosᵠα forms; what the term does there is in docs/real-falls.md, "Munk
+//! cosᵠα forms; what the term does there is in docs/lab/real-falls.md, "Munk
 //! relief near broadside".
 //!
-//! Coefficients and defaults: [`UnsteadyAero`](crate::physics::model::UnsteadyAero) (docs/real-falls.md has the
+//! Coefficients and defaults: [`UnsteadyAero`](crate::physics::model::UnsteadyAero) (docs/lab/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
 //! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.65, C_T = 1.2,
 //! C_R = 1.5, μ₁ = 0.1, G = 0.6 and k = 3 were fitted as one set to the
@@ -168,10 +168,10 @@
 //! 144 candidate sets and 108 around the best, then with it over 270 more),
 //! every fall at a step that bounds a tumbling plate's turn, with the
 //! strips' scaling law and the disks' regimes as the lag term's check, and
-//! then checked on ten other seeds of the squares (docs/real-falls.md,
+//! then checked on ten other seeds of the squares (docs/lab/real-falls.md,
 //! "The defaults"). They were kept when the lag's couple was made
 //! continuous through face-on (cos α above), which moved the fit a little
-//! (docs/real-falls.md, "A couple without a jump").
+//! (docs/lab/real-falls.md, "A couple without a jump").
 
 mod lag;
 mod rates;

@@ -52,7 +52,7 @@ pub const COP_LEADING: f64 = 0.25;
 /// APW 2005 use π ([`APW_ROTATIONAL_LIFT`]).
 pub const ROTATIONAL_LIFT: f64 = 0.0;
 
-/// Andersen, Pesavento & Wang's C_R (docs/falling-plates.md, "APW
+/// Andersen, Pesavento & Wang's C_R (docs/design/falling-plates.md, "APW
 /// quasi-steady model"), available as an override.
 pub const APW_ROTATIONAL_LIFT: f64 = std::f64::consts::PI;
 
@@ -239,7 +239,7 @@ pub struct UnsteadyAero {
     /// the plate's translation, as APW's model does, so rotation acts only
     /// through the rotational lift and damping calibrated for it; 1 is strip
     /// theory (each triangle's own velocity), which damps a turning plate
-    /// 2–3 times more than APW's μ₁ term (docs/real-falls.md).
+    /// 2–3 times more than APW's μ₁ term (docs/lab/real-falls.md).
     pub rotation_drag: f64,
     /// Buoyancy: an upward force ρ (m/ρ_s) g on every particle.
     pub buoyancy: bool,
@@ -285,14 +285,14 @@ fn default_wake_strouhal() -> f64 {
 /// with the lagged centre of pressure ([`UNSTEADY_PRESSURE_LAG_GAIN`],
 /// [`UNSTEADY_PRESSURE_LAG`]) to the squares and the strips' scaling law
 /// together, and checked on ten seeds the fit did not see and the disks
-/// against Field et al. 1997: docs/real-falls.md, "The defaults".
+/// against Field et al. 1997: docs/lab/real-falls.md, "The defaults".
 pub const UNSTEADY_CD_NORMAL: f64 = 2.6;
 /// Default form drag edge-on beyond skin friction: 0.65 (APW 2005's C_D(0)
 /// is 0.4). A paper sheet is far thinner than APW's plates, so this is not
 /// edge thickness: it stands for what the 2-D law leaves out at the
 /// Reynolds numbers of falling paper (10³–10⁴), the separated flow round
 /// the edges of a plate of finite span; set to 0 it lets squares glide up
-/// to 6 times too far (docs/real-falls.md).
+/// to 6 times too far (docs/lab/real-falls.md).
 pub const UNSTEADY_CD_PARALLEL: f64 = 0.65;
 /// Default C_T: APW 2005's 1.2, under the law's bound C_D⊥/2 = 1.3.
 pub const UNSTEADY_TRANSLATIONAL_LIFT: f64 = 1.2;
@@ -302,14 +302,14 @@ pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.5;
 /// Default μ₁: 0.1, half APW 2005's 0.2.
 pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.1;
 /// Default μ₂: none (APW's 0.2 stops the real squares' tumbling glide; see
-/// [`crate::physics::forces::unsteady`] and docs/real-falls.md).
+/// [`crate::physics::forces::unsteady`] and docs/lab/real-falls.md).
 pub const UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC: f64 = 0.0;
 /// Default share of the plate's rotation in drag and translational lift:
 /// none, as in APW 2005, whose drag and circulation act on the plate's
 /// centre velocity and whose μ₁ is the whole rotational damping.
 pub const UNSTEADY_ROTATION_DRAG: f64 = 0.0;
 /// Density of paper, kg/m³ (70 g/m² paper is 69 µm thick:
-/// docs/falling-plates.md, "Measured regimes").
+/// docs/design/falling-plates.md, "Measured regimes").
 pub const PAPER_DENSITY: f64 = 1008.0;
 /// Default gain G on the lagged centre of pressure: 0.6, fitted with the
 /// coefficients above and [`UNSTEADY_PRESSURE_LAG`]. With it the strips
@@ -318,7 +318,7 @@ pub const PAPER_DENSITY: f64 = 1008.0;
 /// was made continuous) and the 3 cm disks fall chaotically inside Field
 /// et al.'s band; with a gain of 0 and the other defaults 0.35 and −0.83,
 /// and no chaotic disks
-/// (docs/real-falls.md, "The defaults").
+/// (docs/lab/real-falls.md, "The defaults").
 pub const UNSTEADY_PRESSURE_LAG_GAIN: f64 = 0.6;
 /// Default lag of the centre of pressure, in chord transits c∥/|u|: 3,
 /// fitted with [`UNSTEADY_PRESSURE_LAG_GAIN`]; the lag's form is Leishman

@@ -38,7 +38,7 @@ pub struct Triangle {
 /// apexes `apexes[0]` (first triangle) and `apexes[1]` (second). It resists
 /// changes of the fold angle θ (0 when flat) about its rest value, which is
 /// what keeps a folded leaf folded; unlike a spring across the fold it is as
-/// stiff near flat as anywhere else (docs/falling-plates.md, "Folded leaves
+/// stiff near flat as anywhere else (docs/design/falling-plates.md, "Folded leaves
 /// under the linear law", bending near flat).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hinge {

@@ -4,7 +4,7 @@
 //! its statistics. For each integrator and step this runs a small ensemble of
 //! drops released a hair apart, classifies each (see [`crate::motion::classify`]),
 //! and compares the majority class, the mean descent speed and the rotation
-//! rate with those at the finest step (docs/numerics.md, "Error against
+//! rate with those at the finest step (docs/design/numerics.md, "Error against
 //! work", step 5, with DiffEqDevTools-style 1.96 σ/√N bands).
 //!
 //! The horizon itself is measured with twin runs at the finest RK4 step,
@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 /// Initial separation of the twin runs, chords (δ₀ = 1e-9 L:
-/// docs/numerics.md, "Error against work", step 5).
+/// docs/design/numerics.md, "Error against work", step 5).
 pub const TWIN_SEPARATION: f64 = 1e-9;
 /// Separation, chords, at which the twin runs count as unrelated.
 pub const HORIZON_SEPARATION: f64 = 1e-3;

@@ -1,5 +1,5 @@
 //! How accurate a run is, and what accuracy costs: work-precision sweeps over
-//! the time step (docs/numerics.md, "Error against work"), the error
+//! the time step (docs/design/numerics.md, "Error against work"), the error
 //! estimate that breeding runs record ([`estimate`]), and, past the horizon
 //! where pointwise error means nothing, statistics across time steps
 //! ([`long`]).
@@ -30,7 +30,7 @@
 //! every point measured again; still not valid, the report carries a
 //! warning. Errors are measured against the finer of the two runs. Because RK4 is fourth order,
 //! h_ref need not be below the first-order curves' smallest step (the rule
-//! h_ref ≤ h_min/8 of docs/numerics.md, "Error against work", step 3, is for
+//! h_ref ≤ h_min/8 of docs/design/numerics.md, "Error against work", step 3, is for
 //! a reference of the same order); the validation is what guarantees it is
 //! good enough.
 //!
@@ -45,7 +45,7 @@
 //! oscillating step to step: [`EndRun::oscillating`]) is kept with
 //! `oscillating = true` and no error: above the stable step the unstable
 //! mode need not run away, the springs' nonlinearity can hold it at a
-//! bounded amplitude for as long as the run lasts (docs/accuracy.md,
+//! bounded amplitude for as long as the run lasts (docs/design/accuracy.md,
 //! "Stable limits"). Between the largest stable and the smallest unstable
 //! step of each explicit scheme, the step count n (h = T/n) is then
 //! bisected, so the observed stability limit is located to about 1 % and

@@ -16,7 +16,7 @@ use std::time::Instant;
 type V3 = Vector3<f64>;
 
 /// The reference's self-difference must be below this fraction of the
-/// smallest error plotted (docs/numerics.md, "Error against work", step 3).
+/// smallest error plotted (docs/design/numerics.md, "Error against work", step 3).
 pub const REFERENCE_FACTOR: f64 = 0.1;
 /// A run that reached T is still unstable when its internal acceleration
 /// (see [`EndRun::internal_acceleration`]) exceeds this many times the
@@ -24,7 +24,7 @@ pub const REFERENCE_FACTOR: f64 = 0.1;
 /// stiffest mode grows each step until the springs' and hinges' geometric
 /// nonlinearity holds it in a bounded step-to-step oscillation (prototype A
 /// under Verlet at 1.11 × dt_max: springs ringing by 1.5 % of their length
-/// for 30 s, never stopped as a runaway; docs/accuracy.md, "Stable
+/// for 30 s, never stopped as a runaway; docs/design/accuracy.md, "Stable
 /// limits"). That oscillation's second difference is some 4 × its amplitude
 /// per step, so over h² it stands orders of magnitude above the smooth
 /// motion's.
@@ -36,7 +36,7 @@ pub const OSCILLATION_FLOOR: f64 = 1.0;
 /// A copy of `model` in which no spring can break, and how many springs
 /// were breakable. Breaking is an event that limits any scheme to first
 /// order unless located, so convergence studies switch it off
-/// (docs/numerics.md, "Error against work", step 6).
+/// (docs/design/numerics.md, "Error against work", step 6).
 pub fn smooth_model(model: &Model) -> (Model, usize) {
     let mut smooth = model.clone();
     let mut count = 0;

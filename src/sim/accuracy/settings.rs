@@ -1,7 +1,7 @@
 //! What a work-precision sweep runs: each integrator's steps and the
 //! reference's, and the default sweep for a model, set by its predicted
 //! stable steps and by what each curve can show at what cost
-//! (docs/numerics.md, "Error against work").
+//! (docs/design/numerics.md, "Error against work").
 
 use super::error::AccuracyError;
 use crate::physics::model::Model;
@@ -10,7 +10,7 @@ use crate::physics::stability;
 use serde::Serialize;
 
 /// Timed runs per point (the median is reported); at least 5
-/// (docs/numerics.md, "Error against work", step 1).
+/// (docs/design/numerics.md, "Error against work", step 1).
 pub const DEFAULT_RUNS: usize = 5;
 /// The most steps any single run of a default sweep may take, so that a
 /// stiff model cannot make the sweep run for hours.

@@ -1,5 +1,5 @@
 //! When a real flat release leaves its flat fall, measured past the films'
-//! first frames (docs/real-falls.md, "When a flat release departs").
+//! first frames (docs/lab/real-falls.md, "When a flat release departs").
 //!
 //! The experiment cuts a flat release's start as "steady" until the tracked
 //! centre has moved 0.2 r sideways, and those segments last 3–7 frames. But

@@ -151,7 +151,7 @@ impl Film {
     /// difference (z_k − z_{k+2}) · FPS / 2 (exact for a fall at constant
     /// acceleration); `None` under 3 frames. A plate that falls edge-first
     /// gains speed until it turns, so this is how fast its dives went
-    /// (docs/real-falls.md, "How fast real paper dives").
+    /// (docs/lab/real-falls.md, "How fast real paper dives").
     pub fn fastest_descent(&self) -> Option<f64> {
         self.position
             .windows(3)
@@ -165,7 +165,7 @@ impl Film {
     /// either third moves less than [`MIN_THIRD_RUN`] sideways (a fall
     /// nearly straight down has no heading). A plate tumbling in one plane
     /// glides on a straight line and turns 0°; the films' squares turn a
-    /// median 16–125° per bin and kind of release (docs/real-falls.md, "How
+    /// median 16–125° per bin and kind of release (docs/lab/real-falls.md, "How
     /// far a tumbling path turns").
     pub fn path_turn(&self) -> Option<f64> {
         let p = &self.position;

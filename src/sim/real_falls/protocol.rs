@@ -43,7 +43,7 @@ pub struct Release {
 /// The default is the protocol of the project's cross-check
 /// (`../shared/tools/realfalls/`, `simdrops.py`): flat releases tilted
 /// 1–5°, half the releases on edge. The films say otherwise on both counts
-/// (docs/real-falls.md, "The release protocol" and "When a flat release
+/// (docs/lab/real-falls.md, "The release protocol" and "When a flat release
 /// departs"): the real flat releases depart 0.2 r sideways 0.13–0.37 s
 /// after their first frame ([`departure`](super::departure)), which a 1–5° tilt from rest
 /// takes 0.76–1.05 s to do, and the real bins hold 5:9 to 17:7 flat to
@@ -57,12 +57,12 @@ pub struct Protocol {
     pub mix: ReleaseMix,
     /// The paper's bending stiffness D, N·m: `None` cuts rigid plates (the
     /// falling-plate literature's, and the cross-check's); `Some(D)` sheets
-    /// that bend ([`crate::leaf::plates::flexible`]; docs/real-falls.md,
+    /// that bend ([`crate::leaf::plates::flexible`]; docs/lab/real-falls.md,
     /// "Paper that bends").
     pub bending: Option<f64>,
     /// Plates meshed this many times finer across than `leafmagic plate`'s
     /// (1; [`crate::leaf::plates::plate_meshed`]): for convergence studies
-    /// (docs/real-falls.md, "Is the experiment converged?").
+    /// (docs/lab/real-falls.md, "Is the experiment converged?").
     pub refine: usize,
     /// A draught in the room ([`Draught`]): `None` is still air, the
     /// experiment's and the cross-check's.
@@ -72,7 +72,7 @@ pub struct Protocol {
 /// A draught in the room: a uniform horizontal wind, each component a
 /// stationary Ornstein–Uhlenbeck process (Gaussian, of standard deviation
 /// `speed` and exponential autocorrelation e^(−|Δt|/`correlation`)), its
-/// own for each release ([`draught_field`]; docs/real-falls.md, "Paper that
+/// own for each release ([`draught_field`]; docs/lab/real-falls.md, "Paper that
 /// bends, and a draught in the room").
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Draught {

@@ -128,7 +128,7 @@ pub fn real_table(real: &[RealSegment]) -> Vec<BinStats> {
 /// fall differently (the smallest squares drift 0.26 let go flat and 0.72
 /// on edge), so a simulation that lets go half and half is compared like
 /// for like with the films re-weighted to halves, not with their own mix
-/// (5 flat to 9 on edge in that bin; docs/real-falls.md, "The films at the
+/// (5 flat to 9 on edge in that bin; docs/lab/real-falls.md, "The films at the
 /// simulated mix"). A bin without one kind keeps its drops unweighted; the
 /// counts and the side are the films'.
 pub fn real_table_at_mix(real: &[RealSegment], flat_share: &[f64]) -> Vec<BinStats> {
@@ -269,7 +269,7 @@ pub fn real_by_release(real: &[RealSegment]) -> Vec<ByRelease> {
 /// drift, flat Ω, edge drift, edge Ω); `None` where either side has no
 /// positive median. The pooled table ([`BinStats`]) mixes the two releases
 /// in each side's own proportion, and the films' bins are not half and
-/// half (docs/real-falls.md, "The release protocol"), so a law can score
+/// half (docs/lab/real-falls.md, "The release protocol"), so a law can score
 /// well pooled with each release off on its own.
 pub fn release_mismatch(real: &ByRelease, sim: &ByRelease) -> [Option<f64>; 4] {
     let log_ratio = |r: f64, s: f64| (r > 0.0 && s > 0.0).then(|| (s / r).ln().abs());
@@ -319,7 +319,7 @@ impl BinIntervals {
 /// [`real_table`] does, and the [`BOOTSTRAP_LEVEL`] percentile interval of
 /// each statistic. A bin of 14 moving drops (the smallest squares) pins its
 /// medians far less than one of 30: a simulated value inside the interval
-/// is as close as the real data can tell (docs/real-falls.md, "How sure the
+/// is as close as the real data can tell (docs/lab/real-falls.md, "How sure the
 /// real side is").
 pub fn real_intervals(real: &[RealSegment], resamples: usize, seed: u64) -> Vec<BinIntervals> {
     real_bins(real)
@@ -492,7 +492,7 @@ mod tests {
     use std::path::Path;
 
     /// What a law that fell exactly as the films' drops would score at the
-    /// cross-check's protocol (docs/real-falls.md, "The films at the
+    /// cross-check's protocol (docs/lab/real-falls.md, "The films at the
     /// simulated mix"): each bin's own drops resampled 12 flat and 12 on
     /// edge, 4,000 times, against the films' table. The smallest squares'
     /// pooled drift is within ×1.5 of the films' in only a quarter of the

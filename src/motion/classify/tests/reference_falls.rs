@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 // ------------------------------------------------------------ APW ODE
 
 /// Falls of the Andersen–Pesavento–Wang 2D quasi-steady plate model
-/// (nondimensional form of docs/falling-plates.md, "APW quasi-steady
+/// (nondimensional form of docs/design/falling-plates.md, "APW quasi-steady
 /// model": C_T = 1.2, C_R = π, A = 1.4, B = 1, μ1 = μ2 = 0.2), released
 /// from rest at 45°, RK4 with h = 0.005, embedded in 3D (motion in the x–z
 /// plane, span along y). Lengths in half-chords a = 1 cm, time unit
@@ -65,7 +65,7 @@ fn apw_fall(i_star: f64) -> Trajectory {
     tr
 }
 
-/// The APW model classified as the table in docs/falling-plates.md, "APW
+/// The APW model classified as the table in docs/design/falling-plates.md, "APW
 /// quasi-steady model", says it falls.
 #[test]
 fn apw_model_falls_flutter_and_tumble_where_the_notes_say() {

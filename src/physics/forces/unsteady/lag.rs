@@ -19,7 +19,7 @@ use crate::physics::model::{AeroLaw, Model};
 /// in Δ. So Verlet's end-of-step evaluation, whose acceleration it carries
 /// into the next step, sees the lag at that step's end, and the term keeps
 /// Verlet second order (a test measures it). RK4 under this law is not
-/// fourth order, with the term or without it (docs/real-falls.md).
+/// fourth order, with the term or without it (docs/lab/real-falls.md).
 /// [`Self::advance`] then commits the step's last evaluation. The same
 /// state carries each plate's wake phase when the opt-in wake term is on
 /// (module docs, "Wake"), read and committed the same way.

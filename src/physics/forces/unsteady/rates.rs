@@ -100,7 +100,7 @@ fn triangle_bounds(
 /// square's side, a disk's diameter). A tumbling plate's edges move at
 /// about its fall speed or slower (Ω c/2 ≲ U; Mahadevan, Ryu & Samuel
 /// 1999): measured at the defaults, real and simulated squares turn at
-/// 0.6–0.7 of it and a narrow heavy strip at 0.2 (docs/real-falls.md), so this is a bound,
+/// 0.6–0.7 of it and a narrow heavy strip at 0.2 (docs/lab/real-falls.md), so this is a bound,
 /// not an estimate.
 pub fn tumbling_rate(model: &Model) -> f64 {
     let AeroLaw::Unsteady(law) = &model.aero else {

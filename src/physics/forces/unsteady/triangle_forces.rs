@@ -185,7 +185,7 @@ fn lagged_pressure(
         // couple reversed in a jump whenever the in-plane flow passed
         // through zero (a plate rocking through face-on with α_L behind
         // α), and a 5 cm plate's fall converged erratically, its Verlet
-        // error at 0.25 s 60× the smooth law's (docs/real-falls.md,
+        // error at 0.25 s 60× the smooth law's (docs/lab/real-falls.md,
         // "A couple without a jump").
         let along_flow = (flow.u - tm.n * flow.qn) / flow.speed;
         flow.lag_arm = along_flow * (-shift * normal_force);

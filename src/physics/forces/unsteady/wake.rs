@@ -7,7 +7,7 @@
 //! release, about three to four times the time the air takes to cross the
 //! plate at every size; the law's face-on fall, let go at 1–5°, only rocks
 //! about face-on at the Munk couple's period and takes 0.76–1.05 s at every
-//! size (docs/real-falls.md, "When a flat release departs"). No coefficient
+//! size (docs/lab/real-falls.md, "When a flat release departs"). No coefficient
 //! of the quasi-steady terms changes that. A bluff plate's wake does: it
 //! sheds vortices from alternate edges at a Strouhal frequency
 //! f = St |u| / c (St ≈ 0.15 for plates normal to a stream; Roshko 1954,
