@@ -27,7 +27,9 @@
 //! - [`studio`]: choosing leaves by eye in the browser: a session of
 //!   generations bred from a person's picks, and its local web server.
 //!
-//! The command line (`src/cli/`) sits on top, in the binary.
+//! The command line (`src/cli/`) sits on top, in the binary. The research
+//! experiments (real falls, strips) are the workspace's `lab` crate, built
+//! on this library; nothing here depends on them.
 #![warn(missing_docs)]
 
 pub mod breed;

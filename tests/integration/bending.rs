@@ -244,12 +244,4 @@ fn plate_writes_a_sheet_that_bends() {
     let rel = (a.hinges[0].stiffness / b.hinges[0].stiffness - 1.0).abs();
     assert!(rel < 1e-12, "{rel}");
     let _ = std::fs::remove_dir_all(&dir);
-    for bad in [0.0, -1.0, f64::NAN] {
-        let protocol = leafmagic::sim::real_falls::Protocol {
-            bending: Some(bad),
-            ..Default::default()
-        };
-        let err = protocol.check().unwrap_err();
-        assert!(err.contains("bending stiffness"), "{err}");
-    }
 }

@@ -7,7 +7,7 @@
 //! would see. And the real paper squares of `tests/data/real-falls/squares`
 //! with people's labels, and the leave-one-out refit of the two thresholds
 //! calibrated on them. Shared by `real_falls.rs` and
-//! `examples/real_falls_classify.rs`.
+//! `lab/examples/real_falls_classify.rs`.
 
 use leafmagic::leaf::genome::{Genome, mutate};
 use leafmagic::leaf::plates::{self, square_card};

@@ -12,7 +12,7 @@ mod breeding;
 mod classes;
 mod common;
 mod contact;
-// Shared with examples/real_falls_classify.rs, which uses all of it.
+// Shared with lab/examples/real_falls_classify.rs, which uses all of it.
 #[allow(dead_code)]
 mod corpus;
 mod docs_links;
@@ -32,7 +32,6 @@ mod newcomer;
 mod particles;
 mod plate_cli;
 mod real_falls;
-mod real_falls_aero;
 mod resume;
 mod rigid;
 mod scene_files;

@@ -157,7 +157,7 @@ fn increment(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>) -> Vector3<f64> {
 /// The features [`classify`](super::classify) measures from a pose record, over the whole of
 /// `trajectory` (no start-up window, no sampling checks, no decision): for
 /// a caller that has cut its record already, such as the real-falls
-/// experiment's filmed fall (`crate::sim::real_falls::rotation_of`).
+/// experiment's filmed fall (`leafmagic_lab::real_falls::rotation_of`, in the workspace's lab).
 /// Without an orientation per sample, the default (all zero).
 pub fn pose_features(trajectory: &Trajectory, size: f64) -> Features {
     let n = trajectory.time.len();

@@ -9,7 +9,7 @@
 //!
 //! `cargo run --release --example real_falls_classify` (about 15 s).
 
-#[path = "../tests/integration/corpus.rs"]
+#[path = "../../tests/integration/corpus.rs"]
 #[allow(dead_code)]
 mod corpus;
 

@@ -57,11 +57,11 @@ pub struct Protocol {
     pub mix: ReleaseMix,
     /// The paper's bending stiffness D, N·m: `None` cuts rigid plates (the
     /// falling-plate literature's, and the cross-check's); `Some(D)` sheets
-    /// that bend ([`crate::leaf::plates::flexible`]; docs/lab/real-falls.md,
+    /// that bend ([`leafmagic::leaf::plates::flexible`]; docs/lab/real-falls.md,
     /// "Paper that bends").
     pub bending: Option<f64>,
     /// Plates meshed this many times finer across than `leafmagic plate`'s
-    /// (1; [`crate::leaf::plates::plate_meshed`]): for convergence studies
+    /// (1; [`leafmagic::leaf::plates::plate_meshed`]): for convergence studies
     /// (docs/lab/real-falls.md, "Is the experiment converged?").
     pub refine: usize,
     /// A draught in the room ([`Draught`]): `None` is still air, the
@@ -107,8 +107,8 @@ pub fn draught_field(
     bin: usize,
     k: usize,
     seconds: f64,
-) -> crate::physics::field::WindField {
-    use crate::physics::field::{Interpolation, Keyframes, Primitive, WindField};
+) -> leafmagic::physics::field::WindField {
+    use leafmagic::physics::field::{Interpolation, Keyframes, Primitive, WindField};
     use rand_distr::{Distribution, StandardNormal};
     let mut rng = Xoshiro256PlusPlus::seed_from_u64(
         release_stream(seed, bin, k).wrapping_add(0xD1B5_4A32_D192_ED03),

@@ -155,7 +155,7 @@ fn table() {
     let fixture = |name: &str| {
         LeafSpec::read(
             &std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-                .join(format!("tests/fixtures/{name}")),
+                .join(format!("../tests/fixtures/{name}")),
         )
         .unwrap()
     };

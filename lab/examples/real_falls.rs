@@ -41,7 +41,7 @@ use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::physics::forces::unsteady;
 use leafmagic::physics::model::AeroLaw;
-use leafmagic::sim::real_falls::{self, BinStats, Protocol, ReleaseStats};
+use leafmagic_lab::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
@@ -171,7 +171,8 @@ fn run() -> Result<(), String> {
     let real = match &films {
         Some(dir) => real_falls::read_films(dir, None).map_err(|e| e.to_string())?,
         None => {
-            let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
+            let dir =
+                Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/real-falls/squares");
             real_falls::read_squares(&dir).map_err(|e| e.to_string())?
         }
     };

@@ -16,12 +16,12 @@ use leafmagic::motion::class::Regime;
 use leafmagic::motion::classify::{Classification, classify};
 use leafmagic::physics::model::AIR_DENSITY_20C;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
-use leafmagic::sim::real_falls::{self, Label};
+use leafmagic_lab::real_falls::{self, Label};
 use std::path::Path;
 
 fn squares() -> Vec<real_falls::RealSegment> {
     real_falls::read_squares(
-        &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares"),
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/real-falls/squares"),
     )
     .unwrap()
 }
@@ -206,7 +206,7 @@ fn plate_fall(
     tilt: [f64; 2],
 ) -> Classification {
     let aero = AeroSpec::named(AeroLawName::Unsteady);
-    leafmagic::sim::strips::classify_plate_fall(shape, size, aspect, sigma, tilt, 8.0, &aero)
+    leafmagic_lab::strips::classify_plate_fall(shape, size, aspect, sigma, tilt, 8.0, &aero)
         .unwrap()
 }
 
@@ -259,7 +259,7 @@ fn a_tumbling_plate_falls_at_the_auto_step_as_at_half_of_it() {
 /// The strips' scaling law, as issue 17 states it: twelve strips of aspect
 /// 5 over areal density ×8 (35–280 g/m²) and width ×4 (1–4 cm), let go at
 /// 60° about the long axis and each falling 300 scaled times
-/// ([`leafmagic::sim::strips`]), all tumble, and the fit Ω ∝ σ^p w^q gives
+/// ([`leafmagic_lab::strips`]), all tumble, and the fit Ω ∝ σ^p w^q gives
 /// p = 0.5 ± 0.1 and q = −1.0 ± 0.1 (Mahadevan, Ryu & Samuel 1999: ½ and
 /// −1). Measured under the defaults: 0.42 and −0.92 (0.50 and −0.97 with
 /// the lag's couple along the unit in-plane direction, before it was made
@@ -268,7 +268,7 @@ fn a_tumbling_plate_falls_at_the_auto_step_as_at_half_of_it() {
 /// (docs/lab/real-falls.md, "The defaults").
 #[test]
 fn strips_tumble_at_the_scaling_law_over_equal_scaled_times() {
-    use leafmagic::sim::strips::{
+    use leafmagic_lab::strips::{
         SCALED_DURATION, SIGMAS, WIDTHS, fit_exponents, strip_fall, strip_seconds,
     };
     use rayon::prelude::*;
@@ -380,7 +380,7 @@ fn held_out_shapes_are_predicted_by_the_experiments_own_path() {
 fn the_filmed_mix_and_the_split_by_release_follow_the_labels() {
     let real = squares();
     let labels = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares/labels.csv"),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/real-falls/squares/labels.csv"),
     )
     .unwrap();
     let mut flat = [0usize; 5];
@@ -655,7 +655,7 @@ fn bad_real_fall_files_are_refused_with_file_line_and_reason() {
 fn another_shapes_films_are_compared_with_plates_of_that_shape() {
     let dir = std::env::temp_dir().join(format!("leafmagic-circle-films-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares");
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/real-falls/squares");
     for entry in std::fs::read_dir(&src).unwrap() {
         let path = entry.unwrap().path();
         let text = std::fs::read_to_string(&path).unwrap();
@@ -1311,5 +1311,19 @@ fn the_laws_large_squares_tumble_or_flutter_and_the_rule_calls_the_tumbles_chaot
     assert_eq!(real_falls::rotation_counts(&drops, false), [0, 4, 0, 0]);
     for d in drops.iter().filter(|d| d.on_edge) {
         assert_eq!(d.moving_label(), Some(Label::Chaotic), "{d:?}");
+    }
+}
+
+/// The experiment's protocol refuses a bending stiffness that is not a
+/// positive number, naming it.
+#[test]
+fn a_protocol_refuses_a_bending_stiffness_that_is_not_positive() {
+    for bad in [0.0, -1.0, f64::NAN] {
+        let protocol = real_falls::Protocol {
+            bending: Some(bad),
+            ..Default::default()
+        };
+        let err = protocol.check().unwrap_err();
+        assert!(err.contains("bending stiffness"), "{err}");
     }
 }

@@ -488,7 +488,7 @@ pub fn real_flat_share(real: &[RealSegment]) -> Vec<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::real_falls::{bounds_missed, read_squares};
+    use crate::real_falls::{bounds_missed, read_squares};
     use std::path::Path;
 
     /// What a law that fell exactly as the films' drops would score at the
@@ -502,7 +502,7 @@ mod tests {
     #[test]
     fn the_films_own_drops_let_go_half_and_half_miss_the_smallest_drift() {
         let real = read_squares(
-            &Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real-falls/squares"),
+            &Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/real-falls/squares"),
         )
         .unwrap();
         let table = real_table(&real);

@@ -11,12 +11,12 @@
 //! durations compare like with like where a fixed 8 s would not
 //! (docs/lab/real-falls.md, "The strips' exponents and the protocol").
 
-use crate::leaf::AeroSpec;
-use crate::leaf::plates::{PlateShape, plate};
-use crate::motion::class::Regime;
-use crate::motion::classify::{Classification, classify};
-use crate::physics::model::STANDARD_GRAVITY;
-use crate::sim::drop::{DropParams, drop_leaf};
+use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::plates::{PlateShape, plate};
+use leafmagic::motion::class::Regime;
+use leafmagic::motion::classify::{Classification, classify};
+use leafmagic::physics::model::STANDARD_GRAVITY;
+use leafmagic::sim::drop::{DropParams, drop_leaf};
 
 /// Areal densities of the sweep, kg/m²: 35 to 280 g/m² (×8).
 pub const SIGMAS: [f64; 4] = [0.035, 0.07, 0.14, 0.28];

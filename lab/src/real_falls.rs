@@ -41,9 +41,9 @@ pub use protocol::*;
 pub use segments::*;
 pub use table::*;
 
-use crate::leaf::AeroSpec;
-use crate::leaf::plates::PlateShape;
-use crate::physics::model::STANDARD_GRAVITY;
+use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::plates::PlateShape;
+use leafmagic::physics::model::STANDARD_GRAVITY;
 
 /// The score's four parts for one bin: |Δ fraction tumbling|, |ln v ratio|,
 /// |ln drift ratio|, |ln Ω ratio| (values floored at 0.01; a value the

@@ -9,14 +9,14 @@ use super::protocol::{
 };
 use super::segments::label_of;
 use super::table::{BinStats, ByRelease, Measured, MovingDrop, release_stats, stats};
-use crate::leaf::AeroSpec;
-use crate::leaf::plates::{PlateShape, plate_meshed};
-use crate::motion::trajectory::Trajectory;
-use crate::physics::model::Model;
-use crate::physics::params::{Integrator, TimeStep};
-use crate::physics::pose::PoseTracker;
-use crate::physics::run::{StepError, resolve_step, run_sampled};
-use crate::physics::state::State;
+use leafmagic::leaf::AeroSpec;
+use leafmagic::leaf::plates::{PlateShape, plate_meshed};
+use leafmagic::motion::trajectory::Trajectory;
+use leafmagic::physics::model::Model;
+use leafmagic::physics::params::{Integrator, TimeStep};
+use leafmagic::physics::pose::PoseTracker;
+use leafmagic::physics::run::{StepError, resolve_step, run_sampled};
+use leafmagic::physics::state::State;
 use nalgebra::{UnitQuaternion, Vector3};
 use rayon::prelude::*;
 
@@ -27,16 +27,16 @@ type V3 = Vector3<f64>;
 pub enum ExperimentError {
     /// The plate could not be built.
     #[error(transparent)]
-    Plate(#[from] crate::leaf::plates::PlateError),
+    Plate(#[from] leafmagic::leaf::plates::PlateError),
     /// The plate's model is invalid.
     #[error(transparent)]
-    Model(#[from] crate::physics::model::ModelError),
+    Model(#[from] leafmagic::physics::model::ModelError),
     /// No step could be chosen.
     #[error(transparent)]
     Step(#[from] StepError),
     /// The fall diverged.
     #[error(transparent)]
-    Sim(#[from] crate::physics::integrate::SimError),
+    Sim(#[from] leafmagic::physics::integrate::SimError),
     /// The release protocol is out of range ([`Protocol::check`]).
     #[error("release protocol: {0}")]
     Protocol(String),
@@ -284,13 +284,13 @@ pub enum Rotation {
 
 /// What a fall did by its plate's rotation over the whole of `trajectory`
 /// (`size` its chord, m), read with the motion classifier's own kinematics
-/// ([`crate::motion::classify::pose_features`]: a reversal is a turning
+/// ([`leafmagic::motion::classify::pose_features`]: a reversal is a turning
 /// point of a swing of at least 10° about the dominant axis, a flip the
 /// normal crossing the horizontal with ±30° hysteresis): tumbling with no
 /// reversal and at least two flips (a whole turn), fluttering with
 /// reversals and no flip, mixed with both, steady otherwise.
 pub fn rotation_of(trajectory: &Trajectory, size: f64) -> Rotation {
-    let f = crate::motion::classify::pose_features(trajectory, size);
+    let f = leafmagic::motion::classify::pose_features(trajectory, size);
     match (f.reversals > 0, f.normal_flips) {
         (false, flips) if flips >= 2 => Rotation::Tumbling,
         (true, 0) => Rotation::Fluttering,
@@ -350,12 +350,12 @@ pub fn simulate_bin(
     run.protocol.check().map_err(ExperimentError::Protocol)?;
     let mut spec = plate_meshed(shape, side, 1.0, PAPER, aero.clone(), run.protocol.refine)?;
     if let Some(d) = run.protocol.bending {
-        spec = crate::leaf::plates::flexible(spec, d)?;
+        spec = leafmagic::leaf::plates::flexible(spec, d)?;
     }
     let model = spec.model()?;
     // Each release's own draught, if any; the step is found once, under the
     // strongest of them (a faster relative flow only shortens it).
-    let fields: Vec<Option<crate::physics::field::WindField>> = (0..run.releases)
+    let fields: Vec<Option<leafmagic::physics::field::WindField>> = (0..run.releases)
         .map(|k| {
             run.protocol
                 .draught
@@ -400,10 +400,10 @@ pub fn simulate_bin(
 /// The experiment's air in an `[aero]` table of law `law`: its density and
 /// viscosity (the unsteady law), its density (the quadratic law).
 pub fn experiment_air(mut aero: AeroSpec) -> AeroSpec {
-    if aero.law != crate::leaf::AeroLawName::Linear {
+    if aero.law != leafmagic::leaf::AeroLawName::Linear {
         aero.air_density.get_or_insert(AIR_DENSITY);
     }
-    if aero.law == crate::leaf::AeroLawName::Unsteady {
+    if aero.law == leafmagic::leaf::AeroLawName::Unsteady {
         aero.kinematic_viscosity.get_or_insert(AIR_VISCOSITY);
     }
     aero

@@ -4,7 +4,7 @@
 //! centres) fitted on them.
 
 use super::films::{Features, Film, Label};
-use crate::leaf::plates::PlateShape;
+use leafmagic::leaf::plates::PlateShape;
 use nalgebra::Vector3;
 use std::path::Path;
 
