@@ -49,8 +49,7 @@ pub const QUATERNION_COLUMNS: [&str; 4] = ["qw", "qx", "qy", "qz"];
 /// script) by up to ~2e-3 (0.9996–1.0004 on the MuJoCo falls so rounded);
 /// 1e-2 reads those and still refuses columns that do not hold a rotation's
 /// quaternion (Euler angles, another quantity), whose norm is not within 1 %
-/// of 1 row after row. Until 2026-12-05 this was 1e-5, which refused 3 and
-/// 4 decimals.
+/// of 1 row after row.
 pub const QUATERNION_NORM_TOLERANCE: f64 = 1e-2;
 
 /// Quaternions already unit to within this are kept bit for bit instead of

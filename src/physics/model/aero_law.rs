@@ -277,15 +277,13 @@ fn default_wake_strouhal() -> f64 {
     UNSTEADY_WAKE_STROUHAL
 }
 
-/// Default C_D face-on: 2.6, near APW 2005's 2-D A + B = 2.4. Fitted, with
+/// Default C_D face-on: 2.6, near APW 2005's 2-D A + B = 2.4. One set with
 /// [`UNSTEADY_CD_PARALLEL`], [`UNSTEADY_TRANSLATIONAL_LIFT`],
-/// [`UNSTEADY_ROTATIONAL_LIFT`] and [`UNSTEADY_ROTATIONAL_DAMPING`], as one
-/// set to the real paper squares at steps that bound a tumbling plate's
-/// turn ([`crate::physics::stability::MAX_TURN_PER_STEP`]), then refitted
-/// with the lagged centre of pressure ([`UNSTEADY_PRESSURE_LAG_GAIN`],
-/// [`UNSTEADY_PRESSURE_LAG`]) to the squares and the strips' scaling law
-/// together, and checked on ten seeds the fit did not see and the disks
-/// against Field et al. 1997: docs/lab/real-falls.md, "The defaults".
+/// [`UNSTEADY_ROTATIONAL_LIFT`], [`UNSTEADY_ROTATIONAL_DAMPING`] and the
+/// lagged centre of pressure ([`UNSTEADY_PRESSURE_LAG_GAIN`],
+/// [`UNSTEADY_PRESSURE_LAG`]), fitted to the real paper squares and the
+/// strips' scaling law (how, and its checks: docs/lab/real-falls.md, "The
+/// defaults").
 pub const UNSTEADY_CD_NORMAL: f64 = 2.6;
 /// Default form drag edge-on beyond skin friction: 0.65 (APW 2005's C_D(0)
 /// is 0.4). A paper sheet is far thinner than APW's plates, so this is not
