@@ -163,12 +163,12 @@ fn unknown_keys_and_syntax_errors_name_the_place() {
         }),
         &["stifness"],
     );
-    expect_error("name = \"x\"\n[aero\nalpha_n = 1", &["line 2"]);
+    expect_error("name = \"x\"\n[aero\nalpha_n = 1", &[":2: "]);
 }
 
 /// A name given as a number says that a string was wanted, and which
-/// (serde's own message, "wanted string or table", said neither), on the
-/// key's line.
+/// (serde's own message, "wanted string or table", said neither), at the
+/// key's line and field.
 #[test]
 fn a_number_where_a_name_belongs_says_the_names() {
     let text = edited(|t| {
@@ -180,8 +180,7 @@ fn a_number_where_a_name_belongs_says_the_names() {
     expect_error(
         &text,
         &[
-            "line",
-            "law = 3",
+            ": aero.law: ",
             "expected a string: one of linear, quadratic, unsteady",
         ],
     );
