@@ -341,9 +341,10 @@
     return [0, 1, 2].map(function (j) { return C[k * 3 + j] * (1 - a) + C[(k + 1) * 3 + j] * a; });
   }
 
-  // Draws `list` (prepared falls, each shifted by its `dx` metres along
-  // x) in canvas `cv` at time t: the wall and ground for scale, then each
-  // one's trail and leaf. The view follows the falls' mean centre.
+  // Draws the prepared falls `list` in canvas `cv` at time t, side by
+  // side in columns at one scale (the largest view span fits its column),
+  // each followed by its own view: one fall fills a grid cell; kept
+  // leaves compare size, sway and spin directly.
   function drawView(cv, list, t) {
     const dpr = window.devicePixelRatio || 1;
     const w = Math.max(1, Math.round(cv.clientWidth * dpr)), h = Math.max(1, Math.round(cv.clientHeight * dpr));
@@ -351,29 +352,35 @@
     const ctx = cv.getContext('2d');
     ctx.fillStyle = '#10161f';
     ctx.fillRect(0, 0, w, h);
-    const shown = list.filter(function (e) { return e.o.P; });
-    if (!shown.length) {
-      ctx.fillStyle = list.length && list[0].o.c ? '#c06060' : '#8893a2';
-      ctx.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
-      ctx.fillText(list.length && list[0].o.c ? 'no fall to show' : 'dropping…', 10 * dpr, 20 * dpr);
-      return false;
-    }
-    const at = shown.map(function (e) {
-      const g = frameAt(e.o, t), p = comAt(e.o, g);
-      return { o: e.o, dx: e.dx, g: g, c: [p[0] + e.dx, p[1], p[2]] };
+    const n = Math.max(1, list.length), cw = w / n;
+    const big = list.reduce(function (m, o) { return Math.max(m, o.P ? o.span : 0); }, 0);
+    const s = Math.min(cw, h) / (big || 1);
+    let any = false;
+    list.forEach(function (o, k) {
+      ctx.save();
+      ctx.beginPath(); ctx.rect(k * cw, 0, cw, h); ctx.clip();
+      ctx.translate(k * cw, 0);
+      if (o.P) {
+        drawOne(ctx, o, t, cw, h, s, dpr);
+        any = true;
+      } else {
+        ctx.fillStyle = o.c ? '#c06060' : '#8893a2';
+        ctx.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
+        ctx.fillText(o.c ? 'no fall to show' : 'dropping…', 10 * dpr, 20 * dpr);
+      }
+      ctx.restore();
+      if (k > 0) {
+        ctx.strokeStyle = '#2c3542'; ctx.lineWidth = 1;
+        ctx.beginPath(); ctx.moveTo(k * cw, 0); ctx.lineTo(k * cw, h); ctx.stroke();
+      }
     });
-    const c = [0, 1, 2].map(function (j) { return at.reduce(function (s, a) { return s + a.c[j]; }, 0) / at.length; });
-    // Fit every fall's view span around its centre's place on screen (one
-    // fall: its span fills the smaller side, as in a grid cell).
-    const big = Math.max.apply(null, at.map(function (a) { return a.o.span; }));
-    let xr = 0, yr = 0;
-    at.forEach(function (a) {
-      const p = project(a.c[0] - c[0], a.c[1] - c[1], a.c[2] - c[2]);
-      xr = Math.max(xr, Math.abs(p[0])); yr = Math.max(yr, Math.abs(p[1]));
-    });
-    const span = big + 2 * Math.max(xr, yr);
-    const ground = Math.min.apply(null, at.map(function (a) { return a.o.ground; }));
-    const s = Math.min(w / (big + 2 * xr), h / (big + 2 * yr));
+    return any;
+  }
+
+  // One fall in a w × h view at s pixels a metre, following its centre:
+  // the wall and ground for scale, its trail and the leaf.
+  function drawOne(ctx, o, t, w, h, s, dpr) {
+    const g = frameAt(o, t), c = comAt(o, g);
     const sx = function (p) { return w / 2 + s * p[0]; }, syy = function (p) { return h / 2 - s * p[1]; };
     const rel = function (x, y, z) { return project(x - c[0], y - c[1], z - c[2]); };
     // Scale: a back wall of 10 cm squares, fixed in the world, so the fall
@@ -381,7 +388,7 @@
     ctx.lineWidth = 1;
     ctx.strokeStyle = 'rgba(120,140,170,0.25)';
     ctx.beginPath();
-    const half = span, step = 0.1, wallY = c[1] + half;
+    const half = Math.max(w, h) / s, step = 0.1, wallY = c[1] + o.span;
     for (let z = Math.floor((c[2] - half) / step) * step; z <= c[2] + half; z += step) {
       const a = rel(c[0] - half, wallY, z), b = rel(c[0] + half, wallY, z);
       ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
@@ -391,31 +398,30 @@
       ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
     }
     ctx.stroke();
-    if (ground > c[2] - half) {
+    if (o.ground > c[2] - half) {
       ctx.strokeStyle = 'rgba(150,170,120,0.5)';
       ctx.beginPath();
       const n = Math.ceil(half / step);
       for (let k = -n; k <= n; k++) {
-        let a = rel(c[0] + k * step, c[1] - half, ground), b = rel(c[0] + k * step, c[1] + half, ground);
+        let a = rel(c[0] + k * step, c[1] - half, o.ground), b = rel(c[0] + k * step, c[1] + half, o.ground);
         ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
-        a = rel(c[0] - half, c[1] + k * step, ground); b = rel(c[0] + half, c[1] + k * step, ground);
+        a = rel(c[0] - half, c[1] + k * step, o.ground); b = rel(c[0] + half, c[1] + k * step, o.ground);
         ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
       }
       ctx.stroke();
     }
-    at.forEach(function (a) { drawFall(ctx, a.o, a.dx, a.g, rel, sx, syy, dpr); });
-    return true;
+    drawFall(ctx, o, g, rel, sx, syy, dpr);
   }
 
   // One fall: the trail of its centre over the last TRAIL_S seconds,
   // fading with age, and the leaf's triangles, far first, shaded by how
   // they face the light.
-  function drawFall(ctx, o, dx, g, rel, sx, syy, dpr) {
+  function drawFall(ctx, o, g, rel, sx, syy, dpr) {
     const first = Math.max(0, Math.floor(g - TRAIL_S * state.fps));
     ctx.lineWidth = Math.max(1.5, 2 * dpr);
     let prev = null;
     for (let f = first; f <= Math.floor(g); f++) {
-      const p = rel(o.com[f * 3] + dx, o.com[f * 3 + 1], o.com[f * 3 + 2]);
+      const p = rel(o.com[f * 3], o.com[f * 3 + 1], o.com[f * 3 + 2]);
       if (prev) {
         ctx.strokeStyle = 'rgba(255,150,40,' + fmt(0.9 * (1 - (g - f) / (TRAIL_S * state.fps)), 3) + ')';
         ctx.beginPath(); ctx.moveTo(sx(prev), syy(prev)); ctx.lineTo(sx(p), syy(p)); ctx.stroke();
@@ -426,7 +432,7 @@
     const V = [];
     for (let i = 0; i < o.n; i++) {
       const p0 = (k0 * o.n + i) * 3, p1 = (k1 * o.n + i) * 3, P = o.P;
-      V.push([P[p0] * (1 - a) + P[p1] * a + dx, P[p0 + 1] * (1 - a) + P[p1 + 1] * a, P[p0 + 2] * (1 - a) + P[p1 + 2] * a]);
+      V.push([P[p0] * (1 - a) + P[p1] * a, P[p0 + 1] * (1 - a) + P[p1 + 1] * a, P[p0 + 2] * (1 - a) + P[p1 + 2] * a]);
     }
     const tris = [];
     for (let i = 0; i + 2 < o.tris.length; i += 3) {
@@ -448,7 +454,7 @@
   }
 
   function draw(o, t) {
-    o.drawn = drawView(o.canvas, [{ o: o, dx: 0 }], t);
+    o.drawn = drawView(o.canvas, [o], t);
   }
 
   function tick() {
@@ -461,11 +467,7 @@
       cells.forEach(function (o) { draw(o, t); });
       if (!busy && cells.every(function (o) { return o.drawn; })) document.body.dataset.drawn = state.generation.index;
       if (together.length >= 2) {
-        // Kept leaves side by side, a view's width of their largest apart.
-        const gap = 0.6 * together.reduce(function (m, o) { return Math.max(m, o.span || 0); }, 0);
-        const tw = drawView($('together'), together.map(function (o, k) {
-          return { o: o, dx: (k - (together.length - 1) / 2) * gap };
-        }), t);
+        const tw = drawView($('together'), together, t);
         if (tw) document.body.dataset.together = together.length;
       }
     }
