@@ -693,6 +693,50 @@ fn keep_and_export(s: &Studio, dir: &Path, a: u64, b: u64) {
 }
 
 #[test]
+fn a_studio_killed_mid_breed_reopens_at_the_generation_before() {
+    let dir = scratch("studio-kill");
+    let out = dir.to_str().unwrap();
+    // 10 s drops: the kill lands while generation 1 is being bred.
+    let mut s = Studio::start(
+        &[
+            "--out",
+            out,
+            "--seed",
+            "9",
+            "--grid",
+            "4",
+            "--seconds",
+            "10",
+        ],
+        &dir,
+    );
+    let g0 = ids(&s.api("/api/state", ""));
+    let picks = format!("{{\"picks\": [{}, {}]}}", g0[0], g0[1]);
+    s.start_breed(&picks);
+    s.child.kill().unwrap(); // SIGKILL
+    s.child.wait().unwrap();
+    let session = s.session();
+    assert_eq!(
+        session["generations"].as_array().unwrap().len(),
+        1,
+        "{session}"
+    );
+    assert_eq!(session["current"], 0);
+    drop(s);
+    // Reopened: generation 0, and the same breeding goes through.
+    let r = Studio::start(&["--resume", out], &dir);
+    let state = r.api("/api/state", "");
+    assert_eq!(state["generation"]["index"], 0);
+    assert_eq!(ids(&state), g0);
+    let bred = r.breed(&picks);
+    assert_eq!(bred["generation"]["index"], 1);
+    assert_eq!(
+        r.session()["generations"][1]["picks"],
+        serde_json::json!([g0[0], g0[1]])
+    );
+}
+
+#[test]
 fn studio_sessions_with_the_same_seed_and_picks_write_the_same_bytes() {
     let (da, db) = (scratch("studio-same-a"), scratch("studio-same-b"));
     let (a, b) = std::thread::scope(|scope| {
