@@ -18,7 +18,8 @@
 //! k}`; `POST /api/keep` `{"id": id, "keep": bool?}`; `POST /api/export`
 //! `{"fps": f, "start_height_m": h}` writes the collection under the
 //! session's `export/`; `POST /api/auto` `{"generations": n}` breeds n
-//! generations from the machine's picks in the background, as Breed. Each but progress and export answers with the
+//! generations from the machine's picks in the background, as Breed, and
+//! `POST /api/like` `{"id": id, "scale": s?}` one toward `id`'s fall. Each but progress and export answers with the
 //! state.
 
 use super::collection::{ExportRequest, export_collection};
@@ -178,6 +179,7 @@ impl Server {
             .route("/api/goto", post(go_to))
             .route("/api/progress", get(progress))
             .route("/api/auto", post(auto))
+            .route("/api/like", post(like))
             .route("/api/keep", post(keep))
             .route("/api/export", post(export))
             .layer(DefaultBodyLimit::max(MAX_BODY))
@@ -408,6 +410,27 @@ fn start_breeding(app: &Arc<Shared>, r: &BreedRequest) -> Answer {
     start_job(app, false, 1, |s| s.plan(&r.picks, r.scale))
 }
 
+/// `POST /api/like`: "More like this" of candidate `id`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LikeRequest {
+    id: u64,
+    #[serde(default)]
+    scale: Option<f64>,
+}
+
+async fn like(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
+    match parse::<LikeRequest>(&body) {
+        Ok(r) => {
+            blocking(app, move |app| {
+                start_job(app, false, 1, |s| s.plan_like(r.id, r.scale))
+            })
+            .await
+        }
+        Err(refusal) => refusal,
+    }
+}
+
 /// `POST /api/auto`: `generations` bred one after another from the
 /// machine's picks ([`Session::plan_auto`]), then the person again.
 #[derive(Deserialize)]
@@ -602,6 +625,7 @@ fn candidate_json(c: &Candidate, m: &CandidateMotion) -> serde_json::Value {
         "kept": r.kept,
         "releases": r.releases,
         "error": r.error,
+        "distance": r.distance,
         "motion": m,
     })
 }
@@ -642,6 +666,7 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
             "picks": g.picks,
             "scale": g.scale,
             "auto": g.auto,
+            "like": g.like,
         })).collect::<Vec<_>>(),
         "fps": MOTION_FPS,
         "candidates": candidates,

@@ -47,6 +47,9 @@ pub const SHRINK: f64 = 0.8;
 /// Frames per second of the falls shown: enough for smooth motion in a
 /// small view, few enough that a grid of 10 s falls stays small.
 pub const MOTION_FPS: f64 = 20.0;
+/// "More like this" evaluates this many times the grid and keeps the
+/// grid's worth closest: the machine's volume between two looks.
+pub const LIKE_POOL: usize = 3;
 /// Candidates the machine picks in a generation it breeds alone
 /// ([`Session::auto_picks`]): two, so crossovers join the variations.
 pub const AUTO_PICKS: usize = 2;
@@ -138,6 +141,10 @@ pub struct GenerationNode {
     /// person's.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub auto: bool,
+    /// "More like this": the candidate whose fall the generation was bred
+    /// toward ([`Session::plan_like`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub like: Option<u64>,
 }
 
 /// The session file: settings and the tree.
@@ -267,6 +274,7 @@ impl Session {
             scale: bs.initial_scale,
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
+            like: None,
         };
         let mut session = Session {
             dir: dir.to_path_buf(),
@@ -421,8 +429,42 @@ impl Session {
             scale,
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
+            like: None,
         };
         Ok(self.pending(node, children))
+    }
+
+    /// "More like this": a generation bred from candidate `id` of the
+    /// current generation toward its own fall (breed's `--like`: the
+    /// distance of each fall's descriptors to those of `id`'s shown fall,
+    /// gated on its class). The machine does the volume: [`LIKE_POOL`]
+    /// times the grid of variations (and wild cards) are evaluated and the
+    /// grid's worth closest kept ([`Pending::evaluate`]).
+    pub fn plan_like(&self, id: u64, scale: Option<f64>) -> Result<Pending, StudioError> {
+        let (node, generation) = self.current();
+        let Some(c) = generation.candidates.iter().find(|c| c.id == id) else {
+            return Err(StudioError::Input(format!(
+                "candidate {id} is not in generation {} (its ids: {:?})",
+                node.index, node.ids
+            )));
+        };
+        let target = like_target(&self.proto, c, self.file.settings.seconds)?;
+        let grid = self.file.settings.grid;
+        let mut pending = self.plan(&[id], scale)?;
+        let children = children_of(
+            &[(id, &c.genome)],
+            &self.proto,
+            grid * LIKE_POOL,
+            pending.node.scale,
+            pending.node.seed,
+            self.file.next_id,
+        );
+        pending.node.ids = children.iter().map(|c| c.id).collect();
+        pending.node.like = Some(id);
+        pending.children = children;
+        pending.settings.like = Some(target);
+        pending.keep = Some(grid);
+        Ok(pending)
     }
 
     /// The candidates of the current generation the machine picks when
@@ -451,10 +493,12 @@ impl Session {
 
     fn pending(&self, node: GenerationNode, children: Vec<Child>) -> Pending {
         Pending {
+            first_id: self.file.next_id,
             node,
             children,
             proto: self.proto.clone(),
             settings: self.file.settings.breed_settings(),
+            keep: None,
         }
     }
 
@@ -493,10 +537,11 @@ impl Session {
             node,
             candidates,
             motion,
+            first_id,
+            reserved,
         } = evaluated;
         let k = node.index;
-        let next_id = candidates.first().map_or(self.file.next_id, |c| c.id);
-        if k != self.generations.len() || next_id != self.file.next_id {
+        if k != self.generations.len() || first_id != self.file.next_id {
             return Err(StudioError::Input(format!(
                 "generation {k} was planned from another state of the session (it has {} \
                  generations now)",
@@ -515,7 +560,7 @@ impl Session {
         // not part of the session (a kill before leaves files nothing
         // names).
         let before = (self.file.next_id, self.file.current);
-        self.file.next_id += candidates.len() as u64;
+        self.file.next_id += reserved;
         self.file.current = k;
         self.file.generations.push(node);
         if let Err(e) = self.write_session() {
@@ -580,6 +625,10 @@ pub struct Pending {
     children: Vec<Child>,
     proto: LeafSpec,
     settings: BreedSettings,
+    /// The first id its children take (the session's next, when planned).
+    first_id: u64,
+    /// Keep only this many, the closest to the target (else all).
+    keep: Option<usize>,
 }
 
 /// A generation evaluated, in grid order, ready for [`Session::commit`].
@@ -588,6 +637,9 @@ pub struct Evaluated {
     node: GenerationNode,
     candidates: Vec<Candidate>,
     motion: Vec<CandidateMotion>,
+    first_id: u64,
+    /// Ids used, kept or not (each id names one evaluation, kept or not).
+    reserved: u64,
 }
 
 impl Pending {
@@ -601,6 +653,11 @@ impl Pending {
         self.settings.releases
     }
 
+    /// Candidates evaluated (more than the grid for "More like this").
+    pub fn evaluations(&self) -> usize {
+        self.children.len()
+    }
+
     /// Evaluates every candidate on the rayon pool, calling `finished`
     /// with its grid slot as each is done (in whatever order they finish,
     /// from whatever thread), and gathers them in grid order: the files
@@ -610,11 +667,14 @@ impl Pending {
         finished: impl Fn(usize, &Candidate, &CandidateMotion) + Sync,
     ) -> Evaluated {
         let Pending {
-            node,
+            mut node,
             children,
             proto,
             settings,
+            first_id,
+            keep,
         } = self;
+        let reserved = children.len() as u64;
         let evaluated: Vec<(Candidate, CandidateMotion)> = children
             .into_par_iter()
             .enumerate()
@@ -624,13 +684,79 @@ impl Pending {
                 (candidate, motion)
             })
             .collect();
+        let evaluated = match keep {
+            None => evaluated,
+            Some(n) => closest(evaluated, n),
+        };
+        node.ids = evaluated.iter().map(|(c, _)| c.id).collect();
         let (candidates, motion) = evaluated.into_iter().unzip();
         Evaluated {
             node,
             candidates,
             motion,
+            first_id,
+            reserved,
         }
     }
+}
+
+/// The `n` of `evaluated` closest to the target (no distance: last; ties
+/// to the lower id), in the order they were made: the files do not depend
+/// on the order the evaluations finished in.
+fn closest(
+    evaluated: Vec<(Candidate, CandidateMotion)>,
+    n: usize,
+) -> Vec<(Candidate, CandidateMotion)> {
+    let mut order: Vec<(f64, u64)> = evaluated
+        .iter()
+        .map(|(c, _)| {
+            let d = c.evaluation.distance.filter(|d| d.is_finite());
+            (d.unwrap_or(f64::INFINITY), c.id)
+        })
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let chosen: Vec<u64> = order.iter().take(n).map(|(_, id)| *id).collect();
+    evaluated
+        .into_iter()
+        .filter(|(c, _)| chosen.contains(&c.id))
+        .collect()
+}
+
+/// The target of "More like this" from candidate `c`: the descriptors of
+/// the fall it is shown with (its lower-median release, dropped again as
+/// it was evaluated), gated on that fall's class.
+fn like_target(
+    proto: &LeafSpec,
+    c: &Candidate,
+    seconds: f64,
+) -> Result<crate::motion::describe::MotionTarget, StudioError> {
+    use crate::motion::describe::{Descriptors, MotionTarget};
+    let refuse = |why: String| {
+        StudioError::Input(format!(
+            "candidate {}: no fall to breed toward: {why}",
+            c.id
+        ))
+    };
+    if c.evaluation.fall().is_none() {
+        return Err(refuse("its drop diverged".to_string()));
+    }
+    let model = c.genome.model(proto).map_err(|e| refuse(e.to_string()))?;
+    let params = crate::sim::drop::DropParams {
+        seconds,
+        tilt_deg: c.evaluation.release_deg,
+        ..crate::sim::drop::DropParams::default()
+    };
+    let fall = crate::sim::drop::drop_leaf(&model, &params).map_err(|e| refuse(e.to_string()))?;
+    let described = Descriptors::of(&crate::motion::classify::classify(
+        &fall.trajectory,
+        model.chord(),
+    ))
+    .map_err(|e| refuse(format!("its fall is undetermined ({})", e.reason)))?;
+    Ok(MotionTarget::like(
+        &format!("leaf-{}", c.id),
+        model.chord(),
+        &described,
+    ))
 }
 
 /// One child evaluated as breed evaluates it, with the fall it is shown

@@ -13,6 +13,7 @@
   const $ = function (id) { return document.getElementById(id); };
   const gridEl = $('grid'), statusEl = $('status'), scaleEl = $('scale'), treeEl = $('tree');
   const TRAIL_S = 2.0;        // trail length, seconds
+  const LIKE_POOL = 3;        // session.rs's LIKE_POOL
   const YAW = -0.9, PITCH = 0.45;
   let state = null, cells = [], picks = [], busy = false, start = performance.now();
   let together = [];  // the collection's falls, prepared
@@ -74,9 +75,10 @@
   }
 
   function infoHtml(c) {
-    const rate = c.class === 'diverged' ? c.error :
+    let rate = c.class === 'diverged' ? c.error :
       fmt(c.descent_m_s, 2) + ' m/s · drift ' + fmt(c.drift_ratio, 2) + ' · ' +
       fmt(c.spin_rad_s, 1) + ' rad/s · kept ' + c.kept + '/' + c.releases;
+    if (c.distance !== null && c.distance !== undefined) rate += ' · distance ' + fmt(c.distance, 2);
     return '<b>#' + c.id + ' ' + c.class + '</b> ' + (c.regime || '') + '<br>' + rate +
       '<br><span class="origin">' + originText(c) + '</span>';
   }
@@ -107,6 +109,17 @@
       keepLeaf(c.id, !isKept(c.id));
     });
     o.info.insertBefore(keep, o.info.firstChild);
+    if (state.candidates.some(function (x) { return x.id === c.id; }) && c.class !== 'diverged' && c.class !== 'undetermined') {
+      const like = document.createElement('button');
+      like.className = 'like';
+      like.textContent = 'more like this';
+      like.title = 'breed the next generation toward this leaf\'s fall: ' + LIKE_POOL + '× the grid evaluated, the closest kept';
+      like.addEventListener('click', function (e) {
+        e.stopPropagation();
+        moreLike(c.id);
+      });
+      o.info.insertBefore(like, keep.nextSibling);
+    }
   }
 
   // The grid of `list` (candidates, or null for those still dropping).
@@ -146,7 +159,7 @@
     treeEl.innerHTML = 'history: ';
     state.tree.forEach(function (g) {
       const s = document.createElement('span');
-      s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + (g.auto ? 'auto: ' : '') +
+      s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + (g.auto ? 'auto: ' : '') + (g.like !== null && g.like !== undefined ? 'like ' : '') +
         g.picks.map(function (p) { return '#' + p; }).join(', ') + ')');
       if (g.index === state.generation.index) s.className = 'here';
       s.addEventListener('click', function () { act('/api/goto', { generation: g.index }); });
@@ -292,6 +305,21 @@
     busy = true;
     showStatus('breeding from ' + ids.map(function (i) { return '#' + i; }).join(', ') + '…');
     api('/api/breed', body).then(function (s) {
+      state = s;
+      follow(s.breeding);
+    }).catch(function (e) {
+      busy = false; showStatus('refused: ' + e.message);
+    });
+  }
+
+  function moreLike(id) {
+    if (busy) return;
+    const scale = parseFloat(scaleEl.value);
+    const body = { id: id };
+    if (isFinite(scale)) body.scale = scale;
+    busy = true;
+    showStatus('breeding toward #' + id + '\'s fall…');
+    api('/api/like', body).then(function (s) {
       state = s;
       follow(s.breeding);
     }).catch(function (e) {

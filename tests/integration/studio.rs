@@ -188,13 +188,19 @@ impl Studio {
         assert!(state["breeding"].is_null(), "{state}");
         // A poll may land after the last candidate and before the commit,
         // or only after it: what arrived is the grid, where it arrived.
-        if got > 0 {
-            let shown: Vec<Option<u64>> = ids(&state).into_iter().map(Some).collect();
+        let shown = ids(&state);
+        if got > 0 && slots.len() == shown.len() {
             for (k, id) in slots.iter().enumerate() {
                 assert!(
-                    id.is_none() || *id == shown[k],
+                    id.is_none() || *id == Some(shown[k]),
                     "slot {k}: {id:?} vs {shown:?}"
                 );
+            }
+        } else if got == slots.len() && got > 0 {
+            // "More like this" evaluated more than it keeps: what it keeps
+            // arrived.
+            for id in &shown {
+                assert!(slots.contains(&Some(*id)), "{id} never arrived: {slots:?}");
             }
         }
         state
@@ -461,6 +467,7 @@ fn studio_breeds_from_picks_and_keeps_a_tree() {
 
     keep_and_export(&s, &dir, g1[0]["id"].as_u64().unwrap(), two[0]);
     auto_generations(&s, &dir);
+    more_like_this(&s, &dir);
 
     // Reopened, it is where it was, and goes on.
     let before = s.api("/api/state", "");
@@ -526,6 +533,61 @@ fn auto_generations(s: &Studio, dir: &Path) {
     }
     // Generations a person bred are not marked.
     assert!(gens[1].get("auto").is_none(), "{}", gens[1]);
+}
+
+/// "More like this" of a candidate with a class: three times the grid
+/// evaluated toward its fall (ids reserved for all), the grid's worth
+/// kept, each a variation of it or a wild card; refused for a candidate
+/// not on the grid or whose fall has no class.
+fn more_like_this(s: &Studio, dir: &Path) {
+    let state = s.api("/api/state", "");
+    let (s_ok, s_bad): (Vec<&Value>, Vec<&Value>) = state["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .partition(|c| c["class"] != "undetermined" && c["class"] != "diverged");
+    let (status, reason) = s.call("POST", "/api/like", "{\"id\": 999999}");
+    assert_eq!(status, 400, "{reason}");
+    assert!(reason.contains("not in generation"), "{reason}");
+    if let Some(bad) = s_bad.first() {
+        let (status, reason) = s.call("POST", "/api/like", &format!("{{\"id\": {}}}", bad["id"]));
+        assert_eq!(status, 400, "{reason}");
+        assert!(reason.contains("no fall to breed toward"), "{reason}");
+    }
+    let id = s_ok.first().expect("a candidate with a class")["id"]
+        .as_u64()
+        .unwrap();
+    let before = s.session();
+    let first = before["next_id"].as_u64().unwrap();
+    let (status, text) = s.call("POST", "/api/like", &format!("{{\"id\": {id}}}"));
+    assert_eq!(status, 202, "{text}");
+    let started: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(started["breeding"]["candidates"], 12, "3 × the grid of 4");
+    let bred = s.finish_breed();
+    let after = s.session();
+    let k = bred["generation"]["index"].as_u64().unwrap() as usize;
+    let node = &after["generations"][k];
+    assert_eq!(node["like"], id, "{node}");
+    assert_eq!(node["picks"], serde_json::json!([id]));
+    assert_eq!(node["parent"], before["current"]);
+    assert_eq!(
+        after["next_id"].as_u64().unwrap(),
+        first + 12,
+        "every evaluation's id used"
+    );
+    let g = read_json(&dir.join(format!("gen-{k:03}.json")));
+    let g = g.as_array().unwrap();
+    assert_eq!(g.len(), 4);
+    for c in g {
+        let cid = c["id"].as_u64().unwrap();
+        assert!((first..first + 12).contains(&cid), "{cid}");
+        let p = c["parents"].as_array().unwrap();
+        assert!(p.is_empty() || p == &[Value::from(id)], "{c}");
+    }
+    assert!(
+        g.iter().any(|c| c["evaluation"]["distance"].is_number()),
+        "some kept fall is near enough to be measured: {g:?}"
+    );
 }
 
 /// The centre of every frame of a fall shown (`gen-NNN-motion.json`'s
