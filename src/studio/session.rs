@@ -5,8 +5,9 @@
 //! killed at any moment reopens at its last completed action):
 //!
 //! - `studio.json`: the settings, the tree (each generation's parent, the
-//!   picks it was bred from, its random seed and variation scale, its ids)
-//!   and the generation on screen;
+//!   picks it was bred from (and whether the machine made them), its
+//!   random seed and variation scale, its ids), the generation on screen
+//!   and the collection of kept leaves;
 //! - `prototype.toml`: the prototype, so a session reopens without its
 //!   source file;
 //! - `gen-NNN.json`: generation NNN's candidates: how each was made, its
@@ -47,6 +48,15 @@ pub const SHRINK: f64 = 0.8;
 /// Frames per second of the falls shown: enough for smooth motion in a
 /// small view, few enough that a grid of 10 s falls stays small.
 pub const MOTION_FPS: f64 = 20.0;
+/// "More like this" evaluates this many times the grid and keeps the
+/// grid's worth closest: the machine's volume between two looks.
+pub const LIKE_POOL: usize = 3;
+/// Candidates the machine picks in a generation it breeds alone
+/// ([`Session::auto_picks`]): two, so crossovers join the variations.
+pub const AUTO_PICKS: usize = 2;
+/// Most generations one "Auto N" request may breed: enough to cover the
+/// 5–20 generations interactive sessions last (Sims 1991).
+pub const MAX_AUTO: usize = 20;
 /// Stream slot of a generation's step seed in [`stream_seed`] (never an
 /// individual's id nor breed's selection stream).
 const STEP_STREAM: u64 = u64::MAX - 2;
@@ -128,6 +138,14 @@ pub struct GenerationNode {
     pub scale: f64,
     /// Its candidates' ids, in grid order.
     pub ids: Vec<u64>,
+    /// The picks were the machine's ([`Session::plan_auto`]), not the
+    /// person's.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub auto: bool,
+    /// "More like this": the candidate whose fall the generation was bred
+    /// toward ([`Session::plan_like`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub like: Option<u64>,
 }
 
 /// The session file: settings and the tree.
@@ -144,6 +162,9 @@ pub struct SessionFile {
     pub next_id: u64,
     /// Every generation, by index.
     pub generations: Vec<GenerationNode>,
+    /// The collection: the ids of the kept candidates, in the order kept.
+    #[serde(default)]
+    pub kept: Vec<u64>,
 }
 
 /// One candidate of a generation.
@@ -253,20 +274,24 @@ impl Session {
             seed: step_seed(settings.seed, 0),
             scale: bs.initial_scale,
             ids: children.iter().map(|c| c.id).collect(),
+            auto: false,
+            like: None,
         };
         let mut session = Session {
             dir: dir.to_path_buf(),
             file: SessionFile {
                 format: FORMAT,
-                next_id: children.len() as u64,
+                next_id: 0,
                 settings,
                 current: 0,
                 generations: Vec::new(),
+                kept: Vec::new(),
             },
             proto,
             generations: Vec::new(),
         };
-        session.add(node, children)?;
+        let pending = session.pending(node, children);
+        session.commit(pending.evaluate(|_, _, _| {}))?;
         Ok(session)
     }
 
@@ -344,8 +369,19 @@ impl Session {
 
     /// Breeds the next generation from `picks` (ids of the current
     /// generation) with variation `scale` ([`Session::next_scale`] if
-    /// none), evaluates it on all cores, writes it and makes it current.
+    /// none), evaluates it on all cores, writes it and makes it current:
+    /// [`Session::plan`], [`Pending::evaluate`] and [`Session::commit`] in
+    /// one.
     pub fn breed(&mut self, picks: &[u64], scale: Option<f64>) -> Result<(), StudioError> {
+        let pending = self.plan(picks, scale)?;
+        self.commit(pending.evaluate(|_, _, _| {}))
+    }
+
+    /// The next generation bred from `picks` with variation `scale`, made
+    /// but not evaluated: the evaluation needs no session, so a server
+    /// can run it while the session answers other requests. Refuses picks
+    /// that are not in the current generation and a scale out of range.
+    pub fn plan(&self, picks: &[u64], scale: Option<f64>) -> Result<Pending, StudioError> {
         let (node, generation) = self.current();
         if picks.is_empty() {
             return Err(StudioError::Input(
@@ -393,10 +429,78 @@ impl Session {
             seed,
             scale,
             ids: children.iter().map(|c| c.id).collect(),
+            auto: false,
+            like: None,
         };
-        self.file.next_id += children.len() as u64;
-        self.file.current = index;
-        self.add(node, children)
+        Ok(self.pending(node, children))
+    }
+
+    /// "More like this": a generation bred from candidate `id` of the
+    /// current generation toward its own fall (breed's `--like`: the
+    /// distance of each fall's descriptors to those of `id`'s shown fall,
+    /// gated on its class). The machine does the volume: [`LIKE_POOL`]
+    /// times the grid of variations (and wild cards) are evaluated and the
+    /// grid's worth closest kept ([`Pending::evaluate`]).
+    pub fn plan_like(&self, id: u64, scale: Option<f64>) -> Result<Pending, StudioError> {
+        let (node, generation) = self.current();
+        let Some(c) = generation.candidates.iter().find(|c| c.id == id) else {
+            return Err(StudioError::Input(format!(
+                "candidate {id} is not in generation {} (its ids: {:?})",
+                node.index, node.ids
+            )));
+        };
+        let target = like_target(&self.proto, c, self.file.settings.seconds)?;
+        let grid = self.file.settings.grid;
+        let mut pending = self.plan(&[id], scale)?;
+        let children = children_of(
+            &[(id, &c.genome)],
+            &self.proto,
+            grid * LIKE_POOL,
+            pending.node.scale,
+            pending.node.seed,
+            self.file.next_id,
+        );
+        pending.node.ids = children.iter().map(|c| c.id).collect();
+        pending.node.like = Some(id);
+        pending.children = children;
+        pending.settings.like = Some(target);
+        pending.keep = Some(grid);
+        Ok(pending)
+    }
+
+    /// The candidates of the current generation the machine picks when
+    /// it breeds alone: the [`AUTO_PICKS`] best toward the session's
+    /// target by breed's score, ties to the earlier in the grid.
+    pub fn auto_picks(&self) -> Vec<u64> {
+        let mut ranked: Vec<&Candidate> = self.current().1.candidates.iter().collect();
+        // A stable sort keeps grid order among ties; a NaN score ranks last.
+        ranked.sort_by(|a, b| {
+            let key = |c: &Candidate| {
+                let s = c.evaluation.score;
+                if s.is_nan() { f64::NEG_INFINITY } else { s }
+            };
+            key(b).total_cmp(&key(a))
+        });
+        ranked.iter().take(AUTO_PICKS).map(|c| c.id).collect()
+    }
+
+    /// The next generation bred from [`Session::auto_picks`] at the
+    /// default scale, marked as the machine's choice.
+    pub fn plan_auto(&self) -> Result<Pending, StudioError> {
+        let mut pending = self.plan(&self.auto_picks(), None)?;
+        pending.node.auto = true;
+        Ok(pending)
+    }
+
+    fn pending(&self, node: GenerationNode, children: Vec<Child>) -> Pending {
+        Pending {
+            first_id: self.file.next_id,
+            node,
+            children,
+            proto: self.proto.clone(),
+            settings: self.file.settings.breed_settings(),
+            keep: None,
+        }
     }
 
     /// Makes generation `index` current: going back, or to any generation
@@ -408,8 +512,10 @@ impl Session {
                 self.generations.len()
             )));
         }
+        let before = self.file.current;
         self.file.current = index;
         self.write_session()
+            .inspect_err(|_| self.file.current = before)
     }
 
     /// Makes the current generation's parent current (generation 0 has
@@ -423,39 +529,83 @@ impl Session {
         }
     }
 
-    /// Evaluates `children` (on the rayon pool, gathered in order), writes
-    /// their files and then the session file, which makes them part of it.
-    fn add(&mut self, node: GenerationNode, children: Vec<Child>) -> Result<(), StudioError> {
-        let settings = self.file.settings.breed_settings();
-        let proto = &self.proto;
-        let evaluated: Vec<(Candidate, CandidateMotion)> = children
-            .into_par_iter()
-            .map(|c| {
-                let evaluation = evaluate(proto, c.id, &c.genome, &settings);
-                let motion = motion_of(proto, &c, &evaluation, settings.seconds);
-                let candidate = Candidate {
-                    id: c.id,
-                    origin: c.origin,
-                    parents: c.parents,
-                    genome: c.genome,
-                    evaluation,
-                };
-                (candidate, motion)
-            })
-            .collect();
-        let (candidates, motion): (Vec<_>, Vec<_>) = evaluated.into_iter().unzip();
+    /// Writes an evaluated generation's files and then the session file,
+    /// which makes it part of the session, and makes it current. The
+    /// generation must be the next one planned from this session (no other
+    /// generation committed since its plan).
+    pub fn commit(&mut self, evaluated: Evaluated) -> Result<(), StudioError> {
+        let Evaluated {
+            node,
+            candidates,
+            motion,
+            first_id,
+            reserved,
+        } = evaluated;
         let k = node.index;
+        if k != self.generations.len() || first_id != self.file.next_id {
+            return Err(StudioError::Input(format!(
+                "generation {k} was planned from another state of the session (it has {} \
+                 generations now)",
+                self.generations.len()
+            )));
+        }
         let leaves = self.dir.join(format!("gen-{k:03}"));
         std::fs::create_dir_all(&leaves).map_err(|e| file_error(&leaves, e))?;
         for c in &candidates {
-            let leaf = c.genome.to_leaf(proto).to_toml();
+            let leaf = c.genome.to_leaf(&self.proto).to_toml();
             self.write(&format!("gen-{k:03}/leaf-{}.toml", c.id), leaf.as_bytes())?;
         }
         self.write(&candidates_file(k), &pretty(&candidates)?)?;
         self.write(&motion_file(k), &pretty(&motion)?)?;
+        // The session file last: until it is written, the generation is
+        // not part of the session (a kill before leaves files nothing
+        // names).
+        let before = (self.file.next_id, self.file.current);
+        self.file.next_id += reserved;
+        self.file.current = k;
         self.file.generations.push(node);
+        if let Err(e) = self.write_session() {
+            (self.file.next_id, self.file.current) = before;
+            self.file.generations.pop();
+            return Err(e);
+        }
         self.generations.push(Generation { candidates, motion });
+        Ok(())
+    }
+
+    /// The candidate `id` wherever it is in the tree, with its fall and
+    /// the index of its generation.
+    pub fn find(&self, id: u64) -> Option<(usize, &Candidate, &CandidateMotion)> {
+        self.generations.iter().enumerate().find_map(|(k, g)| {
+            let i = g.candidates.iter().position(|c| c.id == id)?;
+            Some((k, &g.candidates[i], &g.motion[i]))
+        })
+    }
+
+    /// The prototype the session breeds from.
+    pub fn prototype(&self) -> &LeafSpec {
+        &self.proto
+    }
+
+    /// Adds candidate `id` (of any generation) to the collection, or with
+    /// `keep` false takes it out; recorded at once.
+    pub fn keep(&mut self, id: u64, keep: bool) -> Result<(), StudioError> {
+        if self.find(id).is_none() {
+            return Err(StudioError::Input(format!(
+                "there is no candidate {id} in the session"
+            )));
+        }
+        let before = self.file.kept.clone();
+        let at = self.file.kept.iter().position(|k| *k == id);
+        match (keep, at) {
+            (true, None) => self.file.kept.push(id),
+            (false, Some(i)) => {
+                self.file.kept.remove(i);
+            }
+            _ => return Ok(()),
+        }
         self.write_session()
+            .inspect_err(|_| self.file.kept = before)
     }
 
     fn write_session(&self) -> Result<(), StudioError> {
@@ -466,6 +616,167 @@ impl Session {
         let path = self.dir.join(name);
         write_atomic(&path, bytes).map_err(|e| file_error(&path, e))
     }
+}
+
+/// A generation made from picks but not yet evaluated ([`Session::plan`]):
+/// it carries what its evaluation needs, so it runs apart from the session.
+#[derive(Debug)]
+pub struct Pending {
+    node: GenerationNode,
+    children: Vec<Child>,
+    proto: LeafSpec,
+    settings: BreedSettings,
+    /// The first id its children take (the session's next, when planned).
+    first_id: u64,
+    /// Keep only this many, the closest to the target (else all).
+    keep: Option<usize>,
+}
+
+/// A generation evaluated, in grid order, ready for [`Session::commit`].
+#[derive(Debug)]
+pub struct Evaluated {
+    node: GenerationNode,
+    candidates: Vec<Candidate>,
+    motion: Vec<CandidateMotion>,
+    first_id: u64,
+    /// Ids used, kept or not (each id names one evaluation, kept or not).
+    reserved: u64,
+}
+
+impl Pending {
+    /// Its place in the tree.
+    pub fn node(&self) -> &GenerationNode {
+        &self.node
+    }
+
+    /// Drops per candidate.
+    pub fn releases(&self) -> usize {
+        self.settings.releases
+    }
+
+    /// Candidates evaluated (more than the grid for "More like this").
+    pub fn evaluations(&self) -> usize {
+        self.children.len()
+    }
+
+    /// Evaluates every candidate on the rayon pool, calling `finished`
+    /// with its grid slot as each is done (in whatever order they finish,
+    /// from whatever thread), and gathers them in grid order: the files
+    /// written from the result do not depend on the order of evaluation.
+    pub fn evaluate(
+        self,
+        finished: impl Fn(usize, &Candidate, &CandidateMotion) + Sync,
+    ) -> Evaluated {
+        let Pending {
+            mut node,
+            children,
+            proto,
+            settings,
+            first_id,
+            keep,
+        } = self;
+        let reserved = children.len() as u64;
+        let evaluated: Vec<(Candidate, CandidateMotion)> = children
+            .into_par_iter()
+            .enumerate()
+            .map(|(slot, c)| {
+                let (candidate, motion) = evaluate_child(&proto, c, &settings);
+                finished(slot, &candidate, &motion);
+                (candidate, motion)
+            })
+            .collect();
+        let evaluated = match keep {
+            None => evaluated,
+            Some(n) => closest(evaluated, n),
+        };
+        node.ids = evaluated.iter().map(|(c, _)| c.id).collect();
+        let (candidates, motion) = evaluated.into_iter().unzip();
+        Evaluated {
+            node,
+            candidates,
+            motion,
+            first_id,
+            reserved,
+        }
+    }
+}
+
+/// The `n` of `evaluated` closest to the target (no distance: last; ties
+/// to the lower id), in the order they were made: the files do not depend
+/// on the order the evaluations finished in.
+fn closest(
+    evaluated: Vec<(Candidate, CandidateMotion)>,
+    n: usize,
+) -> Vec<(Candidate, CandidateMotion)> {
+    let mut order: Vec<(f64, u64)> = evaluated
+        .iter()
+        .map(|(c, _)| {
+            let d = c.evaluation.distance.filter(|d| d.is_finite());
+            (d.unwrap_or(f64::INFINITY), c.id)
+        })
+        .collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let chosen: Vec<u64> = order.iter().take(n).map(|(_, id)| *id).collect();
+    evaluated
+        .into_iter()
+        .filter(|(c, _)| chosen.contains(&c.id))
+        .collect()
+}
+
+/// The target of "More like this" from candidate `c`: the descriptors of
+/// the fall it is shown with (its lower-median release, dropped again as
+/// it was evaluated), gated on that fall's class.
+fn like_target(
+    proto: &LeafSpec,
+    c: &Candidate,
+    seconds: f64,
+) -> Result<crate::motion::describe::MotionTarget, StudioError> {
+    use crate::motion::describe::{Descriptors, MotionTarget};
+    let refuse = |why: String| {
+        StudioError::Input(format!(
+            "candidate {}: no fall to breed toward: {why}",
+            c.id
+        ))
+    };
+    if c.evaluation.fall().is_none() {
+        return Err(refuse("its drop diverged".to_string()));
+    }
+    let model = c.genome.model(proto).map_err(|e| refuse(e.to_string()))?;
+    let params = crate::sim::drop::DropParams {
+        seconds,
+        tilt_deg: c.evaluation.release_deg,
+        ..crate::sim::drop::DropParams::default()
+    };
+    let fall = crate::sim::drop::drop_leaf(&model, &params).map_err(|e| refuse(e.to_string()))?;
+    let described = Descriptors::of(&crate::motion::classify::classify(
+        &fall.trajectory,
+        model.chord(),
+    ))
+    .map_err(|e| refuse(format!("its fall is undetermined ({})", e.reason)))?;
+    Ok(MotionTarget::like(
+        &format!("leaf-{}", c.id),
+        model.chord(),
+        &described,
+    ))
+}
+
+/// One child evaluated as breed evaluates it, with the fall it is shown
+/// with.
+pub fn evaluate_child(
+    proto: &LeafSpec,
+    c: Child,
+    settings: &BreedSettings,
+) -> (Candidate, CandidateMotion) {
+    let evaluation = evaluate(proto, c.id, &c.genome, settings);
+    let motion = motion_of(proto, &c, &evaluation, settings.seconds);
+    let candidate = Candidate {
+        id: c.id,
+        origin: c.origin,
+        parents: c.parents,
+        genome: c.genome,
+        evaluation,
+    };
+    (candidate, motion)
 }
 
 /// The seed of the step that makes generation `index`.
@@ -551,5 +862,74 @@ fn motion_of(
         frames: frames.len(),
         positions: base64::engine::general_purpose::STANDARD.encode(bytes),
         error: String::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Mutex;
+
+    /// A fresh session of 4 candidates with 1 s drops in a scratch folder.
+    fn small(name: &str) -> Session {
+        let dir = std::env::temp_dir().join(format!("leafmagic-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let settings = StudioSettings {
+            grid: 4,
+            seconds: 1.0,
+            ..StudioSettings::new("a", MotionClass::Floater, 7)
+        };
+        Session::create(&dir, settings, LeafSpec::load("a").unwrap()).unwrap()
+    }
+
+    #[test]
+    fn each_candidate_is_reported_once_as_it_finishes_and_lands_in_its_slot() {
+        let mut s = small("studio-evaluate");
+        let ids = s.current().0.ids.clone();
+        let pending = s.plan(&ids[..2], None).unwrap();
+        let seen = Mutex::new(Vec::new());
+        let evaluated = pending.evaluate(|slot, c, m| {
+            assert_eq!(c.id, m.id);
+            seen.lock().unwrap().push((slot, c.clone()));
+        });
+        let mut seen = seen.into_inner().unwrap();
+        seen.sort_by_key(|(slot, _)| *slot);
+        assert_eq!(
+            seen.iter().map(|(k, _)| *k).collect::<Vec<_>>(),
+            [0, 1, 2, 3]
+        );
+        for ((_, reported), kept) in seen.iter().zip(&evaluated.candidates) {
+            assert_eq!(reported, kept, "what was shown is what is recorded");
+        }
+        // Nothing is on disk or in the tree before the commit.
+        assert_eq!(s.file().generations.len(), 1);
+        assert!(!s.dir().join(candidates_file(1)).exists());
+        s.commit(evaluated).unwrap();
+        assert_eq!(s.file().generations.len(), 2);
+        assert_eq!(s.file().current, 1);
+        assert_eq!(s.file().generations[1].picks, ids[..2]);
+        let _ = std::fs::remove_dir_all(s.dir());
+    }
+
+    #[test]
+    fn a_generation_planned_from_an_older_state_is_refused() {
+        let mut s = small("studio-stale");
+        let ids = s.current().0.ids.clone();
+        let first = s.plan(&ids[..1], None).unwrap();
+        let second = s.plan(&ids[1..2], None).unwrap();
+        s.commit(first.evaluate(|_, _, _| {})).unwrap();
+        let err = s.commit(second.evaluate(|_, _, _| {})).unwrap_err();
+        assert!(err.to_string().contains("another state"), "{err}");
+        assert_eq!(s.file().generations.len(), 2);
+        // Keeping: only what exists, once, and recorded.
+        assert!(s.keep(999, true).is_err());
+        s.keep(ids[0], true).unwrap();
+        s.keep(ids[0], true).unwrap();
+        assert_eq!(s.file().kept, [ids[0]]);
+        let reopened = Session::open(s.dir()).unwrap();
+        assert_eq!(reopened.file().kept, [ids[0]]);
+        s.keep(ids[0], false).unwrap();
+        assert!(s.file().kept.is_empty());
+        let _ = std::fs::remove_dir_all(s.dir());
     }
 }

@@ -1,6 +1,8 @@
 // leafmagic studio: a grid of falling candidates, each in its own canvas,
 // drawn with a plain 2-D projection (as the preview's fallback renderer
-// does); picks go to the server, which breeds the next generation.
+// does); picks go to the server, which breeds the next generation in the
+// background while the page draws each candidate as its drops finish.
+// Kept leaves make a collection that falls side by side and exports.
 // URL query: token=TOKEN (required), t=SECONDS (clock held there, for
 // screenshots).
 'use strict';
@@ -11,8 +13,10 @@
   const $ = function (id) { return document.getElementById(id); };
   const gridEl = $('grid'), statusEl = $('status'), scaleEl = $('scale'), treeEl = $('tree');
   const TRAIL_S = 2.0;        // trail length, seconds
+  const LIKE_POOL = 3;        // session.rs's LIKE_POOL
   const YAW = -0.9, PITCH = 0.45;
   let state = null, cells = [], picks = [], busy = false, start = performance.now();
+  let together = [];  // the collection's falls, prepared
 
   function api(path, body) {
     const headers = { 'X-Leafmagic-Token': token };
@@ -70,36 +74,83 @@
     return o;
   }
 
-  function build() {
+  function infoHtml(c) {
+    let rate = c.class === 'diverged' ? c.error :
+      fmt(c.descent_m_s, 2) + ' m/s · drift ' + fmt(c.drift_ratio, 2) + ' · ' +
+      fmt(c.spin_rad_s, 1) + ' rad/s · kept ' + c.kept + '/' + c.releases;
+    if (c.distance !== null && c.distance !== undefined) rate += ' · distance ' + fmt(c.distance, 2);
+    return '<b>#' + c.id + ' ' + c.class + '</b> ' + (c.regime || '') + '<br>' + rate +
+      '<br><span class="origin">' + originText(c) + '</span>';
+  }
+
+  function isKept(id) {
+    return state.collection.some(function (k) { return k.id === id; });
+  }
+
+  // A cell's contents: the candidate's numbers and Keep button, or (while
+  // its drops run) a placeholder.
+  function fill(k, c) {
+    const o = cells[k];
+    if (!c) {
+      o.info.textContent = 'dropping…';
+      o.el.classList.add('pending');
+      return;
+    }
+    Object.assign(o, prepare(c));
+    o.el.classList.remove('pending');
+    o.el.dataset.id = c.id;
+    o.info.innerHTML = infoHtml(c);
+    const keep = document.createElement('button');
+    keep.className = 'keep' + (isKept(c.id) ? ' kept' : '');
+    keep.textContent = isKept(c.id) ? 'kept' : 'keep';
+    keep.title = 'add this leaf to the collection (again: take it out)';
+    keep.addEventListener('click', function (e) {
+      e.stopPropagation();
+      keepLeaf(c.id, !isKept(c.id));
+    });
+    o.info.insertBefore(keep, o.info.firstChild);
+    if (state.candidates.some(function (x) { return x.id === c.id; }) && c.class !== 'diverged' && c.class !== 'undetermined') {
+      const like = document.createElement('button');
+      like.className = 'like';
+      like.textContent = 'more like this';
+      like.title = 'breed the next generation toward this leaf\'s fall: ' + LIKE_POOL + '× the grid evaluated, the closest kept';
+      like.addEventListener('click', function (e) {
+        e.stopPropagation();
+        moreLike(c.id);
+      });
+      o.info.insertBefore(like, keep.nextSibling);
+    }
+  }
+
+  // The grid of `list` (candidates, or null for those still dropping).
+  function build(list, keepClock) {
     gridEl.innerHTML = '';
-    const n = state.candidates.length;
+    const n = list.length;
     const cols = Math.ceil(Math.sqrt(n * 4 / 3));
     gridEl.style.gridTemplateColumns = 'repeat(' + cols + ', minmax(0, 1fr))';
-    cells = state.candidates.map(function (c, k) {
+    cells = list.map(function (c, k) {
       const el = document.createElement('div');
       el.className = 'cell';
-      el.dataset.id = c.id;
       const canvas = document.createElement('canvas');
       const key = document.createElement('span');
       key.className = 'key';
       key.textContent = k < 10 ? String((k + 1) % 10) : '';
       const info = document.createElement('div');
       info.className = 'info';
-      const rate = c.class === 'diverged' ? c.error :
-        fmt(c.descent_m_s, 2) + ' m/s · drift ' + fmt(c.drift_ratio, 2) + ' · ' +
-        fmt(c.spin_rad_s, 1) + ' rad/s · kept ' + c.kept + '/' + c.releases;
-      info.innerHTML = '<b>#' + c.id + ' ' + c.class + '</b> ' + (c.regime || '') + '<br>' + rate +
-        '<br><span class="origin">' + originText(c) + '</span>';
       el.appendChild(key); el.appendChild(canvas); el.appendChild(info);
       el.addEventListener('click', function () { toggle(k); });
       gridEl.appendChild(el);
-      const o = prepare(c);
-      o.el = el; o.canvas = canvas; o.drawn = false;
-      return o;
+      return { el: el, canvas: canvas, info: info, P: null, F: 0, drawn: false };
     });
+    list.forEach(function (c, k) { fill(k, c); });
     picks = [];
-    start = performance.now();
+    if (!keepClock) start = performance.now();
+  }
+
+  function showState(keepClock) {
+    build(state.candidates, keepClock);
     showTree();
+    showCollection();
     showStatus();
     document.body.dataset.generation = state.generation.index;
   }
@@ -108,11 +159,30 @@
     treeEl.innerHTML = 'history: ';
     state.tree.forEach(function (g) {
       const s = document.createElement('span');
-      s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + g.picks.map(function (p) { return '#' + p; }).join(', ') + ')');
+      s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + (g.auto ? 'auto: ' : '') + (g.like !== null && g.like !== undefined ? 'like ' : '') +
+        g.picks.map(function (p) { return '#' + p; }).join(', ') + ')');
       if (g.index === state.generation.index) s.className = 'here';
       s.addEventListener('click', function () { act('/api/goto', { generation: g.index }); });
       treeEl.appendChild(s);
     });
+  }
+
+  function showCollection() {
+    const list = $('kept');
+    list.innerHTML = '';
+    together = state.collection.map(function (c) {
+      const s = document.createElement('span');
+      s.textContent = '#' + c.id + ' ' + c.class + ' (g' + c.generation + ') ✕';
+      s.title = 'take #' + c.id + ' out of the collection';
+      s.addEventListener('click', function () { keepLeaf(c.id, false); });
+      list.appendChild(s);
+      return prepare(c);
+    });
+    $('kept-count').textContent = '(' + together.length + ')';
+    $('export').disabled = together.length === 0;
+    // Two or more kept leaves fall side by side in one view.
+    $('together').style.display = together.length >= 2 ? 'block' : 'none';
+    document.body.dataset.kept = together.length;
   }
 
   function showStatus(text) {
@@ -123,11 +193,12 @@
       (picks.length ? picks.map(function (k) { return '#' + cells[k].c.id; }).join(', ') : 'none (click or 1–9, 0)') +
       ' · Enter breeds, Backspace goes back · ' + state.dir;
     $('back').disabled = busy || g.parent === null;
+    $('auto').disabled = busy;
     $('breed').disabled = busy || picks.length === 0;
   }
 
   function toggle(k) {
-    if (busy || k >= cells.length) return;
+    if (busy || k >= cells.length || !cells[k].c) return;
     const i = picks.indexOf(k);
     if (i < 0) picks.push(k); else picks.splice(i, 1);
     cells[k].el.classList.toggle('picked', i < 0);
@@ -139,29 +210,144 @@
     busy = true;
     showStatus(what || 'working…');
     api(path, body).then(function (s) {
-      busy = false; state = s; build();
+      busy = false; state = s; showState();
       scaleEl.value = fmt(state.next_scale, 2);
     }).catch(function (e) {
       busy = false; showStatus('refused: ' + e.message);
     });
   }
 
+  function keepLeaf(id, keep) {
+    api('/api/keep', { id: id, keep: keep }).then(function (s) {
+      // The grid stays as it is (its clock too); only the marks change.
+      state.collection = s.collection;
+      cells.forEach(function (o) {
+        if (!o.c) return;
+        const b = o.info.querySelector('button.keep');
+        b.classList.toggle('kept', isKept(o.c.id));
+        b.textContent = isKept(o.c.id) ? 'kept' : 'keep';
+      });
+      showCollection();
+    }).catch(function (e) { $('exported').textContent = 'refused: ' + e.message; });
+  }
+
+  function exportCollection() {
+    const body = { fps: parseFloat($('fps').value), start_height_m: parseFloat($('height').value) };
+    $('exported').textContent = 'exporting ' + together.length + ' leaves…';
+    $('export').disabled = true;
+    api('/api/export', body).then(function (r) {
+      $('exported').textContent = 'wrote ' + r.files.length + ' files in ' + r.dir + ': ' + r.files.join(', ');
+      document.body.dataset.exported = r.files.length;
+    }).catch(function (e) {
+      $('exported').textContent = 'refused: ' + e.message;
+    }).then(function () { $('export').disabled = together.length === 0; });
+  }
+
+  // ----- breeding in the background -----
+  // The server answers Breed at once; the page polls its progress and
+  // draws each candidate as its drops finish.
+  let got = 0, following = null;
+  function showProgress(b) {
+    const bar = $('progress');
+    bar.style.visibility = b ? 'visible' : 'hidden';
+    if (!b) return;
+    bar.firstChild.style.width = (100 * b.drops_done / Math.max(1, b.drops)) + '%';
+    showStatus((b.auto ? 'auto ' + b.auto[0] + ' of ' + b.auto[1] + ': ' : '') +
+      'breeding generation ' + b.generation + ' from ' + b.picks.map(function (i) { return '#' + i; }).join(', ') +
+      ': ' + b.done + ' of ' + b.candidates + ' candidates (' + b.drops_done + ' of ' + b.drops + ' drops)');
+  }
+
+  function follow(b) {
+    busy = true;
+    got = 0;
+    following = b.generation;
+    build(new Array(b.candidates).fill(null));
+    document.body.dataset.generation = b.generation;
+    showProgress(b);
+    poll();
+  }
+
+  function poll() {
+    api('/api/progress?from=' + got).then(function (p) {
+      const b = p.breeding;
+      if (b && b.generation !== following) {
+        // Auto N moved on to its next generation: a fresh grid for it.
+        follow(b);
+        return;
+      }
+      if (b) {
+        b.finished.forEach(function (c) { fill(c.slot, c); });
+        got += b.finished.length;
+        showProgress(b);
+        setTimeout(poll, 100);
+        return;
+      }
+      return api('/api/state').then(function (s) {
+        busy = false; state = s;
+        showProgress(null);
+        showState(true);
+        scaleEl.value = fmt(state.next_scale, 2);
+        if (p.breed_error) showStatus('breeding failed: ' + p.breed_error);
+      });
+    }).catch(function (e) {
+      // The server went away, or refused: say so, try again shortly.
+      showStatus('lost the studio: ' + e.message);
+      setTimeout(poll, 1000);
+    });
+  }
+
   function breed() {
-    if (!picks.length) return;
+    if (!picks.length || busy) return;
     const ids = picks.map(function (k) { return cells[k].c.id; });
     const scale = parseFloat(scaleEl.value);
     const body = { picks: ids };
     if (isFinite(scale)) body.scale = scale;
-    act('/api/breed', body, 'breeding ' + state.settings.grid + ' candidates × ' +
-      state.settings.releases + ' releases from ' + ids.map(function (i) { return '#' + i; }).join(', ') + '…');
+    busy = true;
+    showStatus('breeding from ' + ids.map(function (i) { return '#' + i; }).join(', ') + '…');
+    api('/api/breed', body).then(function (s) {
+      state = s;
+      follow(s.breeding);
+    }).catch(function (e) {
+      busy = false; showStatus('refused: ' + e.message);
+    });
+  }
+
+  function moreLike(id) {
+    if (busy) return;
+    const scale = parseFloat(scaleEl.value);
+    const body = { id: id };
+    if (isFinite(scale)) body.scale = scale;
+    busy = true;
+    showStatus('breeding toward #' + id + '\'s fall…');
+    api('/api/like', body).then(function (s) {
+      state = s;
+      follow(s.breeding);
+    }).catch(function (e) {
+      busy = false; showStatus('refused: ' + e.message);
+    });
+  }
+
+  function autoBreed() {
+    if (busy) return;
+    const n = parseInt($('auto-n').value, 10);
+    busy = true;
+    showStatus('breeding ' + n + ' generations from the machine\'s picks…');
+    api('/api/auto', { generations: n }).then(function (s) {
+      state = s;
+      follow(s.breeding);
+    }).catch(function (e) {
+      busy = false; showStatus('refused: ' + e.message);
+    });
   }
 
   function back() { if (state.generation.parent !== null) act('/api/back', {}, 'going back…'); }
 
   $('breed').addEventListener('click', breed);
   $('back').addEventListener('click', back);
+  $('export').addEventListener('click', exportCollection);
+  $('auto').addEventListener('click', autoBreed);
   document.addEventListener('keydown', function (e) {
-    if (e.target === scaleEl) { if (e.key === 'Enter') breed(); return; }
+    if (e.target.tagName === 'INPUT') { if (e.target === scaleEl && e.key === 'Enter') breed(); return; }
     if (e.key >= '0' && e.key <= '9') toggle((parseInt(e.key, 10) + 9) % 10);
     else if (e.key === 'Enter') breed();
     else if (e.key === 'Backspace') { e.preventDefault(); back(); }
@@ -183,20 +369,46 @@
     return [0, 1, 2].map(function (j) { return C[k * 3 + j] * (1 - a) + C[(k + 1) * 3 + j] * a; });
   }
 
-  function draw(o, t) {
-    const cv = o.canvas, dpr = window.devicePixelRatio || 1;
+  // Draws the prepared falls `list` in canvas `cv` at time t, side by
+  // side in columns at one scale (the largest view span fits its column),
+  // each followed by its own view: one fall fills a grid cell; kept
+  // leaves compare size, sway and spin directly.
+  function drawView(cv, list, t) {
+    const dpr = window.devicePixelRatio || 1;
     const w = Math.max(1, Math.round(cv.clientWidth * dpr)), h = Math.max(1, Math.round(cv.clientHeight * dpr));
     if (cv.width !== w || cv.height !== h) { cv.width = w; cv.height = h; }
     const ctx = cv.getContext('2d');
     ctx.fillStyle = '#10161f';
     ctx.fillRect(0, 0, w, h);
-    if (!o.P) {
-      ctx.fillStyle = '#c06060';
-      ctx.fillText('no fall to show', 10, 20);
-      return;
-    }
+    const n = Math.max(1, list.length), cw = w / n;
+    const big = list.reduce(function (m, o) { return Math.max(m, o.P ? o.span : 0); }, 0);
+    const s = Math.min(cw, h) / (big || 1);
+    let any = false;
+    list.forEach(function (o, k) {
+      ctx.save();
+      ctx.beginPath(); ctx.rect(k * cw, 0, cw, h); ctx.clip();
+      ctx.translate(k * cw, 0);
+      if (o.P) {
+        drawOne(ctx, o, t, cw, h, s, dpr);
+        any = true;
+      } else {
+        ctx.fillStyle = o.c ? '#c06060' : '#8893a2';
+        ctx.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
+        ctx.fillText(o.c ? 'no fall to show' : 'dropping…', 10 * dpr, 20 * dpr);
+      }
+      ctx.restore();
+      if (k > 0) {
+        ctx.strokeStyle = '#2c3542'; ctx.lineWidth = 1;
+        ctx.beginPath(); ctx.moveTo(k * cw, 0); ctx.lineTo(k * cw, h); ctx.stroke();
+      }
+    });
+    return any;
+  }
+
+  // One fall in a w × h view at s pixels a metre, following its centre:
+  // the wall and ground for scale, its trail and the leaf.
+  function drawOne(ctx, o, t, w, h, s, dpr) {
     const g = frameAt(o, t), c = comAt(o, g);
-    const s = Math.min(w, h) / o.span;
     const sx = function (p) { return w / 2 + s * p[0]; }, syy = function (p) { return h / 2 - s * p[1]; };
     const rel = function (x, y, z) { return project(x - c[0], y - c[1], z - c[2]); };
     // Scale: a back wall of 10 cm squares, fixed in the world, so the fall
@@ -204,7 +416,7 @@
     ctx.lineWidth = 1;
     ctx.strokeStyle = 'rgba(120,140,170,0.25)';
     ctx.beginPath();
-    const half = o.span, step = 0.1, wallY = c[1] + half;
+    const half = Math.max(w, h) / s, step = 0.1, wallY = c[1] + o.span;
     for (let z = Math.floor((c[2] - half) / step) * step; z <= c[2] + half; z += step) {
       const a = rel(c[0] - half, wallY, z), b = rel(c[0] + half, wallY, z);
       ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
@@ -217,7 +429,8 @@
     if (o.ground > c[2] - half) {
       ctx.strokeStyle = 'rgba(150,170,120,0.5)';
       ctx.beginPath();
-      for (let k = -10; k <= 10; k++) {
+      const n = Math.ceil(half / step);
+      for (let k = -n; k <= n; k++) {
         let a = rel(c[0] + k * step, c[1] - half, o.ground), b = rel(c[0] + k * step, c[1] + half, o.ground);
         ctx.moveTo(sx(a), syy(a)); ctx.lineTo(sx(b), syy(b));
         a = rel(c[0] - half, c[1] + k * step, o.ground); b = rel(c[0] + half, c[1] + k * step, o.ground);
@@ -225,7 +438,13 @@
       }
       ctx.stroke();
     }
-    // The trail: the centre over the last TRAIL_S seconds, fading with age.
+    drawFall(ctx, o, g, rel, sx, syy, dpr);
+  }
+
+  // One fall: the trail of its centre over the last TRAIL_S seconds,
+  // fading with age, and the leaf's triangles, far first, shaded by how
+  // they face the light.
+  function drawFall(ctx, o, g, rel, sx, syy, dpr) {
     const first = Math.max(0, Math.floor(g - TRAIL_S * state.fps));
     ctx.lineWidth = Math.max(1.5, 2 * dpr);
     let prev = null;
@@ -237,7 +456,6 @@
       }
       prev = p;
     }
-    // The leaf: its triangles, far first, shaded by how they face the light.
     const k0 = Math.min(Math.floor(g), o.F - 1), k1 = Math.min(k0 + 1, o.F - 1), a = g - k0;
     const V = [];
     for (let i = 0; i < o.n; i++) {
@@ -261,7 +479,10 @@
       ctx.moveTo(sx(tr.p[0]), syy(tr.p[0])); ctx.lineTo(sx(tr.p[1]), syy(tr.p[1])); ctx.lineTo(sx(tr.p[2]), syy(tr.p[2]));
       ctx.closePath(); ctx.fill(); ctx.stroke();
     });
-    o.drawn = true;
+  }
+
+  function draw(o, t) {
+    o.drawn = drawView(o.canvas, [o], t);
   }
 
   function tick() {
@@ -272,14 +493,20 @@
       const T = (F - 1) / state.fps;
       const t = heldAt !== null ? Math.min(heldAt, T) : ((performance.now() - start) / 1000) % (T + 1);
       cells.forEach(function (o) { draw(o, t); });
-      if (cells.every(function (o) { return o.drawn; })) document.body.dataset.drawn = state.generation.index;
+      if (!busy && cells.every(function (o) { return o.drawn; })) document.body.dataset.drawn = state.generation.index;
+      if (together.length >= 2) {
+        const tw = drawView($('together'), together, t);
+        if (tw) document.body.dataset.together = together.length;
+      }
     }
     requestAnimationFrame(tick);
   }
 
   api('/api/state').then(function (s) {
-    state = s; build();
+    state = s; showState();
     scaleEl.value = fmt(state.next_scale, 2);
+    // Opened (or reloaded) while a generation is being bred: follow it.
+    if (s.breeding) follow(s.breeding);
     requestAnimationFrame(tick);
   }).catch(function (e) { showStatus('could not load the session: ' + e.message); });
 })();

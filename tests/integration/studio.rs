@@ -1,8 +1,11 @@
 //! `leafmagic studio`: its server refuses what it must (no token, a foreign
 //! Host or Origin, a large or malformed body) and keeps running; breeding
-//! from picks records the picks and parents, going back and branching makes
-//! a tree, a session reopens where it was, and the same seed and picks
-//! write the same bytes. Requests are plain HTTP over a TcpStream.
+//! runs in the background with its progress and each candidate shown as it
+//! finishes, one at a time (409 while one runs); breeding from picks
+//! records the picks and parents, going back and branching makes a tree, a
+//! session reopens where it was, and the same seed and picks write the same
+//! bytes; kept leaves export under the session as the falls shown.
+//! Requests are plain HTTP over a TcpStream.
 
 use serde_json::Value;
 use std::io::{BufRead, BufReader, Read, Write};
@@ -123,6 +126,92 @@ impl Studio {
         serde_json::from_str(&text).unwrap()
     }
 
+    /// A GET with the token in the header, so `target` may carry its own
+    /// query.
+    fn get(&self, target: &str) -> Value {
+        let (status, text) = self.raw(
+            "GET",
+            target,
+            &[
+                format!("Host: {}", self.host()),
+                format!("X-Leafmagic-Token: {}", self.token),
+            ],
+            b"",
+        );
+        assert_eq!(status, 200, "{target}: {text}");
+        serde_json::from_str(&text).unwrap()
+    }
+
+    /// Starts breeding from `body` (202 at once, the breeding announced).
+    fn start_breed(&self, body: &str) -> Value {
+        let (status, text) = self.call("POST", "/api/breed", body);
+        assert_eq!(status, 202, "{body}: {text}");
+        let started: Value = serde_json::from_str(&text).unwrap();
+        assert!(started["breeding"].is_object(), "{started}");
+        started
+    }
+
+    /// Follows the breeding under way to its end as the page does, from
+    /// its progress: every candidate arrives once, in some order, with its
+    /// fall, and the count of drops done only grows. Returns the state
+    /// then, whose grid must hold what arrived, slot by slot.
+    fn finish_breed(&self) -> Value {
+        let mut slots: Vec<Option<u64>> = Vec::new();
+        let (mut got, mut drops_done, mut generation) = (0, 0, None);
+        loop {
+            let p = self.get(&format!("/api/progress?from={got}"));
+            let Some(b) = p["breeding"].as_object() else {
+                assert!(p["breed_error"].is_null(), "{p}");
+                break;
+            };
+            // Auto N goes on to its next generation: follow that one.
+            if generation != Some(b["generation"].clone()) {
+                generation = Some(b["generation"].clone());
+                (slots, got, drops_done) = (Vec::new(), 0, 0);
+                continue;
+            }
+            let n = b["candidates"].as_u64().unwrap() as usize;
+            slots.resize(n, None);
+            assert!(b["drops_done"].as_u64().unwrap() >= drops_done, "{p}");
+            drops_done = b["drops_done"].as_u64().unwrap();
+            assert_eq!(b["drops"].as_u64().unwrap(), n as u64 * 4, "{p}");
+            for c in b["finished"].as_array().unwrap() {
+                let slot = c["slot"].as_u64().unwrap() as usize;
+                assert!(slots[slot].is_none(), "slot {slot} arrived twice");
+                assert!(c["motion"]["frames"].as_u64().unwrap() > 0, "{c}");
+                slots[slot] = Some(c["id"].as_u64().unwrap());
+                got += 1;
+            }
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let state = self.api("/api/state", "");
+        assert!(state["breeding"].is_null(), "{state}");
+        // A poll may land after the last candidate and before the commit,
+        // or only after it: what arrived is the grid, where it arrived.
+        let shown = ids(&state);
+        if got > 0 && slots.len() == shown.len() {
+            for (k, id) in slots.iter().enumerate() {
+                assert!(
+                    id.is_none() || *id == Some(shown[k]),
+                    "slot {k}: {id:?} vs {shown:?}"
+                );
+            }
+        } else if got == slots.len() && got > 0 {
+            // "More like this" evaluated more than it keeps: what it keeps
+            // arrived.
+            for id in &shown {
+                assert!(slots.contains(&Some(*id)), "{id} never arrived: {slots:?}");
+            }
+        }
+        state
+    }
+
+    /// Breeds from `body` and waits for the generation.
+    fn breed(&self, body: &str) -> Value {
+        self.start_breed(body);
+        self.finish_breed()
+    }
+
     fn session(&self) -> Value {
         read_json(&self.dir.join("studio.json"))
     }
@@ -164,7 +253,21 @@ fn start_in(dir: &Path, seed: &str) -> Studio {
 #[test]
 fn studio_refuses_what_it_must_and_keeps_running() {
     let dir = scratch("studio-security");
-    let s = start_in(&dir, "3");
+    // 10 s drops: its one breeding lasts long enough to be interrupted.
+    let out = dir.to_str().unwrap();
+    let s = Studio::start(
+        &[
+            "--out",
+            out,
+            "--seed",
+            "3",
+            "--grid",
+            "4",
+            "--seconds",
+            "10",
+        ],
+        &dir,
+    );
     let host = format!("Host: {}", s.host());
     let token = format!("?token={}", s.token);
     let get = |target: &str, headers: &[String]| s.raw("GET", target, headers, b"");
@@ -263,6 +366,31 @@ fn studio_refuses_what_it_must_and_keeps_running() {
     let state = s.api("/api/state", "");
     assert_eq!(state["generation"]["index"], 0);
     assert_eq!(s.session()["generations"].as_array().unwrap().len(), 1);
+
+    // One breeding at a time: while one runs (it takes far longer than a
+    // request), another, or moving in the tree, is refused with 409.
+    let g0 = ids(&state);
+    let started = s.start_breed(&format!("{{\"picks\": [{}]}}", g0[0]));
+    assert_eq!(
+        started["generation"]["index"], 0,
+        "answered before it is bred"
+    );
+    assert_eq!(started["breeding"]["generation"], 1);
+    assert_eq!(started["breeding"]["drops"], 16);
+    for (path, body) in [
+        ("/api/breed", format!("{{\"picks\": [{}]}}", g0[1])),
+        ("/api/goto", "{\"generation\": 0}".to_string()),
+    ] {
+        let (status, reason) = s.call("POST", path, &body);
+        assert_eq!(status, 409, "{path}: {reason}");
+        assert!(reason.contains("being bred"), "{reason}");
+    }
+    // Keeping does not wait.
+    s.api("/api/keep", &format!("{{\"id\": {}}}", g0[3]));
+    let bred = s.finish_breed();
+    assert_eq!(bred["generation"]["index"], 1);
+    assert_eq!(s.session()["generations"].as_array().unwrap().len(), 2);
+    assert_eq!(bred["collection"][0]["id"], g0[3]);
 }
 
 /// Breeds from two picks, goes back, branches from one pick: the session's
@@ -270,19 +398,13 @@ fn studio_refuses_what_it_must_and_keeps_running() {
 fn pick_breed_back_branch(s: &Studio) -> (Vec<u64>, Vec<u64>) {
     let g0 = ids(&s.api("/api/state", ""));
     let two = vec![g0[1], g0[2]];
-    let g1 = s.api(
-        "/api/breed",
-        &format!("{{\"picks\": [{}, {}]}}", two[0], two[1]),
-    );
+    let g1 = s.breed(&format!("{{\"picks\": [{}, {}]}}", two[0], two[1]));
     assert_eq!(g1["generation"]["index"], 1);
     let back = s.api("/api/back", "{}");
     assert_eq!(back["generation"]["index"], 0);
     assert_eq!(ids(&back), g0);
     let one = vec![g0[0]];
-    let g2 = s.api(
-        "/api/breed",
-        &format!("{{\"picks\": [{}], \"scale\": 0.5}}", one[0]),
-    );
+    let g2 = s.breed(&format!("{{\"picks\": [{}], \"scale\": 0.5}}", one[0]));
     assert_eq!(g2["generation"]["index"], 2);
     (two, one)
 }
@@ -343,6 +465,10 @@ fn studio_breeds_from_picks_and_keeps_a_tree() {
     let motion = read_json(&dir.join("gen-001-motion.json"));
     assert!(motion[0]["frames"].as_u64().unwrap() > 20, "{}", motion[0]);
 
+    keep_and_export(&s, &dir, g1[0]["id"].as_u64().unwrap(), two[0]);
+    auto_generations(&s, &dir);
+    more_like_this(&s, &dir);
+
     // Reopened, it is where it was, and goes on.
     let before = s.api("/api/state", "");
     drop(s);
@@ -351,7 +477,325 @@ fn studio_breeds_from_picks_and_keeps_a_tree() {
     assert_eq!(after["generation"], before["generation"]);
     assert_eq!(after["candidates"], before["candidates"]);
     let back = r.api("/api/back", "{}");
-    assert_eq!(back["generation"]["index"], 0);
+    let current = before["generation"]["index"].as_u64().unwrap() as usize;
+    assert_eq!(
+        back["generation"]["index"],
+        r.session()["generations"][current]["parent"]
+    );
+}
+
+/// "Auto 2" from the current generation: two more generations, each
+/// bred from the two best of the one before by breed's score (ties to the
+/// earlier in the grid), marked as the machine's picks.
+fn auto_generations(s: &Studio, dir: &Path) {
+    for body in [
+        "{\"generations\": 0}",
+        "{\"generations\": 21}",
+        "{\"n\": 2}",
+    ] {
+        let (status, reason) = s.call("POST", "/api/auto", body);
+        assert_eq!(status, 400, "{body}: {reason}");
+    }
+    let before = s.session();
+    let from = before["current"].as_u64().unwrap() as usize;
+    let count = before["generations"].as_array().unwrap().len();
+    let (status, text) = s.call("POST", "/api/auto", "{\"generations\": 2}");
+    assert_eq!(status, 202, "{text}");
+    let state = s.finish_breed();
+    let after = s.session();
+    let gens = after["generations"].as_array().unwrap();
+    assert_eq!(gens.len(), count + 2);
+    assert_eq!(state["generation"]["index"], count + 1);
+    let mut parent = from;
+    for g in &gens[count..] {
+        assert_eq!(g["parent"], parent, "{g}");
+        assert_eq!(g["auto"], true, "{g}");
+        let bred_from = read_json(&dir.join(format!("gen-{parent:03}.json")));
+        let mut ranked: Vec<(f64, usize, u64)> = bred_from
+            .as_array()
+            .unwrap()
+            .iter()
+            .enumerate()
+            .map(|(k, c)| {
+                let score = c["evaluation"]["score"]
+                    .as_f64()
+                    .unwrap_or(f64::NEG_INFINITY);
+                (score, k, c["id"].as_u64().unwrap())
+            })
+            .collect();
+        ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+        assert_eq!(
+            g["picks"],
+            serde_json::json!([ranked[0].2, ranked[1].2]),
+            "{g}"
+        );
+        parent = g["index"].as_u64().unwrap() as usize;
+    }
+    // Generations a person bred are not marked.
+    assert!(gens[1].get("auto").is_none(), "{}", gens[1]);
+}
+
+/// "More like this" of a candidate with a class: three times the grid
+/// evaluated toward its fall (ids reserved for all), the grid's worth
+/// kept, each a variation of it or a wild card; refused for a candidate
+/// not on the grid or whose fall has no class.
+fn more_like_this(s: &Studio, dir: &Path) {
+    let state = s.api("/api/state", "");
+    let (s_ok, s_bad): (Vec<&Value>, Vec<&Value>) = state["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .partition(|c| c["class"] != "undetermined" && c["class"] != "diverged");
+    let (status, reason) = s.call("POST", "/api/like", "{\"id\": 999999}");
+    assert_eq!(status, 400, "{reason}");
+    assert!(reason.contains("not in generation"), "{reason}");
+    if let Some(bad) = s_bad.first() {
+        let (status, reason) = s.call("POST", "/api/like", &format!("{{\"id\": {}}}", bad["id"]));
+        assert_eq!(status, 400, "{reason}");
+        assert!(reason.contains("no fall to breed toward"), "{reason}");
+    }
+    let id = s_ok.first().expect("a candidate with a class")["id"]
+        .as_u64()
+        .unwrap();
+    let before = s.session();
+    let first = before["next_id"].as_u64().unwrap();
+    let (status, text) = s.call("POST", "/api/like", &format!("{{\"id\": {id}}}"));
+    assert_eq!(status, 202, "{text}");
+    let started: Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(started["breeding"]["candidates"], 12, "3 × the grid of 4");
+    let bred = s.finish_breed();
+    let after = s.session();
+    let k = bred["generation"]["index"].as_u64().unwrap() as usize;
+    let node = &after["generations"][k];
+    assert_eq!(node["like"], id, "{node}");
+    assert_eq!(node["picks"], serde_json::json!([id]));
+    assert_eq!(node["parent"], before["current"]);
+    assert_eq!(
+        after["next_id"].as_u64().unwrap(),
+        first + 12,
+        "every evaluation's id used"
+    );
+    let g = read_json(&dir.join(format!("gen-{k:03}.json")));
+    let g = g.as_array().unwrap();
+    assert_eq!(g.len(), 4);
+    for c in g {
+        let cid = c["id"].as_u64().unwrap();
+        assert!((first..first + 12).contains(&cid), "{cid}");
+        let p = c["parents"].as_array().unwrap();
+        assert!(p.is_empty() || p == &[Value::from(id)], "{c}");
+    }
+    assert!(
+        g.iter().any(|c| c["evaluation"]["distance"].is_number()),
+        "some kept fall is near enough to be measured: {g:?}"
+    );
+}
+
+/// The centre of every frame of a fall shown (`gen-NNN-motion.json`'s
+/// float32 positions), m.
+fn shown_centres(motion: &Value) -> Vec<[f64; 3]> {
+    use base64::Engine as _;
+    let bytes = base64::engine::general_purpose::STANDARD
+        .decode(motion["positions"].as_str().unwrap())
+        .unwrap();
+    let n = motion["vertices"].as_u64().unwrap() as usize;
+    let floats: Vec<f64> = bytes
+        .chunks_exact(4)
+        .map(|b| f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])))
+        .collect();
+    floats
+        .chunks_exact(3 * n)
+        .map(|frame| {
+            let mut c = [0.0; 3];
+            for v in frame.chunks_exact(3) {
+                (0..3).for_each(|j| c[j] += v[j] / n as f64);
+            }
+            c
+        })
+        .collect()
+}
+
+/// Keeps `a` (generation 1) and `b` (generation 0), refuses bad keeps and
+/// exports, exports the two, and checks the files: each kept leaf as a
+/// leaf file, glTF, USD, Alembic and PC2 with its OBJ, the glTF read back
+/// by the crate's own reader playing the fall the page showed, lifted to
+/// the start height, at the frame rate asked.
+fn keep_and_export(s: &Studio, dir: &Path, a: u64, b: u64) {
+    for (body, says) in [
+        ("{\"id\": 999999}", "no candidate"),
+        ("{\"id\": \"../x\"}", "malformed"),
+        ("{\"id\": 1, \"path\": \"/tmp\"}", "unknown field"),
+    ] {
+        let (status, reason) = s.call("POST", "/api/keep", body);
+        assert_eq!(status, 400, "{body}: {reason}");
+        assert!(reason.contains(says), "{body}: {reason}");
+    }
+    let (status, reason) = s.call(
+        "POST",
+        "/api/export",
+        "{\"fps\": 24, \"start_height_m\": 1}",
+    );
+    assert_eq!(status, 400, "an empty collection: {reason}");
+    assert!(reason.contains("empty"), "{reason}");
+    s.api("/api/keep", &format!("{{\"id\": {a}}}"));
+    s.api("/api/keep", &format!("{{\"id\": {b}}}"));
+    // Kept twice is kept once; taken out and kept again goes last.
+    s.api("/api/keep", &format!("{{\"id\": {a}}}"));
+    s.api("/api/keep", &format!("{{\"id\": {a}, \"keep\": false}}"));
+    let state = s.api("/api/keep", &format!("{{\"id\": {a}, \"keep\": true}}"));
+    let kept: Vec<u64> = state["collection"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| c["id"].as_u64().unwrap())
+        .collect();
+    assert_eq!(kept, [b, a]);
+    assert_eq!(state["collection"][1]["generation"], 1);
+    assert_eq!(s.session()["kept"], serde_json::json!([b, a]), "recorded");
+    for (body, says) in [
+        ("{\"fps\": 0, \"start_height_m\": 1}", "frame rate"),
+        ("{\"fps\": 1000, \"start_height_m\": 1}", "frame rate"),
+        ("{\"fps\": 24, \"start_height_m\": -1}", "start height"),
+        ("{\"fps\": 24, \"start_height_m\": 1e300}", "start height"),
+        ("{\"fps\": 24}", "missing field"),
+        (
+            "{\"fps\": 24, \"start_height_m\": 1, \"dir\": \"/tmp\"}",
+            "unknown field",
+        ),
+    ] {
+        let (status, reason) = s.call("POST", "/api/export", body);
+        assert_eq!(status, 400, "{body}: {reason}");
+        assert!(reason.contains(says), "{body}: {reason}");
+    }
+    assert!(
+        !dir.join("export").exists(),
+        "a refused export writes nothing"
+    );
+
+    // At the page's own 20 fps, the exported fall is the one shown.
+    let (fps, height) = (20.0, 2.5);
+    let (status, text) = s.call(
+        "POST",
+        "/api/export",
+        &format!("{{\"fps\": {fps}, \"start_height_m\": {height}}}"),
+    );
+    assert_eq!(status, 200, "{text}");
+    let answer: Value = serde_json::from_str(&text).unwrap();
+    let out = dir.join("export");
+    let mut names: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    let mut expected: Vec<String> = [a, b]
+        .iter()
+        .flat_map(|id| {
+            ["abc", "glb", "obj", "pc2", "toml", "usda"].map(|e| format!("leaf-{id}.{e}"))
+        })
+        .collect();
+    expected.sort();
+    assert_eq!(names, expected);
+    assert_eq!(
+        answer["files"].as_array().unwrap().len(),
+        expected.len(),
+        "{answer}"
+    );
+    for id in [a, b] {
+        let stem = out.join(format!("leaf-{id}"));
+        let (k, motion) = (0..3)
+            .find_map(|k| {
+                let m = read_json(&dir.join(format!("gen-{k:03}-motion.json")));
+                m.as_array()
+                    .unwrap()
+                    .iter()
+                    .find(|m| m["id"] == id)
+                    .map(|m| (k, m.clone()))
+            })
+            .unwrap();
+        let shown = shown_centres(&motion);
+        let clip = leafmagic::formats::gltf::from_glb(&stem.with_extension("glb"), None, None)
+            .unwrap_or_else(|e| panic!("leaf-{id}.glb: {e}"));
+        assert_eq!(clip.fps, fps);
+        let o = &clip.objects[0];
+        assert_eq!(o.frame_count(), shown.len(), "leaf {id} of generation {k}");
+        for (f, c) in shown.iter().enumerate() {
+            let e = o.centre(f);
+            let d = ((e.x - c[0]).powi(2) + (e.y - c[1]).powi(2) + (e.z - height - c[2]).powi(2))
+                .sqrt();
+            assert!(d < 1e-3, "leaf {id} frame {f}: {d} m from the fall shown");
+        }
+        let usda = std::fs::read_to_string(stem.with_extension("usda")).unwrap();
+        let usd = leafmagic::formats::usd::read_usda_keys(&usda, "usda").unwrap();
+        assert_eq!(usd.objects[0].frame_count(), shown.len());
+        let abc = std::fs::read(stem.with_extension("abc")).unwrap();
+        let abc = leafmagic::formats::alembic::read_abc(&abc, "abc").unwrap();
+        assert_eq!(abc.objects[0].frame_count(), shown.len());
+        let leaf = leafmagic::leaf::LeafSpec::read(&stem.with_extension("toml")).unwrap();
+        leaf.model().unwrap();
+        let pc2 = std::fs::read(stem.with_extension("pc2")).unwrap();
+        assert_eq!(&pc2[..12], b"POINTCACHE2\0");
+        let samples = i32::from_le_bytes([pc2[28], pc2[29], pc2[30], pc2[31]]);
+        assert_eq!(samples as usize, shown.len());
+    }
+
+    // Again at 24 fps: the folder is replaced, with 24 frames a second.
+    let (status, text) = s.call(
+        "POST",
+        "/api/export",
+        "{\"fps\": 24, \"start_height_m\": 0}",
+    );
+    assert_eq!(status, 200, "{text}");
+    let clip =
+        leafmagic::formats::gltf::from_glb(&out.join(format!("leaf-{a}.glb")), None, None).unwrap();
+    assert_eq!(clip.fps, 24.0);
+    let seconds = s.session()["settings"]["seconds"].as_f64().unwrap();
+    assert_eq!(
+        clip.objects[0].frame_count(),
+        (seconds * 24.0).round() as usize + 1
+    );
+}
+
+#[test]
+fn a_studio_killed_mid_breed_reopens_at_the_generation_before() {
+    let dir = scratch("studio-kill");
+    let out = dir.to_str().unwrap();
+    // 10 s drops: the kill lands while generation 1 is being bred.
+    let mut s = Studio::start(
+        &[
+            "--out",
+            out,
+            "--seed",
+            "9",
+            "--grid",
+            "4",
+            "--seconds",
+            "10",
+        ],
+        &dir,
+    );
+    let g0 = ids(&s.api("/api/state", ""));
+    let picks = format!("{{\"picks\": [{}, {}]}}", g0[0], g0[1]);
+    s.start_breed(&picks);
+    s.child.kill().unwrap(); // SIGKILL
+    s.child.wait().unwrap();
+    let session = s.session();
+    assert_eq!(
+        session["generations"].as_array().unwrap().len(),
+        1,
+        "{session}"
+    );
+    assert_eq!(session["current"], 0);
+    drop(s);
+    // Reopened: generation 0, and the same breeding goes through.
+    let r = Studio::start(&["--resume", out], &dir);
+    let state = r.api("/api/state", "");
+    assert_eq!(state["generation"]["index"], 0);
+    assert_eq!(ids(&state), g0);
+    let bred = r.breed(&picks);
+    assert_eq!(bred["generation"]["index"], 1);
+    assert_eq!(
+        r.session()["generations"][1]["picks"],
+        serde_json::json!([g0[0], g0[1]])
+    );
 }
 
 #[test]
@@ -395,16 +839,20 @@ fn playwright_python() -> Result<PathBuf, String> {
 
 /// Opens the studio in headless Chromium, waits for the grid, picks the
 /// second candidate by a click and the third by its key, breeds with
-/// Enter, screenshots the new grid (clock held at 1.5 s), goes back with
-/// Backspace. Prints what the Rust side checks, as JSON. Any request to
-/// another server is recorded (the page must need none).
+/// Enter (the grid is replaced by one cell per candidate at once, filled
+/// as each finishes, with a progress bar), screenshots the new grid (clock
+/// held at 1.5 s), goes back with Backspace, branches from the first
+/// candidate, keeps two leaves by their buttons (they fall side by side;
+/// screenshot of that view), refuses a bad frame rate and exports at 24
+/// fps from 1.5 m. Prints what the Rust side checks, as JSON. Any request
+/// to another server is recorded (the page must need none).
 const BROWSER_PY: &str = r##"
 import json, sys
 from playwright.sync_api import sync_playwright
-url, chromium, shot = sys.argv[1:4]
+url, chromium, shot, shot2 = sys.argv[1:5]
 with sync_playwright() as p:
     browser = p.chromium.launch(executable_path=chromium, args=["--no-sandbox", "--disable-gpu"])
-    page = browser.new_page(viewport={"width": 1000, "height": 760}, device_scale_factor=1)
+    page = browser.new_page(viewport={"width": 1000, "height": 900}, device_scale_factor=1)
     errors, foreign = [], []
     page.on("pageerror", lambda e: errors.append(str(e)))
     origin = url.split("/?")[0]
@@ -415,8 +863,15 @@ with sync_playwright() as p:
     page.click(".cell:nth-child(2) canvas")
     page.keyboard.press("3")
     picked = page.eval_on_selector_all(".cell.picked", "els => els.map(e => +e.dataset.id)")
+    # Every change of the grid while breeding: cells, and those still dropping.
+    page.evaluate("""() => { window.seen = [];
+      new MutationObserver(() => window.seen.push([document.querySelectorAll('.cell').length,
+        document.querySelectorAll('.cell.pending').length,
+        document.getElementById('progress').style.visibility]))
+        .observe(document.getElementById('grid'), {subtree: true, childList: true, attributes: true}); }""")
     page.keyboard.press("Enter")
     page.wait_for_selector('body[data-drawn="1"]', timeout=600000)
+    seen = page.evaluate("window.seen")
     page.wait_for_timeout(500)
     page.screenshot(path=shot)
     boxes = page.eval_on_selector_all(".cell canvas",
@@ -424,9 +879,32 @@ with sync_playwright() as p:
     status = page.inner_text("#status")
     page.keyboard.press("Backspace")
     page.wait_for_selector('body[data-generation="0"]', timeout=60000)
+    page.wait_for_selector('body[data-drawn="0"]', timeout=60000)
+    branch_from = page.eval_on_selector(".cell:nth-child(1)", "e => +e.dataset.id")
+    page.keyboard.press("1")
+    page.keyboard.press("Enter")
+    page.wait_for_selector('body[data-drawn="2"]', timeout=600000)
+    g2 = page.eval_on_selector_all(".cell", "els => els.map(e => +e.dataset.id)")
+    page.click(".cell:nth-child(1) button.keep")
+    page.wait_for_selector('body[data-kept="1"]', timeout=60000)
+    page.click(".cell:nth-child(2) button.keep")
+    page.wait_for_selector('body[data-together="2"]', timeout=60000)
+    page.wait_for_timeout(300)
+    page.locator("#together").screenshot(path=shot2)
+    page.fill("#fps", "0")
+    page.click("#export")
+    # (Playwright's selectors, not wait_for_function: the page's CSP allows no eval.)
+    page.wait_for_selector("#exported:has-text('refused')", timeout=60000)
+    refused = page.inner_text("#exported")
+    page.fill("#fps", "24")
+    page.fill("#height", "1.5")
+    page.click("#export")
+    page.wait_for_selector('body[data-exported]', timeout=600000)
+    exported = page.inner_text("#exported")
     browser.close()
 print(json.dumps({"ids": ids, "picked": picked, "boxes": boxes, "errors": errors,
-                  "foreign": foreign, "status": status}))
+                  "foreign": foreign, "status": status, "seen": seen, "branch_from": branch_from,
+                  "g2": g2, "refused": refused, "exported": exported}))
 "##;
 
 /// Skips (with the reason) where no browser or driver can be had, but
@@ -452,10 +930,12 @@ fn studio_in_a_real_browser_picks_breeds_and_draws_every_candidate() {
     let s = start_in(&dir, "5");
     let url = format!("http://127.0.0.1:{}/?token={}", s.port, s.token);
     let shot = dir.with_extension("png");
+    let shot2 = dir.with_extension("together.png");
     let out = Command::new(&python)
         .args(["-c", BROWSER_PY, &url])
         .arg(&chromium)
         .arg(&shot)
+        .arg(&shot2)
         .output()
         .unwrap();
     assert!(
@@ -481,46 +961,137 @@ fn studio_in_a_real_browser_picks_breeds_and_draws_every_candidate() {
     let session = s.session();
     assert_eq!(session["generations"][1]["parent"], 0);
     assert_eq!(session["generations"][1]["picks"], serde_json::json!(two));
-    assert_eq!(session["current"], 0);
+    let g1 = read_json(&dir.join("gen-001.json"));
+    let mut parents: Vec<u64> = g1
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|c| c["parents"].as_array().unwrap().clone())
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    parents.sort_unstable();
+    parents.dedup();
+    assert_eq!(parents, two, "generation 1's parents are exactly the picks");
+    // While breeding, the grid was the new generation's four cells, some
+    // still dropping, under a visible progress bar.
+    let seen = report["seen"].as_array().unwrap();
+    assert!(
+        seen.iter()
+            .any(|s| s[0] == 4 && s[1].as_u64().unwrap() > 0 && s[2] == "visible"),
+        "{report}"
+    );
+    // Back, then a branch from generation 0's first candidate.
+    let branch_from = report["branch_from"].as_u64().unwrap();
+    assert_eq!(branch_from, g0[0]);
+    assert_eq!(session["generations"][2]["parent"], 0);
+    assert_eq!(
+        session["generations"][2]["picks"],
+        serde_json::json!([g0[0]])
+    );
+    assert_eq!(session["current"], 2);
+    // Two kept, recorded; a frame rate of 0 refused on the page.
+    let g2: Vec<u64> = report["g2"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_u64().unwrap())
+        .collect();
+    assert_eq!(session["kept"], serde_json::json!([g2[0], g2[1]]));
+    assert!(
+        report["refused"].as_str().unwrap().contains("frame rate"),
+        "{report}"
+    );
+    // The export: every format of both, the glTF read back at 24 fps
+    // starting from 1.5 m.
+    for id in [g2[0], g2[1]] {
+        let stem = dir.join("export").join(format!("leaf-{id}"));
+        for ext in ["toml", "glb", "usda", "abc", "pc2", "obj"] {
+            assert!(stem.with_extension(ext).is_file(), "{report}: no .{ext}");
+        }
+        let clip = leafmagic::formats::gltf::from_glb(&stem.with_extension("glb"), None, None)
+            .unwrap_or_else(|e| panic!("leaf-{id}.glb: {e}"));
+        assert_eq!(clip.fps, 24.0);
+        assert_eq!(clip.objects[0].frame_count(), 2 * 24 + 1);
+        assert!((clip.objects[0].centre(0).z - 1.5).abs() < 0.01, "{report}");
+    }
 
     // Every cell of the new grid drew its leaf and its trail.
-    let mut decoder =
-        png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&shot).unwrap()));
-    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
-    let mut reader = decoder.read_info().unwrap();
-    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
-    let info = reader.next_frame(&mut buf).unwrap();
-    let channels = info.line_size / info.width as usize;
-    let pixel = |x: usize, y: usize| {
-        let k = y * info.line_size + x * channels;
-        [buf[k], buf[k + 1], buf[k + 2]]
-    };
     let boxes = report["boxes"].as_array().unwrap();
     assert_eq!(boxes.len(), 4, "{report}");
+    let (image, width, height) = read_rgb(&shot);
     for (k, b) in boxes.iter().enumerate() {
         let b: Vec<usize> = (0..4).map(|i| b[i].as_f64().unwrap() as usize).collect();
-        let (mut drawn, mut trail, mut leaf) = (0, 0, 0);
-        for y in b[1] + 2..(b[1] + b[3]).min(info.height as usize) - 2 {
-            for x in b[0] + 2..(b[0] + b[2]).min(info.width as usize) - 2 {
-                let [r, g, bl] = pixel(x, y).map(i32::from);
-                // The canvas background is #10161f.
-                if (r - 0x10).abs() + (g - 0x16).abs() + (bl - 0x1f).abs() > 12 {
-                    drawn += 1;
-                }
-                // The trail is orange, faded: red well above blue and green.
-                if r > bl + 40 && r > g + 15 {
-                    trail += 1;
-                }
-                // The leaf is green.
-                if g > r + 40 && g > bl + 40 {
-                    leaf += 1;
-                }
-            }
-        }
+        let (drawn, trail, leaf) = count_pixels(&image, width, height, [b[0], b[1], b[2], b[3]]);
         assert!(
             drawn > 500 && trail > 20 && leaf > 20,
             "cell {k}: {drawn} drawn, {trail} trail and {leaf} leaf pixels ({})",
             shot.display()
         );
     }
+    // The two kept leaves side by side: two leaves' worth of leaf and
+    // trail pixels, one in each half of the view.
+    let (image, width, height) = read_rgb(&shot2);
+    for half in 0..2 {
+        let (drawn, trail, leaf) = count_pixels(
+            &image,
+            width,
+            height,
+            [half * width / 2, 0, width / 2, height],
+        );
+        assert!(
+            drawn > 200 && trail > 10 && leaf > 10,
+            "side by side, half {half}: {drawn} drawn, {trail} trail and {leaf} leaf pixels ({})",
+            shot2.display()
+        );
+    }
+}
+
+/// A PNG's pixels as RGB rows, with its width and height.
+fn read_rgb(path: &Path) -> (Vec<[u8; 3]>, usize, usize) {
+    let mut decoder =
+        png::Decoder::new(std::io::BufReader::new(std::fs::File::open(path).unwrap()));
+    decoder.set_transformations(png::Transformations::EXPAND | png::Transformations::STRIP_16);
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    let channels = info.line_size / info.width as usize;
+    let (w, h) = (info.width as usize, info.height as usize);
+    let pixels = (0..h)
+        .flat_map(|y| (0..w).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let k = y * info.line_size + x * channels;
+            [buf[k], buf[k + 1], buf[k + 2]]
+        })
+        .collect();
+    (pixels, w, h)
+}
+
+/// In the box `[x, y, w, h]` (2 px in from its edges): the pixels that
+/// differ from the canvas background, the trail's (orange) and the leaf's
+/// (green).
+fn count_pixels(
+    image: &[[u8; 3]],
+    width: usize,
+    height: usize,
+    b: [usize; 4],
+) -> (usize, usize, usize) {
+    let (mut drawn, mut trail, mut leaf) = (0, 0, 0);
+    for y in b[1] + 2..(b[1] + b[3]).min(height) - 2 {
+        for x in b[0] + 2..(b[0] + b[2]).min(width) - 2 {
+            let [r, g, bl] = image[y * width + x].map(i32::from);
+            // The canvas background is #10161f.
+            if (r - 0x10).abs() + (g - 0x16).abs() + (bl - 0x1f).abs() > 12 {
+                drawn += 1;
+            }
+            // The trail is orange, faded: red well above blue and green.
+            if r > bl + 40 && r > g + 15 {
+                trail += 1;
+            }
+            // The leaf is green.
+            if g > r + 40 && g > bl + 40 {
+                leaf += 1;
+            }
+        }
+    }
+    (drawn, trail, leaf)
 }
