@@ -150,3 +150,70 @@ fn every_export_plays_at_the_simulations_speed_in_a_default_blender_scene() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The studio's collection, exported from its page at the page's default
+/// frame rate (24: Blender's), plays at the simulation's speed in a default
+/// Blender scene, in all four formats: frame 150 within 1 mm of the fall at
+/// 6.25 s (the .glb's keys are the simulation's samples, in seconds).
+#[test]
+fn the_studios_exports_play_at_the_simulations_speed_in_a_default_blender_scene() {
+    use leafmagic::leaf::LeafSpec;
+    use leafmagic::motion::classify::MotionClass;
+    use leafmagic::studio::collection::{ExportRequest, export_collection};
+    use leafmagic::studio::{Session, StudioSettings};
+    let python = match venv_python("bpy-venv", "bpy", "bpy==4.5.*") {
+        Ok(p) => p,
+        Err(why) => {
+            missing_tool(
+                "the_studios_exports_play_at_the_simulations_speed_in_a_default_blender_scene",
+                &why,
+            );
+            return;
+        }
+    };
+    let dir = scratch("studio");
+    let settings = StudioSettings {
+        grid: 4,
+        ..StudioSettings::new("a", MotionClass::Floater, 7)
+    };
+    let mut session =
+        Session::create(&dir.join("session"), settings, LeafSpec::load("a").unwrap()).unwrap();
+    let id = session.current().0.ids[0];
+    session.keep(id, true).unwrap();
+    let files = export_collection(
+        &session,
+        ExportRequest {
+            fps: 24.0,
+            start_height_m: 5.0,
+        },
+    )
+    .unwrap();
+    let out = session.dir().to_path_buf();
+    let stem = format!("leaf-{id}");
+    let glb = out.join("export").join(format!("{stem}.glb"));
+    assert!(files.iter().any(|f| out.join(f) == glb), "{files:?}");
+    let clip = from_glb(&glb, None, None).unwrap();
+    // 150 / 24 s is sample 150 at the export's own 24 fps.
+    let truth = clip.objects[0].centre(150);
+    assert!(
+        truth.z < 5.0 - 1.0,
+        "the leaf has fallen from 5 m: {truth:?}"
+    );
+    for (kind, ext) in [
+        ("glb", "glb"),
+        ("usd", "usda"),
+        ("abc", "abc"),
+        ("pc2", "obj"),
+    ] {
+        let file = out.join("export").join(format!("{stem}.{ext}"));
+        let (fps, centre) = blender_centre(&python, kind, &file);
+        assert_eq!(fps, 24.0);
+        let off = (centre - truth).norm();
+        eprintln!("studio {kind}: frame 150 {off:.2e} m from the simulation at 6.25 s");
+        assert!(
+            off < 1e-3,
+            "studio {kind}: {off} m from the simulation at 6.25 s"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
