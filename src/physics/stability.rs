@@ -336,9 +336,11 @@ fn lost_mass(model: &Model, tensors: &[Matrix3<f64>]) -> Option<LostMass> {
     lost
 }
 
-/// Computes the estimate at the rest shape.
+/// Computes the estimate at the rest shape: bounds on the stiffest mode
+/// from the springs and hinges one by one, the mode itself by power
+/// iteration on the network ([`RestNetwork`]), its damping, and the
+/// spread of the masses.
 pub fn estimate(model: &Model) -> StabilityEstimate {
-    let n = model.len();
     let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();
     let mut warnings = Vec::new();
     let tensors = rest_tensors(model);
@@ -349,153 +351,309 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         .as_deref()
         .filter(|_| mass_lost_to_added_mass.is_none())
         .and_then(|t| effective_mass_roots(model, &free, t));
-    let with_added_mass = roots.is_some();
-    // |(m_i I + M_i)^(-1/2) v|² = vᵀ (m_i I + M_i)⁻¹ v: particle i's inverse
-    // mass along v, times |v|².
-    let inverse_mass_along = |r: &[Matrix3<f64>], i: usize, v: &V3| (r[i] * v).norm_squared();
+    let network = RestNetwork::new(model, &free, roots);
+    let bounds = network.bounds();
+    warnings.extend(bounds.too_stiff.clone());
 
-    // Bounds and the stiffest spring. A spring's k bᵀ M⁻¹ b (b its unit
-    // direction on its two particles) bounds λ_max(M⁻¹K) from below, the
-    // effective masses' M included.
-    let mut omega2_lower: f64 = 0.0;
-    let mut stiffest = None;
-    let mut row_sum = vec![0.0; n];
-    // Springs above WARN_SPRING_RATE: how many, and the stiffest of them
-    // (one warning, not one per spring: a sheet has hundreds alike).
-    let mut too_stiff: (usize, Option<(usize, f64)>) = (0, None);
-    for (k, s) in model.springs.iter().enumerate() {
-        let rate = match &roots {
-            Some(r) => {
-                let d = model.rest_position[s.i] - model.rest_position[s.j];
-                let l = d.norm();
-                let dir = if l > 0.0 { d / l } else { V3::zeros() };
-                s.stiffness * (inverse_mass_along(r, s.i, &dir) + inverse_mass_along(r, s.j, &dir))
-            }
-            None => s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]),
-        };
-        if rate > omega2_lower {
-            omega2_lower = rate;
-            stiffest = Some(k);
-        }
-        row_sum[s.i] += s.stiffness;
-        row_sum[s.j] += s.stiffness;
-        if rate > WARN_SPRING_RATE {
-            too_stiff.0 += 1;
-            if too_stiff.1.is_none_or(|(_, r)| rate > r) {
-                too_stiff.1 = Some((k, rate));
-            }
-        }
-    }
-    if let (count, Some((k, rate))) = too_stiff {
-        let others = if count > 1 {
-            format!(" (the stiffest of {count} springs above it)")
-        } else {
-            String::new()
-        };
+    let (lambda, y, converged) = network.power(Network::Stiffness);
+    // The damping's fastest rate λ_max(M⁻¹C). Where the top stiffness mode
+    // is overdamped, the damping's own fastest decay, not that mode's share
+    // of it (qᵀCq), bounds an explicit step: a leaf of 1e-9 kg particles
+    // (tests/data/hardening/light-masses.toml, ζ 11) diverged under Verlet
+    // at 0.75 of the modal estimate. An unsettled iteration is taken with
+    // the margin the stiffness's is.
+    let damping_rate_max = match network.power(Network::Damping) {
+        (rate, _, true) => rate,
+        (rate, _, false) => UNCONVERGED_MARGIN * rate,
+    };
+    let omega2 = if converged {
+        lambda.min(bounds.omega2_upper)
+    } else if bounds.omega2_lower <= bounds.omega2_upper {
+        (UNCONVERGED_MARGIN * lambda).clamp(bounds.omega2_lower, bounds.omega2_upper)
+    } else {
+        // A bound overflowed (or is NaN: inf − inf through an infinite root
+        // above): the mode is unbounded, and `check_estimate` refuses it.
+        f64::INFINITY
+    };
+
+    // The quadratic law's damping is not added to the mode's: at
+    // γ/(2ω_max) ~ 1e-2 it moves no scheme's spring limit by more than
+    // ~1 %, well inside AUTO_SAFETY; its own limit is the drag bound.
+    // Only the model's own law gives a non-zero rate. The unsteady law's
+    // bound divides by each particle's effective mass, added mass included.
+    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model)
+        + crate::physics::forces::unsteady::drag_rate(model);
+    let c_eff = network.mode_damping(&y);
+    // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
+    // an unbounded mode, not a zero one: `max` would make it 0 and hide it.
+    let omega = if omega2.is_nan() {
+        f64::INFINITY
+    } else {
+        omega2.max(0.0).sqrt()
+    };
+    let zeta = if omega > 0.0 {
+        c_eff / (2.0 * omega)
+    } else {
+        0.0
+    };
+
+    let (lightest, mass_ratio) = mass_spread(model, &free);
+    if mass_ratio > WARN_MASS_RATIO {
         warnings.push(format!(
-            "spring[{k}]: k (1/m_i + 1/m_j) = {rate:.3e} s^-2 exceeds {WARN_SPRING_RATE:.0e}{others}: explicit steps must be tiny"
+            "particle[{lightest}]: mass ratio heaviest/lightest = {mass_ratio:.3e} exceeds {WARN_MASS_RATIO:.0e}: the light particle sets the stable step"
         ));
     }
-    // Hinges at rest: K_h = k_b g gᵀ with g = ∇θ (4 particles).
-    let hinge_grads: Vec<([usize; 4], [V3; 4], f64, f64)> = model
-        .hinges
-        .iter()
-        .filter_map(|h| {
-            crate::physics::forces::dihedral(&model.rest_position, h)
-                .map(|(_, g)| (h.particles(), g, h.stiffness, h.damping))
-        })
-        .collect();
-    for (ids, g, k, _) in &hinge_grads {
-        let total: f64 = g.iter().map(|v| v.norm()).sum();
-        for (&i, gi) in ids.iter().zip(g) {
-            row_sum[i] += 0.5 * k * gi.norm() * total;
+
+    StabilityEstimate {
+        omega_max: omega,
+        omega_lower: bounds.omega2_lower.sqrt(),
+        omega_upper: bounds.omega2_upper.sqrt(),
+        power_converged: converged,
+        with_added_mass: network.roots.is_some(),
+        mode_damping_rate: c_eff,
+        damping_rate_max,
+        zeta,
+        drag_rate: network.air.rate_max.max(quadratic_rate),
+        explicit_drag_rate: quadratic_rate,
+        tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
+        stiffest_spring: bounds.stiffest,
+        mass_lost_to_added_mass,
+        lightest_particle: lightest,
+        mass_ratio,
+        warnings,
+    }
+}
+
+/// The lightest free particle and the heaviest/lightest mass ratio (1
+/// with no free particle).
+fn mass_spread(model: &Model, free: &[bool]) -> (usize, f64) {
+    let (mut lightest, mut m_min, mut m_max) = (0, f64::INFINITY, 0.0f64);
+    for i in (0..model.len()).filter(|&i| free[i]) {
+        if model.mass[i] < m_min {
+            m_min = model.mass[i];
+            lightest = i;
         }
-        for (&i, gi) in ids.iter().zip(g) {
-            let rate = match &roots {
-                Some(r) => k * inverse_mass_along(r, i, gi),
-                None => k * gi.norm_squared() * model.inv_mass[i],
+        m_max = m_max.max(model.mass[i]);
+    }
+    let mass_ratio = if m_min.is_finite() {
+        m_max / m_min
+    } else {
+        1.0
+    };
+    (lightest, mass_ratio)
+}
+
+/// What bounds the stiffest mode before any iteration.
+struct ModeBounds {
+    /// Largest single spring's or hinge's k bᵀ M⁻¹ b: a lower bound on
+    /// λ_max(M⁻¹K).
+    omega2_lower: f64,
+    /// Gershgorin's bound 2 Σ k / m over the rows: an upper bound.
+    omega2_upper: f64,
+    /// The spring that sets the lower bound.
+    stiffest: Option<usize>,
+    /// One warning for the springs above [`WARN_SPRING_RATE`].
+    too_stiff: Option<String>,
+}
+
+/// The spring and hinge network at rest, scaled by the particles' inverse
+/// mass roots M^(-1/2) (the effective masses' where the law adds mass): the
+/// operator S = M^(-1/2) K M^(-1/2), same spectrum as M⁻¹K, whose top
+/// eigenvalue is ω_max², and the same for the damping C.
+struct RestNetwork<'a> {
+    model: &'a Model,
+    free: &'a [bool],
+    /// (m_i I + M_i)^(-1/2) per particle, where the unsteady law adds mass.
+    roots: Option<Vec<Matrix3<f64>>>,
+    inv_sqrt_m: Vec<f64>,
+    /// Each spring's ends, unit direction and [stiffness, damping].
+    springs: Vec<(usize, usize, V3, [f64; 2])>,
+    /// Each hinge's particles, ∇θ at rest, stiffness and damping.
+    hinges: Vec<([usize; 4], [V3; 4], f64, f64)>,
+    air: AirDamping,
+}
+
+impl<'a> RestNetwork<'a> {
+    fn new(model: &'a Model, free: &'a [bool], roots: Option<Vec<Matrix3<f64>>>) -> Self {
+        let springs = model
+            .springs
+            .iter()
+            .map(|s| {
+                let d = model.rest_position[s.i] - model.rest_position[s.j];
+                let l = d.norm();
+                // A zero-length spring has no direction and no stiffness mode.
+                let dir = if l > 0.0 { d / l } else { V3::zeros() };
+                (s.i, s.j, dir, [s.stiffness, s.damping])
+            })
+            .collect();
+        // Hinges at rest: K_h = k_b g gᵀ with g = ∇θ (4 particles).
+        let hinges = model
+            .hinges
+            .iter()
+            .filter_map(|h| {
+                crate::physics::forces::dihedral(&model.rest_position, h)
+                    .map(|(_, g)| (h.particles(), g, h.stiffness, h.damping))
+            })
+            .collect();
+        let inv_sqrt_m = (0..model.len())
+            .map(|i| {
+                if free[i] {
+                    model.mass[i].powf(-0.5)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        RestNetwork {
+            model,
+            free,
+            roots,
+            inv_sqrt_m,
+            springs,
+            hinges,
+            air: air_damping(model),
+        }
+    }
+
+    /// |(m_i I + M_i)^(-1/2) v|² = vᵀ (m_i I + M_i)⁻¹ v: particle i's
+    /// inverse mass along v, times |v|².
+    fn inverse_mass_along(r: &[Matrix3<f64>], i: usize, v: &V3) -> f64 {
+        (r[i] * v).norm_squared()
+    }
+
+    /// The bounds, and the stiffest spring. A spring's k bᵀ M⁻¹ b (b its
+    /// unit direction on its two particles) bounds λ_max(M⁻¹K) from below,
+    /// the effective masses' M included; with added mass (m_i I + M_i ≥
+    /// m_i I) Gershgorin's bound on the masses alone stays an upper bound.
+    fn bounds(&self) -> ModeBounds {
+        let model = self.model;
+        let n = model.len();
+        let mut omega2_lower: f64 = 0.0;
+        let mut stiffest = None;
+        let mut row_sum = vec![0.0; n];
+        // Springs above WARN_SPRING_RATE: how many, and the stiffest of them
+        // (one warning, not one per spring: a sheet has hundreds alike).
+        let mut too_stiff: (usize, Option<(usize, f64)>) = (0, None);
+        for (k, s) in model.springs.iter().enumerate() {
+            let rate = match &self.roots {
+                Some(r) => {
+                    let d = model.rest_position[s.i] - model.rest_position[s.j];
+                    let l = d.norm();
+                    let dir = if l > 0.0 { d / l } else { V3::zeros() };
+                    s.stiffness
+                        * (Self::inverse_mass_along(r, s.i, &dir)
+                            + Self::inverse_mass_along(r, s.j, &dir))
+                }
+                None => s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]),
             };
             if rate > omega2_lower {
                 omega2_lower = rate;
+                stiffest = Some(k);
             }
+            row_sum[s.i] += s.stiffness;
+            row_sum[s.j] += s.stiffness;
+            if rate > WARN_SPRING_RATE {
+                too_stiff.0 += 1;
+                if too_stiff.1.is_none_or(|(_, r)| rate > r) {
+                    too_stiff.1 = Some((k, rate));
+                }
+            }
+        }
+        let too_stiff = match too_stiff {
+            (count, Some((k, rate))) => {
+                let others = if count > 1 {
+                    format!(" (the stiffest of {count} springs above it)")
+                } else {
+                    String::new()
+                };
+                Some(format!(
+                    "spring[{k}]: k (1/m_i + 1/m_j) = {rate:.3e} s^-2 exceeds {WARN_SPRING_RATE:.0e}{others}: explicit steps must be tiny"
+                ))
+            }
+            _ => None,
+        };
+        for (ids, g, k, _) in &self.hinges {
+            let total: f64 = g.iter().map(|v| v.norm()).sum();
+            for (&i, gi) in ids.iter().zip(g) {
+                row_sum[i] += 0.5 * k * gi.norm() * total;
+            }
+            for (&i, gi) in ids.iter().zip(g) {
+                let rate = match &self.roots {
+                    Some(r) => k * Self::inverse_mass_along(r, i, gi),
+                    None => k * gi.norm_squared() * model.inv_mass[i],
+                };
+                if rate > omega2_lower {
+                    omega2_lower = rate;
+                }
+            }
+        }
+        let omega2_upper = (0..n)
+            .filter(|&i| self.free[i])
+            .map(|i| 2.0 * row_sum[i] / model.mass[i])
+            .fold(0.0, f64::max);
+        ModeBounds {
+            omega2_lower,
+            omega2_upper,
+            stiffest,
+            too_stiff,
         }
     }
-    // With added mass (m_i I + M_i ≥ m_i I) this stays an upper bound.
-    let omega2_upper = (0..n)
-        .filter(|&i| free[i])
-        .map(|i| 2.0 * row_sum[i] / model.mass[i])
-        .fold(0.0, f64::max);
 
-    // Power iteration on S = M^-1/2 K M^-1/2 (symmetric, same spectrum as
-    // M⁻¹K); below, the same on the damping's M^-1/2 C M^-1/2. Each spring
-    // carries [stiffness, damping], each hinge (…, k, c).
-    let dirs: Vec<(usize, usize, V3, [f64; 2])> = model
-        .springs
-        .iter()
-        .map(|s| {
-            let d = model.rest_position[s.i] - model.rest_position[s.j];
-            let l = d.norm();
-            // A zero-length spring has no direction and no stiffness mode.
-            let dir = if l > 0.0 { d / l } else { V3::zeros() };
-            (s.i, s.j, dir, [s.stiffness, s.damping])
-        })
-        .collect();
-    let inv_sqrt_m: Vec<f64> = (0..n)
-        .map(|i| {
-            if free[i] {
-                model.mass[i].powf(-0.5)
-            } else {
-                0.0
-            }
-        })
-        .collect();
-    // M^(-1/2) v at particle i: the effective mass's root where the law
-    // adds mass, else v/√m_i (in the order the scalar products always had).
-    let root = |i: usize, v: V3| match &roots {
-        Some(r) => r[i] * v,
-        None => v * inv_sqrt_m[i],
-    };
-    // g · M^(-1/2) y at particle i (M^(-1/2) is symmetric).
-    let root_dot = |i: usize, g: &V3, y: &V3| match &roots {
-        Some(r) => (r[i] * g).dot(y),
-        None => g.dot(y) * inv_sqrt_m[i],
-    };
-    let air = air_damping(model);
-    // S y for the network's stiffnesses K (`Network::Stiffness`), or for
-    // its damping C: dashpots and the linear law's air damping.
-    let apply = |network: Network, y: &[V3], out: &mut [V3]| {
+    /// M^(-1/2) v at particle i: the effective mass's root where the law
+    /// adds mass, else v/√m_i (in the order the scalar products always had).
+    fn root(&self, i: usize, v: V3) -> V3 {
+        match &self.roots {
+            Some(r) => r[i] * v,
+            None => v * self.inv_sqrt_m[i],
+        }
+    }
+
+    /// g · M^(-1/2) y at particle i (M^(-1/2) is symmetric).
+    fn root_dot(&self, i: usize, g: &V3, y: &V3) -> f64 {
+        match &self.roots {
+            Some(r) => (r[i] * g).dot(y),
+            None => g.dot(y) * self.inv_sqrt_m[i],
+        }
+    }
+
+    /// S y for the network's stiffnesses K (`Network::Stiffness`), or for
+    /// its damping C: dashpots and the linear law's air damping.
+    fn apply(&self, network: Network, y: &[V3], out: &mut [V3]) {
         out.fill(V3::zeros());
         let pick = network as usize;
-        for &(i, j, dir, coefficient) in &dirs {
+        for &(i, j, dir, coefficient) in &self.springs {
             let k = coefficient[pick];
-            let u = root(i, y[i]) - root(j, y[j]);
+            let u = self.root(i, y[i]) - self.root(j, y[j]);
             let f = dir * (k * dir.dot(&u));
-            out[i] += root(i, f);
-            out[j] -= root(j, f);
+            out[i] += self.root(i, f);
+            out[j] -= self.root(j, f);
         }
-        for (ids, g, stiffness, damping) in &hinge_grads {
+        for (ids, g, stiffness, damping) in &self.hinges {
             let k = [*stiffness, *damping][pick];
             let gy: f64 = ids
                 .iter()
                 .zip(g)
-                .map(|(&i, gi)| root_dot(i, gi, &y[i]))
+                .map(|(&i, gi)| self.root_dot(i, gi, &y[i]))
                 .sum();
             for (&i, gi) in ids.iter().zip(g) {
-                out[i] += match &roots {
+                out[i] += match &self.roots {
                     Some(r) => r[i] * gi * (k * gy),
-                    None => gi * (k * gy * inv_sqrt_m[i]),
+                    None => gi * (k * gy * self.inv_sqrt_m[i]),
                 };
             }
         }
         if network == Network::Damping {
-            for (i, block) in air.blocks.iter().enumerate() {
-                out[i] += root(i, block * root(i, y[i]));
+            for (i, block) in self.air.blocks.iter().enumerate() {
+                out[i] += self.root(i, block * self.root(i, y[i]));
             }
         }
-    };
-    let stiff = !dirs.is_empty() || !hinge_grads.is_empty();
-    // The top eigenvalue of S, its vector, and whether the iteration settled.
-    let power = |network: Network| -> (f64, Vec<V3>, bool) {
+    }
+
+    /// The top eigenvalue of S (for `network`), its vector, and whether the
+    /// iteration settled.
+    fn power(&self, network: Network) -> (f64, Vec<V3>, bool) {
+        let n = self.model.len();
+        let stiff = !self.springs.is_empty() || !self.hinges.is_empty();
         // A fixed, irregular start vector: deterministic, and not
         // orthogonal to the top mode for any realistic network.
         let mut y: Vec<V3> = (0..n)
@@ -505,7 +663,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
                     (1.3 * a).sin(),
                     (2.7 * a + 0.5).cos(),
                     (0.9 * a + 1.1).sin() + 0.1,
-                ) * if free[i] { 1.0 } else { 0.0 }
+                ) * if self.free[i] { 1.0 } else { 0.0 }
             })
             .collect();
         let mut sy = vec![V3::zeros(); n];
@@ -520,7 +678,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
                 break;
             }
             y.iter_mut().for_each(|v| *v /= norm);
-            apply(network, &y, &mut sy);
+            self.apply(network, &y, &mut sy);
             let rq = dot(&y, &sy);
             let change = (rq - lambda).abs();
             lambda = rq;
@@ -535,103 +693,28 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
             y.iter_mut().for_each(|v| *v /= norm_y);
         }
         (lambda, y, converged)
-    };
-    let (lambda, y, converged) = power(Network::Stiffness);
-    // The damping's fastest rate λ_max(M⁻¹C). Where the top stiffness mode
-    // is overdamped, the damping's own fastest decay, not that mode's share
-    // of it (qᵀCq), bounds an explicit step: a leaf of 1e-9 kg particles
-    // (tests/data/hardening/light-masses.toml, ζ 11) diverged under Verlet
-    // at 0.75 of the modal estimate. An unsettled iteration is taken with
-    // the margin the stiffness's is.
-    let damping_rate_max = match power(Network::Damping) {
-        (rate, _, true) => rate,
-        (rate, _, false) => UNCONVERGED_MARGIN * rate,
-    };
-    let omega2 = if converged {
-        lambda.min(omega2_upper)
-    } else if omega2_lower <= omega2_upper {
-        (UNCONVERGED_MARGIN * lambda).clamp(omega2_lower, omega2_upper)
-    } else {
-        // A bound overflowed (or is NaN: inf − inf through an infinite root
-        // above): the mode is unbounded, and `check_estimate` refuses it.
-        f64::INFINITY
-    };
+    }
 
-    // Damping of that mode: c_eff = qᵀ C q / qᵀ M q with q = M^-1/2 y.
-    // The quadratic law's damping is not added here: at γ/(2ω_max) ~ 1e-2
-    // it moves no scheme's spring limit by more than ~1 %, well inside
-    // AUTO_SAFETY; its own limit is the drag bound.
-    // Only the model's own law gives a non-zero rate. The unsteady law's
-    // bound divides by each particle's effective mass, added mass included.
-    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model)
-        + crate::physics::forces::unsteady::drag_rate(model);
-    let mut c_eff = 0.0;
-    for (s, &(i, j, dir, _)) in model.springs.iter().zip(&dirs) {
-        let u = root(i, y[i]) - root(j, y[j]);
-        c_eff += s.damping * dir.dot(&u).powi(2);
-    }
-    for (ids, g, _, c) in &hinge_grads {
-        let gq: f64 = ids
-            .iter()
-            .zip(g)
-            .map(|(&i, gi)| root_dot(i, gi, &y[i]))
-            .sum();
-        c_eff += c * gq * gq;
-    }
-    for (i, block) in air.blocks.iter().enumerate() {
-        let q = root(i, y[i]);
-        c_eff += q.dot(&(block * q));
-    }
-    // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
-    // an unbounded mode, not a zero one: `max` would make it 0 and hide it.
-    let omega = if omega2.is_nan() {
-        f64::INFINITY
-    } else {
-        omega2.max(0.0).sqrt()
-    };
-    let zeta = if omega > 0.0 {
-        c_eff / (2.0 * omega)
-    } else {
-        0.0
-    };
-
-    // Lightest particle and mass ratio.
-    let (mut lightest, mut m_min, mut m_max) = (0, f64::INFINITY, 0.0f64);
-    for i in (0..n).filter(|&i| free[i]) {
-        if model.mass[i] < m_min {
-            m_min = model.mass[i];
-            lightest = i;
+    /// Damping of the mode y: c_eff = qᵀ C q / qᵀ M q with q = M^-1/2 y.
+    fn mode_damping(&self, y: &[V3]) -> f64 {
+        let mut c_eff = 0.0;
+        for (s, &(i, j, dir, _)) in self.model.springs.iter().zip(&self.springs) {
+            let u = self.root(i, y[i]) - self.root(j, y[j]);
+            c_eff += s.damping * dir.dot(&u).powi(2);
         }
-        m_max = m_max.max(model.mass[i]);
-    }
-    let mass_ratio = if m_min.is_finite() {
-        m_max / m_min
-    } else {
-        1.0
-    };
-    if mass_ratio > WARN_MASS_RATIO {
-        warnings.push(format!(
-            "particle[{lightest}]: mass ratio heaviest/lightest = {mass_ratio:.3e} exceeds {WARN_MASS_RATIO:.0e}: the light particle sets the stable step"
-        ));
-    }
-
-    StabilityEstimate {
-        omega_max: omega,
-        omega_lower: omega2_lower.sqrt(),
-        omega_upper: omega2_upper.sqrt(),
-        power_converged: converged,
-        with_added_mass,
-        mode_damping_rate: c_eff,
-        damping_rate_max,
-        zeta,
-        drag_rate: air.rate_max.max(quadratic_rate),
-        explicit_drag_rate: quadratic_rate,
-        tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
-        stiffest_spring: stiffest,
-        mass_lost_to_added_mass,
-        lightest_particle: lightest,
-        mass_ratio,
-        warnings,
+        for (ids, g, _, c) in &self.hinges {
+            let gq: f64 = ids
+                .iter()
+                .zip(g)
+                .map(|(&i, gi)| self.root_dot(i, gi, &y[i]))
+                .sum();
+            c_eff += c * gq * gq;
+        }
+        for (i, block) in self.air.blocks.iter().enumerate() {
+            let q = self.root(i, y[i]);
+            c_eff += q.dot(&(block * q));
+        }
+        c_eff
     }
 }
 
