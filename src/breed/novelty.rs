@@ -53,14 +53,18 @@ pub const SPREAD_FLOOR: [f64; 3] = [SCALES[0] / 100.0, SCALES[5] / 100.0, SCALES
 /// generations was 0.999982, a real margin).
 pub const SATURATED: f64 = 1.0 - 1e-9;
 
-/// Whether `leaf` holds `target` robustly: the class, with the margin at
-/// its top ([`SATURATED`]: the score saturated at 2) and kept by every
-/// release. Only such leaves are rescored, and rescoring lifts them all
-/// above 2, where no other leaf can reach.
+/// Whether `leaf` is of `target` robustly: its recorded drop is of the
+/// class, and every one of its releases kept it.
+pub fn robust(leaf: &Individual, target: MotionClass) -> bool {
+    leaf.eval.fall().is_some_and(|f| f.class == target) && leaf.eval.kept == leaf.eval.releases
+}
+
+/// Whether `leaf` holds `target`: [`robust`]ly, with the margin at its top
+/// ([`SATURATED`]: the score saturated at 2). Only such leaves are
+/// rescored, and rescoring lifts them all above 2, where no other leaf can
+/// reach.
 pub fn holds(leaf: &Individual, target: MotionClass) -> bool {
-    leaf.eval.fall().is_some_and(|f| {
-        f.class == target && f.margin >= SATURATED && leaf.eval.kept == leaf.eval.releases
-    })
+    robust(leaf, target) && leaf.eval.fall().is_some_and(|f| f.margin >= SATURATED)
 }
 
 fn values(f: &Fall) -> [f64; 3] {
@@ -127,10 +131,12 @@ pub fn rescore(population: &mut [Individual], target: MotionClass) {
     }
 }
 
-/// The leaves, taken in the order given (best first), that hold `target`
-/// and fall [`apart`] from every one taken before: at most `most`. What
-/// `best/` holds, and (counted over a whole generation) the `distinct`
-/// column of `generations.csv`.
+/// The leaves, taken in the order given (best first), that are of `target`
+/// [`robust`]ly and fall [`apart`] from every one taken before: at most
+/// `most`. What `best/` holds, and (counted over a whole generation) the
+/// `distinct` column of `generations.csv`. Robust rather than holding: a
+/// class whose margin never saturates (floaters from prototype A top out
+/// near 0.98) still gets leaves that differ.
 pub fn distinct<'a>(
     ranked: &[&'a Individual],
     target: MotionClass,
@@ -141,7 +147,7 @@ pub fn distinct<'a>(
         if chosen.len() >= most {
             break;
         }
-        if holds(leaf, target) && chosen.iter().all(|c| apart(c, leaf)) {
+        if robust(leaf, target) && chosen.iter().all(|c| apart(c, leaf)) {
             chosen.push(leaf);
         }
     }
@@ -238,6 +244,11 @@ mod tests {
         let chosen: Vec<u64> = distinct(&ranked, S, 5).iter().map(|i| i.id).collect();
         assert_eq!(chosen, [0, 2]);
         assert_eq!(distinct(&ranked, S, 1).len(), 1);
+        // Robust is enough; a release lost is not.
+        let mut d = leaf(3, S, 0.5, 4, [1.0, 0.1, 20.0]);
+        assert_eq!(distinct(&[&a, &d], S, 5).len(), 2);
+        d.eval.kept = 3;
+        assert_eq!(distinct(&[&a, &d], S, 5).len(), 1);
         assert!(distinct(&ranked, MotionClass::Floater, 5).is_empty());
     }
 }

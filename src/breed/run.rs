@@ -992,8 +992,9 @@ impl Run {
             self.write("archive.csv", csv.as_bytes())?;
         }
         let ranked = rank(&cp.population);
-        // Toward a class: the best leaves that hold it and fall pairwise
-        // apart (issue 60), or, before any holds it, the five best.
+        // Toward a class: the best leaves of it, each kept by every release,
+        // that fall pairwise apart (issue 60), or, before any is, the five
+        // best.
         let apart = match &self.settings.like {
             None if self.settings.novelty => {
                 novelty::distinct(&ranked, self.settings.target, BEST_LEAVES)

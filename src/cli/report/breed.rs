@@ -11,9 +11,10 @@ use std::path::Path;
 
 /// A line per generation: the count of each class, best and mean score,
 /// the best's robustness (how many of its releases kept the class) and the
-/// mutation scale; toward a class, how many leaves hold it and fall
-/// pairwise apart (`apart`, what improves once the class is held); with
-/// `like`, the best individual's distance to the target instead.
+/// mutation scale; toward a class, how many leaves of it, kept by every
+/// release, fall pairwise apart (`apart`: what improves once the class is
+/// held); with `like`, the best individual's distance to the target
+/// instead.
 pub fn generations(history: &[GenerationSummary], like: bool) -> String {
     text(|out| {
         write!(
