@@ -722,3 +722,41 @@ fn a_class_breed_returns_a_spread_of_robust_leaves_not_ties() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Novelty (issue 60) scores a leaf among its whole generation, computed
+/// where the generation is finished: a breed toward spinners, where it
+/// acts from generation 1 (scores above 2), is the same bytes with 1 and
+/// 2 threads and after kill + resume.
+#[test]
+fn a_class_breed_with_novelty_is_the_same_bytes_with_threads_and_after_kill_and_resume() {
+    let dir = scratch("novelty-resume");
+    let args = [
+        "--target",
+        "spinner",
+        "--population",
+        "24",
+        "--generations",
+        "5",
+        "--seconds",
+        "4",
+    ];
+    let files = breed_on_one_and_two_threads(&args, &dir);
+    let last = String::from_utf8_lossy(&files["gen-004.csv"]).into_owned();
+    let header: Vec<&str> = last.lines().next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "score").unwrap();
+    let above = last
+        .lines()
+        .skip(1)
+        .filter(|l| l.split(',').nth(col).unwrap().parse::<f64>().unwrap() > 2.0)
+        .count();
+    assert!(above >= 2, "novelty never acted: {above} scores above 2");
+    let killed = dir.join("killed");
+    kill_then_resume(
+        &[&args[..], &["--threads", "2"]].concat(),
+        &killed,
+        "gen-001.csv",
+        4,
+    );
+    same_files(&dir.join("two"), &killed, "after kill and resume");
+    let _ = std::fs::remove_dir_all(&dir);
+}
