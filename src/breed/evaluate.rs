@@ -150,6 +150,7 @@ fn diverged(error: String, tilt: [f64; 2]) -> Evaluation {
         kept: 0,
         release_deg: tilt,
         residuals: Vec::new(),
+        spread: [0.0; 3],
     }
 }
 
@@ -235,6 +236,7 @@ fn scored(
                 kept: 0,
                 release_deg: tilt,
                 residuals,
+                spread: [0.0; 3],
             }
         }
     }

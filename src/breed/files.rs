@@ -11,13 +11,13 @@ use std::path::Path;
 /// generations.csv: one row per completed generation.
 pub fn generations_csv(history: &[GenerationSummary]) -> String {
     let mut out = String::from(
-        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance,best_kept,releases\n",
+        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance,best_kept,releases,distinct\n",
     );
     for h in history {
         let c = h.counts;
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             h.generation,
             c[0],
             c[1],
@@ -31,7 +31,8 @@ pub fn generations_csv(history: &[GenerationSummary]) -> String {
             h.success_rate,
             h.best_distance.map_or(String::new(), |d| d.to_string()),
             h.best_kept,
-            h.releases
+            h.releases,
+            h.distinct
         );
     }
     out
@@ -46,7 +47,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         }
     }
     out.push_str(
-        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,releases,kept,release_x_deg,release_y_deg,error\n",
+        ",class,regime,score,margin,descent_m_s,drift_ratio,net_turns,yaw_turns,reversals,flips,tilt_deg,dt,distance,releases,kept,release_x_deg,release_y_deg,spread_descent_m_s,spread_drift_ratio,spread_spin_rad_s,error\n",
     );
     for i in population {
         let parent = i.parent.map_or(String::new(), |p| p.to_string());
@@ -63,7 +64,7 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
         };
         let _ = writeln!(
             out,
-            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            ",{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             e.class,
             e.regime,
             e.score,
@@ -81,6 +82,9 @@ pub fn population_csv(generation: usize, population: &[Individual]) -> String {
             e.kept,
             e.release_deg[0],
             e.release_deg[1],
+            e.spread[0],
+            e.spread[1],
+            e.spread[2],
             error
         );
     }

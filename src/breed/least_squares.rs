@@ -292,6 +292,7 @@ mod tests {
                     kept: 1,
                     release_deg: [0.0; 2],
                     residuals: r,
+                    spread: [0.0; 3],
                 },
             }
         };

@@ -16,7 +16,8 @@
 //! Files: [`settings`] and [`population`] are the data; [`mod@evaluate`] drops
 //! and scores one individual; [`selection`] ranks, selects and varies
 //! (with [`strategy`], [`cmaes`] and [`least_squares`]);
-//! [`archive`] is the MAP-Elites archive; [`run`] is the driver and the run
+//! [`archive`] is the MAP-Elites archive; [`novelty`] scores the leaves
+//! that hold the target class by how differently they fall; [`run`] is the driver and the run
 //! directory ([`files`] its tables, [`plot`] its plots); [`shard`],
 //! [`worker`] and [`executor`] spread a generation over processes and
 //! machines; [`verify`] checks a run directory before it is used again.
@@ -32,6 +33,7 @@ pub mod evaluate;
 pub mod executor;
 pub mod files;
 pub mod least_squares;
+pub mod novelty;
 pub mod plot;
 pub mod population;
 pub mod robust;

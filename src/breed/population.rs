@@ -45,7 +45,17 @@ pub struct Evaluation {
     /// a [`Evaluation::distance`]; empty otherwise. What the hybrid's
     /// Levenberg–Marquardt steps fit ([`super::least_squares`]).
     pub residuals: Vec<f64>,
+    /// How far apart the drops that fell came out, release to release:
+    /// max − min over them of descent speed (m/s), drift ratio and
+    /// rotation rate (rad/s), in [`SPREAD_NAMES`] order ([`super::robust`]).
+    /// Two leaves whose recorded values differ by more than the sum of
+    /// their spreads in one of these fall apart from any release
+    /// ([`super::novelty`]). Zeros in a run written before them.
+    pub spread: [f64; 3],
 }
+
+/// The descriptors of [`Evaluation::spread`], in order.
+pub const SPREAD_NAMES: [&str; 3] = ["descent_m_s", "drift_ratio", "spin_rad_s"];
 
 /// How one individual's drop ended.
 #[derive(Clone, Debug, PartialEq)]
@@ -163,6 +173,9 @@ pub struct EvaluationRecord {
     /// See [`Evaluation::residuals`] (empty in a run written before them).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub residuals: Vec<f64>,
+    /// See [`Evaluation::spread`] (zeros in a run written before them).
+    #[serde(default)]
+    pub spread: [f64; 3],
 }
 
 fn one() -> usize {
@@ -215,6 +228,7 @@ impl From<Evaluation> for EvaluationRecord {
             kept: e.kept,
             release_deg: e.release_deg,
             residuals,
+            spread: e.spread,
         }
     }
 }
@@ -255,6 +269,7 @@ impl TryFrom<EvaluationRecord> for Evaluation {
             kept: r.kept,
             release_deg: r.release_deg,
             residuals: r.residuals,
+            spread: r.spread,
         })
     }
 }
@@ -340,6 +355,12 @@ pub struct GenerationSummary {
     /// Releases per individual ([`Evaluation::releases`]).
     #[serde(default = "one")]
     pub releases: usize,
+    /// How many leaves of the generation hold the target class robustly
+    /// and fall pairwise apart ([`super::novelty::distinct`]): what a run
+    /// toward a class improves once the class is held (issue 60); 0 in a
+    /// run toward descriptors or written before it.
+    #[serde(default)]
+    pub distinct: usize,
 }
 
 /// The resumable state after a completed generation.

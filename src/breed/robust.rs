@@ -49,16 +49,37 @@ pub fn lower_median(scores: &[f64]) -> usize {
 }
 
 /// One individual's drops (one per release) as one evaluation: the lower
-/// median's drop, with the number of releases and how many of them kept
-/// the target class (`kept[k]` for drop k).
+/// median's drop, with the number of releases, how many of them kept
+/// the target class (`kept[k]` for drop k) and how far apart the drops
+/// that fell came out ([`spread`]).
 pub fn combine(mut drops: Vec<Evaluation>, kept: &[bool]) -> Evaluation {
     let scores: Vec<f64> = drops.iter().map(|e| e.score).collect();
     let k = lower_median(&scores);
     let releases = drops.len();
+    let spread = spread(&drops);
     let mut chosen = drops.swap_remove(k);
     chosen.releases = releases;
     chosen.kept = kept.iter().filter(|&&b| b).count();
+    chosen.spread = spread;
     chosen
+}
+
+/// The release-to-release spread of `drops` ([`Evaluation::spread`]):
+/// max − min of descent speed, drift ratio and rotation rate over the
+/// drops that fell; 0 where fewer than two fell. What "apart" is measured
+/// against: a leaf whose releases scatter widely must move further to
+/// fall visibly otherwise.
+pub fn spread(drops: &[Evaluation]) -> [f64; 3] {
+    let falls: Vec<[f64; 3]> = drops
+        .iter()
+        .filter_map(Evaluation::fall)
+        .map(|f| [f.descent_m_s, f.drift_ratio, f.spin_rad_s])
+        .collect();
+    std::array::from_fn(|q| {
+        let lo = falls.iter().map(|v| v[q]).fold(f64::INFINITY, f64::min);
+        let hi = falls.iter().map(|v| v[q]).fold(f64::NEG_INFINITY, f64::max);
+        if falls.len() < 2 { 0.0 } else { hi - lo }
+    })
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@
 use super::archive::{ARCHIVE_DESCENT_EDGES, ARCHIVE_SPIN_EDGES, update_archive};
 use super::executor::{Executor, Local};
 use super::files::{export_leaves, generations_csv, population_csv, remove_stale_temporaries};
+use super::novelty;
 use super::plot;
 use super::population::{
     BreedError, Checkpoint, Evaluation, GenerationSummary, Individual, Job, Plan, Progress, io_err,
@@ -60,6 +61,8 @@ const EXAMPLE_FILE: &str = "example.csv";
 /// The overlay of the example's and the best leaf's falls.
 const LIKE_PLOT_FILE: &str = "like.svg";
 const CHECKPOINT_FILE: &str = "checkpoint.json";
+/// How many leaves `best/` holds at most.
+pub const BEST_LEAVES: usize = 5;
 
 /// `run.toml`: the settings, the tool version and the prototype itself.
 #[derive(Serialize, Deserialize)]
@@ -759,9 +762,28 @@ impl Run {
                 )
             })
             .collect();
+        let mut population: Vec<Individual> = elites;
+        population.extend(evaluated.iter().map(|(i, _)| i.clone()));
+        population.sort_by_key(|i| i.id);
+        // Toward a class, the leaves that hold it are scored among the
+        // whole generation, elites included (novelty, issue 60): before
+        // anything reads a score.
+        let class_target = s.like.is_none().then_some(s.target);
+        if let Some(target) = class_target.filter(|_| s.novelty) {
+            novelty::rescore(&mut population, target);
+        }
+        let member = |id: u64| -> &Individual {
+            let k = population
+                .binary_search_by_key(&id, |i| i.id)
+                .expect("every child is a member");
+            &population[k]
+        };
         // The 1/5 rule steers the GA's children only: CMA-ES has its own
         // step size.
-        let ga_children = &evaluated[..bred];
+        let ga_children: Vec<(&Individual, f64)> = evaluated[..bred]
+            .iter()
+            .map(|(i, ps)| (member(i.id), *ps))
+            .collect();
         let successes = ga_children
             .iter()
             .filter(|(i, ps)| ps.is_nan() || i.eval.score >= *ps)
@@ -773,7 +795,7 @@ impl Run {
             // count, and a success is a child strictly closer than its
             // parent. Children crossing into the class would otherwise keep
             // the rate high and the variation coarse for ever.
-            let inside: Vec<&(Individual, f64)> =
+            let inside: Vec<&(&Individual, f64)> =
                 ga_children.iter().filter(|(_, ps)| *ps > 1.0).collect();
             if !inside.is_empty() {
                 let closer = inside.iter().filter(|(i, ps)| i.eval.score > *ps).count();
@@ -782,13 +804,10 @@ impl Run {
         }
         let sampled: Vec<&Individual> = evaluated[bred + model_children..]
             .iter()
-            .map(|(i, _)| i)
+            .map(|(i, _)| member(i.id))
             .collect();
         let ga_ids: Vec<u64> = ga_children.iter().map(|(i, _)| i.id).collect();
-        let mut population: Vec<Individual> = elites;
-        population.extend(evaluated.iter().map(|(i, _)| i.clone()));
-        population.sort_by_key(|i| i.id);
-        let summary = summarise(generation, &population, scale, success_rate);
+        let summary = summarise(generation, &population, scale, success_rate, class_target);
         let mut history = match &self.checkpoint {
             None => Vec::new(),
             Some(cp) => cp.history.clone(),
@@ -972,7 +991,21 @@ impl Run {
             }
             self.write("archive.csv", csv.as_bytes())?;
         }
-        let best: Vec<&Individual> = rank(&cp.population).into_iter().take(5).collect();
+        let ranked = rank(&cp.population);
+        // Toward a class: the best leaves of it, each kept by every release,
+        // that fall pairwise apart (issue 60), or, before any is, the five
+        // best.
+        let apart = match &self.settings.like {
+            None if self.settings.novelty => {
+                novelty::distinct(&ranked, self.settings.target, BEST_LEAVES)
+            }
+            _ => Vec::new(),
+        };
+        let best: Vec<&Individual> = if apart.is_empty() {
+            ranked.into_iter().take(BEST_LEAVES).collect()
+        } else {
+            apart
+        };
         let dir = self.dir.join("best");
         std::fs::create_dir_all(&dir).map_err(|e| io_err(&dir, e))?;
         export_leaves(&self.proto, &best, &dir)?;

@@ -9,6 +9,7 @@ use super::strategy::{cma_children, search_bounds};
 use crate::leaf::Bounds;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::{Genome, mutate};
+use crate::motion::classify::MotionClass;
 use rand::RngExt;
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
@@ -57,11 +58,14 @@ pub fn rank(population: &[Individual]) -> Vec<&Individual> {
 
 const CLASSES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
 
+/// The summary of a generation; `target`, for a run toward a class, counts
+/// its [`super::novelty::distinct`] leaves.
 pub(crate) fn summarise(
     generation: usize,
     population: &[Individual],
     scale: f64,
     success_rate: f64,
+    target: Option<MotionClass>,
 ) -> GenerationSummary {
     let mut counts = [0; 5];
     for i in population {
@@ -81,6 +85,9 @@ pub(crate) fn summarise(
         best_distance: best.eval.distance,
         best_kept: best.eval.kept,
         releases: best.eval.releases,
+        distinct: target.map_or(0, |t| {
+            super::novelty::distinct(&rank(population), t, usize::MAX).len()
+        }),
     }
 }
 

@@ -62,6 +62,11 @@ pub struct BreedSettings {
     /// for a run started from the prototype alone.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub start: Vec<Genome>,
+    /// Toward a class, leaves that hold it robustly are scored by how
+    /// differently they fall from the others ([`super::novelty`], issue
+    /// 60); false in a run written before it, whose scores saturate at 2.
+    #[serde(default)]
+    pub novelty: bool,
 }
 
 /// The strategy of a run whose run.toml predates `--strategy`.
@@ -94,6 +99,7 @@ impl BreedSettings {
             strategy: Strategy::Hybrid,
             uniform_start: true,
             start: Vec::new(),
+            novelty: true,
         }
     }
 

@@ -582,6 +582,7 @@ mod tests {
             kept: 3,
             release_deg: [-17.25, 0.1 + 0.2],
             residuals: vec![0.1 + 0.2, -1e-300, 5e-324, -0.0],
+            spread: [0.1 + 0.2, 1e-300, 5e-324],
         }
     }
 
@@ -595,6 +596,7 @@ mod tests {
             kept: 0,
             release_deg: [2.0, -29.9],
             residuals: Vec::new(),
+            spread: [0.0; 3],
         }
     }
 

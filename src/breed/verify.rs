@@ -371,6 +371,9 @@ fn check_member(i: &Individual, proto: &LeafSpec, at: &str, file: &Path) -> Resu
         ("distance", r.distance.unwrap_or(0.0)),
         ("release_deg[0]", r.release_deg[0]),
         ("release_deg[1]", r.release_deg[1]),
+        ("spread[0]", r.spread[0]),
+        ("spread[1]", r.spread[1]),
+        ("spread[2]", r.spread[2]),
     ];
     if r.releases == 0 || r.kept > r.releases {
         return Err(Damage::new(

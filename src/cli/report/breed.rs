@@ -11,8 +11,10 @@ use std::path::Path;
 
 /// A line per generation: the count of each class, best and mean score,
 /// the best's robustness (how many of its releases kept the class) and the
-/// mutation scale; with `like`, the best individual's distance to the
-/// target too.
+/// mutation scale; toward a class, how many leaves of it, kept by every
+/// release, fall pairwise apart (`apart`: what improves once the class is
+/// held); with `like`, the best individual's distance to the target
+/// instead.
 pub fn generations(history: &[GenerationSummary], like: bool) -> String {
     text(|out| {
         write!(
@@ -29,7 +31,7 @@ pub fn generations(history: &[GenerationSummary], like: bool) -> String {
             "mean",
             "scale"
         )?;
-        writeln!(out, "{}", if like { "  best dist." } else { "" })?;
+        writeln!(out, "{}", if like { "  best dist." } else { "  apart" })?;
         for h in history {
             let c = h.counts;
             let kept = format!("{}/{}", h.best_kept, h.releases);
@@ -54,6 +56,8 @@ pub fn generations(history: &[GenerationSummary], like: bool) -> String {
                     h.best_distance
                         .map_or("∞".to_string(), |d| format!("{d:.4}"))
                 )?;
+            } else {
+                write!(out, "  {:>5}", h.distinct)?;
             }
             writeln!(out)?;
         }
