@@ -46,7 +46,7 @@ impl Executor for Local {
             .par_iter()
             .map(|c| {
                 let eval = evaluate(job.proto, c.id, &c.genome, settings);
-                progress.individual_done(eval.class_name(), eval.score);
+                progress.individual_done(eval.kind(), eval.score);
                 eval
             })
             .collect())
@@ -128,7 +128,7 @@ fn evaluate_sharded(
             match shard::read_valid(dir, plan, split) {
                 Ok(evals) => {
                     for e in &evals {
-                        progress.individual_done(e.class_name(), e.score);
+                        progress.individual_done(e.kind(), e.score);
                     }
                     *slot = Some(evals);
                     if attempt == 0 {

@@ -2,7 +2,7 @@
 //! `gen-NNN.csv`, leaf files with their `index.csv`; and the clean-up of
 //! temporaries a killed writer left.
 
-use super::population::{BreedError, GenerationSummary, Individual, io_err};
+use super::population::{BreedError, GenerationSummary, Individual, OutcomeKind, io_err};
 use crate::leaf::LeafSpec;
 use crate::util::io::write_atomic;
 use std::fmt::Write as _;
@@ -10,20 +10,22 @@ use std::path::Path;
 
 /// generations.csv: one row per completed generation.
 pub fn generations_csv(history: &[GenerationSummary]) -> String {
-    let mut out = String::from(
-        "generation,floater,spinner,lilter,undetermined,diverged,best_score,mean_score,best_id,scale,success_rate,best_distance,best_kept,releases,distinct\n",
+    let mut out = String::from("generation");
+    for kind in OutcomeKind::ALL {
+        out.push(',');
+        out.push_str(kind.name());
+    }
+    out.push_str(
+        ",best_score,mean_score,best_id,scale,success_rate,best_distance,best_kept,releases,distinct\n",
     );
     for h in history {
-        let c = h.counts;
+        let _ = write!(out, "{}", h.generation);
+        for (_, count) in h.counts.iter() {
+            let _ = write!(out, ",{count}");
+        }
         let _ = writeln!(
             out,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            h.generation,
-            c[0],
-            c[1],
-            c[2],
-            c[3],
-            c[4],
+            ",{},{},{},{},{},{},{},{},{}",
             h.best_score,
             h.mean_score,
             h.best_id,

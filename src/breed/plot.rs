@@ -1,7 +1,7 @@
 //! The plots of a breeding run: class counts per generation, and the
 //! example's fall against the best leaf's.
 
-use super::population::GenerationSummary;
+use super::population::{GenerationSummary, OutcomeKind};
 use crate::motion::trajectory::Trajectory;
 use crate::util::svg::{PlotError, legend, legend_mark};
 use plotters::prelude::*;
@@ -12,7 +12,7 @@ use plotters::prelude::*;
 /// # Errors
 /// A message if plotters fails (it writes to memory, so only on a bug).
 pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<String, PlotError> {
-    const NAMES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
+    // In OutcomeKind::ALL's order.
     const COLOURS: [RGBColor; 5] = [
         RGBColor(0, 114, 178),
         RGBColor(213, 94, 0),
@@ -23,7 +23,7 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
     let last = history.last().map_or(1, |h| h.generation.max(1));
     let top = history
         .iter()
-        .flat_map(|h| h.counts)
+        .map(|h| h.counts.max())
         .max()
         .unwrap_or(1)
         .max(1);
@@ -50,18 +50,18 @@ pub fn generations_svg(history: &[GenerationSummary], title: &str) -> Result<Str
             .label_style(("sans-serif", 14))
             .draw()
             .map_err(PlotError::of)?;
-        for (k, (name, colour)) in NAMES.iter().zip(COLOURS).enumerate() {
-            if history.iter().all(|h| h.counts[k] == 0) {
+        for (kind, colour) in OutcomeKind::ALL.into_iter().zip(COLOURS) {
+            if history.iter().all(|h| h.counts[kind] == 0) {
                 continue;
             }
             let points: Vec<(f64, f64)> = history
                 .iter()
-                .map(|h| (h.generation as f64, h.counts[k] as f64))
+                .map(|h| (h.generation as f64, h.counts[kind] as f64))
                 .collect();
             chart
                 .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))
                 .map_err(PlotError::of)?
-                .label(*name)
+                .label(kind.name())
                 .legend(legend_mark(colour, 2));
             chart
                 .draw_series(

@@ -97,8 +97,88 @@ pub struct Fall {
     pub dt: f64,
 }
 
+/// What one leaf's evaluation came to: one of the classifier's motion
+/// classes, or a drop that diverged. The five a generation is counted by
+/// (the breed table, generations.csv, the plot, the progress bar).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum OutcomeKind {
+    /// Classified a floater.
+    Floater,
+    /// Classified a spinner.
+    Spinner,
+    /// Classified a lilter.
+    Lilter,
+    /// Classified undetermined.
+    Undetermined,
+    /// The drop diverged.
+    Diverged,
+}
+
+impl OutcomeKind {
+    /// All five, in the order the run's files list them.
+    pub const ALL: [OutcomeKind; 5] = [
+        OutcomeKind::Floater,
+        OutcomeKind::Spinner,
+        OutcomeKind::Lilter,
+        OutcomeKind::Undetermined,
+        OutcomeKind::Diverged,
+    ];
+
+    /// The name files and tables use (the class's own name, or `diverged`).
+    pub const fn name(self) -> &'static str {
+        match self {
+            OutcomeKind::Floater => "floater",
+            OutcomeKind::Spinner => "spinner",
+            OutcomeKind::Lilter => "lilter",
+            OutcomeKind::Undetermined => "undetermined",
+            OutcomeKind::Diverged => "diverged",
+        }
+    }
+
+    /// The outcome of a fall classified `class`.
+    pub fn of_class(class: MotionClass) -> OutcomeKind {
+        match class {
+            MotionClass::Floater => OutcomeKind::Floater,
+            MotionClass::Spinner => OutcomeKind::Spinner,
+            MotionClass::Lilter => OutcomeKind::Lilter,
+            MotionClass::Undetermined => OutcomeKind::Undetermined,
+        }
+    }
+}
+
+/// Leaves per [`OutcomeKind`] (written as the five numbers, in
+/// [`OutcomeKind::ALL`]'s order).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(transparent)]
+pub struct OutcomeCounts(pub [usize; 5]);
+
+impl OutcomeCounts {
+    /// The counts in [`OutcomeKind::ALL`]'s order, with their kinds.
+    pub fn iter(&self) -> impl Iterator<Item = (OutcomeKind, usize)> + '_ {
+        OutcomeKind::ALL.into_iter().zip(self.0)
+    }
+
+    /// The largest count.
+    pub fn max(&self) -> usize {
+        self.0.into_iter().max().unwrap_or(0)
+    }
+}
+
+impl std::ops::Index<OutcomeKind> for OutcomeCounts {
+    type Output = usize;
+    fn index(&self, kind: OutcomeKind) -> &usize {
+        &self.0[kind as usize]
+    }
+}
+
+impl std::ops::IndexMut<OutcomeKind> for OutcomeCounts {
+    fn index_mut(&mut self, kind: OutcomeKind) -> &mut usize {
+        &mut self.0[kind as usize]
+    }
+}
+
 /// The name of a diverged outcome where a class name would be.
-pub const DIVERGED: &str = "diverged";
+pub const DIVERGED: &str = OutcomeKind::Diverged.name();
 
 impl Evaluation {
     /// The fall, unless the drop diverged.
@@ -109,12 +189,17 @@ impl Evaluation {
         }
     }
 
+    /// The class, or diverged.
+    pub fn kind(&self) -> OutcomeKind {
+        match &self.outcome {
+            Outcome::Fell(f) => OutcomeKind::of_class(f.class),
+            Outcome::Diverged(_) => OutcomeKind::Diverged,
+        }
+    }
+
     /// The class name, or `diverged`.
     pub fn class_name(&self) -> &'static str {
-        match &self.outcome {
-            Outcome::Fell(f) => f.class.as_str(),
-            Outcome::Diverged(_) => DIVERGED,
-        }
+        self.kind().name()
     }
 
     /// The flat record the run's files hold.
@@ -332,8 +417,8 @@ pub struct Plan {
 pub struct GenerationSummary {
     /// Generation index.
     pub generation: usize,
-    /// Counts of floater, spinner, lilter, undetermined, diverged.
-    pub counts: [usize; 5],
+    /// Leaves per outcome.
+    pub counts: OutcomeCounts,
     /// Best score.
     pub best_score: f64,
     /// Mean score.
@@ -464,8 +549,8 @@ pub(crate) fn io_err(path: &Path, e: impl std::fmt::Display) -> BreedError {
 pub trait Progress: Sync {
     /// A generation starts with `size` individuals to evaluate.
     fn start_generation(&self, generation: usize, size: usize);
-    /// One individual finished with this class.
-    fn individual_done(&self, class: &str, score: f64);
+    /// One individual finished with this outcome.
+    fn individual_done(&self, outcome: OutcomeKind, score: f64);
     /// The generation is complete.
     fn finish_generation(&self, summary: &GenerationSummary);
 }
@@ -475,6 +560,6 @@ pub struct Quiet;
 
 impl Progress for Quiet {
     fn start_generation(&self, _: usize, _: usize) {}
-    fn individual_done(&self, _: &str, _: f64) {}
+    fn individual_done(&self, _: OutcomeKind, _: f64) {}
     fn finish_generation(&self, _: &GenerationSummary) {}
 }

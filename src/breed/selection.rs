@@ -3,7 +3,7 @@
 //! generation the same bytes whatever process derives it.
 
 use super::least_squares;
-use super::population::{Checkpoint, Child, GenerationSummary, Individual, Plan};
+use super::population::{Checkpoint, Child, GenerationSummary, Individual, OutcomeCounts, Plan};
 use super::settings::{BreedSettings, Strategy};
 use super::strategy::{cma_children, search_bounds};
 use crate::leaf::Bounds;
@@ -56,8 +56,6 @@ pub fn rank(population: &[Individual]) -> Vec<&Individual> {
     v
 }
 
-const CLASSES: [&str; 5] = ["floater", "spinner", "lilter", "undetermined", "diverged"];
-
 /// The summary of a generation; `target`, for a run toward a class, counts
 /// its [`super::novelty::distinct`] leaves.
 pub(crate) fn summarise(
@@ -67,11 +65,9 @@ pub(crate) fn summarise(
     success_rate: f64,
     target: Option<MotionClass>,
 ) -> GenerationSummary {
-    let mut counts = [0; 5];
+    let mut counts = OutcomeCounts::default();
     for i in population {
-        if let Some(k) = CLASSES.iter().position(|c| *c == i.eval.class_name()) {
-            counts[k] += 1;
-        }
+        counts[i.eval.kind()] += 1;
     }
     let best = rank(population)[0];
     GenerationSummary {

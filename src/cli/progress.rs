@@ -1,6 +1,7 @@
 //! The progress of `breed` on a terminal: a bar per generation with the
 //! count of each class so far and the best score (indicatif).
 
+use leafmagic::breed::population::OutcomeKind;
 use leafmagic::breed::{self, GenerationSummary};
 use leafmagic::physics::model::Model;
 use leafmagic::physics::run::Work;
@@ -47,13 +48,10 @@ impl breed::Progress for Bar {
         }
     }
 
-    fn individual_done(&self, class: &str, score: f64) {
+    fn individual_done(&self, outcome: OutcomeKind, score: f64) {
         use std::sync::atomic::Ordering::Relaxed;
-        let k = ["floater", "spinner", "lilter", "undetermined", "diverged"]
-            .iter()
-            .position(|c| *c == class)
-            .unwrap_or(3);
-        self.counts[k].fetch_add(1, Relaxed);
+        // Counted in OutcomeKind::ALL's order, as the bar's F S L U D.
+        self.counts[outcome as usize].fetch_add(1, Relaxed);
         let best = {
             let mut b = self.best.lock().expect("progress lock");
             *b = b.max(score);

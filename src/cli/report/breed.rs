@@ -4,6 +4,7 @@
 
 use super::text;
 use leafmagic::breed::GenerationSummary;
+use leafmagic::breed::population::OutcomeKind;
 use leafmagic::breed::worker::Outcome;
 use leafmagic::motion::describe::{self, Descriptors};
 use std::fmt::Write as _;
@@ -39,11 +40,11 @@ pub fn generations(history: &[GenerationSummary], like: bool) -> String {
                 out,
                 "{:>3}  {:>7} {:>7} {:>6} {:>6} {:>6}  {:>10.4} {:>5} {:>10.4} {:>6.3}",
                 h.generation,
-                c[0],
-                c[1],
-                c[2],
-                c[3],
-                c[4],
+                c[OutcomeKind::Floater],
+                c[OutcomeKind::Spinner],
+                c[OutcomeKind::Lilter],
+                c[OutcomeKind::Undetermined],
+                c[OutcomeKind::Diverged],
                 h.best_score,
                 kept,
                 h.mean_score,
