@@ -20,16 +20,32 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                 ..StudioSettings::new(&args.prototype, args.target, args.seed)
             };
             settings.validate()?;
-            let dir = args
-                .out
-                .clone()
-                .unwrap_or_else(|| default_dir(&args.prototype, args.seed));
-            eprintln!(
-                "studio: breeding generation 0 ({} candidates) in {}",
-                settings.grid,
-                dir.display()
-            );
-            Session::create(&dir, settings, proto)?
+            match &args.out {
+                Some(dir) => create(dir, settings, proto)?,
+                // The default folder is named by prototype and seed: running
+                // `studio` again with the same settings reopens it where it
+                // was, as an animator coming back expects.
+                None => {
+                    let dir = default_dir(&args.prototype, args.seed);
+                    if dir.join(leafmagic::studio::session::SESSION_FILE).exists() {
+                        let session = Session::open(&dir)?;
+                        if session.file().settings != settings {
+                            anyhow::bail!(
+                                "{} holds a session with other settings; reopen it with --resume {}, or start another with --out DIR",
+                                dir.display(),
+                                dir.display()
+                            );
+                        }
+                        eprintln!(
+                            "studio: reopening {} where it was (--out DIR starts another session)",
+                            dir.display()
+                        );
+                        session
+                    } else {
+                        create(&dir, settings, proto)?
+                    }
+                }
+            }
         }
     };
     let server = Server::bind(args.port).context("could not listen on 127.0.0.1")?;
@@ -46,6 +62,16 @@ pub fn studio(args: StudioArgs) -> Result<()> {
         let _ = std::process::Command::new("xdg-open").arg(&url).spawn();
     }
     server.serve(session).context("the studio's server stopped")
+}
+
+/// A new session in `dir`, generation 0 bred.
+fn create(dir: &Path, settings: StudioSettings, proto: LeafSpec) -> Result<Session> {
+    eprintln!(
+        "studio: breeding generation 0 ({} candidates) in {}",
+        settings.grid,
+        dir.display()
+    );
+    Ok(Session::create(dir, settings, proto)?)
 }
 
 /// `runs/studio-<prototype>-s<seed>`, a file prototype by its stem.

@@ -97,3 +97,50 @@ fn accuracy_writes_under_runs_not_into_the_current_folder() {
     assert!(dir.join("runs/accuracy/accuracy.csv").is_file());
     assert!(!dir.join("accuracy.csv").exists());
 }
+
+/// `studio` run again in the same folder reopens its session where it was
+/// (the default folder is named by prototype and seed), and refuses, naming
+/// both ways on, when asked for other settings.
+#[test]
+fn studio_run_again_reopens_its_session() {
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+    let dir = scratch("newcomer-studio-again");
+    // Starts `studio ARGS` in `dir`; (its stderr, whether it printed its
+    // address), stopped once it has.
+    let start = |extra: &[&str]| -> (String, bool) {
+        let mut child = leafmagic()
+            .current_dir(&dir)
+            .args(["studio", "--port", "0", "--grid", "4", "--seconds", "2"])
+            .args(extra)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        let stdout = BufReader::new(child.stdout.take().unwrap());
+        let served = stdout
+            .lines()
+            .map_while(Result::ok)
+            .any(|l| l.starts_with("studio: http://127.0.0.1:"));
+        let _ = child.kill();
+        let out = child.wait_with_output().unwrap();
+        (String::from_utf8_lossy(&out.stderr).into_owned(), served)
+    };
+    let (err, served) = start(&[]);
+    assert!(served, "{err}");
+    assert!(err.contains("breeding generation 0"), "{err}");
+    let (err, served) = start(&[]);
+    assert!(served, "{err}");
+    assert!(
+        err.contains("reopening runs/studio-a-s1991 where it was"),
+        "{err}"
+    );
+    let (err, served) = start(&["--target", "spinner"]);
+    assert!(!served);
+    assert!(
+        err.contains("holds a session with other settings")
+            && err.contains("--resume runs/studio-a-s1991")
+            && err.contains("--out DIR"),
+        "{err}"
+    );
+}
