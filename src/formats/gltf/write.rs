@@ -449,35 +449,82 @@ fn base_count(o: &ClipObject, n: usize) -> usize {
 /// the file would exceed the 4 GiB a GLB header can describe.
 pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
     clip.validate()?;
-    let mut root = Root {
-        asset: json::Asset {
-            generator: Some(format!("leafmagic {}", env!("CARGO_PKG_VERSION"))),
-            ..Default::default()
-        },
-        ..Default::default()
-    };
-    let mut bin = Bin { bytes: Vec::new() };
-    let times: Vec<f32> = clip.times().iter().map(|&t| t as f32).collect();
-    let time_view = bin.view(&mut root, &f32_bytes(&times), None);
-    let time_accessor = accessor(
-        &mut root,
-        time_view,
-        times.len(),
-        ComponentType::F32,
-        Type::Scalar,
-        Some((vec![times[0]], vec![*times.last().unwrap_or(&0.0)])),
-    );
-    // A single key cannot be interpolated; the animation is only written
-    // when there are two frames or more.
-    let animate = clip.frames >= 2;
-    let mut nodes = Vec::new();
-    let mut channels = Vec::new();
-    let mut samplers = Vec::new();
-    let mut materials = std::collections::BTreeMap::new();
+    let mut glb = GlbBuilder::new(clip);
     for o in &clip.objects {
+        glb.object(o);
+    }
+    glb.finish(clip)
+}
+
+/// A .glb being written: the document, its binary chunk, the key times
+/// every channel shares, and the nodes, animation channels and materials
+/// so far. Objects are added in order ([`GlbBuilder::object`]), each
+/// pushing its material (first use), accessors, mesh, node and channels in
+/// that order, so the bytes depend only on the clip.
+struct GlbBuilder {
+    root: Root,
+    bin: Bin,
+    time_accessor: Index<json::Accessor>,
+    /// A single key cannot be interpolated; the animation is only written
+    /// when there are two frames or more.
+    animate: bool,
+    nodes: Vec<Index<json::Node>>,
+    channels: Vec<json::animation::Channel>,
+    samplers: Vec<json::animation::Sampler>,
+    materials: std::collections::BTreeMap<String, Index<json::Material>>,
+}
+
+impl GlbBuilder {
+    fn new(clip: &Clip) -> Self {
+        let mut root = Root {
+            asset: json::Asset {
+                generator: Some(format!("leafmagic {}", env!("CARGO_PKG_VERSION"))),
+                ..Default::default()
+            },
+            ..Default::default()
+        };
+        let mut bin = Bin { bytes: Vec::new() };
+        let times: Vec<f32> = clip.times().iter().map(|&t| t as f32).collect();
+        let time_view = bin.view(&mut root, &f32_bytes(&times), None);
+        let time_accessor = accessor(
+            &mut root,
+            time_view,
+            times.len(),
+            ComponentType::F32,
+            Type::Scalar,
+            Some((vec![times[0]], vec![*times.last().unwrap_or(&0.0)])),
+        );
+        GlbBuilder {
+            root,
+            bin,
+            time_accessor,
+            animate: clip.frames >= 2,
+            nodes: Vec::new(),
+            channels: Vec::new(),
+            samplers: Vec::new(),
+            materials: std::collections::BTreeMap::new(),
+        }
+    }
+
+    /// One object: its material, mesh, node and (animated) channels.
+    fn object(&mut self, o: &ClipObject) {
+        let material = self.material(o);
+        let framed = o.framed();
+        let rig = (self.animate && framed.deforms()).then(|| rig(o, &framed));
+        let mesh = self.mesh(o, &framed, material, rig.as_ref());
+        let node = self.node(o, &framed, mesh);
+        self.nodes.push(node);
+        if self.animate {
+            self.channels_of(node, &framed, rig);
+        }
+    }
+
+    /// The material of `o`'s kind and class, made on its first use.
+    fn material(&mut self, o: &ClipObject) -> Index<json::Material> {
         let rgb = colour(o);
         let key = material_name(o);
-        let material = *materials.entry(key.clone()).or_insert_with(|| {
+        let root = &mut self.root;
+        *self.materials.entry(key.clone()).or_insert_with(|| {
             root.push(json::Material {
                 name: Some(key),
                 double_sided: true,
@@ -491,11 +538,23 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 },
                 ..Default::default()
             })
-        });
-        let framed = o.framed();
-        let surface = shown(o, &framed);
+        })
+    }
+
+    /// `o`'s mesh at rest: positions, and for a surface normals, UVs and
+    /// triangles (a rope's segments as lines, lone points as points), with
+    /// the rig's morph targets when it deforms.
+    fn mesh(
+        &mut self,
+        o: &ClipObject,
+        framed: &Framed,
+        material: Index<json::Material>,
+        rig: Option<&Rig>,
+    ) -> Index<json::Mesh> {
+        let (root, bin) = (&mut self.root, &mut self.bin);
+        let surface = shown(o, framed);
         let base: Vec<[f32; 3]> = surface.rest.iter().map(to_gltf).collect();
-        let position = vec3_accessor(&mut root, &mut bin, &base, true);
+        let position = vec3_accessor(root, bin, &base, true);
         let mut attributes = vec![(Valid(json::mesh::Semantic::Positions), position)];
         let (indices, mode) = if surface.triangles.is_empty() {
             (
@@ -507,7 +566,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 .iter()
                 .map(to_gltf)
                 .collect();
-            let normal = vec3_accessor(&mut root, &mut bin, &normals, true);
+            let normal = vec3_accessor(root, bin, &normals, true);
             attributes.push((Valid(json::mesh::Semantic::Normals), normal));
             // glTF's UV origin is the top left: v runs down.
             let uv: Vec<f32> = surface
@@ -516,12 +575,12 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 .flat_map(|t| [t[0] as f32, 1.0 - t[1] as f32])
                 .collect();
             let view = bin.view(
-                &mut root,
+                root,
                 &f32_bytes(&uv),
                 Some(json::buffer::Target::ArrayBuffer),
             );
             let texcoord = accessor(
-                &mut root,
+                root,
                 view,
                 surface.uvs.len(),
                 ComponentType::F32,
@@ -536,13 +595,9 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
         };
         let index_accessor = (!indices.is_empty()).then(|| {
             let bytes: Vec<u8> = indices.iter().flat_map(|i| i.to_le_bytes()).collect();
-            let view = bin.view(
-                &mut root,
-                &bytes,
-                Some(json::buffer::Target::ElementArrayBuffer),
-            );
+            let view = bin.view(root, &bytes, Some(json::buffer::Target::ElementArrayBuffer));
             accessor(
-                &mut root,
+                root,
                 view,
                 indices.len(),
                 ComponentType::U32,
@@ -555,16 +610,15 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
         } else {
             mode
         };
-        let rig = (animate && framed.deforms()).then(|| rig(o, &framed));
         let mut targets = None;
         let mut weights = None;
         let mut mesh_extras = None;
-        if let Some(rig) = &rig {
+        if let Some(rig) = rig {
             let list = rig
                 .targets
                 .iter()
                 .map(|(ix, vals)| json::mesh::MorphTarget {
-                    positions: Some(sparse_vec3(&mut root, &mut bin, base.len(), ix, vals)),
+                    positions: Some(sparse_vec3(root, bin, base.len(), ix, vals)),
                     normals: None,
                     tangents: None,
                 })
@@ -574,7 +628,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
             // The names of the targets, where Blender and three.js look.
             mesh_extras = raw_extras(js!({ "targetNames": rig.names }));
         }
-        let mesh = root.push(json::Mesh {
+        root.push(json::Mesh {
             extensions: None,
             extras: mesh_extras,
             name: Some(format!("{}-mesh", o.name)),
@@ -588,7 +642,17 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 targets,
             }],
             weights,
-        });
+        })
+    }
+
+    /// `o`'s node at its first pose, with its kind, class, regime and
+    /// features in the extras.
+    fn node(
+        &mut self,
+        o: &ClipObject,
+        framed: &Framed,
+        mesh: Index<json::Mesh>,
+    ) -> Index<json::Node> {
         let mut extras = js!({"kind": o.kind, "label": o.label});
         if !o.regime.is_empty() {
             extras["regime"] = js!(o.regime);
@@ -601,7 +665,7 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
                 .collect::<serde_json::Map<_, _>>()
                 .into();
         }
-        let node = root.push(json::Node {
+        self.root.push(json::Node {
             mesh: Some(mesh),
             name: Some(o.name.clone()),
             translation: Some(to_gltf(&framed.origin[0])),
@@ -610,34 +674,23 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
             ))),
             extras: raw_extras(extras),
             ..Default::default()
-        });
-        nodes.push(node);
-        if !animate {
-            continue;
-        }
-        let mut channel = |root: &mut Root,
-                           bin: &mut Bin,
-                           output: Vec<f32>,
-                           type_: Type,
-                           count: usize,
-                           path: json::animation::Property| {
-            let view = bin.view(root, &f32_bytes(&output), None);
-            let out = accessor(root, view, count, ComponentType::F32, type_, None);
-            sampler_channel(&mut samplers, &mut channels, time_accessor, out, node, path);
-        };
+        })
+    }
+
+    /// The node's translation and rotation channels, and its morph
+    /// weights' when it deforms, all on the shared key times.
+    fn channels_of(&mut self, node: Index<json::Node>, framed: &Framed, rig: Option<Rig>) {
         let t: Vec<f32> = framed.origin.iter().flat_map(to_gltf).collect();
-        channel(
-            &mut root,
-            &mut bin,
+        self.channel(
+            node,
             t,
             Type::Vec3,
             framed.origin.len(),
             json::animation::Property::Translation,
         );
         let r: Vec<f32> = framed.rotation.iter().flat_map(quat_to_gltf).collect();
-        channel(
-            &mut root,
-            &mut bin,
+        self.channel(
+            node,
             r,
             Type::Vec4,
             framed.rotation.len(),
@@ -646,9 +699,8 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
         if let Some(rig) = rig {
             let w: Vec<f32> = rig.weights.into_iter().flatten().collect();
             let count = w.len();
-            channel(
-                &mut root,
-                &mut bin,
+            self.channel(
+                node,
                 w,
                 Type::Scalar,
                 count,
@@ -656,59 +708,93 @@ pub fn glb_bytes(clip: &Clip) -> Result<Vec<u8>, ExportError> {
             );
         }
     }
-    if animate {
-        root.push(json::Animation {
+
+    fn channel(
+        &mut self,
+        node: Index<json::Node>,
+        output: Vec<f32>,
+        type_: Type,
+        count: usize,
+        path: json::animation::Property,
+    ) {
+        let view = self.bin.view(&mut self.root, &f32_bytes(&output), None);
+        let out = accessor(&mut self.root, view, count, ComponentType::F32, type_, None);
+        sampler_channel(
+            &mut self.samplers,
+            &mut self.channels,
+            self.time_accessor,
+            out,
+            node,
+            path,
+        );
+    }
+
+    /// The animation, the scene with the clip's timing in its extras, the
+    /// buffer, and the GLB container around the JSON and binary chunks.
+    fn finish(self, clip: &Clip) -> Result<Vec<u8>, ExportError> {
+        let GlbBuilder {
+            mut root,
+            mut bin,
+            animate,
+            nodes,
+            channels,
+            samplers,
+            ..
+        } = self;
+        if animate {
+            root.push(json::Animation {
+                extensions: None,
+                extras: None,
+                channels,
+                name: Some("motion".to_string()),
+                samplers,
+            });
+        }
+        let scene = root.push(json::Scene {
+            extensions: None,
+            extras: raw_extras(js!({"leafmagic": {
+                "fps": clip.fps,
+                "frames": clip.frames,
+                "start_s": 0.0,
+                "end_s": clip.duration(),
+                "ground": clip.ground,
+                "wind": clip.wind,
+            }})),
+            name: Some(format!("{}-scene", clip.name)),
+            nodes,
+        });
+        root.scene = Some(scene);
+        while bin.bytes.len() % 4 != 0 {
+            bin.bytes.push(0);
+        }
+        root.push(json::Buffer {
+            byte_length: USize64::from(bin.bytes.len()),
             extensions: None,
             extras: None,
-            channels,
-            name: Some("motion".to_string()),
-            samplers,
+            name: None,
+            uri: None,
         });
+        let text = json::serialize::to_vec(&root)
+            .map_err(|e| ExportError::Data(format!("cannot serialise the glTF document: {e}")))?;
+        let total = 12 + 8 + text.len().next_multiple_of(4) + 8 + bin.bytes.len();
+        let length = u32::try_from(total).map_err(|_| {
+            ExportError::Data(format!(
+                "{}: {total} bytes exceed the 4 GiB a .glb can hold; export fewer frames (--fps) or objects",
+                clip.name
+            ))
+        })?;
+        let glb = gltf::binary::Glb {
+            header: gltf::binary::Header {
+                magic: *b"glTF",
+                version: 2,
+                length,
+            },
+            json: Cow::Owned(text),
+            bin: Some(Cow::Owned(bin.bytes)),
+        };
+        glb.to_vec()
+            .map_err(|e| ExportError::Data(format!("cannot write the GLB container: {e}")))
     }
-    let scene = root.push(json::Scene {
-        extensions: None,
-        extras: raw_extras(js!({"leafmagic": {
-            "fps": clip.fps,
-            "frames": clip.frames,
-            "start_s": 0.0,
-            "end_s": clip.duration(),
-            "ground": clip.ground,
-            "wind": clip.wind,
-        }})),
-        name: Some(format!("{}-scene", clip.name)),
-        nodes,
-    });
-    root.scene = Some(scene);
-    while bin.bytes.len() % 4 != 0 {
-        bin.bytes.push(0);
-    }
-    root.push(json::Buffer {
-        byte_length: USize64::from(bin.bytes.len()),
-        extensions: None,
-        extras: None,
-        name: None,
-        uri: None,
-    });
-    let text = json::serialize::to_vec(&root)
-        .map_err(|e| ExportError::Data(format!("cannot serialise the glTF document: {e}")))?;
-    let total = 12 + 8 + text.len().next_multiple_of(4) + 8 + bin.bytes.len();
-    let length = u32::try_from(total).map_err(|_| {
-        ExportError::Data(format!(
-            "{}: {total} bytes exceed the 4 GiB a .glb can hold; export fewer frames (--fps) or objects",
-            clip.name
-        ))
-    })?;
-    let glb = gltf::binary::Glb {
-        header: gltf::binary::Header {
-            magic: *b"glTF",
-            version: 2,
-            length,
-        },
-        json: Cow::Owned(text),
-        bin: Some(Cow::Owned(bin.bytes)),
-    };
-    glb.to_vec()
-        .map_err(|e| ExportError::Data(format!("cannot write the GLB container: {e}")))
 }
 
 /// Writes `clip` to `path` as `.glb`, atomically; returns the byte count.
