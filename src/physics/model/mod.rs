@@ -136,196 +136,16 @@ impl Model {
         let particle_drag = if parts.particle_drag.is_empty() {
             vec![0.0; n]
         } else if parts.particle_drag.len() == n {
-            parts.particle_drag
+            parts.particle_drag.clone()
         } else {
             return Err(err("particle", "drag list length differs from particles"));
         };
-        for (p, &m) in parts.mass.iter().enumerate() {
-            finite(&format!("particle[{p}].mass"), m)?;
-            if m <= 0.0 {
-                return Err(err(
-                    format!("particle[{p}].mass"),
-                    format!("must be > 0 kg, got {m}"),
-                ));
-            }
-            // A subnormal mass passes `> 0` but its 1/m overflows to inf.
-            if !(1.0 / m).is_finite() {
-                return Err(err(
-                    format!("particle[{p}].mass"),
-                    format!(
-                        "must be at least {:e} kg (1/m must be finite), got {m:e}",
-                        f64::MIN_POSITIVE
-                    ),
-                ));
-            }
-            let x = parts.rest_position[p];
-            for (axis, value) in x.iter().enumerate() {
-                finite(&format!("particle[{p}].position[{axis}]"), *value)?;
-            }
-            let drag = particle_drag[p];
-            finite(&format!("particle[{p}].drag"), drag)?;
-            if drag < 0.0 {
-                return Err(err(
-                    format!("particle[{p}].drag"),
-                    format!("must be ≥ 0 kg/s, got {drag}"),
-                ));
-            }
-        }
-        let mut seen = HashSet::new();
-        for (s, spring) in parts.springs.iter().enumerate() {
-            let item = |f: &str| format!("spring[{s}].{f}");
-            for (name, idx) in [("ends[0]", spring.i), ("ends[1]", spring.j)] {
-                if idx >= n {
-                    return Err(err(
-                        item(name),
-                        format!("particle index {idx} out of range (there are {n} particles)"),
-                    ));
-                }
-            }
-            if spring.i == spring.j {
-                return Err(err(
-                    item("ends"),
-                    "a spring must join two different particles",
-                ));
-            }
-            let key = (spring.i.min(spring.j), spring.i.max(spring.j));
-            if !seen.insert(key) {
-                return Err(err(
-                    item("ends"),
-                    format!("duplicate spring between particles {} and {}", key.0, key.1),
-                ));
-            }
-            for (name, value) in [
-                ("rest_length", spring.rest_length),
-                ("stiffness", spring.stiffness),
-                ("damping", spring.damping),
-            ] {
-                finite(&item(name), value)?;
-                if value < 0.0 {
-                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
-                }
-            }
-            if let Some(b) = spring.break_strain {
-                finite(&item("break_strain"), b)?;
-                if b <= 0.0 {
-                    return Err(err(
-                        item("break_strain"),
-                        format!("must be > 0 (a strain), got {b}"),
-                    ));
-                }
-            }
-        }
-        for (t, tri) in parts.triangles.iter().enumerate() {
-            let item = |f: &str| format!("triangle[{t}].{f}");
-            for (c, &idx) in tri.corners.iter().enumerate() {
-                if idx >= n {
-                    return Err(err(
-                        item(&format!("corners[{c}]")),
-                        format!("particle index {idx} out of range (there are {n} particles)"),
-                    ));
-                }
-            }
-            let [a, b, c] = tri.corners;
-            if a == b || b == c || a == c {
-                return Err(err(
-                    item("corners"),
-                    "corners must be three different particles",
-                ));
-            }
-            for (name, value) in [("alpha_n", tri.alpha_n), ("alpha_t", tri.alpha_t)] {
-                finite(&item(name), value)?;
-                if value < 0.0 {
-                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
-                }
-            }
-            let x = &parts.rest_position;
-            let doubled_area = (x[b] - x[a]).cross(&(x[c] - x[a])).norm();
-            let longest = (x[b] - x[a])
-                .norm()
-                .max((x[c] - x[b]).norm())
-                .max((x[a] - x[c]).norm());
-            if doubled_area <= DEGENERATE_TRIANGLE_RATIO * longest * longest {
-                return Err(err(
-                    item("corners"),
-                    "zero area at rest (the corners are coincident or collinear)",
-                ));
-            }
-        }
-        for (h, hinge) in parts.hinges.iter().enumerate() {
-            let item = |f: &str| format!("hinge[{h}].{f}");
-            let ids = hinge.particles();
-            if let Some(&bad) = ids.iter().find(|&&i| i >= n) {
-                return Err(err(
-                    item("particles"),
-                    format!("particle index {bad} out of range (there are {n} particles)"),
-                ));
-            }
-            for a in 0..4 {
-                for b in a + 1..4 {
-                    if ids[a] == ids[b] {
-                        return Err(err(
-                            item("particles"),
-                            "edge and apexes must be four different particles",
-                        ));
-                    }
-                }
-            }
-            for (name, value) in [
-                ("rest_angle", hinge.rest_angle),
-                ("stiffness", hinge.stiffness),
-                ("damping", hinge.damping),
-            ] {
-                finite(&item(name), value)?;
-                if name != "rest_angle" && value < 0.0 {
-                    return Err(err(item(name), format!("must be ≥ 0, got {value}")));
-                }
-            }
-        }
-        for (axis, value) in parts.gravity.iter().enumerate() {
-            finite(&format!("gravity[{axis}]"), *value)?;
-        }
-        match &parts.aero {
-            AeroLaw::Linear => {}
-            AeroLaw::Quadratic(law) => law.validate()?,
-            AeroLaw::Unsteady(law) => law.validate()?,
-        }
-        if parts.aero != AeroLaw::Linear {
-            // These laws replace the linear one: leftover α would be ignored
-            // by the forces yet damp the implicit step and the stability
-            // estimate.
-            for (t, tri) in parts.triangles.iter().enumerate() {
-                if tri.alpha_n != 0.0 || tri.alpha_t != 0.0 {
-                    return Err(err(
-                        format!("triangle[{t}].alpha_n"),
-                        format!(
-                            "the {} aerodynamic law uses no αⁿ, αᵗ: they must be 0",
-                            parts.aero.name()
-                        ),
-                    ));
-                }
-            }
-        }
-        parts
-            .wind
-            .validate()
-            .map_err(|e| err(e.item.clone(), e.reason.clone()))?;
-        if let Some(ground) = &parts.ground {
-            ground.validate()?;
-        }
-        let mut owner: Vec<Option<usize>> = vec![None; n];
-        let mut rigid = Vec::with_capacity(parts.rigid.len());
-        for (b, group) in parts.rigid.iter().enumerate() {
-            let body = RigidBody::new(b, group, &parts.mass, &parts.fixed, &parts.rest_position)?;
-            for &i in &body.members {
-                if let Some(other) = owner[i].replace(b) {
-                    return Err(err(
-                        format!("rigid[{b}].members"),
-                        format!("particle {i} already belongs to rigid[{other}]"),
-                    ));
-                }
-            }
-            rigid.push(body);
-        }
+        check_particles(&parts, &particle_drag)?;
+        check_springs(&parts)?;
+        check_triangles(&parts)?;
+        check_hinges(&parts)?;
+        check_law_and_surroundings(&parts)?;
+        let rigid = rigid_bodies(&parts)?;
         let surfaces = if matches!(parts.aero, AeroLaw::Unsteady(_)) {
             let corners: Vec<[usize; 3]> = parts.triangles.iter().map(|t| t.corners).collect();
             surface_geometry(&parts.rest_position, &corners)
@@ -456,6 +276,229 @@ impl Model {
         }
         flags
     }
+}
+
+/// Every particle's mass (positive, with a finite inverse), position and
+/// drag.
+fn check_particles(parts: &ModelParts, particle_drag: &[f64]) -> Result<(), ModelError> {
+    for (p, &m) in parts.mass.iter().enumerate() {
+        finite(&format!("particle[{p}].mass"), m)?;
+        if m <= 0.0 {
+            return Err(err(
+                format!("particle[{p}].mass"),
+                format!("must be > 0 kg, got {m}"),
+            ));
+        }
+        // A subnormal mass passes `> 0` but its 1/m overflows to inf.
+        if !(1.0 / m).is_finite() {
+            return Err(err(
+                format!("particle[{p}].mass"),
+                format!(
+                    "must be at least {:e} kg (1/m must be finite), got {m:e}",
+                    f64::MIN_POSITIVE
+                ),
+            ));
+        }
+        let x = parts.rest_position[p];
+        for (axis, value) in x.iter().enumerate() {
+            finite(&format!("particle[{p}].position[{axis}]"), *value)?;
+        }
+        let drag = particle_drag[p];
+        finite(&format!("particle[{p}].drag"), drag)?;
+        if drag < 0.0 {
+            return Err(err(
+                format!("particle[{p}].drag"),
+                format!("must be ≥ 0 kg/s, got {drag}"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every spring's ends (in range, two particles, no duplicate) and numbers.
+fn check_springs(parts: &ModelParts) -> Result<(), ModelError> {
+    let n = parts.mass.len();
+    let mut seen = HashSet::new();
+    for (s, spring) in parts.springs.iter().enumerate() {
+        let item = |f: &str| format!("spring[{s}].{f}");
+        for (name, idx) in [("ends[0]", spring.i), ("ends[1]", spring.j)] {
+            if idx >= n {
+                return Err(err(
+                    item(name),
+                    format!("particle index {idx} out of range (there are {n} particles)"),
+                ));
+            }
+        }
+        if spring.i == spring.j {
+            return Err(err(
+                item("ends"),
+                "a spring must join two different particles",
+            ));
+        }
+        let key = (spring.i.min(spring.j), spring.i.max(spring.j));
+        if !seen.insert(key) {
+            return Err(err(
+                item("ends"),
+                format!("duplicate spring between particles {} and {}", key.0, key.1),
+            ));
+        }
+        for (name, value) in [
+            ("rest_length", spring.rest_length),
+            ("stiffness", spring.stiffness),
+            ("damping", spring.damping),
+        ] {
+            finite(&item(name), value)?;
+            if value < 0.0 {
+                return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+            }
+        }
+        if let Some(b) = spring.break_strain {
+            finite(&item("break_strain"), b)?;
+            if b <= 0.0 {
+                return Err(err(
+                    item("break_strain"),
+                    format!("must be > 0 (a strain), got {b}"),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every triangle's corners (in range, three particles, an area at rest)
+/// and coefficients.
+fn check_triangles(parts: &ModelParts) -> Result<(), ModelError> {
+    let n = parts.mass.len();
+    for (t, tri) in parts.triangles.iter().enumerate() {
+        let item = |f: &str| format!("triangle[{t}].{f}");
+        for (c, &idx) in tri.corners.iter().enumerate() {
+            if idx >= n {
+                return Err(err(
+                    item(&format!("corners[{c}]")),
+                    format!("particle index {idx} out of range (there are {n} particles)"),
+                ));
+            }
+        }
+        let [a, b, c] = tri.corners;
+        if a == b || b == c || a == c {
+            return Err(err(
+                item("corners"),
+                "corners must be three different particles",
+            ));
+        }
+        for (name, value) in [("alpha_n", tri.alpha_n), ("alpha_t", tri.alpha_t)] {
+            finite(&item(name), value)?;
+            if value < 0.0 {
+                return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+            }
+        }
+        let x = &parts.rest_position;
+        let doubled_area = (x[b] - x[a]).cross(&(x[c] - x[a])).norm();
+        let longest = (x[b] - x[a])
+            .norm()
+            .max((x[c] - x[b]).norm())
+            .max((x[a] - x[c]).norm());
+        if doubled_area <= DEGENERATE_TRIANGLE_RATIO * longest * longest {
+            return Err(err(
+                item("corners"),
+                "zero area at rest (the corners are coincident or collinear)",
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Every hinge's four particles and numbers.
+fn check_hinges(parts: &ModelParts) -> Result<(), ModelError> {
+    let n = parts.mass.len();
+    for (h, hinge) in parts.hinges.iter().enumerate() {
+        let item = |f: &str| format!("hinge[{h}].{f}");
+        let ids = hinge.particles();
+        if let Some(&bad) = ids.iter().find(|&&i| i >= n) {
+            return Err(err(
+                item("particles"),
+                format!("particle index {bad} out of range (there are {n} particles)"),
+            ));
+        }
+        for a in 0..4 {
+            for b in a + 1..4 {
+                if ids[a] == ids[b] {
+                    return Err(err(
+                        item("particles"),
+                        "edge and apexes must be four different particles",
+                    ));
+                }
+            }
+        }
+        for (name, value) in [
+            ("rest_angle", hinge.rest_angle),
+            ("stiffness", hinge.stiffness),
+            ("damping", hinge.damping),
+        ] {
+            finite(&item(name), value)?;
+            if name != "rest_angle" && value < 0.0 {
+                return Err(err(item(name), format!("must be ≥ 0, got {value}")));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Gravity, the aerodynamic law (and no linear α left under another law),
+/// the wind and the ground.
+fn check_law_and_surroundings(parts: &ModelParts) -> Result<(), ModelError> {
+    for (axis, value) in parts.gravity.iter().enumerate() {
+        finite(&format!("gravity[{axis}]"), *value)?;
+    }
+    match &parts.aero {
+        AeroLaw::Linear => {}
+        AeroLaw::Quadratic(law) => law.validate()?,
+        AeroLaw::Unsteady(law) => law.validate()?,
+    }
+    if parts.aero != AeroLaw::Linear {
+        // These laws replace the linear one: leftover α would be ignored
+        // by the forces yet damp the implicit step and the stability
+        // estimate.
+        for (t, tri) in parts.triangles.iter().enumerate() {
+            if tri.alpha_n != 0.0 || tri.alpha_t != 0.0 {
+                return Err(err(
+                    format!("triangle[{t}].alpha_n"),
+                    format!(
+                        "the {} aerodynamic law uses no αⁿ, αᵗ: they must be 0",
+                        parts.aero.name()
+                    ),
+                ));
+            }
+        }
+    }
+    parts
+        .wind
+        .validate()
+        .map_err(|e| err(e.item.clone(), e.reason.clone()))?;
+    if let Some(ground) = &parts.ground {
+        ground.validate()?;
+    }
+    Ok(())
+}
+
+/// The rigid bodies, each particle in one at most.
+fn rigid_bodies(parts: &ModelParts) -> Result<Vec<RigidBody>, ModelError> {
+    let n = parts.mass.len();
+    let mut owner: Vec<Option<usize>> = vec![None; n];
+    let mut rigid = Vec::with_capacity(parts.rigid.len());
+    for (b, group) in parts.rigid.iter().enumerate() {
+        let body = RigidBody::new(b, group, &parts.mass, &parts.fixed, &parts.rest_position)?;
+        for &i in &body.members {
+            if let Some(other) = owner[i].replace(b) {
+                return Err(err(
+                    format!("rigid[{b}].members"),
+                    format!("particle {i} already belongs to rigid[{other}]"),
+                ));
+            }
+        }
+        rigid.push(body);
+    }
+    Ok(rigid)
 }
 
 #[cfg(test)]
