@@ -13,12 +13,17 @@
 //! - `gen-NNN.json`: generation NNN's candidates: how each was made, its
 //!   parents, genome and evaluation;
 //! - `gen-NNN-motion.json`: the fall each candidate is shown with;
-//! - `gen-NNN/leaf-ID.toml`: every candidate as a leaf file.
+//! - `gen-NNN/leaf-ID.toml`: every candidate as a leaf file;
+//! - `run.toml`, `gen-NNN.csv`, `generations.csv`, `checkpoint.json`: the
+//!   session as a breeding run ([`crate::breed::run::write_record`]), so
+//!   `export` and `preview` read it as any run; rewritten before
+//!   `studio.json` at every action.
 
 use super::variation::{Child, Origin, children_of, first_generation};
 use crate::breed::evaluate;
-use crate::breed::population::Evaluation;
-use crate::breed::selection::{MAX_SCALE, MIN_SCALE, stream_seed};
+use crate::breed::population::{Evaluation, Individual};
+use crate::breed::run::{RunRecord, write_record};
+use crate::breed::selection::{MAX_SCALE, MIN_SCALE, stream_seed, summarise};
 use crate::breed::settings::{BreedSettings, DEFAULT_RELEASES};
 use crate::formats::clip::Motion;
 use crate::leaf::LeafSpec;
@@ -564,12 +569,13 @@ impl Session {
         self.file.next_id += reserved;
         self.file.current = k;
         self.file.generations.push(node);
+        self.generations.push(Generation { candidates, motion });
         if let Err(e) = self.write_session() {
             (self.file.next_id, self.file.current) = before;
             self.file.generations.pop();
+            self.generations.pop();
             return Err(e);
         }
-        self.generations.push(Generation { candidates, motion });
         Ok(())
     }
 
@@ -609,7 +615,85 @@ impl Session {
     }
 
     fn write_session(&self) -> Result<(), StudioError> {
+        self.write_run()?;
         self.write(SESSION_FILE, &pretty(&self.file)?)
+    }
+
+    /// The members [`Session::write_run`] gives the run's last generation:
+    /// the collection when it holds at least two leaves (breed's smallest
+    /// population: `export --top` then ranks the kept leaves), else the
+    /// generation on screen with the collection's one leaf if any.
+    pub fn run_members(&self) -> Vec<u64> {
+        let kept = &self.file.kept;
+        let mut ids = if kept.len() >= 2 {
+            kept.clone()
+        } else {
+            let mut ids = self.current().0.ids.clone();
+            if let Some(k) = kept.first().filter(|k| !ids.contains(k)) {
+                ids.push(*k);
+            }
+            ids
+        };
+        ids.sort_unstable();
+        ids
+    }
+
+    /// Writes the session as a breeding run's directory beside
+    /// `studio.json` (`run.toml`, `gen-NNN.csv`, `generations.csv`,
+    /// `checkpoint.json`), so the commands that read a run (`export`,
+    /// `preview`) read a session: its generations in the order they were
+    /// made, the last one's population [`Session::run_members`].
+    fn write_run(&self) -> Result<(), StudioError> {
+        let member = |c: &Candidate| Individual {
+            id: c.id,
+            parent: c.parents.first().copied(),
+            elite: false,
+            genome: c.genome.clone(),
+            eval: c.evaluation.clone(),
+        };
+        let mut generations = Vec::with_capacity(self.generations.len());
+        let mut history = Vec::with_capacity(self.generations.len());
+        for (k, g) in self.generations.iter().enumerate() {
+            let mut members: Vec<Individual> = g.candidates.iter().map(member).collect();
+            members.sort_by_key(|i| i.id);
+            // Breed's success rate: the children that scored at least as
+            // well as the parent they were bred from.
+            let judged: Vec<bool> = g
+                .candidates
+                .iter()
+                .filter_map(|c| {
+                    let (_, parent, _) = self.find(*c.parents.first()?)?;
+                    Some(c.evaluation.score >= parent.evaluation.score)
+                })
+                .collect();
+            let success = if judged.is_empty() {
+                0.0
+            } else {
+                judged.iter().filter(|b| **b).count() as f64 / judged.len() as f64
+            };
+            history.push(summarise(
+                k,
+                &members,
+                self.file.generations[k].scale,
+                success,
+            ));
+            generations.push(members);
+        }
+        let population = self
+            .run_members()
+            .iter()
+            .filter_map(|id| self.find(*id).map(|(_, c, _)| member(c)))
+            .collect();
+        let record = RunRecord {
+            settings: self.file.settings.breed_settings(),
+            proto: &self.proto,
+            generations,
+            history,
+            population,
+            scale: self.next_scale(),
+            next_id: self.file.next_id,
+        };
+        write_record(&self.dir, record).map_err(|e| StudioError::Input(e.to_string()))
     }
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), StudioError> {

@@ -1095,3 +1095,114 @@ fn count_pixels(
     }
     (drawn, trail, leaf)
 }
+
+/// The ids of `session`'s candidates `ids`, best first by breed's score
+/// (ties to the lower id), the first `n`.
+fn best_of(s: &leafmagic::studio::Session, ids: &[u64], n: usize) -> Vec<u64> {
+    let mut scored: Vec<(f64, u64)> = ids
+        .iter()
+        .map(|id| (s.find(*id).unwrap().1.evaluation.score, *id))
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    scored.iter().take(n).map(|(_, id)| *id).collect()
+}
+
+/// `leafmagic CMD ARGS` run to success, its standard output.
+fn run_ok(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "leafmagic {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The leaf files `export` wrote in `out`, by id.
+fn exported_ids(out: &Path, ext: &str) -> Vec<u64> {
+    let mut ids: Vec<u64> = std::fs::read_dir(out)
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            name.strip_prefix("leaf-")?
+                .strip_suffix(&format!(".{ext}"))?
+                .parse()
+                .ok()
+        })
+        .collect();
+    ids.sort_unstable();
+    ids
+}
+
+#[test]
+fn a_studio_session_is_a_run_directory_that_export_and_preview_read() {
+    use leafmagic::studio::{Session, StudioSettings};
+    let dir = scratch("studio-as-run");
+    let settings = StudioSettings {
+        grid: 4,
+        seconds: 2.0,
+        ..StudioSettings::new("a", leafmagic::motion::classify::MotionClass::Floater, 5)
+    };
+    let proto = leafmagic::leaf::LeafSpec::load("a").unwrap();
+    let mut s = Session::create(&dir, settings, proto).unwrap();
+    let g0 = s.current().0.ids.clone();
+    s.breed(&g0[..2], None).unwrap();
+    let g1 = s.current().0.ids.clone();
+    assert!(g1.iter().all(|id| !g0.contains(id)));
+    let d = dir.to_str().unwrap();
+
+    // No collection: the run's last generation is the one on screen.
+    let top = best_of(&s, &g1, 2);
+    let out = dir.join("top");
+    run_ok(&[
+        "export",
+        d,
+        "--top",
+        "2",
+        "--format",
+        "glb",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let mut want = top.clone();
+    want.sort_unstable();
+    assert_eq!(exported_ids(&out, "glb"), want);
+    assert_eq!(exported_ids(&out, "toml"), want);
+    let page = dir.join("page.html");
+    run_ok(&["preview", d, "--top", "2", "--out", page.to_str().unwrap()]);
+    let html = std::fs::read_to_string(&page).unwrap();
+    for id in g1.iter().chain(&g0) {
+        assert_eq!(
+            html.contains(&format!("\"leaf-{id}\"")),
+            top.contains(id),
+            "leaf-{id} on the page: only the 2 best of the generation on screen"
+        );
+    }
+    // --ids names any leaf of it; one of an earlier generation is refused.
+    let one = dir.join("one");
+    run_ok(&[
+        "export",
+        d,
+        "--ids",
+        &g1[3].to_string(),
+        "--out",
+        one.to_str().unwrap(),
+    ]);
+    assert_eq!(exported_ids(&one, "toml"), [g1[3]]);
+
+    // A collection of two or more is what the commands read, whatever is
+    // on screen: two leaves of generation 0 kept, and --top 2 exports them
+    // even with generation 1 on screen.
+    s.keep(g0[3], true).unwrap();
+    s.keep(g0[1], true).unwrap();
+    let kept = dir.join("kept");
+    run_ok(&["export", d, "--top", "2", "--out", kept.to_str().unwrap()]);
+    assert_eq!(exported_ids(&kept, "toml"), [g0[1], g0[3]]);
+    // The session reopens as it was, the run files beside it.
+    let reopened = Session::open(&dir).unwrap();
+    assert_eq!(reopened.file().kept, [g0[3], g0[1]]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
