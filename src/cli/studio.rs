@@ -29,7 +29,26 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                 settings.grid,
                 dir.display()
             );
-            Session::create(&dir, settings, proto)?
+            // The example is read (and checked) before anything is bred.
+            let example = match &args.like {
+                Some(path) => Some((
+                    path.display().to_string(),
+                    super::input::read_record(
+                        path,
+                        super::input::CsvUnits::default(),
+                        super::input::Pick::default(),
+                    )
+                    .with_context(|| format!("--like {}", path.display()))?,
+                )),
+                None => None,
+            };
+            let mut session = Session::create(&dir, settings, proto)?;
+            if let Some((name, record)) = example {
+                session
+                    .set_example(&name, &record.trajectory)
+                    .with_context(|| format!("--like {name}"))?;
+            }
+            session
         }
     };
     let server = Server::bind(args.port).context("could not listen on 127.0.0.1")?;

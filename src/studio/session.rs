@@ -14,6 +14,8 @@
 //!   parents, genome and evaluation;
 //! - `gen-NNN-motion.json`: the fall each candidate is shown with;
 //! - `gen-NNN/leaf-ID.toml`: every candidate as a leaf file;
+//! - `example.csv`: the example fall given at the start (`--like`), as
+//!   read, so a session reopens with it;
 //! - `run.toml`, `gen-NNN.csv`, `generations.csv`, `checkpoint.json`: the
 //!   session as a breeding run ([`crate::breed::run::write_record`]), so
 //!   `export` and `preview` read it as any run; rewritten before
@@ -62,6 +64,8 @@ pub const AUTO_PICKS: usize = 2;
 /// Most generations one "Auto N" request may breed: enough to cover the
 /// 5–20 generations interactive sessions last (Sims 1991).
 pub const MAX_AUTO: usize = 20;
+/// The example fall's file in the session.
+pub const EXAMPLE_FILE: &str = "example.csv";
 /// Stream slot of a generation's step seed in [`stream_seed`] (never an
 /// individual's id nor breed's selection stream).
 const STEP_STREAM: u64 = u64::MAX - 2;
@@ -151,6 +155,10 @@ pub struct GenerationNode {
     /// toward ([`Session::plan_like`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub like: Option<u64>,
+    /// Bred toward the session's example fall: its distances are to the
+    /// example's ([`Session::plan_auto`] with an example).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub example: bool,
 }
 
 /// The session file: settings and the tree.
@@ -170,6 +178,56 @@ pub struct SessionFile {
     /// The collection: the ids of the kept candidates, in the order kept.
     #[serde(default)]
     pub kept: Vec<u64>,
+    /// The example fall's name (the file it was read from, as given), if
+    /// the session has one ([`EXAMPLE_FILE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub example: Option<String>,
+}
+
+/// The example fall beside the leaves: what it is shown as and what Auto N
+/// breeds toward.
+#[derive(Clone, Debug)]
+pub struct Example {
+    /// Its name (the file it was read from).
+    pub name: String,
+    /// Its class, as described at the prototype's chord.
+    pub class: MotionClass,
+    /// The target of breeding toward it (breed's `--like` target).
+    pub target: crate::motion::describe::MotionTarget,
+    /// Its fall as shown: a plate of the prototype's chord (or a marker,
+    /// without attitudes), at [`MOTION_FPS`].
+    pub motion: CandidateMotion,
+}
+
+impl Example {
+    /// The example `trajectory` named `name`, described at `proto`'s chord
+    /// (breed's `--like` at the prototype's size); one whose fall cannot be
+    /// described is refused with the reason.
+    pub fn of(
+        name: &str,
+        trajectory: &crate::motion::trajectory::Trajectory,
+        proto: &LeafSpec,
+    ) -> Result<Example, StudioError> {
+        use crate::motion::describe::{Descriptors, MotionTarget};
+        let refuse = |why: String| StudioError::Input(format!("the example {name}: {why}"));
+        let chord = proto.model().map_err(|e| refuse(e.to_string()))?.chord();
+        let described = Descriptors::of(&crate::motion::classify::classify(trajectory, chord))
+            .map_err(|e| refuse(format!("its fall is undetermined ({})", e.reason)))?;
+        let clip =
+            crate::output::preview::from_record("example", trajectory, chord, Some(MOTION_FPS))
+                .map_err(|e| refuse(e.to_string()))?;
+        let object = clip
+            .objects
+            .into_iter()
+            .next()
+            .ok_or_else(|| refuse("nothing to show".to_string()))?;
+        Ok(Example {
+            name: name.to_string(),
+            class: described.class,
+            target: MotionTarget::like(name, chord, &described),
+            motion: shown_motion(u64::MAX, &object),
+        })
+    }
 }
 
 /// One candidate of a generation.
@@ -247,6 +305,7 @@ pub struct Session {
     proto: LeafSpec,
     file: SessionFile,
     generations: Vec<Generation>,
+    example: Option<Example>,
 }
 
 impl Session {
@@ -281,6 +340,7 @@ impl Session {
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
             like: None,
+            example: false,
         };
         let mut session = Session {
             dir: dir.to_path_buf(),
@@ -291,9 +351,11 @@ impl Session {
                 current: 0,
                 generations: Vec::new(),
                 kept: Vec::new(),
+                example: None,
             },
             proto,
             generations: Vec::new(),
+            example: None,
         };
         let pending = session.pending(node, children);
         session.commit(pending.evaluate(|_, _, _| {}))?;
@@ -342,12 +404,56 @@ impl Session {
         if file.current >= generations.len() {
             return Err(file_error(&path, "the current generation does not exist"));
         }
+        let example = match &file.example {
+            None => None,
+            Some(name) => {
+                let p = dir.join(EXAMPLE_FILE);
+                let t = crate::motion::trajectory::Trajectory::read_csv(&p)
+                    .map_err(|e| file_error(&p, e))?;
+                Some(Example::of(name, &t, &proto)?)
+            }
+        };
         Ok(Session {
             dir: dir.to_path_buf(),
             proto,
             file,
             generations,
+            example,
         })
+    }
+
+    /// Gives the session an example fall, `trajectory` read from the file
+    /// `name` (once, by the caller): copied into the session as read
+    /// ([`EXAMPLE_FILE`]), shown beside the kept leaves, and what Auto N
+    /// breeds toward. A session has one example, given at its start.
+    pub fn set_example(
+        &mut self,
+        name: &str,
+        trajectory: &crate::motion::trajectory::Trajectory,
+    ) -> Result<(), StudioError> {
+        if self.example.is_some() {
+            return Err(StudioError::Input(
+                "the session has an example already".to_string(),
+            ));
+        }
+        let example = Example::of(name, trajectory, &self.proto)?;
+        let p = self.dir.join(EXAMPLE_FILE);
+        let bytes = trajectory
+            .try_to_csv_bytes()
+            .map_err(|e| file_error(&p, e))?;
+        self.write(EXAMPLE_FILE, &bytes)?;
+        self.file.example = Some(name.to_string());
+        if let Err(e) = self.write_session() {
+            self.file.example = None;
+            return Err(e);
+        }
+        self.example = Some(example);
+        Ok(())
+    }
+
+    /// The session's example fall, if it has one.
+    pub fn example(&self) -> Option<&Example> {
+        self.example.as_ref()
     }
 
     /// The session directory.
@@ -436,6 +542,7 @@ impl Session {
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
             like: None,
+            example: false,
         };
         Ok(self.pending(node, children))
     }
@@ -475,9 +582,20 @@ impl Session {
 
     /// The candidates of the current generation the machine picks when
     /// it breeds alone: the [`AUTO_PICKS`] best toward the session's
-    /// target by breed's score, ties to the earlier in the grid.
+    /// target by breed's score, ties to the earlier in the grid; in a
+    /// generation bred toward the example, the [`AUTO_PICKS`] closest to
+    /// it (no distance: last).
     pub fn auto_picks(&self) -> Vec<u64> {
-        let mut ranked: Vec<&Candidate> = self.current().1.candidates.iter().collect();
+        let (node, generation) = self.current();
+        let mut ranked: Vec<&Candidate> = generation.candidates.iter().collect();
+        if node.example {
+            let key = |c: &Candidate| {
+                let d = c.evaluation.distance.filter(|d| d.is_finite());
+                d.unwrap_or(f64::INFINITY)
+            };
+            ranked.sort_by(|a, b| key(a).total_cmp(&key(b)));
+            return ranked.iter().take(AUTO_PICKS).map(|c| c.id).collect();
+        }
         // A stable sort keeps grid order among ties; a NaN score ranks last.
         ranked.sort_by(|a, b| {
             let key = |c: &Candidate| {
@@ -490,10 +608,35 @@ impl Session {
     }
 
     /// The next generation bred from [`Session::auto_picks`] at the
-    /// default scale, marked as the machine's choice.
+    /// default scale, marked as the machine's choice. With an example,
+    /// toward its fall as "More like this" breeds toward a candidate's:
+    /// [`LIKE_POOL`] times the grid evaluated by their distance to the
+    /// example's descriptors, the grid's worth closest kept.
     pub fn plan_auto(&self) -> Result<Pending, StudioError> {
-        let mut pending = self.plan(&self.auto_picks(), None)?;
+        let picks = self.auto_picks();
+        let mut pending = self.plan(&picks, None)?;
         pending.node.auto = true;
+        if let Some(example) = &self.example {
+            let generation = self.current().1;
+            let parents: Vec<(u64, &Genome)> = picks
+                .iter()
+                .filter_map(|id| generation.candidates.iter().find(|c| c.id == *id))
+                .map(|c| (c.id, &c.genome))
+                .collect();
+            let children = children_of(
+                &parents,
+                &self.proto,
+                self.file.settings.grid * LIKE_POOL,
+                pending.node.scale,
+                pending.node.seed,
+                self.file.next_id,
+            );
+            pending.node.ids = children.iter().map(|c| c.id).collect();
+            pending.node.example = true;
+            pending.children = children;
+            pending.settings.like = Some(example.target.clone());
+            pending.keep = Some(self.file.settings.grid);
+        }
         Ok(pending)
     }
 
@@ -915,10 +1058,14 @@ fn motion_of(
         MOTION_FPS,
         evaluation.release_deg,
     );
-    let object = match clip {
-        Ok(o) => o,
-        Err(e) => return empty(e.to_string()),
-    };
+    match clip {
+        Ok(object) => shown_motion(child.id, &object),
+        Err(e) => empty(e.to_string()),
+    }
+}
+
+/// A clip object's fall as the page draws it: every vertex per frame.
+fn shown_motion(id: u64, object: &crate::formats::clip::ClipObject) -> CandidateMotion {
     let frames: Vec<Vec<nalgebra::Vector3<f64>>> = match &object.motion {
         Motion::Deforming { frames } => frames.clone(),
         Motion::Rigid {
@@ -931,7 +1078,7 @@ fn motion_of(
             .map(|(t, q)| local.iter().map(|v| t + q * v).collect())
             .collect(),
     };
-    let mut bytes = Vec::with_capacity(frames.len() * model.len() * 12);
+    let mut bytes = Vec::with_capacity(frames.len() * frames.first().map_or(0, Vec::len) * 12);
     for frame in &frames {
         for v in frame {
             for c in v.iter() {
@@ -940,7 +1087,7 @@ fn motion_of(
         }
     }
     CandidateMotion {
-        id: child.id,
+        id,
         vertices: frames.first().map_or(0, Vec::len),
         triangles: object.triangles.iter().flatten().copied().collect(),
         frames: frames.len(),

@@ -1206,3 +1206,92 @@ fn a_studio_session_is_a_run_directory_that_export_and_preview_read() {
     assert_eq!(reopened.file().kept, [g0[3], g0[1]]);
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `studio --like FILE`: the example fall (here the prototype a's own 2 s fall, a floater,
+/// written as a tracked CSV record with attitudes) is read once, copied
+/// into the session, shown in the state beside the collection labelled
+/// as the example, and Auto N breeds toward it: each generation evaluates
+/// three times the grid by the distance to the example's descriptors,
+/// keeps the grid's worth, and the next one picks the two closest.
+#[test]
+fn studio_with_an_example_fall_shows_it_and_breeds_auto_toward_it() {
+    let dir = scratch("studio-like");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_, model) = leafmagic::leaf::LeafSpec::load_with_model("a").unwrap();
+    let params = leafmagic::sim::drop::DropParams {
+        seconds: 2.0,
+        ..Default::default()
+    };
+    let fall = leafmagic::sim::drop::drop_leaf(&model, &params).unwrap();
+    let csv = dir.join("tracked.csv");
+    std::fs::write(&csv, fall.trajectory.try_to_csv_bytes().unwrap()).unwrap();
+    let session = dir.join("session");
+    let (csv_s, out) = (csv.to_str().unwrap(), session.to_str().unwrap());
+
+    // A file that is not there is refused before anything is bred.
+    let missing = Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+        .args(["studio", "--out", out, "--like", "/nonexistent/fall.csv"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert!(err.contains("/nonexistent/fall.csv"), "{err}");
+    assert!(!session.join("studio.json").exists());
+
+    let mut args = vec!["--out", out, "--seed", "4", "--like", csv_s];
+    args.extend(SMALL);
+    let s = Studio::start(&args, &session);
+    let state = s.api("/api/state", "");
+    let example = &state["example"];
+    assert_eq!(example["name"], csv_s, "{example}");
+    assert_eq!(
+        example["class"], "floater",
+        "as `classify` finds it: {example}"
+    );
+    assert!(example["motion"]["frames"].as_u64().unwrap() > 10);
+    assert!(example["motion"]["vertices"].as_u64().unwrap() > 0);
+    assert_eq!(
+        std::fs::read(session.join("example.csv")).unwrap(),
+        std::fs::read(&csv).unwrap(),
+        "copied as read"
+    );
+    assert_eq!(s.session()["example"], csv_s);
+
+    let (status, text) = s.call("POST", "/api/auto", "{\"generations\": 2}");
+    assert_eq!(status, 202, "{text}");
+    s.finish_breed();
+    let gens = s.session()["generations"].as_array().unwrap().clone();
+    assert_eq!(gens.len(), 3);
+    for g in &gens[1..] {
+        assert_eq!(g["example"], true, "{g}");
+        assert_eq!(g["ids"].as_array().unwrap().len(), 4, "{g}");
+    }
+    // Every id of the pool is used up: 3 × 4 evaluated per generation.
+    assert_eq!(s.session()["next_id"], 4 + 2 * 3 * 4);
+    // Generation 2's picks: the two of generation 1 closest to the example
+    // (no distance: last; ties to the earlier in the grid).
+    let bred_from = read_json(&session.join("gen-001.json"));
+    let mut ranked: Vec<(f64, usize, u64)> = bred_from
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let d = c["evaluation"]["distance"]
+                .as_f64()
+                .unwrap_or(f64::INFINITY);
+            (d, k, c["id"].as_u64().unwrap())
+        })
+        .collect();
+    assert!(ranked.iter().any(|r| r.0.is_finite()), "{bred_from}");
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    assert_eq!(
+        gens[2]["picks"],
+        serde_json::json!([ranked[0].2, ranked[1].2])
+    );
+    drop(s);
+
+    // Reopened, the session shows the same example again.
+    let r = Studio::start(&["--resume", out], &session);
+    assert_eq!(r.api("/api/state", "")["example"], state["example"]);
+}
