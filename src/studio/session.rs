@@ -527,6 +527,7 @@ impl Session {
         let parents: Vec<(u64, &Genome)> = chosen.iter().map(|c| (c.id, &c.genome)).collect();
         let children = children_of(
             &parents,
+            self.archive_offer(index),
             &self.proto,
             self.file.settings.grid,
             scale,
@@ -566,6 +567,7 @@ impl Session {
         let mut pending = self.plan(&[id], scale)?;
         let children = children_of(
             &[(id, &c.genome)],
+            self.archive_offer(pending.node.index),
             &self.proto,
             grid * LIKE_POOL,
             pending.node.scale,
@@ -625,6 +627,7 @@ impl Session {
                 .collect();
             let children = children_of(
                 &parents,
+                self.archive_offer(pending.node.index),
                 &self.proto,
                 self.file.settings.grid * LIKE_POOL,
                 pending.node.scale,
@@ -762,6 +765,35 @@ impl Session {
         self.write(SESSION_FILE, &pretty(&self.file)?)
     }
 
+    /// The session's MAP-Elites archive: every candidate evaluated so far
+    /// binned as breed bins them ([`crate::breed::archive`]), the best
+    /// score of each cell kept (ties to the lower id), sorted by cell.
+    pub fn archive(&self) -> Vec<crate::breed::population::ArchiveEntry> {
+        let mut archive = Vec::new();
+        for (k, g) in self.generations.iter().enumerate() {
+            let members: Vec<Individual> = g.candidates.iter().map(member).collect();
+            crate::breed::archive::update_archive(&mut archive, k, &members);
+        }
+        archive
+    }
+
+    /// The elite the first wild card of generation `index`, bred from the
+    /// current one, varies ([`super::variation::archive_elite`]): from a
+    /// cell the current generation does not show.
+    fn archive_offer(&self, index: usize) -> Option<(u64, &Genome)> {
+        let shown: Vec<(usize, usize)> = self
+            .current()
+            .1
+            .candidates
+            .iter()
+            .filter_map(|c| c.evaluation.fall())
+            .map(|f| crate::breed::archive::cell(f.descent_m_s, f.spin_rad_s))
+            .collect();
+        let archive = self.archive();
+        let id = super::variation::archive_elite(&archive, &shown, index)?.id;
+        self.find(id).map(|(_, c, _)| (c.id, &c.genome))
+    }
+
     /// The members [`Session::write_run`] gives the run's last generation:
     /// the collection when it holds at least two leaves (breed's smallest
     /// population: `export --top` then ranks the kept leaves), else the
@@ -787,13 +819,6 @@ impl Session {
     /// `preview`) read a session: its generations in the order they were
     /// made, the last one's population [`Session::run_members`].
     fn write_run(&self) -> Result<(), StudioError> {
-        let member = |c: &Candidate| Individual {
-            id: c.id,
-            parent: c.parents.first().copied(),
-            elite: false,
-            genome: c.genome.clone(),
-            eval: c.evaluation.clone(),
-        };
         let mut generations = Vec::with_capacity(self.generations.len());
         let mut history = Vec::with_capacity(self.generations.len());
         for (k, g) in self.generations.iter().enumerate() {
@@ -1006,6 +1031,17 @@ pub fn evaluate_child(
     (candidate, motion)
 }
 
+/// A candidate as a member of a breeding run's population.
+fn member(c: &Candidate) -> Individual {
+    Individual {
+        id: c.id,
+        parent: c.parents.first().copied(),
+        elite: false,
+        genome: c.genome.clone(),
+        eval: c.evaluation.clone(),
+    }
+}
+
 /// The seed of the step that makes generation `index`.
 fn step_seed(seed: u64, index: u64) -> u64 {
     stream_seed(seed, index, STEP_STREAM)
@@ -1139,6 +1175,70 @@ mod tests {
         assert_eq!(s.file().generations.len(), 2);
         assert_eq!(s.file().current, 1);
         assert_eq!(s.file().generations[1].picks, ids[..2]);
+        let _ = std::fs::remove_dir_all(s.dir());
+    }
+
+    #[test]
+    fn wild_cards_come_from_archive_cells_the_grid_did_not_show() {
+        use crate::breed::archive::cell;
+        let mut s = small("studio-archive");
+        let cell_of = |c: &Candidate| {
+            c.evaluation
+                .fall()
+                .map(|f| cell(f.descent_m_s, f.spin_rad_s))
+        };
+        let mut from_archive = 0;
+        for _ in 0..6 {
+            let (_, shown) = s.current();
+            let shown_cells: Vec<_> = shown.candidates.iter().filter_map(cell_of).collect();
+            let archive = s.archive();
+            let unshown = archive
+                .iter()
+                .filter(|e| !shown_cells.contains(&(e.descent_bin, e.spin_bin)))
+                .count();
+            let pick = shown.candidates[0].id;
+            s.breed(&[pick], None).unwrap();
+            let wild = s.current().1.candidates.last().unwrap().clone();
+            if unshown == 0 {
+                assert_eq!(
+                    wild.origin,
+                    Origin::Wild,
+                    "every cell shown: a uniform draw"
+                );
+                continue;
+            }
+            from_archive += 1;
+            assert_eq!(wild.origin, Origin::Archive);
+            let (k, elite, _) = s.find(wild.parents[0]).unwrap();
+            assert!(
+                k + 1 < s.file().generations.len(),
+                "an earlier generation's"
+            );
+            let elite_cell = cell_of(elite).unwrap();
+            assert!(
+                !shown_cells.contains(&elite_cell),
+                "from a cell not on screen"
+            );
+            assert_ne!(
+                Some(elite_cell),
+                cell_of(s.find(pick).unwrap().1),
+                "not the pick's"
+            );
+            // The cell's elite: no earlier candidate of that cell scored better.
+            for g in &s.generations[..s.generations.len() - 1] {
+                for c in g
+                    .candidates
+                    .iter()
+                    .filter(|c| cell_of(c) == Some(elite_cell))
+                {
+                    assert!(c.evaluation.score <= elite.evaluation.score, "{}", c.id);
+                }
+            }
+        }
+        assert!(
+            from_archive > 0,
+            "the archive offered no cell in 6 generations"
+        );
         let _ = std::fs::remove_dir_all(s.dir());
     }
 

@@ -44,6 +44,7 @@
     if (c.origin === 'variation') return 'variation of #' + c.parents[0];
     if (c.origin === 'crossover') return 'crossover of #' + c.parents.join(' × #');
     if (c.origin === 'wild') return 'wild card';
+    if (c.origin === 'archive') return 'wild card from #' + c.parents[0] + '\'s cell';
     if (c.origin === 'prototype') return 'varied prototype';
     return 'uniform draw';
   }
