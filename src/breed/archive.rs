@@ -15,6 +15,15 @@ fn bin(edges: &[f64], value: f64) -> usize {
     edges.iter().rposition(|&e| value >= e).unwrap_or(0)
 }
 
+/// The archive cell (descent bin, rotation bin) of a fall of mean descent
+/// `descent_m_s` and rotation rate `spin_rad_s`.
+pub fn cell(descent_m_s: f64, spin_rad_s: f64) -> (usize, usize) {
+    (
+        bin(&ARCHIVE_DESCENT_EDGES, descent_m_s),
+        bin(&ARCHIVE_SPIN_EDGES, spin_rad_s),
+    )
+}
+
 /// Adds a generation's evaluated individuals to the archive: each cell keeps
 /// the highest score (ties: the lower id). Diverged falls have no
 /// descriptors and are not archived. Entries stay sorted by cell.
@@ -28,10 +37,7 @@ pub(crate) fn update_archive(
         .filter(|i| !i.elite)
         .filter_map(|i| Some((i, i.eval.fall()?)))
     {
-        let cell = (
-            bin(&ARCHIVE_DESCENT_EDGES, fall.descent_m_s),
-            bin(&ARCHIVE_SPIN_EDGES, fall.spin_rad_s),
-        );
+        let cell = cell(fall.descent_m_s, fall.spin_rad_s);
         let better = |e: &ArchiveEntry| {
             ind.eval.score > e.individual.eval.score
                 || (ind.eval.score == e.individual.eval.score && ind.id < e.individual.id)

@@ -1072,6 +1072,101 @@ impl Run {
     }
 }
 
+/// A run recorded from outside the generation loop: generations bred some
+/// other way (the studio's picks) written as a run directory that `export`,
+/// `preview` and `merge` read as any run's ([`write_record`]).
+#[derive(Debug)]
+pub struct RunRecord<'a> {
+    /// The settings; `population` and `generations` are set from the
+    /// record ([`write_record`]).
+    pub settings: BreedSettings,
+    /// The prototype.
+    pub proto: &'a LeafSpec,
+    /// Every generation's members, in id order.
+    pub generations: Vec<Vec<Individual>>,
+    /// Their summaries, one per generation.
+    pub history: Vec<GenerationSummary>,
+    /// The last generation's population as the checkpoint holds it (what
+    /// `export --top` ranks), in id order.
+    pub population: Vec<Individual>,
+    /// Variation scale for the next generation.
+    pub scale: f64,
+    /// Next id to assign.
+    pub next_id: u64,
+}
+
+/// Writes `record` into `dir` as a completed run: `run.toml`, every
+/// `gen-NNN.csv` that is missing or differs, `generations.csv`, then
+/// `checkpoint.json` with their content hashes (each atomically, the
+/// checkpoint last, so a reader sees the previous state or the new one).
+/// The bytes depend on the record only.
+pub fn write_record(dir: &Path, record: RunRecord<'_>) -> Result<(), BreedError> {
+    let RunRecord {
+        mut settings,
+        proto,
+        generations,
+        history,
+        mut population,
+        scale,
+        next_id,
+    } = record;
+    if generations.is_empty() || generations.len() != history.len() {
+        return Err(BreedError::Refused(format!(
+            "a run record needs one summary per generation ({} generations, {} summaries)",
+            generations.len(),
+            history.len()
+        )));
+    }
+    population.sort_by_key(|i| i.id);
+    settings.population = population.len();
+    settings.generations = generations.len();
+    settings.elites = 0;
+    settings.validate()?;
+    let write = |name: &str, bytes: &[u8]| {
+        let path = dir.join(name);
+        write_atomic(&path, bytes).map_err(|e| io_err(&path, e))
+    };
+    let run_file = RunFile {
+        tool: "leafmagic".to_string(),
+        version: env!("CARGO_PKG_VERSION").to_string(),
+        settings: settings.clone(),
+        integrator: DropParams::default().integrator.to_string(),
+        dt: "auto: each leaf its own, from its stability estimate".to_string(),
+        prototype_error: None,
+        prototype_leaf: proto.clone(),
+    };
+    let run_toml = toml::to_string(&run_file).map_err(|e| io_err(&dir.join(RUN_FILE), e))?;
+    let mut fnv1a64 = std::collections::BTreeMap::new();
+    fnv1a64.insert(RUN_FILE.to_string(), content_hash(run_toml.as_bytes()));
+    write(RUN_FILE, run_toml.as_bytes())?;
+    for (g, members) in generations.iter().enumerate() {
+        let name = generation_file(g);
+        let csv = population_csv(g, members);
+        fnv1a64.insert(name.clone(), content_hash(csv.as_bytes()));
+        // Earlier generations do not change: written once.
+        if std::fs::read(dir.join(&name)).ok().as_deref() != Some(csv.as_bytes()) {
+            write(&name, csv.as_bytes())?;
+        }
+    }
+    write("generations.csv", generations_csv(&history).as_bytes())?;
+    let cp = Checkpoint {
+        settings,
+        generation: generations.len() - 1,
+        population,
+        scale,
+        next_id,
+        history,
+        archive: Vec::new(),
+        cmaes: None,
+        fnv1a64,
+    };
+    let path = dir.join(CHECKPOINT_FILE);
+    check_checkpoint(&cp, &cp.settings, proto, run_toml.as_bytes(), &path)
+        .map_err(|d| io_err(&d.file, format!("{}: {}", d.field, d.reason)))?;
+    let json = encode_checkpoint(&cp).map_err(|e| io_err(&path, e))?;
+    write(CHECKPOINT_FILE, json.as_bytes())
+}
+
 /// What a check of a run directory found to repair.
 enum Finding {
     /// The checkpoint, or the file of an earlier generation than its own,

@@ -653,6 +653,9 @@ pub struct StudioArgs {
     /// Reopen the session in DIR where it was (its own settings apply).
     #[arg(long, value_name = "DIR", conflicts_with_all = ["prototype", "target", "seed", "grid", "seconds", "out"])]
     pub resume: Option<PathBuf>,
+    /// An example fall (a CSV record `t,x,y,z[,qw,qx,qy,qz]` in seconds and metres, z up, or an animation file) shown beside the kept leaves and bred toward by Auto N; read once, at the start.
+    #[arg(long, value_name = "FILE", conflicts_with = "resume")]
+    pub like: Option<PathBuf>,
     /// Open the page in the desktop's browser (xdg-open).
     #[arg(long)]
     pub open: bool,

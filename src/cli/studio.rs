@@ -20,8 +20,30 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                 ..StudioSettings::new(&args.prototype, args.target, args.seed)
             };
             settings.validate()?;
+            // The example is read (and checked) before anything is bred.
+            let example = match &args.like {
+                Some(path) => Some((
+                    path.display().to_string(),
+                    super::input::read_record(
+                        path,
+                        super::input::CsvUnits::default(),
+                        super::input::Pick::default(),
+                    )
+                    .with_context(|| format!("--like {}", path.display()))?,
+                )),
+                None => None,
+            };
+            let new_session = |dir: &Path| -> Result<Session> {
+                let mut session = create(dir, settings.clone(), proto.clone())?;
+                if let Some((name, record)) = &example {
+                    session
+                        .set_example(name, &record.trajectory)
+                        .with_context(|| format!("--like {name}"))?;
+                }
+                Ok(session)
+            };
             match &args.out {
-                Some(dir) => create(dir, settings, proto)?,
+                Some(dir) => new_session(dir)?,
                 // The default folder is named by prototype and seed: running
                 // `studio` again with the same settings reopens it where it
                 // was, as an animator coming back expects.
@@ -29,7 +51,7 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                     let dir = default_dir(&args.prototype, args.seed);
                     if dir.join(leafmagic::studio::session::SESSION_FILE).exists() {
                         let session = Session::open(&dir)?;
-                        if session.file().settings != settings {
+                        if session.file().settings != settings || args.like.is_some() {
                             anyhow::bail!(
                                 "{} holds a session with other settings; reopen it with --resume {}, or start another with --out DIR",
                                 dir.display(),
@@ -42,7 +64,7 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                         );
                         session
                     } else {
-                        create(&dir, settings, proto)?
+                        new_session(&dir)?
                     }
                 }
             }

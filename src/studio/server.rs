@@ -670,5 +670,10 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
         })).collect::<Vec<_>>(),
         "fps": MOTION_FPS,
         "candidates": candidates,
+        "example": session.example().map(|e| json!({
+            "name": e.name,
+            "class": e.class,
+            "motion": e.motion,
+        })),
     })
 }

@@ -13,12 +13,19 @@
 //! - `gen-NNN.json`: generation NNN's candidates: how each was made, its
 //!   parents, genome and evaluation;
 //! - `gen-NNN-motion.json`: the fall each candidate is shown with;
-//! - `gen-NNN/leaf-ID.toml`: every candidate as a leaf file.
+//! - `gen-NNN/leaf-ID.toml`: every candidate as a leaf file;
+//! - `example.csv`: the example fall given at the start (`--like`), as
+//!   read, so a session reopens with it;
+//! - `run.toml`, `gen-NNN.csv`, `generations.csv`, `checkpoint.json`: the
+//!   session as a breeding run ([`crate::breed::run::write_record`]), so
+//!   `export` and `preview` read it as any run; rewritten before
+//!   `studio.json` at every action.
 
 use super::variation::{Child, Origin, children_of, first_generation};
 use crate::breed::evaluate;
-use crate::breed::population::Evaluation;
-use crate::breed::selection::{MAX_SCALE, MIN_SCALE, stream_seed};
+use crate::breed::population::{Evaluation, Individual};
+use crate::breed::run::{RunRecord, write_record};
+use crate::breed::selection::{MAX_SCALE, MIN_SCALE, stream_seed, summarise};
 use crate::breed::settings::{BreedSettings, DEFAULT_RELEASES};
 use crate::formats::clip::Motion;
 use crate::leaf::LeafSpec;
@@ -57,6 +64,8 @@ pub const AUTO_PICKS: usize = 2;
 /// Most generations one "Auto N" request may breed: enough to cover the
 /// 5–20 generations interactive sessions last (Sims 1991).
 pub const MAX_AUTO: usize = 20;
+/// The example fall's file in the session.
+pub const EXAMPLE_FILE: &str = "example.csv";
 /// Stream slot of a generation's step seed in [`stream_seed`] (never an
 /// individual's id nor breed's selection stream).
 const STEP_STREAM: u64 = u64::MAX - 2;
@@ -146,6 +155,10 @@ pub struct GenerationNode {
     /// toward ([`Session::plan_like`]).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub like: Option<u64>,
+    /// Bred toward the session's example fall: its distances are to the
+    /// example's ([`Session::plan_auto`] with an example).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub example: bool,
 }
 
 /// The session file: settings and the tree.
@@ -165,6 +178,56 @@ pub struct SessionFile {
     /// The collection: the ids of the kept candidates, in the order kept.
     #[serde(default)]
     pub kept: Vec<u64>,
+    /// The example fall's name (the file it was read from, as given), if
+    /// the session has one ([`EXAMPLE_FILE`]).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub example: Option<String>,
+}
+
+/// The example fall beside the leaves: what it is shown as and what Auto N
+/// breeds toward.
+#[derive(Clone, Debug)]
+pub struct Example {
+    /// Its name (the file it was read from).
+    pub name: String,
+    /// Its class, as described at the prototype's chord.
+    pub class: MotionClass,
+    /// The target of breeding toward it (breed's `--like` target).
+    pub target: crate::motion::describe::MotionTarget,
+    /// Its fall as shown: a plate of the prototype's chord (or a marker,
+    /// without attitudes), at [`MOTION_FPS`].
+    pub motion: CandidateMotion,
+}
+
+impl Example {
+    /// The example `trajectory` named `name`, described at `proto`'s chord
+    /// (breed's `--like` at the prototype's size); one whose fall cannot be
+    /// described is refused with the reason.
+    pub fn of(
+        name: &str,
+        trajectory: &crate::motion::trajectory::Trajectory,
+        proto: &LeafSpec,
+    ) -> Result<Example, StudioError> {
+        use crate::motion::describe::{Descriptors, MotionTarget};
+        let refuse = |why: String| StudioError::Input(format!("the example {name}: {why}"));
+        let chord = proto.model().map_err(|e| refuse(e.to_string()))?.chord();
+        let described = Descriptors::of(&crate::motion::classify::classify(trajectory, chord))
+            .map_err(|e| refuse(format!("its fall is undetermined ({})", e.reason)))?;
+        let clip =
+            crate::output::preview::from_record("example", trajectory, chord, Some(MOTION_FPS))
+                .map_err(|e| refuse(e.to_string()))?;
+        let object = clip
+            .objects
+            .into_iter()
+            .next()
+            .ok_or_else(|| refuse("nothing to show".to_string()))?;
+        Ok(Example {
+            name: name.to_string(),
+            class: described.class,
+            target: MotionTarget::like(name, chord, &described),
+            motion: shown_motion(u64::MAX, &object),
+        })
+    }
 }
 
 /// One candidate of a generation.
@@ -242,6 +305,7 @@ pub struct Session {
     proto: LeafSpec,
     file: SessionFile,
     generations: Vec<Generation>,
+    example: Option<Example>,
 }
 
 impl Session {
@@ -276,6 +340,7 @@ impl Session {
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
             like: None,
+            example: false,
         };
         let mut session = Session {
             dir: dir.to_path_buf(),
@@ -286,9 +351,11 @@ impl Session {
                 current: 0,
                 generations: Vec::new(),
                 kept: Vec::new(),
+                example: None,
             },
             proto,
             generations: Vec::new(),
+            example: None,
         };
         let pending = session.pending(node, children);
         session.commit(pending.evaluate(|_, _, _| {}))?;
@@ -337,12 +404,56 @@ impl Session {
         if file.current >= generations.len() {
             return Err(file_error(&path, "the current generation does not exist"));
         }
+        let example = match &file.example {
+            None => None,
+            Some(name) => {
+                let p = dir.join(EXAMPLE_FILE);
+                let t = crate::motion::trajectory::Trajectory::read_csv(&p)
+                    .map_err(|e| file_error(&p, e))?;
+                Some(Example::of(name, &t, &proto)?)
+            }
+        };
         Ok(Session {
             dir: dir.to_path_buf(),
             proto,
             file,
             generations,
+            example,
         })
+    }
+
+    /// Gives the session an example fall, `trajectory` read from the file
+    /// `name` (once, by the caller): copied into the session as read
+    /// ([`EXAMPLE_FILE`]), shown beside the kept leaves, and what Auto N
+    /// breeds toward. A session has one example, given at its start.
+    pub fn set_example(
+        &mut self,
+        name: &str,
+        trajectory: &crate::motion::trajectory::Trajectory,
+    ) -> Result<(), StudioError> {
+        if self.example.is_some() {
+            return Err(StudioError::Input(
+                "the session has an example already".to_string(),
+            ));
+        }
+        let example = Example::of(name, trajectory, &self.proto)?;
+        let p = self.dir.join(EXAMPLE_FILE);
+        let bytes = trajectory
+            .try_to_csv_bytes()
+            .map_err(|e| file_error(&p, e))?;
+        self.write(EXAMPLE_FILE, &bytes)?;
+        self.file.example = Some(name.to_string());
+        if let Err(e) = self.write_session() {
+            self.file.example = None;
+            return Err(e);
+        }
+        self.example = Some(example);
+        Ok(())
+    }
+
+    /// The session's example fall, if it has one.
+    pub fn example(&self) -> Option<&Example> {
+        self.example.as_ref()
     }
 
     /// The session directory.
@@ -416,6 +527,7 @@ impl Session {
         let parents: Vec<(u64, &Genome)> = chosen.iter().map(|c| (c.id, &c.genome)).collect();
         let children = children_of(
             &parents,
+            self.archive_offer(index),
             &self.proto,
             self.file.settings.grid,
             scale,
@@ -431,6 +543,7 @@ impl Session {
             ids: children.iter().map(|c| c.id).collect(),
             auto: false,
             like: None,
+            example: false,
         };
         Ok(self.pending(node, children))
     }
@@ -454,6 +567,7 @@ impl Session {
         let mut pending = self.plan(&[id], scale)?;
         let children = children_of(
             &[(id, &c.genome)],
+            self.archive_offer(pending.node.index),
             &self.proto,
             grid * LIKE_POOL,
             pending.node.scale,
@@ -470,9 +584,20 @@ impl Session {
 
     /// The candidates of the current generation the machine picks when
     /// it breeds alone: the [`AUTO_PICKS`] best toward the session's
-    /// target by breed's score, ties to the earlier in the grid.
+    /// target by breed's score, ties to the earlier in the grid; in a
+    /// generation bred toward the example, the [`AUTO_PICKS`] closest to
+    /// it (no distance: last).
     pub fn auto_picks(&self) -> Vec<u64> {
-        let mut ranked: Vec<&Candidate> = self.current().1.candidates.iter().collect();
+        let (node, generation) = self.current();
+        let mut ranked: Vec<&Candidate> = generation.candidates.iter().collect();
+        if node.example {
+            let key = |c: &Candidate| {
+                let d = c.evaluation.distance.filter(|d| d.is_finite());
+                d.unwrap_or(f64::INFINITY)
+            };
+            ranked.sort_by(|a, b| key(a).total_cmp(&key(b)));
+            return ranked.iter().take(AUTO_PICKS).map(|c| c.id).collect();
+        }
         // A stable sort keeps grid order among ties; a NaN score ranks last.
         ranked.sort_by(|a, b| {
             let key = |c: &Candidate| {
@@ -485,10 +610,36 @@ impl Session {
     }
 
     /// The next generation bred from [`Session::auto_picks`] at the
-    /// default scale, marked as the machine's choice.
+    /// default scale, marked as the machine's choice. With an example,
+    /// toward its fall as "More like this" breeds toward a candidate's:
+    /// [`LIKE_POOL`] times the grid evaluated by their distance to the
+    /// example's descriptors, the grid's worth closest kept.
     pub fn plan_auto(&self) -> Result<Pending, StudioError> {
-        let mut pending = self.plan(&self.auto_picks(), None)?;
+        let picks = self.auto_picks();
+        let mut pending = self.plan(&picks, None)?;
         pending.node.auto = true;
+        if let Some(example) = &self.example {
+            let generation = self.current().1;
+            let parents: Vec<(u64, &Genome)> = picks
+                .iter()
+                .filter_map(|id| generation.candidates.iter().find(|c| c.id == *id))
+                .map(|c| (c.id, &c.genome))
+                .collect();
+            let children = children_of(
+                &parents,
+                self.archive_offer(pending.node.index),
+                &self.proto,
+                self.file.settings.grid * LIKE_POOL,
+                pending.node.scale,
+                pending.node.seed,
+                self.file.next_id,
+            );
+            pending.node.ids = children.iter().map(|c| c.id).collect();
+            pending.node.example = true;
+            pending.children = children;
+            pending.settings.like = Some(example.target.clone());
+            pending.keep = Some(self.file.settings.grid);
+        }
         Ok(pending)
     }
 
@@ -564,12 +715,13 @@ impl Session {
         self.file.next_id += reserved;
         self.file.current = k;
         self.file.generations.push(node);
+        self.generations.push(Generation { candidates, motion });
         if let Err(e) = self.write_session() {
             (self.file.next_id, self.file.current) = before;
             self.file.generations.pop();
+            self.generations.pop();
             return Err(e);
         }
-        self.generations.push(Generation { candidates, motion });
         Ok(())
     }
 
@@ -609,7 +761,108 @@ impl Session {
     }
 
     fn write_session(&self) -> Result<(), StudioError> {
+        self.write_run()?;
         self.write(SESSION_FILE, &pretty(&self.file)?)
+    }
+
+    /// The session's MAP-Elites archive: every candidate evaluated so far
+    /// binned as breed bins them ([`crate::breed::archive`]), the best
+    /// score of each cell kept (ties to the lower id), sorted by cell.
+    pub fn archive(&self) -> Vec<crate::breed::population::ArchiveEntry> {
+        let mut archive = Vec::new();
+        for (k, g) in self.generations.iter().enumerate() {
+            let members: Vec<Individual> = g.candidates.iter().map(member).collect();
+            crate::breed::archive::update_archive(&mut archive, k, &members);
+        }
+        archive
+    }
+
+    /// The elite the first wild card of generation `index`, bred from the
+    /// current one, varies ([`super::variation::archive_elite`]): from a
+    /// cell the current generation does not show.
+    fn archive_offer(&self, index: usize) -> Option<(u64, &Genome)> {
+        let shown: Vec<(usize, usize)> = self
+            .current()
+            .1
+            .candidates
+            .iter()
+            .filter_map(|c| c.evaluation.fall())
+            .map(|f| crate::breed::archive::cell(f.descent_m_s, f.spin_rad_s))
+            .collect();
+        let archive = self.archive();
+        let id = super::variation::archive_elite(&archive, &shown, index)?.id;
+        self.find(id).map(|(_, c, _)| (c.id, &c.genome))
+    }
+
+    /// The members [`Session::write_run`] gives the run's last generation:
+    /// the collection when it holds at least two leaves (breed's smallest
+    /// population: `export --top` then ranks the kept leaves), else the
+    /// generation on screen with the collection's one leaf if any.
+    pub fn run_members(&self) -> Vec<u64> {
+        let kept = &self.file.kept;
+        let mut ids = if kept.len() >= 2 {
+            kept.clone()
+        } else {
+            let mut ids = self.current().0.ids.clone();
+            if let Some(k) = kept.first().filter(|k| !ids.contains(k)) {
+                ids.push(*k);
+            }
+            ids
+        };
+        ids.sort_unstable();
+        ids
+    }
+
+    /// Writes the session as a breeding run's directory beside
+    /// `studio.json` (`run.toml`, `gen-NNN.csv`, `generations.csv`,
+    /// `checkpoint.json`), so the commands that read a run (`export`,
+    /// `preview`) read a session: its generations in the order they were
+    /// made, the last one's population [`Session::run_members`].
+    fn write_run(&self) -> Result<(), StudioError> {
+        let mut generations = Vec::with_capacity(self.generations.len());
+        let mut history = Vec::with_capacity(self.generations.len());
+        for (k, g) in self.generations.iter().enumerate() {
+            let mut members: Vec<Individual> = g.candidates.iter().map(member).collect();
+            members.sort_by_key(|i| i.id);
+            // Breed's success rate: the children that scored at least as
+            // well as the parent they were bred from.
+            let judged: Vec<bool> = g
+                .candidates
+                .iter()
+                .filter_map(|c| {
+                    let (_, parent, _) = self.find(*c.parents.first()?)?;
+                    Some(c.evaluation.score >= parent.evaluation.score)
+                })
+                .collect();
+            let success = if judged.is_empty() {
+                0.0
+            } else {
+                judged.iter().filter(|b| **b).count() as f64 / judged.len() as f64
+            };
+            history.push(summarise(
+                k,
+                &members,
+                self.file.generations[k].scale,
+                success,
+                Some(self.file.settings.target),
+            ));
+            generations.push(members);
+        }
+        let population = self
+            .run_members()
+            .iter()
+            .filter_map(|id| self.find(*id).map(|(_, c, _)| member(c)))
+            .collect();
+        let record = RunRecord {
+            settings: self.file.settings.breed_settings(),
+            proto: &self.proto,
+            generations,
+            history,
+            population,
+            scale: self.next_scale(),
+            next_id: self.file.next_id,
+        };
+        write_record(&self.dir, record).map_err(|e| StudioError::Input(e.to_string()))
     }
 
     fn write(&self, name: &str, bytes: &[u8]) -> Result<(), StudioError> {
@@ -779,6 +1032,17 @@ pub fn evaluate_child(
     (candidate, motion)
 }
 
+/// A candidate as a member of a breeding run's population.
+fn member(c: &Candidate) -> Individual {
+    Individual {
+        id: c.id,
+        parent: c.parents.first().copied(),
+        elite: false,
+        genome: c.genome.clone(),
+        eval: c.evaluation.clone(),
+    }
+}
+
 /// The seed of the step that makes generation `index`.
 fn step_seed(seed: u64, index: u64) -> u64 {
     stream_seed(seed, index, STEP_STREAM)
@@ -831,10 +1095,14 @@ fn motion_of(
         MOTION_FPS,
         evaluation.release_deg,
     );
-    let object = match clip {
-        Ok(o) => o,
-        Err(e) => return empty(e.to_string()),
-    };
+    match clip {
+        Ok(object) => shown_motion(child.id, &object),
+        Err(e) => empty(e.to_string()),
+    }
+}
+
+/// A clip object's fall as the page draws it: every vertex per frame.
+fn shown_motion(id: u64, object: &crate::formats::clip::ClipObject) -> CandidateMotion {
     let frames: Vec<Vec<nalgebra::Vector3<f64>>> = match &object.motion {
         Motion::Deforming { frames } => frames.clone(),
         Motion::Rigid {
@@ -847,7 +1115,7 @@ fn motion_of(
             .map(|(t, q)| local.iter().map(|v| t + q * v).collect())
             .collect(),
     };
-    let mut bytes = Vec::with_capacity(frames.len() * model.len() * 12);
+    let mut bytes = Vec::with_capacity(frames.len() * frames.first().map_or(0, Vec::len) * 12);
     for frame in &frames {
         for v in frame {
             for c in v.iter() {
@@ -856,7 +1124,7 @@ fn motion_of(
         }
     }
     CandidateMotion {
-        id: child.id,
+        id,
         vertices: frames.first().map_or(0, Vec::len),
         triangles: object.triangles.iter().flatten().copied().collect(),
         frames: frames.len(),
@@ -908,6 +1176,70 @@ mod tests {
         assert_eq!(s.file().generations.len(), 2);
         assert_eq!(s.file().current, 1);
         assert_eq!(s.file().generations[1].picks, ids[..2]);
+        let _ = std::fs::remove_dir_all(s.dir());
+    }
+
+    #[test]
+    fn wild_cards_come_from_archive_cells_the_grid_did_not_show() {
+        use crate::breed::archive::cell;
+        let mut s = small("studio-archive");
+        let cell_of = |c: &Candidate| {
+            c.evaluation
+                .fall()
+                .map(|f| cell(f.descent_m_s, f.spin_rad_s))
+        };
+        let mut from_archive = 0;
+        for _ in 0..6 {
+            let (_, shown) = s.current();
+            let shown_cells: Vec<_> = shown.candidates.iter().filter_map(cell_of).collect();
+            let archive = s.archive();
+            let unshown = archive
+                .iter()
+                .filter(|e| !shown_cells.contains(&(e.descent_bin, e.spin_bin)))
+                .count();
+            let pick = shown.candidates[0].id;
+            s.breed(&[pick], None).unwrap();
+            let wild = s.current().1.candidates.last().unwrap().clone();
+            if unshown == 0 {
+                assert_eq!(
+                    wild.origin,
+                    Origin::Wild,
+                    "every cell shown: a uniform draw"
+                );
+                continue;
+            }
+            from_archive += 1;
+            assert_eq!(wild.origin, Origin::Archive);
+            let (k, elite, _) = s.find(wild.parents[0]).unwrap();
+            assert!(
+                k + 1 < s.file().generations.len(),
+                "an earlier generation's"
+            );
+            let elite_cell = cell_of(elite).unwrap();
+            assert!(
+                !shown_cells.contains(&elite_cell),
+                "from a cell not on screen"
+            );
+            assert_ne!(
+                Some(elite_cell),
+                cell_of(s.find(pick).unwrap().1),
+                "not the pick's"
+            );
+            // The cell's elite: no earlier candidate of that cell scored better.
+            for g in &s.generations[..s.generations.len() - 1] {
+                for c in g
+                    .candidates
+                    .iter()
+                    .filter(|c| cell_of(c) == Some(elite_cell))
+                {
+                    assert!(c.evaluation.score <= elite.evaluation.score, "{}", c.id);
+                }
+            }
+        }
+        assert!(
+            from_archive > 0,
+            "the archive offered no cell in 6 generations"
+        );
         let _ = std::fs::remove_dir_all(s.dir());
     }
 

@@ -44,6 +44,7 @@
     if (c.origin === 'variation') return 'variation of #' + c.parents[0];
     if (c.origin === 'crossover') return 'crossover of #' + c.parents.join(' × #');
     if (c.origin === 'wild') return 'wild card';
+    if (c.origin === 'archive') return 'wild card from #' + c.parents[0] + '\'s cell';
     if (c.origin === 'prototype') return 'varied prototype';
     return 'uniform draw';
   }
@@ -112,8 +113,8 @@
     if (state.candidates.some(function (x) { return x.id === c.id; }) && c.class !== 'diverged' && c.class !== 'undetermined') {
       const like = document.createElement('button');
       like.className = 'like';
-      like.textContent = 'more like this';
-      like.title = 'breed the next generation toward this leaf\'s fall: ' + LIKE_POOL + '× the grid evaluated, the closest kept';
+      like.textContent = '≈';
+      like.title = 'more like this: breed the next generation toward this leaf\'s fall: ' + LIKE_POOL + '× the grid evaluated, the closest kept';
       like.addEventListener('click', function (e) {
         e.stopPropagation();
         moreLike(c.id);
@@ -180,9 +181,22 @@
     });
     $('kept-count').textContent = '(' + together.length + ')';
     $('export').disabled = together.length === 0;
-    // Two or more kept leaves fall side by side in one view.
+    // The example fall (studio --like) is shown first, labelled as such.
+    const shown = together.length;
+    if (state.example) {
+      const e = prepare({ id: 'example', class: state.example.class, motion: state.example.motion });
+      e.label = 'example: ' + state.example.name + ' (' + state.example.class + ')';
+      together.unshift(e);
+      const b = document.createElement('button');
+      b.textContent = '≈ example';
+      b.title = 'more like the example: one generation bred toward its fall (what Auto N breeds toward)';
+      b.addEventListener('click', function () { autoBreed(1); });
+      list.insertBefore(b, list.firstChild);
+    }
+    // Two or more kept leaves (or one beside the example) fall side by
+    // side in one view.
     $('together').style.display = together.length >= 2 ? 'block' : 'none';
-    document.body.dataset.kept = together.length;
+    document.body.dataset.kept = shown;
   }
 
   function showStatus(text) {
@@ -233,14 +247,14 @@
 
   function exportCollection() {
     const body = { fps: parseFloat($('fps').value), start_height_m: parseFloat($('height').value) };
-    $('exported').textContent = 'exporting ' + together.length + ' leaves…';
+    $('exported').textContent = 'exporting ' + state.collection.length + ' leaves…';
     $('export').disabled = true;
     api('/api/export', body).then(function (r) {
       $('exported').textContent = 'wrote ' + r.files.length + ' files in ' + r.dir + ': ' + r.files.join(', ');
       document.body.dataset.exported = r.files.length;
     }).catch(function (e) {
       $('exported').textContent = 'refused: ' + e.message;
-    }).then(function () { $('export').disabled = together.length === 0; });
+    }).then(function () { $('export').disabled = state.collection.length === 0; });
   }
 
   // ----- breeding in the background -----
@@ -327,9 +341,9 @@
     });
   }
 
-  function autoBreed() {
+  function autoBreed(count) {
     if (busy) return;
-    const n = parseInt($('auto-n').value, 10);
+    const n = typeof count === 'number' ? count : parseInt($('auto-n').value, 10);
     busy = true;
     showStatus('breeding ' + n + ' generations from the machine\'s picks…');
     api('/api/auto', { generations: n }).then(function (s) {
@@ -395,6 +409,11 @@
         ctx.fillStyle = o.c ? '#c06060' : '#8893a2';
         ctx.font = Math.round(12 * dpr) + 'px system-ui, sans-serif';
         ctx.fillText(o.c ? 'no fall to show' : 'dropping…', 10 * dpr, 20 * dpr);
+      }
+      if (o.label) {
+        ctx.fillStyle = '#e0c070';
+        ctx.font = Math.round(11 * dpr) + 'px system-ui, sans-serif';
+        ctx.fillText(o.label, 6 * dpr, h - 8 * dpr);
       }
       ctx.restore();
       if (k > 0) {

@@ -3,6 +3,21 @@
 //! few wild cards so the grid does not collapse onto one lineage (the
 //! known failure of interactive evolution: docs/guide/studio.md).
 //!
+//! Wild cards from the archive's empty cells: the session's archive is
+//! breed's MAP-Elites archive (Mouret & Clune 2015) over every candidate
+//! evaluated so far: per cell of descent speed × rotation rate
+//! ([`crate::breed::archive::cell`]) the best-scoring leaf that fell into
+//! it. A cell the grid has not shown lately is one that no candidate of
+//! the generation bred from occupies (so none of the picks either). The
+//! rule, simple and deterministic: when such cells exist, the first wild
+//! card of a grid is a variation of the elite of one of them, the
+//! `index mod n`-th of the n such cells in cell order for generation
+//! `index` (a choice that moves with the index and the set, with no
+//! memory to forbid a cell twice running); the other wild cards stay
+//! uniform draws. It offers the person a kind of fall the
+//! tree found once and the grid has since left, which a uniform draw
+//! rarely hits (MAP-Elites' point: illumination keeps the stepping stones).
+//!
 //! Mutation and uniform draws are breeding's own
 //! ([`crate::leaf::genome::mutate`], [`crate::breed::selection::uniform`]);
 //! what is new here is only who the parents are and how many of each kind
@@ -31,6 +46,9 @@ pub enum Origin {
     Crossover,
     /// A wild card: a uniform draw over the bounds, no parent.
     Wild,
+    /// A wild card from the archive: a variation of the elite of a cell
+    /// the grid has not shown lately (its one parent).
+    Archive,
 }
 
 /// Wild cards in a grid of `grid`: one in a small grid, two from 10 on
@@ -70,10 +88,12 @@ pub fn first_generation(settings: &BreedSettings, proto: &LeafSpec) -> Vec<Child
 /// The `grid` children of `picks` (id and genome; at least one): [`crossovers`] of them
 /// crossovers of pairs of picks (every pair in turn), [`wild_cards`] wild
 /// cards last, the rest variations of the picks in turn; ids from
-/// `first_id`. Every child draws from its own stream of (`seed`, id), so
-/// the same picks and seed give the same children.
+/// `first_id`; with an `archive` elite (id and genome), the first wild card
+/// is a variation of it. Every child draws from its own stream of
+/// (`seed`, id), so the same picks and seed give the same children.
 pub fn children_of(
     picks: &[(u64, &Genome)],
+    archive: Option<(u64, &Genome)>,
     proto: &LeafSpec,
     grid: usize,
     scale: f64,
@@ -110,6 +130,13 @@ pub fn children_of(
                     parents: vec![a.0, b.0],
                     genome: mutate(&mixed, bounds, scale, &mut rng),
                 }
+            } else if let Some((elite, genome)) = archive.filter(|_| k == varied + cross) {
+                Child {
+                    id,
+                    origin: Origin::Archive,
+                    parents: vec![elite],
+                    genome: mutate(genome, bounds, scale, &mut rng),
+                }
             } else {
                 Child {
                     id,
@@ -140,6 +167,22 @@ pub fn crossover<R: rand::Rng + ?Sized>(
         .map(|(x, y)| if rng.random_bool(0.5) { *x } else { *y })
         .collect();
     a.with_coordinates(bounds, &u)
+}
+
+/// The elite the first wild card of generation `index` varies: of the
+/// `archive` cells (sorted by cell) that none of `shown` (the cells of the
+/// generation bred from) is, the `index mod n`-th; none if every cell was
+/// shown.
+pub fn archive_elite<'a>(
+    archive: &'a [crate::breed::population::ArchiveEntry],
+    shown: &[(usize, usize)],
+    index: usize,
+) -> Option<&'a crate::breed::population::Individual> {
+    let unshown: Vec<_> = archive
+        .iter()
+        .filter(|e| !shown.contains(&(e.descent_bin, e.spin_bin)))
+        .collect();
+    (!unshown.is_empty()).then(|| &unshown[index % unshown.len()].individual)
 }
 
 /// A child before evaluation.

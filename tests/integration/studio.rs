@@ -456,10 +456,17 @@ fn studio_breeds_from_picks_and_keeps_a_tree() {
         let leaf = dir.join(format!("gen-001/leaf-{}.toml", c["id"]));
         assert!(leaf.is_file(), "{}", leaf.display());
     }
+    // Generation 2, a branch from generation 0: its wild card may come
+    // from the archive, from a cell only generation 1 showed.
     let g2 = read_json(&dir.join("gen-002.json"));
+    let g1_ids: Vec<Value> = g1.iter().map(|c| c["id"].clone()).collect();
     for c in g2.as_array().unwrap() {
         let p = c["parents"].as_array().unwrap();
-        assert!(p.is_empty() || p == &[Value::from(one[0])], "{c}");
+        let archive = c["origin"] == "archive" && p.len() == 1 && g1_ids.contains(&p[0]);
+        assert!(
+            p.is_empty() || p == &[Value::from(one[0])] || archive,
+            "{c}"
+        );
     }
     // The motion each is shown with.
     let motion = read_json(&dir.join("gen-001-motion.json"));
@@ -582,7 +589,11 @@ fn more_like_this(s: &Studio, dir: &Path) {
         let cid = c["id"].as_u64().unwrap();
         assert!((first..first + 12).contains(&cid), "{cid}");
         let p = c["parents"].as_array().unwrap();
-        assert!(p.is_empty() || p == &[Value::from(id)], "{c}");
+        // A wild card has no parent, or from the archive an elite's.
+        assert!(
+            p.is_empty() || p == &[Value::from(id)] || c["origin"] == "archive",
+            "{c}"
+        );
     }
     assert!(
         g.iter().any(|c| c["evaluation"]["distance"].is_number()),
@@ -1094,4 +1105,204 @@ fn count_pixels(
         }
     }
     (drawn, trail, leaf)
+}
+
+/// The ids of `session`'s candidates `ids`, best first by breed's score
+/// (ties to the lower id), the first `n`.
+fn best_of(s: &leafmagic::studio::Session, ids: &[u64], n: usize) -> Vec<u64> {
+    let mut scored: Vec<(f64, u64)> = ids
+        .iter()
+        .map(|id| (s.find(*id).unwrap().1.evaluation.score, *id))
+        .collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    scored.iter().take(n).map(|(_, id)| *id).collect()
+}
+
+/// `leafmagic CMD ARGS` run to success, its standard output.
+fn run_ok(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "leafmagic {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// The leaf files `export` wrote in `out`, by id.
+fn exported_ids(out: &Path, ext: &str) -> Vec<u64> {
+    let mut ids: Vec<u64> = std::fs::read_dir(out)
+        .unwrap()
+        .filter_map(|e| {
+            let name = e.unwrap().file_name().to_string_lossy().into_owned();
+            name.strip_prefix("leaf-")?
+                .strip_suffix(&format!(".{ext}"))?
+                .parse()
+                .ok()
+        })
+        .collect();
+    ids.sort_unstable();
+    ids
+}
+
+#[test]
+fn a_studio_session_is_a_run_directory_that_export_and_preview_read() {
+    use leafmagic::studio::{Session, StudioSettings};
+    let dir = scratch("studio-as-run");
+    let settings = StudioSettings {
+        grid: 4,
+        seconds: 2.0,
+        ..StudioSettings::new("a", leafmagic::motion::classify::MotionClass::Floater, 5)
+    };
+    let proto = leafmagic::leaf::LeafSpec::load("a").unwrap();
+    let mut s = Session::create(&dir, settings, proto).unwrap();
+    let g0 = s.current().0.ids.clone();
+    s.breed(&g0[..2], None).unwrap();
+    let g1 = s.current().0.ids.clone();
+    assert!(g1.iter().all(|id| !g0.contains(id)));
+    let d = dir.to_str().unwrap();
+
+    // No collection: the run's last generation is the one on screen.
+    let top = best_of(&s, &g1, 2);
+    let out = dir.join("top");
+    run_ok(&[
+        "export",
+        d,
+        "--top",
+        "2",
+        "--format",
+        "glb",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let mut want = top.clone();
+    want.sort_unstable();
+    assert_eq!(exported_ids(&out, "glb"), want);
+    assert_eq!(exported_ids(&out, "toml"), want);
+    let page = dir.join("page.html");
+    run_ok(&["preview", d, "--top", "2", "--out", page.to_str().unwrap()]);
+    let html = std::fs::read_to_string(&page).unwrap();
+    for id in g1.iter().chain(&g0) {
+        assert_eq!(
+            html.contains(&format!("\"leaf-{id}\"")),
+            top.contains(id),
+            "leaf-{id} on the page: only the 2 best of the generation on screen"
+        );
+    }
+    // --ids names any leaf of it; one of an earlier generation is refused.
+    let one = dir.join("one");
+    run_ok(&[
+        "export",
+        d,
+        "--ids",
+        &g1[3].to_string(),
+        "--out",
+        one.to_str().unwrap(),
+    ]);
+    assert_eq!(exported_ids(&one, "toml"), [g1[3]]);
+
+    // A collection of two or more is what the commands read, whatever is
+    // on screen: two leaves of generation 0 kept, and --top 2 exports them
+    // even with generation 1 on screen.
+    s.keep(g0[3], true).unwrap();
+    s.keep(g0[1], true).unwrap();
+    let kept = dir.join("kept");
+    run_ok(&["export", d, "--top", "2", "--out", kept.to_str().unwrap()]);
+    assert_eq!(exported_ids(&kept, "toml"), [g0[1], g0[3]]);
+    // The session reopens as it was, the run files beside it.
+    let reopened = Session::open(&dir).unwrap();
+    assert_eq!(reopened.file().kept, [g0[3], g0[1]]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `studio --like FILE`: the example fall (here the prototype a's own 2 s fall, a floater,
+/// written as a tracked CSV record with attitudes) is read once, copied
+/// into the session, shown in the state beside the collection labelled
+/// as the example, and Auto N breeds toward it: each generation evaluates
+/// three times the grid by the distance to the example's descriptors,
+/// keeps the grid's worth, and the next one picks the two closest.
+#[test]
+fn studio_with_an_example_fall_shows_it_and_breeds_auto_toward_it() {
+    let dir = scratch("studio-like");
+    std::fs::create_dir_all(&dir).unwrap();
+    let (_, model) = leafmagic::leaf::LeafSpec::load_with_model("a").unwrap();
+    let params = leafmagic::sim::drop::DropParams {
+        seconds: 2.0,
+        ..Default::default()
+    };
+    let fall = leafmagic::sim::drop::drop_leaf(&model, &params).unwrap();
+    let csv = dir.join("tracked.csv");
+    std::fs::write(&csv, fall.trajectory.try_to_csv_bytes().unwrap()).unwrap();
+    let session = dir.join("session");
+    let (csv_s, out) = (csv.to_str().unwrap(), session.to_str().unwrap());
+
+    // A file that is not there is refused before anything is bred.
+    let missing = Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+        .args(["studio", "--out", out, "--like", "/nonexistent/fall.csv"])
+        .output()
+        .unwrap();
+    assert!(!missing.status.success());
+    let err = String::from_utf8_lossy(&missing.stderr);
+    assert!(err.contains("/nonexistent/fall.csv"), "{err}");
+    assert!(!session.join("studio.json").exists());
+
+    let mut args = vec!["--out", out, "--seed", "4", "--like", csv_s];
+    args.extend(SMALL);
+    let s = Studio::start(&args, &session);
+    let state = s.api("/api/state", "");
+    let example = &state["example"];
+    assert_eq!(example["name"], csv_s, "{example}");
+    assert_eq!(
+        example["class"], "floater",
+        "as `classify` finds it: {example}"
+    );
+    assert!(example["motion"]["frames"].as_u64().unwrap() > 10);
+    assert!(example["motion"]["vertices"].as_u64().unwrap() > 0);
+    assert_eq!(
+        std::fs::read(session.join("example.csv")).unwrap(),
+        std::fs::read(&csv).unwrap(),
+        "copied as read"
+    );
+    assert_eq!(s.session()["example"], csv_s);
+
+    let (status, text) = s.call("POST", "/api/auto", "{\"generations\": 2}");
+    assert_eq!(status, 202, "{text}");
+    s.finish_breed();
+    let gens = s.session()["generations"].as_array().unwrap().clone();
+    assert_eq!(gens.len(), 3);
+    for g in &gens[1..] {
+        assert_eq!(g["example"], true, "{g}");
+        assert_eq!(g["ids"].as_array().unwrap().len(), 4, "{g}");
+    }
+    // Every id of the pool is used up: 3 × 4 evaluated per generation.
+    assert_eq!(s.session()["next_id"], 4 + 2 * 3 * 4);
+    // Generation 2's picks: the two of generation 1 closest to the example
+    // (no distance: last; ties to the earlier in the grid).
+    let bred_from = read_json(&session.join("gen-001.json"));
+    let mut ranked: Vec<(f64, usize, u64)> = bred_from
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .map(|(k, c)| {
+            let d = c["evaluation"]["distance"]
+                .as_f64()
+                .unwrap_or(f64::INFINITY);
+            (d, k, c["id"].as_u64().unwrap())
+        })
+        .collect();
+    assert!(ranked.iter().any(|r| r.0.is_finite()), "{bred_from}");
+    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    assert_eq!(
+        gens[2]["picks"],
+        serde_json::json!([ranked[0].2, ranked[1].2])
+    );
+    drop(s);
+
+    // Reopened, the session shows the same example again.
+    let r = Studio::start(&["--resume", out], &session);
+    assert_eq!(r.api("/api/state", "")["example"], state["example"]);
 }
