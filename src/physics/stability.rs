@@ -338,7 +338,7 @@ fn lost_mass(model: &Model, tensors: &[Matrix3<f64>]) -> Option<LostMass> {
 
 /// Computes the estimate at the rest shape: bounds on the stiffest mode
 /// from the springs and hinges one by one, the mode itself by power
-/// iteration on the network ([`RestNetwork`]), its damping, and the
+/// iteration on the network (`RestNetwork`), its damping, and the
 /// spread of the masses.
 pub fn estimate(model: &Model) -> StabilityEstimate {
     let free: Vec<bool> = model.fixed.iter().map(|f| !f).collect();

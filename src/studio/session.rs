@@ -794,7 +794,7 @@ impl Session {
         self.find(id).map(|(_, c, _)| (c.id, &c.genome))
     }
 
-    /// The members [`Session::write_run`] gives the run's last generation:
+    /// The members `Session::write_run` gives the run's last generation:
     /// the collection when it holds at least two leaves (breed's smallest
     /// population: `export --top` then ranks the kept leaves), else the
     /// generation on screen with the collection's one leaf if any.
