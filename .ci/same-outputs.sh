@@ -42,7 +42,7 @@ run_all() {
 # Each side's own folder name is replaced too, as files that name a path
 # name theirs.
 normalise() {
-  sed -E "s|$work/(old\|new)|OUT|g" "$1" |
+  sed -E "s#$work/(old|new)#OUT#g" "$1" |
     sed -E 's/"(wall|elapsed|cpu)[a-z_]*": *[0-9.eE+-]+/"\1": T/g; s/in [0-9.]+ (s|ms)\b/in T/g; s/[0-9.]+ s wall/T wall/g'
 }
 

@@ -563,3 +563,27 @@ impl Progress for Quiet {
     fn individual_done(&self, _: OutcomeKind, _: f64) {}
     fn finish_generation(&self, _: &GenerationSummary) {}
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An outcome of a class is named as the class is in every file.
+    #[test]
+    fn outcome_names_are_the_class_names() {
+        for class in [
+            MotionClass::Floater,
+            MotionClass::Spinner,
+            MotionClass::Lilter,
+            MotionClass::Undetermined,
+        ] {
+            assert_eq!(OutcomeKind::of_class(class).name(), class.as_str());
+        }
+        let names: Vec<&str> = OutcomeKind::ALL.iter().map(|k| k.name()).collect();
+        assert_eq!(names.last(), Some(&DIVERGED));
+        let mut counts = OutcomeCounts::default();
+        counts[OutcomeKind::Lilter] += 2;
+        assert_eq!(counts.0, [0, 0, 2, 0, 0]);
+        assert_eq!(counts.max(), 2);
+    }
+}

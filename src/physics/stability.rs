@@ -534,15 +534,12 @@ impl<'a> RestNetwork<'a> {
         // Springs above WARN_SPRING_RATE: how many, and the stiffest of them
         // (one warning, not one per spring: a sheet has hundreds alike).
         let mut too_stiff: (usize, Option<(usize, f64)>) = (0, None);
-        for (k, s) in model.springs.iter().enumerate() {
+        for (k, (s, (_, _, dir, _))) in model.springs.iter().zip(&self.springs).enumerate() {
             let rate = match &self.roots {
                 Some(r) => {
-                    let d = model.rest_position[s.i] - model.rest_position[s.j];
-                    let l = d.norm();
-                    let dir = if l > 0.0 { d / l } else { V3::zeros() };
                     s.stiffness
-                        * (Self::inverse_mass_along(r, s.i, &dir)
-                            + Self::inverse_mass_along(r, s.j, &dir))
+                        * (Self::inverse_mass_along(r, s.i, dir)
+                            + Self::inverse_mass_along(r, s.j, dir))
                 }
                 None => s.stiffness * (model.inv_mass[s.i] + model.inv_mass[s.j]),
             };

@@ -5,11 +5,11 @@
 //! within 1 mm (the issue's check). A file whose time ran at its own 30 fps
 //! would be 1.2 m off here (the leaf descends at about 1 m/s).
 
-use super::breeding::leafmagic;
+use super::breeding::{leafmagic, scratch};
 use super::common::{missing_tool, venv_python};
 use leafmagic::formats::gltf::from_glb;
 use nalgebra::Vector3;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Imports the file named on the command line into a factory-new scene and
 /// prints the scene's rate and every mesh's world vertex centroid at frame
@@ -47,13 +47,6 @@ for o in scene.objects:
     e.to_mesh_clear()
 print("RESULT " + json.dumps(out))
 "#;
-
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("leafmagic-blender-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
 
 /// The centroid Blender shows at frame 150 of `file` (imported as `kind`),
 /// and the scene's frame rate.
@@ -97,7 +90,7 @@ fn every_export_plays_at_the_simulations_speed_in_a_default_blender_scene() {
             return;
         }
     };
-    let dir = scratch("speed");
+    let dir = scratch("blender-speed");
     let run = dir.join("run");
     let o = leafmagic()
         .args(["breed", "--population", "4", "--generations", "1", "--out"])
@@ -171,7 +164,7 @@ fn the_studios_exports_play_at_the_simulations_speed_in_a_default_blender_scene(
             return;
         }
     };
-    let dir = scratch("studio");
+    let dir = scratch("blender-studio");
     let settings = StudioSettings {
         grid: 4,
         ..StudioSettings::new("a", MotionClass::Floater, 7)

@@ -250,6 +250,21 @@ fn start_in(dir: &Path, seed: &str) -> Studio {
     Studio::start(&args, dir)
 }
 
+/// The ids of a generation file's two best candidates by `key` of their
+/// evaluation, highest first, ties to the earlier in the grid (as the
+/// studio picks them for Auto N).
+fn two_best(generation: &Value, key: impl Fn(&Value) -> f64) -> [u64; 2] {
+    let mut ranked: Vec<(f64, usize, u64)> = generation
+        .as_array()
+        .unwrap()
+        .iter()
+        .enumerate()
+        .map(|(k, c)| (key(&c["evaluation"]), k, c["id"].as_u64().unwrap()))
+        .collect();
+    ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    [ranked[0].2, ranked[1].2]
+}
+
 #[test]
 fn studio_refuses_what_it_must_and_keeps_running() {
     let dir = scratch("studio-security");
@@ -518,24 +533,11 @@ fn auto_generations(s: &Studio, dir: &Path) {
         assert_eq!(g["parent"], parent, "{g}");
         assert_eq!(g["auto"], true, "{g}");
         let bred_from = read_json(&dir.join(format!("gen-{parent:03}.json")));
-        let mut ranked: Vec<(f64, usize, u64)> = bred_from
-            .as_array()
-            .unwrap()
-            .iter()
-            .enumerate()
-            .map(|(k, c)| {
-                let score = c["evaluation"]["score"]
-                    .as_f64()
-                    .unwrap_or(f64::NEG_INFINITY);
-                (score, k, c["id"].as_u64().unwrap())
-            })
-            .collect();
-        ranked.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-        assert_eq!(
-            g["picks"],
-            serde_json::json!([ranked[0].2, ranked[1].2]),
-            "{g}"
-        );
+        // The two best by breed's score (none: last).
+        let best = two_best(&bred_from, |e| {
+            e["score"].as_f64().unwrap_or(f64::NEG_INFINITY)
+        });
+        assert_eq!(g["picks"], serde_json::json!(best), "{g}");
         parent = g["index"].as_u64().unwrap() as usize;
     }
     // Generations a person bred are not marked.
@@ -1282,24 +1284,19 @@ fn studio_with_an_example_fall_shows_it_and_breeds_auto_toward_it() {
     // Generation 2's picks: the two of generation 1 closest to the example
     // (no distance: last; ties to the earlier in the grid).
     let bred_from = read_json(&session.join("gen-001.json"));
-    let mut ranked: Vec<(f64, usize, u64)> = bred_from
-        .as_array()
-        .unwrap()
-        .iter()
-        .enumerate()
-        .map(|(k, c)| {
-            let d = c["evaluation"]["distance"]
-                .as_f64()
-                .unwrap_or(f64::INFINITY);
-            (d, k, c["id"].as_u64().unwrap())
-        })
-        .collect();
-    assert!(ranked.iter().any(|r| r.0.is_finite()), "{bred_from}");
-    ranked.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    assert_eq!(
-        gens[2]["picks"],
-        serde_json::json!([ranked[0].2, ranked[1].2])
+    assert!(
+        bred_from
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|c| c["evaluation"]["distance"].is_f64()),
+        "{bred_from}"
     );
+    // Closest first: the best by the negated distance.
+    let closest = two_best(&bred_from, |e| {
+        -e["distance"].as_f64().unwrap_or(f64::INFINITY)
+    });
+    assert_eq!(gens[2]["picks"], serde_json::json!(closest));
     drop(s);
 
     // Reopened, the session shows the same example again.

@@ -122,7 +122,7 @@ impl Model {
     /// mass ≤ 0, negative stiffness, damping or rest length, indices out of
     /// range, springs joining a particle to itself, duplicate springs, and
     /// triangles of zero area at rest.
-    pub fn new(parts: ModelParts) -> Result<Model, ModelError> {
+    pub fn new(mut parts: ModelParts) -> Result<Model, ModelError> {
         let n = parts.mass.len();
         if parts.fixed.len() != n || parts.rest_position.len() != n {
             return Err(err(
@@ -136,7 +136,7 @@ impl Model {
         let particle_drag = if parts.particle_drag.is_empty() {
             vec![0.0; n]
         } else if parts.particle_drag.len() == n {
-            parts.particle_drag.clone()
+            std::mem::take(&mut parts.particle_drag)
         } else {
             return Err(err("particle", "drag list length differs from particles"));
         };
