@@ -4,14 +4,16 @@
 //! ([`variation`]): variations at a shrinking scale, crossovers of two
 //! picks and wild cards. A session ([`session`]) is a tree of generations
 //! recorded in a run directory, with a collection of kept leaves that
-//! [`collection`] exports; [`server`] is the local web server and its
-//! page.
+//! [`collection`] exports; [`preference`] models the person's taste from
+//! their picks, to order the grid; [`server`] is the local web server and
+//! its page.
 //!
 //! May use: [`crate::output`], [`crate::breed`], [`crate::sim`],
 //! [`crate::leaf`], [`crate::formats`], [`crate::motion`], [`crate::physics`],
 //! [`crate::util`].
 
 pub mod collection;
+pub mod preference;
 pub mod server;
 pub mod session;
 pub mod variation;

@@ -26,6 +26,7 @@ use super::collection::{ExportRequest, export_collection};
 use super::session::{
     Candidate, CandidateMotion, MAX_AUTO, MOTION_FPS, Pending, Session, StudioError,
 };
+use crate::motion::describe::MotionTarget;
 use axum::Router;
 use axum::body::Bytes;
 use axum::extract::{DefaultBodyLimit, Request, State};
@@ -407,7 +408,7 @@ async fn breed(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
 /// Plans the generation, starts its evaluation on a thread of its own and
 /// answers at once (202, the state with the breeding's progress).
 fn start_breeding(app: &Arc<Shared>, r: &BreedRequest) -> Answer {
-    start_job(app, false, 1, |s| s.plan(&r.picks, r.scale))
+    start_job(app, false, 1, None, |s| s.plan(&r.picks, r.scale))
 }
 
 /// `POST /api/like`: "More like this" of candidate `id`.
@@ -423,7 +424,7 @@ async fn like(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
     match parse::<LikeRequest>(&body) {
         Ok(r) => {
             blocking(app, move |app| {
-                start_job(app, false, 1, |s| s.plan_like(r.id, r.scale))
+                start_job(app, false, 1, None, |s| s.plan_like(r.id, r.scale))
             })
             .await
         }
@@ -432,11 +433,19 @@ async fn like(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
 }
 
 /// `POST /api/auto`: `generations` bred one after another from the
-/// machine's picks ([`Session::plan_auto`]), then the person again.
+/// machine's picks ([`Session::plan_auto`]), then the person again;
+/// `toward` (optional) names descriptors to breed toward, as
+/// `descent=0.8, spin=4` ([`MotionTarget::parse_features`]); `like`
+/// (optional, not with `toward`) a candidate on the grid whose fall every
+/// generation is bred toward ([`Session::fall_target`]).
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
 struct AutoRequest {
     generations: usize,
+    #[serde(default)]
+    toward: Option<String>,
+    #[serde(default)]
+    like: Option<u64>,
 }
 
 async fn auto(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
@@ -453,22 +462,43 @@ async fn auto(State(app): State<Arc<Shared>>, body: Bytes) -> Response {
             ),
         );
     }
+    let toward = match r.toward.as_deref().map(str::trim) {
+        None | Some("") => None,
+        Some(text) => match MotionTarget::parse_features(text, None) {
+            Ok(t) => Some(t),
+            Err(e) => return refuse(StatusCode::BAD_REQUEST, format!("auto toward: {e}")),
+        },
+    };
+    if toward.is_some() && r.like.is_some() {
+        return refuse(
+            StatusCode::BAD_REQUEST,
+            "auto: breed toward typed descriptors or toward a candidate's fall, not both"
+                .to_string(),
+        );
+    }
     blocking(app, move |app| {
-        start_job(app, true, r.generations, Session::plan_auto)
+        let toward = match r.like {
+            Some(id) => Some(lock(&app.session).fall_target(id).map_err(studio_refusal)?),
+            None => toward,
+        };
+        start_job(app, true, r.generations, toward.clone(), move |s| {
+            s.plan_auto(toward.as_ref())
+        })
     })
     .await
 }
 
 /// Starts breeding the generation `plan` makes and then, to `total`, the
-/// machine's ([`Session::plan_auto`]), on a thread of their own, and
-/// answers at once (202, the state with the progress; `auto` marks the
-/// progress of an "Auto N"). The thread records each candidate as it
+/// machine's ([`Session::plan_auto`] toward `toward`), on a thread of
+/// their own, and answers at once (202, the state with the progress;
+/// `auto` marks the progress of an "Auto N"). The thread records each candidate as it
 /// finishes and commits each generation whole when its last one does: the
 /// files hold only whole generations.
 fn start_job(
     app: &Arc<Shared>,
     auto: bool,
     total: usize,
+    toward: Option<MotionTarget>,
     plan: impl FnOnce(&Session) -> Result<Pending, StudioError>,
 ) -> Answer {
     if let Some(job) = lock(&app.job).as_ref() {
@@ -501,9 +531,11 @@ fn start_job(
                     lock(&shown.finished).push(json);
                 });
                 let mut session = lock(&worker.session);
-                let next = session
-                    .commit(evaluated)
-                    .and_then(|()| (k < total).then(|| session.plan_auto()).transpose());
+                let next = session.commit(evaluated).and_then(|()| {
+                    (k < total)
+                        .then(|| session.plan_auto(toward.as_ref()))
+                        .transpose()
+                });
                 let mut slot = lock(&worker.job);
                 match next {
                     Ok(Some(p)) => {
@@ -636,11 +668,16 @@ fn candidate_json(c: &Candidate, m: &CandidateMotion) -> serde_json::Value {
 fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
     let file = session.file();
     let (node, generation) = session.current();
+    let preference = session.preference();
     let candidates: Vec<serde_json::Value> = generation
         .candidates
         .iter()
         .zip(&generation.motion)
-        .map(|(c, m)| candidate_json(c, m))
+        .map(|(c, m)| {
+            let mut shown = candidate_json(c, m);
+            shown["taste"] = json!(preference.as_ref().and_then(|p| p.taste(&c.evaluation)));
+            shown
+        })
         .collect();
     let collection: Vec<serde_json::Value> = file
         .kept
@@ -656,6 +693,7 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
         "collection": collection,
         "breeding": lock(&app.job).as_ref().map(|j| j.progress(usize::MAX)),
         "breed_error": lock(&app.breed_error).clone(),
+        "taste_judgements": preference.as_ref().map(|p| p.judgements),
         "settings": file.settings,
         "dir": session.dir().display().to_string(),
         "generation": node,
@@ -667,6 +705,10 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
             "scale": g.scale,
             "auto": g.auto,
             "like": g.like,
+            "toward": g.toward.as_ref().map(|t| json!({
+                "source": t.source,
+                "descriptors": t.descriptors,
+            })),
         })).collect::<Vec<_>>(),
         "fps": MOTION_FPS,
         "candidates": candidates,

@@ -21,6 +21,7 @@
 //!   `export` and `preview` read it as any run; rewritten before
 //!   `studio.json` at every action.
 
+use super::preference::{Preference, features};
 use super::variation::{Child, Origin, children_of, first_generation};
 use crate::breed::evaluate;
 use crate::breed::population::{Evaluation, Individual};
@@ -31,6 +32,7 @@ use crate::formats::clip::Motion;
 use crate::leaf::LeafSpec;
 use crate::leaf::genome::Genome;
 use crate::motion::classify::MotionClass;
+use crate::motion::describe::MotionTarget;
 use crate::output::export::drop_clip_released;
 use crate::util::io::write_atomic;
 use base64::Engine as _;
@@ -159,6 +161,10 @@ pub struct GenerationNode {
     /// example's ([`Session::plan_auto`] with an example).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub example: bool,
+    /// Bred toward descriptors the person gave ("Auto N toward descent=0.8,
+    /// …", [`Session::plan_auto`]): its distances are to them.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub toward: Option<MotionTarget>,
 }
 
 /// The session file: settings and the tree.
@@ -193,7 +199,7 @@ pub struct Example {
     /// Its class, as described at the prototype's chord.
     pub class: MotionClass,
     /// The target of breeding toward it (breed's `--like` target).
-    pub target: crate::motion::describe::MotionTarget,
+    pub target: MotionTarget,
     /// Its fall as shown: a plate of the prototype's chord (or a marker,
     /// without attitudes), at [`MOTION_FPS`].
     pub motion: CandidateMotion,
@@ -208,7 +214,7 @@ impl Example {
         trajectory: &crate::motion::trajectory::Trajectory,
         proto: &LeafSpec,
     ) -> Result<Example, StudioError> {
-        use crate::motion::describe::{Descriptors, MotionTarget};
+        use crate::motion::describe::Descriptors;
         let refuse = |why: String| StudioError::Input(format!("the example {name}: {why}"));
         let chord = proto.model().map_err(|e| refuse(e.to_string()))?.chord();
         let described = Descriptors::of(&crate::motion::classify::classify(trajectory, chord))
@@ -341,6 +347,7 @@ impl Session {
             auto: false,
             like: None,
             example: false,
+            toward: None,
         };
         let mut session = Session {
             dir: dir.to_path_buf(),
@@ -544,8 +551,23 @@ impl Session {
             auto: false,
             like: None,
             example: false,
+            toward: None,
         };
         Ok(self.pending(node, children))
+    }
+
+    /// The fall of candidate `id` of the current generation as a target to
+    /// breed toward (what "More like this" and "Auto N toward #id" aim at):
+    /// its shown drop's descriptors, gated on its class.
+    pub fn fall_target(&self, id: u64) -> Result<MotionTarget, StudioError> {
+        let (node, generation) = self.current();
+        let Some(c) = generation.candidates.iter().find(|c| c.id == id) else {
+            return Err(StudioError::Input(format!(
+                "candidate {id} is not in generation {} (its ids: {:?})",
+                node.index, node.ids
+            )));
+        };
+        like_target(&self.proto, c, self.file.settings.seconds)
     }
 
     /// "More like this": a generation bred from candidate `id` of the
@@ -582,15 +604,35 @@ impl Session {
         Ok(pending)
     }
 
+    /// The model of the person's taste fitted to every pick they made
+    /// ([`super::preference`]): in each generation a person bred from, the
+    /// candidates picked against those passed over. None before the
+    /// person has both picked and passed over a leaf that fell.
+    pub fn preference(&self) -> Option<Preference> {
+        let mut judgements = Vec::new();
+        for node in &self.file.generations {
+            let Some(parent) = node.parent else { continue };
+            if node.auto || node.like.is_some() || node.example || node.toward.is_some() {
+                continue;
+            }
+            for c in &self.generations[parent].candidates {
+                if let Some(x) = features(&c.evaluation) {
+                    judgements.push((x, node.picks.contains(&c.id)));
+                }
+            }
+        }
+        Preference::fit(&judgements)
+    }
+
     /// The candidates of the current generation the machine picks when
     /// it breeds alone: the [`AUTO_PICKS`] best toward the session's
     /// target by breed's score, ties to the earlier in the grid; in a
-    /// generation bred toward the example, the [`AUTO_PICKS`] closest to
-    /// it (no distance: last).
+    /// generation bred toward the example or given descriptors, the
+    /// [`AUTO_PICKS`] closest to them (no distance: last).
     pub fn auto_picks(&self) -> Vec<u64> {
         let (node, generation) = self.current();
         let mut ranked: Vec<&Candidate> = generation.candidates.iter().collect();
-        if node.example {
+        if node.example || node.toward.is_some() {
             let key = |c: &Candidate| {
                 let d = c.evaluation.distance.filter(|d| d.is_finite());
                 d.unwrap_or(f64::INFINITY)
@@ -610,15 +652,21 @@ impl Session {
     }
 
     /// The next generation bred from [`Session::auto_picks`] at the
-    /// default scale, marked as the machine's choice. With an example,
-    /// toward its fall as "More like this" breeds toward a candidate's:
-    /// [`LIKE_POOL`] times the grid evaluated by their distance to the
-    /// example's descriptors, the grid's worth closest kept.
-    pub fn plan_auto(&self) -> Result<Pending, StudioError> {
+    /// default scale, marked as the machine's choice. Toward `toward`
+    /// (descriptors the person gave) or else the session's example, as
+    /// "More like this" breeds toward a candidate's fall: [`LIKE_POOL`]
+    /// times the grid evaluated by their distance to the target's
+    /// descriptors, the grid's worth closest kept. With neither, toward the
+    /// session's class by breed's score.
+    pub fn plan_auto(&self, toward: Option<&MotionTarget>) -> Result<Pending, StudioError> {
         let picks = self.auto_picks();
         let mut pending = self.plan(&picks, None)?;
         pending.node.auto = true;
-        if let Some(example) = &self.example {
+        let target = match toward {
+            Some(t) => Some(t.clone()),
+            None => self.example.as_ref().map(|e| e.target.clone()),
+        };
+        if let Some(target) = target {
             let generation = self.current().1;
             let parents: Vec<(u64, &Genome)> = picks
                 .iter()
@@ -635,9 +683,12 @@ impl Session {
                 self.file.next_id,
             );
             pending.node.ids = children.iter().map(|c| c.id).collect();
-            pending.node.example = true;
+            match toward {
+                Some(t) => pending.node.toward = Some(t.clone()),
+                None => pending.node.example = true,
+            }
             pending.children = children;
-            pending.settings.like = Some(example.target.clone());
+            pending.settings.like = Some(target);
             pending.keep = Some(self.file.settings.grid);
         }
         Ok(pending)

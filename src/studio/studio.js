@@ -80,6 +80,7 @@
       fmt(c.descent_m_s, 2) + ' m/s · drift ' + fmt(c.drift_ratio, 2) + ' · ' +
       fmt(c.spin_rad_s, 1) + ' rad/s · kept ' + c.kept + '/' + c.releases;
     if (c.distance !== null && c.distance !== undefined) rate += ' · distance ' + fmt(c.distance, 2);
+    if (typeof c.taste === 'number') rate += ' · taste ' + fmt(c.taste, 2);
     return '<b>#' + c.id + ' ' + c.class + '</b> ' + (c.regime || '') + '<br>' + rate +
       '<br><span class="origin">' + originText(c) + '</span>';
   }
@@ -148,12 +149,28 @@
     if (!keepClock) start = performance.now();
   }
 
+  // The grid in the order it is shown: with "by taste" on and a model of
+  // the person's taste fitted, most liked first (ties keep grid order).
+  function ordered(list) {
+    if (!$('by-taste').checked || !list.some(function (c) { return typeof c.taste === 'number'; })) return list;
+    const t = function (c) { return typeof c.taste === 'number' ? c.taste : -1; };
+    return list.map(function (c, k) { return [c, k]; })
+      .sort(function (a, b) { return t(b[0]) - t(a[0]) || a[1] - b[1]; })
+      .map(function (p) { return p[0]; });
+  }
+
   function showState(keepClock) {
-    build(state.candidates, keepClock);
+    build(ordered(state.candidates), keepClock);
     showTree();
     showCollection();
     showStatus();
     document.body.dataset.generation = state.generation.index;
+  }
+
+  // A candidate's fall ("leaf-ID") by its number, typed descriptors as typed.
+  function towardLabel(t) {
+    if (t.source.indexOf('leaf-') === 0) return '#' + t.source.slice(5);
+    return Object.keys(t.descriptors).map(function (k) { return k + '=' + t.descriptors[k]; }).join(' ');
   }
 
   function showTree() {
@@ -161,6 +178,7 @@
     state.tree.forEach(function (g) {
       const s = document.createElement('span');
       s.textContent = 'g' + g.index + (g.parent === null ? '' : ' ← g' + g.parent + ' (' + (g.auto ? 'auto: ' : '') + (g.like !== null && g.like !== undefined ? 'like ' : '') +
+        (g.toward ? 'toward ' + towardLabel(g.toward) + ' ' : '') +
         g.picks.map(function (p) { return '#' + p; }).join(', ') + ')');
       if (g.index === state.generation.index) s.className = 'here';
       s.addEventListener('click', function () { act('/api/goto', { generation: g.index }); });
@@ -344,9 +362,16 @@
   function autoBreed(count) {
     if (busy) return;
     const n = typeof count === 'number' ? count : parseInt($('auto-n').value, 10);
+    // Typed descriptors first; else one picked candidate: toward its fall;
+    // else toward the session's class (or its example).
+    const toward = $('auto-toward').value.trim();
+    const body = { generations: n };
+    let aim = '';
+    if (toward) { body.toward = toward; aim = ' toward ' + toward; }
+    else if (picks.length === 1) { body.like = cells[picks[0]].c.id; aim = ' toward #' + body.like + '\'s fall'; }
     busy = true;
-    showStatus('breeding ' + n + ' generations from the machine\'s picks…');
-    api('/api/auto', { generations: n }).then(function (s) {
+    showStatus('breeding ' + n + ' generations from the machine\'s picks' + aim + '…');
+    api('/api/auto', body).then(function (s) {
       state = s;
       follow(s.breeding);
     }).catch(function (e) {
@@ -360,6 +385,7 @@
   $('back').addEventListener('click', back);
   $('export').addEventListener('click', exportCollection);
   $('auto').addEventListener('click', autoBreed);
+  $('by-taste').addEventListener('change', function () { if (!busy) showState(true); });
   document.addEventListener('keydown', function (e) {
     if (e.target.tagName === 'INPUT') { if (e.target === scaleEl && e.key === 'Enter') breed(); return; }
     if (e.key >= '0' && e.key <= '9') toggle((parseInt(e.key, 10) + 9) % 10);

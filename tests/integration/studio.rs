@@ -411,13 +411,55 @@ fn studio_refuses_what_it_must_and_keeps_running() {
 /// Breeds from two picks, goes back, branches from one pick: the session's
 /// tree after these three actions.
 fn pick_breed_back_branch(s: &Studio) -> (Vec<u64>, Vec<u64>) {
-    let g0 = ids(&s.api("/api/state", ""));
+    let state = s.api("/api/state", "");
+    let g0 = ids(&state);
+    // No taste before the person has picked.
+    assert!(
+        state["taste_judgements"].is_null(),
+        "{}",
+        state["taste_judgements"]
+    );
+    assert!(
+        state["candidates"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|c| c["taste"].is_null())
+    );
     let two = vec![g0[1], g0[2]];
     let g1 = s.breed(&format!("{{\"picks\": [{}, {}]}}", two[0], two[1]));
     assert_eq!(g1["generation"]["index"], 1);
     let back = s.api("/api/back", "{}");
     assert_eq!(back["generation"]["index"], 0);
     assert_eq!(ids(&back), g0);
+    // One grid judged: the two picked against the others that fell; the
+    // model likes what was picked more than what was passed over.
+    let fell: Vec<&Value> = back["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|c| c["class"] != "diverged")
+        .collect();
+    assert_eq!(
+        back["taste_judgements"],
+        fell.len(),
+        "{}",
+        back["taste_judgements"]
+    );
+    let mean_taste = |picked: bool| {
+        let t: Vec<f64> = fell
+            .iter()
+            .filter(|c| two.contains(&c["id"].as_u64().unwrap()) == picked)
+            .map(|c| c["taste"].as_f64().unwrap())
+            .collect();
+        assert!(t.iter().all(|v| (0.0..=1.0).contains(v)), "{t:?}");
+        t.iter().sum::<f64>() / t.len() as f64
+    };
+    let (liked, passed) = (mean_taste(true), mean_taste(false));
+    assert!(
+        liked > passed,
+        "taste of the picked {liked}, of the others {passed}"
+    );
     let one = vec![g0[0]];
     let g2 = s.breed(&format!("{{\"picks\": [{}], \"scale\": 0.5}}", one[0]));
     assert_eq!(g2["generation"]["index"], 2);
@@ -914,10 +956,20 @@ with sync_playwright() as p:
     page.click("#export")
     page.wait_for_selector('body[data-exported]', timeout=600000)
     exported = page.inner_text("#exported")
+    # Auto 1 toward typed descriptors: generation 3, its aim in the history.
+    page.fill("#auto-n", "1")
+    page.fill("#auto-toward", "descent=0.5")
+    page.click("#auto")
+    page.wait_for_selector('body[data-drawn="3"]', timeout=600000)
+    tree = page.inner_text("#tree")
+    page.check("#by-taste")
+    page.wait_for_timeout(300)
+    by_taste = page.eval_on_selector_all(".cell", "els => els.map(e => +e.dataset.id)")
     browser.close()
 print(json.dumps({"ids": ids, "picked": picked, "boxes": boxes, "errors": errors,
                   "foreign": foreign, "status": status, "seen": seen, "branch_from": branch_from,
-                  "g2": g2, "refused": refused, "exported": exported}))
+                  "g2": g2, "refused": refused, "exported": exported, "tree": tree,
+                  "by_taste": by_taste}))
 "##;
 
 /// Skips (with the reason) where no browser or driver can be had, but
@@ -1001,7 +1053,8 @@ fn studio_in_a_real_browser_picks_breeds_and_draws_every_candidate() {
         session["generations"][2]["picks"],
         serde_json::json!([g0[0]])
     );
-    assert_eq!(session["current"], 2);
+    // On screen at the end: the Auto's generation 3, bred from 2.
+    assert_eq!(session["current"], 3);
     // Two kept, recorded; a frame rate of 0 refused on the page.
     let g2: Vec<u64> = report["g2"]
         .as_array()
@@ -1012,6 +1065,20 @@ fn studio_in_a_real_browser_picks_breeds_and_draws_every_candidate() {
     assert_eq!(session["kept"], serde_json::json!([g2[0], g2[1]]));
     assert!(
         report["refused"].as_str().unwrap().contains("frame rate"),
+        "{report}"
+    );
+    // Auto 1 typed toward descent=0.5: generation 3, from generation 2,
+    // the aim recorded and shown in the history line.
+    let session = s.session();
+    let g3 = &session["generations"][3];
+    assert_eq!(g3["parent"], 2, "{g3}");
+    assert_eq!(g3["auto"], true, "{g3}");
+    assert_eq!(g3["toward"]["descriptors"]["descent"], 0.5, "{g3}");
+    assert!(
+        report["tree"]
+            .as_str()
+            .unwrap()
+            .contains("toward descent=0.5"),
         "{report}"
     );
     // The export: every format of both, the glTF read back at 24 fps
@@ -1302,4 +1369,93 @@ fn studio_with_an_example_fall_shows_it_and_breeds_auto_toward_it() {
     // Reopened, the session shows the same example again.
     let r = Studio::start(&["--resume", out], &session);
     assert_eq!(r.api("/api/state", "")["example"], state["example"]);
+}
+
+/// Auto N toward descriptors the person types: a name the classifier does
+/// not describe is refused naming it; "descent=D" breeds each generation
+/// from a pool of three grids' worth, keeps the grid's worth closest to
+/// D, and picks the next parents by that distance, so the grid's descent
+/// speeds move toward D.
+#[test]
+fn studio_auto_breeds_toward_typed_descriptors() {
+    let dir = scratch("studio-toward");
+    let s = start_in(&dir, "6");
+    for body in [
+        "{\"generations\": 1, \"toward\": \"wobble=3\"}",
+        "{\"generations\": 1, \"toward\": \"descent\"}",
+        "{\"generations\": 1, \"toward\": \"descent=fast\"}",
+    ] {
+        let (status, reason) = s.call("POST", "/api/auto", body);
+        assert_eq!(status, 400, "{body}: {reason}");
+        assert!(reason.contains("auto toward"), "{reason}");
+    }
+    let descents = |g: usize| -> Vec<f64> {
+        read_json(&dir.join(format!("gen-{g:03}.json")))
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter_map(|c| c["evaluation"]["descent_m_s"].as_f64())
+            .collect()
+    };
+    let first = descents(0);
+    // A target well below every descent of the first grid.
+    let target = 0.5 * first.iter().cloned().fold(f64::INFINITY, f64::min);
+    let body = format!("{{\"generations\": 2, \"toward\": \"descent={target}\"}}");
+    let (status, text) = s.call("POST", "/api/auto", &body);
+    assert_eq!(status, 202, "{text}");
+    s.finish_breed();
+    let gens = s.session()["generations"].as_array().unwrap().clone();
+    assert_eq!(gens.len(), 3);
+    for g in &gens[1..] {
+        assert_eq!(g["auto"], true, "{g}");
+        assert_eq!(g["toward"]["descriptors"]["descent"], target, "{g}");
+        assert!(g.get("example").is_none(), "{g}");
+    }
+    assert_eq!(s.session()["next_id"], 4 + 2 * 3 * 4);
+    let closest = two_best(&read_json(&dir.join("gen-001.json")), |e| {
+        -e["distance"].as_f64().unwrap_or(f64::INFINITY)
+    });
+    assert_eq!(gens[2]["picks"], serde_json::json!(closest));
+    let off = |d: &[f64]| {
+        let mut e: Vec<f64> = d.iter().map(|v| (v - target).abs()).collect();
+        e.sort_by(f64::total_cmp);
+        e[e.len() / 2]
+    };
+    let (before, after) = (off(&first), off(&descents(2)));
+    assert!(
+        after < before,
+        "median |descent − {target}|: {before} in generation 0, {after} in generation 2"
+    );
+    let state = s.api("/api/state", "");
+    let tree = &state["tree"];
+    assert_eq!(
+        tree[2]["toward"]["descriptors"]["descent"], target,
+        "{tree}"
+    );
+    assert_eq!(tree[2]["toward"]["source"], "features", "{tree}");
+
+    // Toward a candidate's fall: its shown drop's descriptors, for every
+    // generation of the Auto; not both, and only a candidate on the grid.
+    let id = state["generation"]["ids"][0].as_u64().unwrap();
+    for body in [
+        format!("{{\"generations\": 1, \"like\": {id}, \"toward\": \"descent=1\"}}"),
+        "{\"generations\": 1, \"like\": 999999}".to_string(),
+    ] {
+        let (status, reason) = s.call("POST", "/api/auto", &body);
+        assert_eq!(status, 400, "{body}: {reason}");
+    }
+    let (status, text) = s.call(
+        "POST",
+        "/api/auto",
+        &format!("{{\"generations\": 2, \"like\": {id}}}"),
+    );
+    assert_eq!(status, 202, "{text}");
+    s.finish_breed();
+    let gens = s.session()["generations"].as_array().unwrap().clone();
+    assert_eq!(gens.len(), 5);
+    for g in &gens[3..] {
+        assert_eq!(g["toward"]["source"], format!("leaf-{id}"), "{g}");
+        assert_eq!(g["toward"]["descriptors"], gens[3]["toward"]["descriptors"]);
+    }
+    assert_eq!(gens[3]["parent"], 2);
 }
