@@ -29,6 +29,7 @@
 //! exponent). Output is therefore deterministic byte for byte, and
 //! write → read is exact.
 
+use crate::util::setting::Setting;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -680,11 +681,16 @@ impl Trajectory {
                 file: file(),
                 found,
                 problem: format!(
-                    "no column `{name}`, the vertical (--up {name}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
+                    "no column `{name}`, the vertical ({}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
+                    Setting::Up.set(name),
                     if up == UpAxis::Z {
-                        " (with --up y, or --up=-y where it points down, `y` is the vertical)"
+                        format!(
+                            " (with {}, or {} where it points down, `y` is the vertical)",
+                            Setting::Up.set("y"),
+                            Setting::Up.set("-y")
+                        )
                     } else {
-                        ""
+                        String::new()
                     }
                 ),
             });
@@ -1150,7 +1156,7 @@ mod tests {
         );
         assert_err(
             "t,x,y,area1\n0,0,0,1\n",
-            &["line 1", "no column `z`, the vertical", "with --up y"],
+            &["line 1", "no column `z`, the vertical", "with up = y"],
         );
         assert_err("t,z\n0,1\n", &["line 1", "no column `x`, `y`"]);
         assert_err(

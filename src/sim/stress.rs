@@ -19,6 +19,7 @@ use crate::physics::params::Integrator;
 use crate::physics::stability::{self, AUTO_SAFETY};
 use crate::physics::state::State;
 use crate::sim::drop;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt;
@@ -552,8 +553,9 @@ pub fn run_case(
                         format!(
                             "refused at step 0: dt = {:.3e} s exceeds the stability estimate \
                              dt_max = {m:.3e} s of {integrator} (limited at particle {limiting}); \
-                             use --explicit substep, a smaller dt or the implicit integrator",
-                            case.dt
+                             use {}, a smaller dt or the implicit integrator",
+                            case.dt,
+                            Setting::Explicit.set("substep")
                         ),
                     );
                     return row;

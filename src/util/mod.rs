@@ -8,5 +8,6 @@ pub mod io;
 pub mod named;
 pub mod number;
 pub mod pipe;
+pub mod setting;
 pub mod svg;
 pub mod toml_lines;

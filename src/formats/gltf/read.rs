@@ -10,6 +10,7 @@ use crate::formats::error::ExportError;
 use crate::formats::sampling::{check_points, key_rate, sampled_frames};
 use crate::formats::skin::{self, Influences};
 use crate::util::confined::ReadScope;
+use crate::util::setting::Setting;
 use gltf::accessor::DataType::{F32, U8, U16, U32};
 use gltf::accessor::Dimensions;
 use gltf::animation::util::ReadOutputs;
@@ -152,10 +153,11 @@ fn named_animation(doc: &gltf::Document, want: &str) -> Result<usize, String> {
         .or_else(|| want.parse::<usize>().ok().filter(|&k| k < count))
         .ok_or_else(|| {
             if count == 0 {
-                format!("--animation {want}: it holds no animation")
+                format!("{}: it holds no animation", Setting::Animation.set(want))
             } else {
                 format!(
-                    "--animation {want}: no animation of that name; it holds {}",
+                    "{}: no animation of that name; it holds {}",
+                    Setting::Animation.set(want),
                     animation_names(doc.animations())
                 )
             }
@@ -198,11 +200,12 @@ fn check_one_take(doc: &gltf::Document) -> Result<(), String> {
                 })
                 .collect();
             return Err(format!(
-                "{} of its animations move node `{}` ({}): name the one to read with --animation NAME",
+                "{} of its animations move node `{}` ({}): name the one to read with {}",
                 moving.len(),
                 node.name()
                     .map_or_else(|| format!("#{}", node.index()), str::to_string),
-                animation_names(moving.into_iter())
+                animation_names(moving.into_iter()),
+                Setting::Animation.set("NAME")
             ));
         }
     }

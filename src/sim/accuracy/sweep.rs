@@ -15,6 +15,7 @@ use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::stability;
 use crate::physics::state::State;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 
@@ -304,8 +305,10 @@ pub fn sweep(
     if let Some(next_s) = over_budget {
         warnings.push(format!(
             "reference refinement stopped at h_ref/2 = {:.3e} s: the next halving would take \
-             about {next_s:.0} s, past the {:.0} s allowed; --reference-j pins a finer one",
-            reference.dt, settings.refine_budget_s
+             about {next_s:.0} s, past the {:.0} s allowed; {} pins a finer one",
+            reference.dt,
+            settings.refine_budget_s,
+            Setting::ReferenceJ
         ));
     }
     if !reference_valid {
