@@ -864,6 +864,10 @@ struct MeshData {
     unread: Vec<String>,
 }
 
+/// How many JOINTS_n / WEIGHTS_n sets a primitive has, and each vertex's
+/// joints and weights from them.
+type SkinSets = (u32, Vec<Vec<usize>>, Vec<Vec<f64>>);
+
 /// Every JOINTS_n / WEIGHTS_n set of primitive `prim` of skinned `node`,
 /// four influences each: how many sets, and each of its `n` vertices'
 /// joints and weights.
@@ -872,7 +876,7 @@ fn skin_sets(
     prim: &gltf::Primitive<'_>,
     n: usize,
     reading: &Reading<'_>,
-) -> Result<(u32, Vec<Vec<usize>>, Vec<Vec<f64>>), ExportError> {
+) -> Result<SkinSets, ExportError> {
     let reader = prim.reader(reading.get());
     let mut set = 0;
     let (mut j, mut w) = (vec![Vec::new(); n], vec![Vec::new(); n]);
