@@ -11,6 +11,7 @@
 use super::evaluate::evaluate;
 use super::population::{BreedError, Evaluation, Job, Plan, Progress, io_err};
 use super::shard::{self, Problem, Split};
+use crate::util::setting::Setting;
 use rayon::prelude::*;
 use std::collections::BTreeMap;
 use std::fs::OpenOptions;
@@ -362,9 +363,12 @@ impl Launcher for Merge {
         );
         Err(BreedError::Shards(format!(
             "generation {generation}: shards {missing:?} of {count} are missing or invalid ({} and so on); \
-             run them (leafmagic shard {} --generation {generation} --index I --count {count}), then merge again",
+             run those shards of {} ({}, {}, {}), then merge again",
             first.display(),
-            run_dir.display()
+            run_dir.display(),
+            Setting::Generation.set(generation),
+            Setting::Index.set("I"),
+            Setting::Count.set(count)
         )))
     }
 }

@@ -22,12 +22,11 @@ use crate::leaf::genome::Genome;
 use crate::motion::trajectory::Trajectory;
 use crate::physics::model::Model;
 use crate::physics::params::TimeStep;
-use crate::physics::run::{
-    Command as RunCommand, MAX_BREED_WORK, Work, check_budget, resolve_step,
-};
+use crate::physics::run::{MAX_BREED_WORK, RunKind, Work, check_budget, resolve_step};
 use crate::sim::accuracy::{ErrorEstimate, error_estimate};
 use crate::sim::drop::{DropParams, FRAME_RATE, drop_leaf};
 use crate::util::io::write_atomic;
+use crate::util::setting::Setting;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -96,12 +95,16 @@ pub struct StartLeaves {
 /// The leaves a new run of `proto` can start from in the earlier `run`
 /// (opened with [`Run::load`]): the cells of its MAP-Elites archive when
 /// it kept one, else its last generation ranked, diverged leaves left
-/// out. Refused, naming `--start-from` and the directory, when the run has
+/// out. Refused, naming the setting ([`Setting::StartFrom`]) and the directory, when the run has
 /// no completed generation or its leaves are not variants of a prototype
 /// shaped as `proto` (folds, particles, stiffness groups).
 pub fn start_leaves(run: &Run, proto: &LeafSpec) -> Result<StartLeaves, BreedError> {
-    let refuse =
-        |why: String| BreedError::Refused(format!("--start-from {}: {why}", run.dir.display()));
+    let refuse = |why: String| {
+        BreedError::Refused(format!(
+            "{}: {why}",
+            Setting::StartFrom.set(run.dir.display())
+        ))
+    };
     let cp = run
         .checkpoint
         .as_ref()
@@ -155,8 +158,9 @@ fn prototype_step(
     seconds: f64,
 ) -> Result<(Model, f64), BreedError> {
     let integrator = DropParams::default().integrator;
-    let refuse =
-        |e: &dyn std::fmt::Display| BreedError::Refused(format!("--prototype {source}: {e}"));
+    let refuse = |e: &dyn std::fmt::Display| {
+        BreedError::Refused(format!("{}: {e}", Setting::Prototype.set(source)))
+    };
     let model = proto.model().map_err(|e| refuse(&e))?;
     let dt = resolve_step(&model, integrator, TimeStep::Auto, 1.0 / FRAME_RATE)
         .map_err(|e| refuse(&e))?;
@@ -173,8 +177,13 @@ fn check_run_work(
     limit: f64,
 ) -> Result<(Model, Work), BreedError> {
     let (model, work) = run_work(proto, settings)?;
-    work.check(&model, 1.0 / FRAME_RATE, limit, RunCommand::Breed)
-        .map_err(|e| BreedError::Refused(format!("--prototype {}: {e}", settings.prototype)))?;
+    work.check(&model, 1.0 / FRAME_RATE, limit, RunKind::Breed)
+        .map_err(|e| {
+            BreedError::Refused(format!(
+                "{}: {e}",
+                Setting::Prototype.set(&settings.prototype)
+            ))
+        })?;
     Ok((model, work))
 }
 
@@ -239,8 +248,9 @@ fn prototype_error(proto: &LeafSpec, source: &str) -> Result<ErrorEstimate, Bree
     let seconds = (ERROR_ESTIMATE_SECONDS / dt).round().max(1.0) * dt;
     error_estimate(&model, DropParams::default().integrator, dt, seconds).map_err(|e| {
         BreedError::Refused(format!(
-            "--prototype {source}: the prototype's own fall, which run.toml records as the \
-             run's error estimate, failed: {e}"
+            "{}: the prototype's own fall, which run.toml records as the \
+             run's error estimate, failed: {e}",
+            Setting::Prototype.set(source)
         ))
     })
 }
@@ -303,32 +313,35 @@ impl Run {
     ) -> Result<Run, BreedError> {
         settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
-            .map_err(|e| BreedError::Refused(format!("--prototype: {e}")))?;
+            .map_err(|e| BreedError::Refused(format!("{}: {e}", Setting::Prototype)))?;
         // Every variant lies within the bounds, and generation 0 and CMA-ES
         // start from the prototype: bounds that exclude it define no search.
         Genome::of_prototype(&proto).check(&proto).map_err(|e| {
             BreedError::Refused(format!(
-                "--prototype {}: its [bounds] exclude the prototype itself: {e}; widen the \
+                "{}: its [bounds] exclude the prototype itself: {e}; widen the \
                  bounds to contain the prototype's own genes (fold angles as the file gives \
                  them, factor 1 for masses, stiffness and size)",
-                settings.prototype
+                Setting::Prototype.set(&settings.prototype)
             ))
         })?;
         if dir.join(RUN_FILE).exists() {
             let existing = Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?;
             if existing.settings != settings {
                 return Err(BreedError::Refused(format!(
-                    "{} holds a different run (its run.toml has other settings); choose another --out or --resume it",
-                    dir.display()
+                    "{} holds a different run (its run.toml has other settings); choose another {} or {} it",
+                    dir.display(),
+                    Setting::Out,
+                    Setting::Resume
                 )));
             }
             return Ok(existing);
         }
         if dir.exists() && !dir.is_dir() {
             return Err(BreedError::Refused(format!(
-                "--out {}: is a file, not a directory; a run directory is a folder (created if \
-                 absent): name another --out or remove the file",
-                dir.display()
+                "{}: is a file, not a directory; a run directory is a folder (created if \
+                 absent): name another {} or remove the file",
+                Setting::Out.set(dir.display()),
+                Setting::Out
             )));
         }
         if dir.exists() {
@@ -474,10 +487,10 @@ impl Run {
             (_, Some(Finding::Replay(d) | Finding::Rewrite(d))) => Err(BreedError::File {
                 path: d.file.clone(),
                 message: format!(
-                    "{}: {}; `leafmagic breed --resume {}` recomputes it",
+                    "{}: {}; resuming the run (`{}`) recomputes it",
                     d.field,
                     d.reason,
-                    dir.display()
+                    Setting::Resume.set(dir.display())
                 ),
             }),
         }
@@ -491,22 +504,23 @@ impl Run {
             // Said for every reader of a run (resume, --start-from,
             // export, merge, shard, preview), not as a resume's.
             return Err(BreedError::Refused(format!(
-                "{}: {}; a breeding run's directory (what `breed` wrote: its --out) is needed",
+                "{}: {}; a breeding run's directory (what breeding wrote: its {}) is needed",
                 dir.display(),
                 if dir.exists() {
                     "is a file, not a run directory"
                 } else {
                     "no such directory"
-                }
+                },
+                Setting::Out
             )));
         }
         if !path.exists() {
             return Err(BreedError::Refused(format!(
                 "{}: no run.toml, so no run was set up there: a run stopped before it wrote \
                  run.toml has bred nothing and cannot be resumed; start it again with the same \
-                 settings and `--out {}` (a directory that is empty but for temporaries is reused)",
+                 settings and `{}` (a directory that is empty but for temporaries is reused)",
                 dir.display(),
-                dir.display()
+                Setting::Out.set(dir.display())
             )));
         }
         let run_toml = std::fs::read(&path).map_err(|e| io_err(&path, e))?;

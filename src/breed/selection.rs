@@ -129,6 +129,39 @@ pub fn uniform<R: rand::Rng + ?Sized>(template: &Genome, bounds: &Bounds, rng: &
     template.with_coordinates(bounds, &u)
 }
 
+/// Generation 0's children: copies of the prototype with the first round's
+/// variation, an earlier run's leaves where the run starts from one, and
+/// (all of them for random search) uniform draws over `bounds`.
+fn first_children(s: &BreedSettings, proto: &LeafSpec, bounds: &Bounds) -> Vec<Child> {
+    // Generation 0: copies of the prototype with the first round's
+    // variation, and (all of it for random search) uniform draws
+    // over the bounds.
+    let g0 = Genome::of_prototype(proto);
+    let copies = initial_copies(s);
+    let start = start_places(s.start.len(), copies);
+    (0..s.population as u64)
+        .map(|id| {
+            let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
+            let genome = if let Some(k) = start.get(id as usize) {
+                // An earlier run's leaf, as it was, moved into
+                // this run's bounds where they are narrower
+                // (a --like run holds stiffness at 1).
+                s.start[*k].clamped(bounds)
+            } else if (id as usize) < copies {
+                mutate(&g0, bounds, s.initial_scale, &mut rng)
+            } else {
+                uniform(&g0, bounds, &mut rng)
+            };
+            Child {
+                id,
+                parent: None,
+                genome,
+                parent_score: f64::NAN,
+            }
+        })
+        .collect()
+}
+
 /// The next generation before evaluation: its children, derived
 /// deterministically from the checkpoint (none: generation 0, copies of
 /// the prototype), and the elites it keeps. Every random draw comes from
@@ -138,33 +171,7 @@ pub fn plan(s: &BreedSettings, proto: &LeafSpec, checkpoint: Option<&Checkpoint>
     let bounds = search_bounds(s, proto);
     let (generation, scale, next_id, children, model_children, cma_children) = match checkpoint {
         None => {
-            // Generation 0: copies of the prototype with the first round's
-            // variation, and (all of it for random search) uniform draws
-            // over the bounds.
-            let g0 = Genome::of_prototype(proto);
-            let copies = initial_copies(s);
-            let start = start_places(s.start.len(), copies);
-            let children: Vec<Child> = (0..s.population as u64)
-                .map(|id| {
-                    let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(s.seed, 0, id));
-                    let genome = if let Some(k) = start.get(id as usize) {
-                        // An earlier run's leaf, as it was, moved into
-                        // this run's bounds where they are narrower
-                        // (a --like run holds stiffness at 1).
-                        s.start[*k].clamped(&bounds)
-                    } else if (id as usize) < copies {
-                        mutate(&g0, &bounds, s.initial_scale, &mut rng)
-                    } else {
-                        uniform(&g0, &bounds, &mut rng)
-                    };
-                    Child {
-                        id,
-                        parent: None,
-                        genome,
-                        parent_score: f64::NAN,
-                    }
-                })
-                .collect();
+            let children = first_children(s, proto, &bounds);
             (0, s.initial_scale, s.population as u64, children, 0, 0)
         }
         Some(cp) => {

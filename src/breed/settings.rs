@@ -3,6 +3,7 @@
 use crate::leaf::genome::Genome;
 use crate::motion::classify::MotionClass;
 use crate::motion::describe::MotionTarget;
+use crate::util::setting::Setting;
 use serde::{Deserialize, Serialize};
 
 /// Release attitudes per individual by default: the issue's 4, enough for a
@@ -107,29 +108,34 @@ impl BreedSettings {
     pub fn validate(&self) -> Result<(), SettingsError> {
         if self.population < 2 {
             return Err(SettingsError(format!(
-                "--population must be at least 2, got {}",
+                "{} must be at least 2, got {}",
+                Setting::Population,
                 self.population
             )));
         }
         if self.generations == 0 {
-            return Err(SettingsError(
-                "--generations must be at least 1".to_string(),
-            ));
+            return Err(SettingsError(format!(
+                "{} must be at least 1",
+                Setting::Generations
+            )));
         }
         if self.target == MotionClass::Undetermined {
-            return Err(SettingsError(
-                "--target must be floater, spinner or lilter".to_string(),
-            ));
+            return Err(SettingsError(format!(
+                "{} must be floater, spinner or lilter",
+                Setting::Target
+            )));
         }
         if !(self.seconds > 0.0 && self.seconds.is_finite()) {
             return Err(SettingsError(format!(
-                "--seconds must be a positive number, got {}",
+                "{} must be a positive number, got {}",
+                Setting::Duration,
                 self.seconds
             )));
         }
         if !(self.initial_scale > 0.0 && self.initial_scale.is_finite()) {
             return Err(SettingsError(format!(
-                "--initial-scale must be a positive number, got {}",
+                "{} must be a positive number, got {}",
+                Setting::InitialScale,
                 self.initial_scale
             )));
         }
@@ -140,16 +146,17 @@ impl BreedSettings {
             )));
         }
         if self.releases == 0 {
-            return Err(SettingsError(
-                "--releases must be at least 1 (each leaf is dropped from that many release \
-                 attitudes and scored on their median; the default is 4)"
-                    .to_string(),
-            ));
+            return Err(SettingsError(format!(
+                "{} must be at least 1 (each leaf is dropped from that many release \
+                 attitudes and scored on their median; the default is 4)",
+                Setting::Releases
+            )));
         }
         if self.releases > MAX_RELEASES {
             return Err(SettingsError(format!(
-                "--releases must be at most {MAX_RELEASES}, got {} (every release is one more \
+                "{} must be at most {MAX_RELEASES}, got {} (every release is one more \
                  drop of every leaf)",
+                Setting::Releases,
                 self.releases
             )));
         }
@@ -159,10 +166,12 @@ impl BreedSettings {
             ));
         }
         if !self.start.is_empty() && self.strategy == Strategy::Random {
-            return Err(SettingsError(
-                "--start-from cannot be used with --strategy random: random search draws every                  leaf uniformly over the bounds, it starts from nothing"
-                    .to_string(),
-            ));
+            return Err(SettingsError(format!(
+                "{} cannot be used with {}: random search draws every leaf uniformly over the \
+                 bounds, it starts from nothing",
+                Setting::StartFrom,
+                Setting::Strategy.set("random")
+            )));
         }
         Ok(())
     }
@@ -204,9 +213,9 @@ impl std::fmt::Display for Strategy {
     }
 }
 
-/// A `--strategy` that names none.
+/// A strategy's name that names none.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("--strategy: unknown strategy '{0}'; known: ga, cmaes, hybrid, random")]
+#[error("{strategy}: unknown strategy '{name}'; known: ga, cmaes, hybrid, random", strategy = Setting::Strategy, name = .0)]
 pub struct UnknownStrategy(pub String);
 
 impl std::str::FromStr for Strategy {

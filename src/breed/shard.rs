@@ -23,6 +23,7 @@
 
 use super::population::{Child, Evaluation, Plan};
 use crate::util::hash::fnv1a64_hex;
+use crate::util::setting::Setting;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -367,8 +368,13 @@ pub fn resolve_split(
         }
     };
     if let Some(index) = index {
-        let count = count.ok_or_else(|| SplitError("--index needs --count".to_string()))?;
-        return check(index, count, "--index/--count");
+        let count = count
+            .ok_or_else(|| SplitError(format!("{} needs {}", Setting::Index, Setting::Count)))?;
+        return check(
+            index,
+            count,
+            &format!("{}/{}", Setting::Index, Setting::Count),
+        );
     }
     let num = |name: &str| -> Result<Option<usize>, SplitError> {
         match var(name) {
@@ -422,13 +428,13 @@ pub fn resolve_split(
         found.retain(|f| !f.single_step);
     }
     let Some(first) = found.first() else {
-        return Err(SplitError(
-            "no shard index: pass --index and --count, or run under srun \
-                    (SLURM_PROCID, SLURM_NTASKS), in a Slurm job array (SLURM_ARRAY_TASK_ID), \
-                    a Kubernetes Indexed Job (JOB_COMPLETION_INDEX, with --count) or an AWS \
-                    Batch array job (AWS_BATCH_JOB_ARRAY_INDEX, with --count)"
-                .to_string(),
-        ));
+        let (index, count) = (Setting::Index, Setting::Count);
+        return Err(SplitError(format!(
+            "no shard index: pass {index} and {count}, or run under srun \
+             (SLURM_PROCID, SLURM_NTASKS), in a Slurm job array (SLURM_ARRAY_TASK_ID), \
+             a Kubernetes Indexed Job (JOB_COMPLETION_INDEX, with {count}) or an AWS \
+             Batch array job (AWS_BATCH_JOB_ARRAY_INDEX, with {count})"
+        )));
     };
     let names = found
         .iter()
@@ -437,7 +443,9 @@ pub fn resolve_split(
         .join(", ");
     if found.iter().any(|f| f.index != first.index) {
         return Err(SplitError(format!(
-            "contradictory shard index: {names}; pass --index and --count"
+            "contradictory shard index: {names}; pass {} and {}",
+            Setting::Index,
+            Setting::Count
         )));
     }
     let count = match count {
@@ -447,12 +455,14 @@ pub fn resolve_split(
             match counts.first() {
                 None => {
                     return Err(SplitError(format!(
-                        "{names} gives the shard index but not the count: pass --count"
+                        "{names} gives the shard index but not the count: pass {}",
+                        Setting::Count
                     )));
                 }
                 Some(&c) if counts.iter().any(|&d| d != c) => {
                     return Err(SplitError(format!(
-                        "contradictory shard count: {names}; pass --count"
+                        "contradictory shard count: {names}; pass {}",
+                        Setting::Count
                     )));
                 }
                 Some(&c) => c,
@@ -520,7 +530,7 @@ mod tests {
         let r = |i, c, e: &[(&str, &str)]| resolve_split(i, c, env(e)).unwrap_err().0;
         assert!(r(None, None, &[]).contains("no shard index"));
         assert!(r(None, Some(3), &[]).contains("no shard index"));
-        assert!(r(None, None, &[("JOB_COMPLETION_INDEX", "1")]).contains("--count"));
+        assert!(r(None, None, &[("JOB_COMPLETION_INDEX", "1")]).contains("count"));
         let e = r(
             None,
             None,
@@ -557,7 +567,7 @@ mod tests {
             r(None, Some(2), &[("JOB_COMPLETION_INDEX", "x")]).contains("JOB_COMPLETION_INDEX")
         );
         assert!(r(Some(0), Some(0), &[]).contains("at least 1"));
-        assert!(r(Some(0), None, &[]).contains("--count"));
+        assert!(r(Some(0), None, &[]).contains("count"));
     }
 
     fn eval(score: f64) -> Evaluation {

@@ -179,6 +179,20 @@ pub(crate) fn check_checkpoint(
     run_toml: &[u8],
     file: &Path,
 ) -> Result<(), Damage> {
+    check_run_file(cp, settings, run_toml, file)?;
+    check_history(cp, settings, file)?;
+    check_population(cp, settings, proto, file)?;
+    check_strategy_state(cp, settings, proto, file)?;
+    check_archive(cp, proto, file)
+}
+
+/// The run.toml a checkpoint names: its content hash and its settings.
+fn check_run_file(
+    cp: &Checkpoint,
+    settings: &BreedSettings,
+    run_toml: &[u8],
+    file: &Path,
+) -> Result<(), Damage> {
     let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     // run.toml first: a checkpoint cannot repair the run's definition, so a
     // run.toml that changed under it is refused (a damage of run.toml).
@@ -211,6 +225,12 @@ pub(crate) fn check_checkpoint(
              another run, or run.toml was edited; restore it, or start a new run",
         ));
     }
+    Ok(())
+}
+
+/// The generation and one finite summary for each generation up to it.
+fn check_history(cp: &Checkpoint, settings: &BreedSettings, file: &Path) -> Result<(), Damage> {
+    let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     if cp.generation >= settings.generations {
         return bad(
             "generation".into(),
@@ -251,6 +271,17 @@ pub(crate) fn check_checkpoint(
             }
         }
     }
+    Ok(())
+}
+
+/// The population: its size, variation scale, increasing ids and members.
+fn check_population(
+    cp: &Checkpoint,
+    settings: &BreedSettings,
+    proto: &LeafSpec,
+    file: &Path,
+) -> Result<(), Damage> {
+    let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     if cp.population.len() != settings.population {
         return bad(
             "population".into(),
@@ -298,6 +329,18 @@ pub(crate) fn check_checkpoint(
             ),
         );
     }
+    Ok(())
+}
+
+/// The strategy's state: only where the strategy keeps one, and one that
+/// can go on.
+fn check_strategy_state(
+    cp: &Checkpoint,
+    settings: &BreedSettings,
+    proto: &LeafSpec,
+    file: &Path,
+) -> Result<(), Damage> {
+    let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     // The strategy's state: only where the strategy keeps one, and one
     // that can go on (its dimension the genome's, its numbers sane).
     if let Some(state) = &cp.cmaes {
@@ -325,6 +368,13 @@ pub(crate) fn check_checkpoint(
             "missing: a cmaes run holds its CMA-ES state from generation 0 on".to_string(),
         );
     }
+    Ok(())
+}
+
+/// The archive: cells that exist, generations up to the checkpoint's, sane
+/// members.
+fn check_archive(cp: &Checkpoint, proto: &LeafSpec, file: &Path) -> Result<(), Damage> {
+    let bad = |field: String, reason: String| Err(Damage::new(file, field, reason));
     let cells = super::archive::ARCHIVE_DESCENT_EDGES.len();
     for (k, e) in cp.archive.iter().enumerate() {
         if e.descent_bin >= cells || e.spin_bin >= super::archive::ARCHIVE_SPIN_EDGES.len() {

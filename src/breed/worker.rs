@@ -6,6 +6,7 @@ use super::population::{BreedError, Evaluation, io_err};
 use super::run::Run;
 use super::shard::{ShardFile, Split, encode, generation_dir, plan_hash, read_valid, shard_path};
 use crate::util::io::write_atomic;
+use crate::util::setting::Setting;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
@@ -51,8 +52,9 @@ pub fn run_shard(
             },
         );
         return Err(BreedError::Refused(format!(
-            "{}: --generation {generation} cannot be evaluated now: {held}",
-            run_dir.display()
+            "{}: {} cannot be evaluated now: {held}",
+            run_dir.display(),
+            Setting::Generation.set(generation)
         )));
     }
     let plan = run.plan();

@@ -5,7 +5,7 @@
 //! `args` is what each subcommand accepts; `breed`, `drop`, `accuracy`,
 //! `motion`, `scene` and `output` do the commands' work (with `input`, the
 //! loading they share, and `progress`, the bar of `breed`); `report` formats
-//! what a person reads. This file: the top-level parser and the dispatch.
+//! what a person reads, `words` names the library's settings as flags. This file: the top-level parser and the dispatch.
 
 mod accuracy;
 mod args;
@@ -19,6 +19,7 @@ mod progress;
 mod report;
 mod scene;
 mod studio;
+mod words;
 
 use anyhow::Result;
 use args::{
@@ -97,6 +98,8 @@ pub enum Command {
 
 /// Runs the parsed command.
 pub fn run(cli: Cli) -> Result<()> {
+    // The library's messages name settings; here they are flags.
+    leafmagic::util::setting::spell_with(&words::Flags);
     match cli.command {
         Command::Breed(args) => breed::breed(args),
         Command::Export(args) => output::export(args),

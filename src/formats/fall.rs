@@ -41,6 +41,7 @@ use crate::formats::usd::read_usd_file;
 use crate::motion::classify::{Classification, classify};
 use crate::motion::trajectory::{ReadNotes, Trajectory, UpAxis};
 use crate::util::confined::{ReadPolicy, ReadScope};
+use crate::util::setting::Setting;
 use nalgebra::{Matrix3, SymmetricEigen, UnitQuaternion, Vector3};
 use std::path::Path;
 
@@ -151,7 +152,8 @@ pub fn read_fall_in(
             ExportError::input(
                 path,
                 format!(
-                    "--object {want}: no object of that name; it holds {}",
+                    "{}: no object of that name; it holds {}",
+                    Setting::Object.set(want),
                     named(&(0..objects.len()).collect::<Vec<_>>())
                 ),
             )
@@ -173,9 +175,10 @@ pub fn read_fall_in(
                 return Err(ExportError::input(
                     path,
                     format!(
-                        "{} objects move in it ({}): name the one to read with --object NAME",
+                        "{} objects move in it ({}): name the one to read with {}",
                         many.len(),
-                        named(many)
+                        named(many),
+                        Setting::Object.set("NAME")
                     ),
                 ));
             }
@@ -271,16 +274,17 @@ pub fn read_any_fall(
 ) -> Result<RecordedFall, ExportError> {
     let Some(format) = AnimationFormat::of(path) else {
         // Worded as the file's other refusals (see `read_fall_in`), by the
-        // option the command line takes.
+        // setting.
         for (option, given, what) in [
-            ("--object", object, "an object"),
-            ("--animation", animation, "an animation"),
+            (Setting::Object, object, "an object"),
+            (Setting::Animation, animation, "an animation"),
         ] {
             if let Some(given) = given {
                 return Err(ExportError::input(
                     path,
                     format!(
-                        "{option} {given}: a CSV record holds one fall; {option} picks {what} of an animation file (.glb, .gltf, .usd, .abc)"
+                        "{}: a CSV record holds one fall; {option} picks {what} of an animation file (.glb, .gltf, .usd, .abc)",
+                        option.set(given)
                     ),
                 ));
             }
@@ -328,7 +332,9 @@ pub fn read_clip_in(
         return Err(ExportError::input(
             path,
             format!(
-                "--animation {want}: a USD stage or an Alembic archive holds one animation; --animation picks one of a glTF file's"
+                "{}: a USD stage or an Alembic archive holds one animation; {} picks one of a glTF file's",
+                Setting::Animation.set(want),
+                Setting::Animation
             ),
         ));
     }
@@ -670,8 +676,8 @@ mod tests {
         assert_eq!(read.trajectory(), &want);
         assert!((read.trajectory().position[1].z - 0.9).abs() < 1e-12);
         for (object, animation, option) in [
-            (Some("leaf"), None, "--object leaf"),
-            (None, Some("take"), "--animation take"),
+            (Some("leaf"), None, "object = leaf"),
+            (None, Some("take"), "animation = take"),
         ] {
             let e = read_any_fall(&path, units, object, animation, &policy)
                 .unwrap_err()

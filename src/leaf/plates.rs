@@ -5,6 +5,7 @@
 use crate::leaf::{AeroSpec, BendingSpec, LeafSpec, ParticleSpec, SpringSpec, TriangleSpec};
 use crate::physics::model::AIR_DENSITY;
 use crate::physics::model::{Model, STANDARD_GRAVITY};
+use crate::util::setting::Setting;
 use nalgebra::{Matrix3, Vector3};
 
 /// Natural frequency the card's springs and hinges are scaled to, rad/s.
@@ -214,21 +215,30 @@ mod tests {
     }
 
     #[test]
-    fn bad_plates_name_the_flag() {
+    fn bad_plates_name_the_argument() {
         let bad = |s, size, aspect, sigma| {
             plate(s, size, aspect, sigma, AeroSpec::unsteady())
                 .unwrap_err()
                 .field
         };
-        assert_eq!(bad(PlateShape::Square, -0.05, 1.0, 0.07), "--size");
-        assert_eq!(bad(PlateShape::Square, f64::NAN, 1.0, 0.07), "--size");
-        assert_eq!(bad(PlateShape::Square, 0.05, 1.0, 0.0), "--areal-density");
+        assert_eq!(bad(PlateShape::Square, -0.05, 1.0, 0.07), PlateField::Size);
+        assert_eq!(
+            bad(PlateShape::Square, f64::NAN, 1.0, 0.07),
+            PlateField::Size
+        );
+        assert_eq!(
+            bad(PlateShape::Square, 0.05, 1.0, 0.0),
+            PlateField::ArealDensity
+        );
         assert_eq!(
             bad(PlateShape::Square, 0.05, 1.0, f64::INFINITY),
-            "--areal-density"
+            PlateField::ArealDensity
         );
-        assert_eq!(bad(PlateShape::Square, 0.05, 2.0, 0.07), "--aspect");
-        assert_eq!(bad(PlateShape::Rectangle, 0.05, 0.5, 0.07), "--aspect");
+        assert_eq!(bad(PlateShape::Square, 0.05, 2.0, 0.07), PlateField::Aspect);
+        assert_eq!(
+            bad(PlateShape::Rectangle, 0.05, 0.5, 0.07),
+            PlateField::Aspect
+        );
     }
 
     #[test]
@@ -312,10 +322,42 @@ pub const PLATE_RINGS: usize = 8;
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("{field}: {reason}")]
 pub struct PlateError {
-    /// The argument, as the command line names it (`--size`).
-    pub field: String,
+    /// The argument.
+    pub field: PlateField,
     /// Why it is refused.
     pub reason: String,
+}
+
+/// The argument of a plate request that is refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PlateField {
+    /// The size.
+    Size,
+    /// The aspect ratio.
+    Aspect,
+    /// The areal density.
+    ArealDensity,
+    /// Size and areal density together (the particles' masses).
+    SizeAndDensity,
+    /// A flexible plate's bending stiffness.
+    BendingStiffness,
+    /// The mesh's refinement ([`plate_meshed`]).
+    Refine,
+}
+
+impl std::fmt::Display for PlateField {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PlateField::Size => write!(f, "{}", Setting::Size),
+            PlateField::Aspect => write!(f, "{}", Setting::Aspect),
+            PlateField::ArealDensity => write!(f, "{}", Setting::ArealDensity),
+            PlateField::SizeAndDensity => {
+                write!(f, "{} and {}", Setting::Size, Setting::ArealDensity)
+            }
+            PlateField::BendingStiffness => write!(f, "{}", Setting::BendingStiffness),
+            PlateField::Refine => f.write_str("refine"),
+        }
+    }
 }
 
 /// The areal density `sigma` (kg/m²) as a name's tag: grams per square
@@ -368,26 +410,26 @@ pub fn plate_meshed(
 ) -> Result<LeafSpec, PlateError> {
     if refine == 0 {
         return Err(PlateError {
-            field: "refine".to_string(),
+            field: PlateField::Refine,
             reason: "must be at least 1".to_string(),
         });
     }
-    let positive = |field: &str, value: f64, unit: &str| {
+    let positive = |field: PlateField, value: f64, unit: &str| {
         if value.is_finite() && value > 0.0 {
             Ok(())
         } else {
             Err(PlateError {
-                field: field.to_string(),
+                field,
                 reason: format!("must be a finite number > 0 {unit}, got {value}"),
             })
         }
     };
-    positive("--size", size, "m")?;
-    positive("--areal-density", sigma, "kg/m²")?;
-    positive("--aspect", aspect, "")?;
+    positive(PlateField::Size, size, "m")?;
+    positive(PlateField::ArealDensity, sigma, "kg/m²")?;
+    positive(PlateField::Aspect, aspect, "")?;
     if shape != PlateShape::Rectangle && aspect != 1.0 {
         return Err(PlateError {
-            field: "--aspect".to_string(),
+            field: PlateField::Aspect,
             reason: format!(
                 "only a rectangle has an aspect ratio (a {} has 1), got {aspect}",
                 shape.as_str()
@@ -396,7 +438,7 @@ pub fn plate_meshed(
     }
     if shape == PlateShape::Rectangle && aspect < 1.0 {
         return Err(PlateError {
-            field: "--aspect".to_string(),
+            field: PlateField::Aspect,
             reason: format!(
                 "is length over width, at least 1 (size is the short side), got {aspect}"
             ),
@@ -416,7 +458,11 @@ pub fn plate_meshed(
     };
     if particles > MAX_PLATE_PARTICLES as f64 {
         return Err(PlateError {
-            field: if refine > 1 { "refine" } else { "--aspect" }.to_string(),
+            field: if refine > 1 {
+                PlateField::Refine
+            } else {
+                PlateField::Aspect
+            },
             reason: format!(
                 "the plate would be meshed into {particles:.3e} particles, more than the \
                  {MAX_PLATE_PARTICLES} a plate may hold"
@@ -444,7 +490,7 @@ pub fn plate_meshed(
     // 1/m must be finite too: no subnormal mass.
     if !(heaviest.is_finite() && lightest >= f64::MIN_POSITIVE) {
         return Err(PlateError {
-            field: "--size and --areal-density".to_string(),
+            field: PlateField::SizeAndDensity,
             reason: format!(
                 "a {} of {size:e} m at {sigma:e} kg/m² has particles of {lightest:.3e} to \
                  {heaviest:.3e} kg, which f64 cannot hold (from {:.3e} kg to finite)",
@@ -644,12 +690,12 @@ pub const CALIBRATION_DIRECTIONS_DEG: [f64; 4] = [0.0, 45.0, 90.0, 135.0];
 ///   modes the air drives are hardly touched.
 ///
 /// # Errors
-/// A stiffness that is not finite and positive (`--bending-stiffness`), a
+/// A stiffness that is not finite and positive, a
 /// plate that is not flat in the x-y plane or has no shared edge, or a
 /// mesh that bends much more stiffly one way than another.
 pub fn flexible(mut spec: LeafSpec, stiffness: f64) -> Result<LeafSpec, PlateError> {
     let refuse = |reason: String| PlateError {
-        field: "--bending-stiffness".to_string(),
+        field: PlateField::BendingStiffness,
         reason,
     };
     if !(stiffness.is_finite() && stiffness > 0.0) {

@@ -33,6 +33,7 @@
 //! a spinner is not like it). An undetermined fall has no descriptors.
 
 use crate::motion::classify::{Classification, MotionClass, Regime};
+use crate::util::setting::Setting;
 use serde::{Deserialize, Serialize};
 use std::fmt::Write as _;
 
@@ -239,16 +240,18 @@ impl MotionTarget {
         class: Option<MotionClass>,
     ) -> Result<MotionTarget, FeatureError> {
         if class == Some(MotionClass::Undetermined) {
-            return Err(FeatureError(
-                "--target must be floater, spinner or lilter".to_string(),
-            ));
+            return Err(FeatureError(format!(
+                "{} must be floater, spinner or lilter",
+                Setting::Target
+            )));
         }
         let mut descriptors = std::collections::BTreeMap::new();
         let mut unknown = Vec::new();
         for item in text.split(',').map(str::trim).filter(|s| !s.is_empty()) {
             let Some((name, value)) = item.split_once('=') else {
                 return Err(FeatureError(format!(
-                    "--target-features: '{item}' is not NAME=VALUE (names: {})",
+                    "{}: '{item}' is not NAME=VALUE (names: {})",
+                    Setting::TargetFeatures,
                     NAMES.join(", ")
                 )));
             };
@@ -263,14 +266,16 @@ impl MotionTarget {
                 .filter(|v: &f64| v.is_finite() && *v >= 0.0)
                 .ok_or_else(|| {
                     FeatureError(format!(
-                        "--target-features: {name}: '{value}' is not a number ≥ 0"
+                        "{}: {name}: '{value}' is not a number ≥ 0",
+                        Setting::TargetFeatures
                     ))
                 })?;
             descriptors.insert(name.to_string(), v);
         }
         if !unknown.is_empty() {
             return Err(FeatureError(format!(
-                "--target-features: unknown descriptor{} {}; known: {}",
+                "{}: unknown descriptor{} {}; known: {}",
+                Setting::TargetFeatures,
                 if unknown.len() > 1 { "s" } else { "" },
                 unknown.join(", "),
                 NAMES.join(", ")
@@ -278,7 +283,8 @@ impl MotionTarget {
         }
         if descriptors.is_empty() {
             return Err(FeatureError(format!(
-                "--target-features: set at least one descriptor ({})",
+                "{}: set at least one descriptor ({})",
+                Setting::TargetFeatures,
                 NAMES.join(", ")
             )));
         }

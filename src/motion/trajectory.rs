@@ -29,6 +29,7 @@
 //! exponent). Output is therefore deterministic byte for byte, and
 //! write → read is exact.
 
+use crate::util::setting::Setting;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -616,31 +617,7 @@ impl Trajectory {
             .delimiter(separator)
             .from_reader(text.as_slice());
         let mut records = rdr.records();
-        let csv_err = |e: csv::Error| -> TrajectoryError {
-            let line = e.position().map_or(0, |p| lines.line_at(p.byte()));
-            match e.into_kind() {
-                csv::ErrorKind::Io(error) => TrajectoryError::Io {
-                    file: file(),
-                    error,
-                },
-                // Said as a sentence, not the CSV reader's debug form.
-                csv::ErrorKind::Utf8 { pos, err } => TrajectoryError::Csv {
-                    file: file(),
-                    line: pos.map_or(line, |p| lines.line_at(p.byte())),
-                    message: format!(
-                        "field {} is not UTF-8 text (bad byte after {} valid bytes of the field); \
-                         a trajectory CSV is plain text: save it as UTF-8 or ASCII",
-                        err.field() + 1,
-                        err.valid_up_to()
-                    ),
-                },
-                kind => TrajectoryError::Csv {
-                    file: file(),
-                    line,
-                    message: format!("{kind:?}"),
-                },
-            }
-        };
+        let csv_err = |e: csv::Error| csv_error(e, &lines, source);
 
         // Header.
         let header = loop {
@@ -670,25 +647,7 @@ impl Trajectory {
             found: found.clone(),
             problem,
         })?;
-        let vertical = match up {
-            UpAxis::Z => 2,
-            UpAxis::Y | UpAxis::YDown => 1,
-        };
-        if missing_position == Some(vertical) {
-            let name = REQUIRED_COLUMNS[1 + vertical];
-            return Err(TrajectoryError::WrongHeader {
-                file: file(),
-                found,
-                problem: format!(
-                    "no column `{name}`, the vertical (--up {name}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
-                    if up == UpAxis::Z {
-                        " (with --up y, or --up=-y where it points down, `y` is the vertical)"
-                    } else {
-                        ""
-                    }
-                ),
-            });
-        }
+        check_vertical(missing_position, up, source, &found)?;
         let quaternion = columns.iter().any(|c| matches!(c, Column::Quaternion(_)));
 
         let mut traj = Trajectory {
@@ -737,41 +696,12 @@ impl Trajectory {
                 l.last_line = line;
                 continue;
             }
-            let (mut t, mut p, mut q) = (0.0f64, [0.0f64; 3], [0.0f64; 4]);
-            for (k, field) in rec.iter().enumerate() {
-                let col = columns[k];
-                if col == Column::Ignored {
-                    continue;
-                }
-                let decimal = if decimal_comma {
-                    std::borrow::Cow::Owned(field.replace(',', "."))
-                } else {
-                    std::borrow::Cow::Borrowed(field)
-                };
-                let x: f64 = decimal.parse().map_err(|_| TrajectoryError::Number {
-                    file: file(),
-                    line,
-                    row,
-                    column: names[k].to_string(),
-                    text: field.to_string(),
-                })?;
-                if !x.is_finite() {
-                    return Err(TrajectoryError::NonFinite {
-                        file: file(),
-                        line,
-                        row,
-                        column: names[k].to_string(),
-                        value: x,
-                    });
-                }
-                match col {
-                    Column::Time => t = x,
-                    Column::Position(i) => p[i] = x,
-                    Column::Quaternion(i) => q[i] = x,
-                    Column::Area(i) => traj.areas[i].values.push(x),
-                    Column::Ignored => {}
-                }
-            }
+            let at = Where {
+                file: source,
+                line,
+                row,
+            };
+            let (t, p, q) = parse_row(&rec, &columns, &names, decimal_comma, at, &mut traj.areas)?;
             if let Some(&previous) = traj.time.last()
                 && t <= previous
             {
@@ -785,21 +715,7 @@ impl Trajectory {
             }
             let position = Vector3::new(p[0], p[1], p[2]);
             if quaternion {
-                let q = Quaternion::new(q[0], q[1], q[2], q[3]);
-                let norm = q.norm();
-                if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
-                    return Err(TrajectoryError::NonUnitQuaternion {
-                        file: file(),
-                        line,
-                        row,
-                        norm,
-                    });
-                }
-                let q = if (norm - 1.0).abs() <= UNIT_EXACT_TOLERANCE {
-                    UnitQuaternion::new_unchecked(q)
-                } else {
-                    UnitQuaternion::new_normalize(q)
-                };
+                let q = unit_quaternion(q, at)?;
                 traj.push(t, position, q);
             } else {
                 traj.push_position(t, position);
@@ -1066,6 +982,157 @@ fn slerp_short(a: &UnitQuaternion<f64>, b: &UnitQuaternion<f64>, s: f64) -> Unit
     UnitQuaternion::new_normalize(Quaternion::from(v))
 }
 
+/// A CSV reader's error, said with the line it is on (`lines` counts them
+/// in the text of `source`).
+fn csv_error(e: csv::Error, lines: &LineCounter, source: &str) -> TrajectoryError {
+    let file = || source.to_string();
+    let line = e.position().map_or(0, |p| lines.line_at(p.byte()));
+    match e.into_kind() {
+        csv::ErrorKind::Io(error) => TrajectoryError::Io {
+            file: file(),
+            error,
+        },
+        // Said as a sentence, not the CSV reader's debug form.
+        csv::ErrorKind::Utf8 { pos, err } => TrajectoryError::Csv {
+            file: file(),
+            line: pos.map_or(line, |p| lines.line_at(p.byte())),
+            message: format!(
+                "field {} is not UTF-8 text (bad byte after {} valid bytes of the field); \
+                 a trajectory CSV is plain text: save it as UTF-8 or ASCII",
+                err.field() + 1,
+                err.valid_up_to()
+            ),
+        },
+        kind => TrajectoryError::Csv {
+            file: file(),
+            line,
+            message: format!("{kind:?}"),
+        },
+    }
+}
+
+/// Refuses a header of `source` (`found`) without the vertical column
+/// `up` names: a fall needs its height.
+fn check_vertical(
+    missing_position: Option<usize>,
+    up: UpAxis,
+    source: &str,
+    found: &str,
+) -> Result<(), TrajectoryError> {
+    let file = || source.to_string();
+    let found = found.to_string();
+    let vertical = match up {
+        UpAxis::Z => 2,
+        UpAxis::Y | UpAxis::YDown => 1,
+    };
+    if missing_position == Some(vertical) {
+        let name = REQUIRED_COLUMNS[1 + vertical];
+        return Err(TrajectoryError::WrongHeader {
+            file: file(),
+            found,
+            problem: format!(
+                "no column `{name}`, the vertical ({}): a fall needs its height; a record in a vertical plane has t, the vertical and one horizontal column{}",
+                Setting::Up.set(name),
+                if up == UpAxis::Z {
+                    format!(
+                        " (with {}, or {} where it points down, `y` is the vertical)",
+                        Setting::Up.set("y"),
+                        Setting::Up.set("-y")
+                    )
+                } else {
+                    String::new()
+                }
+            ),
+        });
+    }
+    Ok(())
+}
+
+/// Where a row of a trajectory CSV is, for its errors.
+#[derive(Clone, Copy)]
+struct Where<'a> {
+    file: &'a str,
+    /// The line, 1-based.
+    line: u64,
+    /// The data row, 1-based.
+    row: usize,
+}
+
+/// The time, position and quaternion of data row `rec` (its columns
+/// `columns`, named `names`), its areas pushed onto `areas`; every field a
+/// finite number.
+fn parse_row(
+    rec: &csv::StringRecord,
+    columns: &[Column],
+    names: &[&str],
+    decimal_comma: bool,
+    at: Where<'_>,
+    areas: &mut [AreaSignal],
+) -> Result<(f64, [f64; 3], [f64; 4]), TrajectoryError> {
+    let Where { line, row, .. } = at;
+    let file = || at.file.to_string();
+    let (mut t, mut p, mut q) = (0.0f64, [0.0f64; 3], [0.0f64; 4]);
+    for (k, field) in rec.iter().enumerate() {
+        let col = columns[k];
+        if col == Column::Ignored {
+            continue;
+        }
+        let decimal = if decimal_comma {
+            std::borrow::Cow::Owned(field.replace(',', "."))
+        } else {
+            std::borrow::Cow::Borrowed(field)
+        };
+        let x: f64 = decimal.parse().map_err(|_| TrajectoryError::Number {
+            file: file(),
+            line,
+            row,
+            column: names[k].to_string(),
+            text: field.to_string(),
+        })?;
+        if !x.is_finite() {
+            return Err(TrajectoryError::NonFinite {
+                file: file(),
+                line,
+                row,
+                column: names[k].to_string(),
+                value: x,
+            });
+        }
+        match col {
+            Column::Time => t = x,
+            Column::Position(i) => p[i] = x,
+            Column::Quaternion(i) => q[i] = x,
+            Column::Area(i) => areas[i].values.push(x),
+            Column::Ignored => {}
+        }
+    }
+    Ok((t, p, q))
+}
+
+/// The orientation a row's quaternion `q` (w, x, y, z) gives: within
+/// [`QUATERNION_NORM_TOLERANCE`] of unit length, normalised unless within
+/// [`UNIT_EXACT_TOLERANCE`] of it.
+fn unit_quaternion(q: [f64; 4], at: Where<'_>) -> Result<UnitQuaternion<f64>, TrajectoryError> {
+    let Where { line, row, .. } = at;
+    let file = || at.file.to_string();
+    let q = Quaternion::new(q[0], q[1], q[2], q[3]);
+    let norm = q.norm();
+    if (norm - 1.0).abs() > QUATERNION_NORM_TOLERANCE {
+        return Err(TrajectoryError::NonUnitQuaternion {
+            file: file(),
+            line,
+            row,
+            norm,
+        });
+    }
+    let q = if (norm - 1.0).abs() <= UNIT_EXACT_TOLERANCE {
+        UnitQuaternion::new_unchecked(q)
+    } else {
+        UnitQuaternion::new_normalize(q)
+    };
+    Ok(q)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1150,7 +1217,7 @@ mod tests {
         );
         assert_err(
             "t,x,y,area1\n0,0,0,1\n",
-            &["line 1", "no column `z`, the vertical", "with --up y"],
+            &["line 1", "no column `z`, the vertical", "with up = y"],
         );
         assert_err("t,z\n0,1\n", &["line 1", "no column `x`, `y`"]);
         assert_err(

@@ -10,6 +10,7 @@ use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::skip::SkipCounts;
 use crate::physics::stability;
 use crate::physics::state::State;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt::Write as _;
@@ -346,7 +347,7 @@ pub const LONG_WORK: f64 = 3e7;
 /// The default limit of one drop or one scene, in particle-steps: about 45 s
 /// of one core for a leaf at [`REFERENCE_RATE`] (a scene of dense sheets,
 /// with 6 elements per particle, some 70 s). The default breed is 3.7e7 for all its
-/// 800 drops; the shipped scenes are at most 1.3e6. `--max-work` raises it.
+/// 800 drops; the shipped scenes are at most 1.3e6. The work limit ([`Setting::MaxWork`]) raises it.
 pub const MAX_WORK: f64 = 1e9;
 /// The default limit of a whole breeding run (every drop of every
 /// generation), in particle-steps: about ten minutes of one core. Measured
@@ -356,7 +357,7 @@ pub const MAX_WORK: f64 = 1e9;
 /// stays a thirtieth of the limit. [`REFERENCE_RATE`] quotes the limit at
 /// about 7 minutes for leaves (machines differ by 2×). Was 1e11 (75
 /// minutes), which let a run start unasked that a slip of a flag made long.
-/// `breed --max-work` raises it.
+/// A breeding run's work limit ([`Setting::MaxWork`]) raises it.
 pub const MAX_BREED_WORK: f64 = 1e10;
 /// Element-steps per second of one core (elements: particles, springs,
 /// triangles and hinges; what a step touches), for the time a message
@@ -666,13 +667,13 @@ impl Work {
     ///
     /// # Errors
     /// [`StepError::TooMuchWork`]: the estimate, the reason and the remedy
-    /// for `command`.
+    /// for `run`.
     pub fn check(
         &self,
         model: &Model,
         frame_dt: f64,
         limit: f64,
-        command: Command,
+        run: RunKind,
     ) -> Result<(), StepError> {
         if self.particle_steps() <= limit {
             return Ok(());
@@ -680,7 +681,7 @@ impl Work {
         Err(StepError::TooMuchWork(Box::new(WorkError {
             work: self.clone().explained(model, frame_dt),
             limit,
-            command,
+            run,
         })))
     }
 }
@@ -703,15 +704,102 @@ pub fn approximate_duration(seconds: f64) -> String {
     }
 }
 
-/// Which command's remedies a [`WorkError`] names.
+/// What a [`WorkError`] refuses: which remedies apply to it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Command {
-    /// `drop`.
+pub enum RunKind {
+    /// One leaf's drop.
     Drop,
-    /// `scene`.
+    /// A scene (its integrator is set in its file).
     Scene,
-    /// `breed` (its drops always use the default integrator).
+    /// A breeding run (its drops always use the default integrator).
     Breed,
+}
+
+/// One way to make a refused run fit its work limit.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Remedy {
+    /// Integrate implicitly, stable at any step: `steps` of them.
+    Implicit {
+        /// Steps the implicit integrator takes.
+        steps: f64,
+        /// Set in the scene file rather than as a setting.
+        in_scene_file: bool,
+    },
+    /// Let the model take a longer step, or simulate less time.
+    SoftenOrShorten {
+        /// The springs' damping sets the step, not their stiffness.
+        damping: bool,
+        /// The duration is the scene file's (settings may override it).
+        in_scene_file: bool,
+    },
+    /// A breeding run: a softer or heavier prototype, or fewer drops.
+    SmallerBreed,
+    /// Raise the work limit to `needed` particle-steps.
+    RaiseWorkLimit {
+        /// The work limit that admits the run.
+        needed: f64,
+    },
+}
+
+impl std::fmt::Display for Remedy {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Remedy::Implicit {
+                steps,
+                in_scene_file: false,
+            } => write!(
+                f,
+                "use `{}` (stable at any step: {} steps)",
+                Setting::Integrator.set("implicit"),
+                step_count(steps)
+            ),
+            Remedy::Implicit {
+                steps,
+                in_scene_file: true,
+            } => write!(
+                f,
+                "set `integrator = \"implicit\"` in the scene file (stable at any step: {} steps)",
+                step_count(steps)
+            ),
+            Remedy::SoftenOrShorten {
+                damping,
+                in_scene_file,
+            } => {
+                // What to change in the model: the springs' stiffness, or,
+                // where the damping's fastest rate sets the step, their
+                // damping.
+                let soften = if damping {
+                    "lower the springs' and hinges' damping"
+                } else {
+                    "soften the stiffest springs"
+                };
+                let duration = Setting::Duration;
+                if in_scene_file {
+                    write!(
+                        f,
+                        "{soften} or make the lightest particles heavier, or shorten `duration` (or {duration})"
+                    )
+                } else {
+                    write!(
+                        f,
+                        "{soften} or make the lightest particles heavier, or shorten {duration}"
+                    )
+                }
+            }
+            Remedy::SmallerBreed => write!(
+                f,
+                "breeding drops every leaf with verlet at its auto step: soften or weight the prototype, or lower {}, {} or {}",
+                Setting::Duration,
+                Setting::Population,
+                Setting::Generations
+            ),
+            Remedy::RaiseWorkLimit { needed } => write!(
+                f,
+                "raise the limit with `{}`",
+                Setting::MaxWork.set(format_args!("{needed:.1e}"))
+            ),
+        }
+    }
 }
 
 /// A run refused before it starts because its estimated work exceeds the
@@ -723,17 +811,50 @@ pub struct WorkError {
     pub work: Work,
     /// The limit it exceeds, particle-steps.
     pub limit: f64,
-    /// Whose remedies to name.
-    pub command: Command,
+    /// What is refused.
+    pub run: RunKind,
 }
 
 impl WorkError {
+    /// What would make the run fit, most direct first.
+    pub fn remedies(&self) -> Vec<Remedy> {
+        let w = &self.work;
+        let mut remedies = Vec::new();
+        if let Some(steps) = w.implicit_steps {
+            match self.run {
+                RunKind::Drop | RunKind::Scene => remedies.push(Remedy::Implicit {
+                    steps,
+                    in_scene_file: self.run == RunKind::Scene,
+                }),
+                RunKind::Breed => {}
+            }
+        }
+        let damping = matches!(
+            w.reason,
+            StepReason::Stability {
+                bound: StepBound::Damping,
+                ..
+            }
+        );
+        remedies.push(match self.run {
+            RunKind::Drop | RunKind::Scene => Remedy::SoftenOrShorten {
+                damping,
+                in_scene_file: self.run == RunKind::Scene,
+            },
+            RunKind::Breed => Remedy::SmallerBreed,
+        });
+        remedies.push(Remedy::RaiseWorkLimit {
+            needed: w.particle_steps() * 1.01,
+        });
+        remedies
+    }
+
     fn message(&self) -> String {
         let w = &self.work;
-        let what = match self.command {
-            Command::Drop => "this drop",
-            Command::Scene => "this scene",
-            Command::Breed => "this breeding run",
+        let what = match self.run {
+            RunKind::Drop => "this drop",
+            RunKind::Scene => "this scene",
+            RunKind::Breed => "this breeding run",
         };
         let why = w.why();
         let why = if why.is_empty() {
@@ -741,43 +862,7 @@ impl WorkError {
         } else {
             format!("; {why}")
         };
-        let implicit = w.implicit_steps.map(|n| match self.command {
-            Command::Drop => format!(
-                "use `--integrator implicit` (stable at any step: {} steps)",
-                step_count(n)
-            ),
-            Command::Scene => format!(
-                "set `integrator = \"implicit\"` in the scene file (stable at any step: {} steps)",
-                step_count(n)
-            ),
-            Command::Breed => String::new(),
-        });
-        let mut remedies: Vec<String> = implicit.into_iter().filter(|r| !r.is_empty()).collect();
-        // What to change in the model: the springs' stiffness, or, where
-        // the damping's fastest rate sets the step, their damping.
-        let soften = match w.reason {
-            StepReason::Stability {
-                bound: StepBound::Damping,
-                ..
-            } => "lower the springs' and hinges' damping",
-            _ => "soften the stiffest springs",
-        };
-        remedies.push(match self.command {
-            Command::Drop => {
-                format!("{soften} or make the lightest particles heavier, or shorten --seconds")
-            }
-            Command::Scene => format!(
-                "{soften} or make the lightest particles heavier, or shorten `duration` (or --seconds)"
-            ),
-            Command::Breed => {
-                "breeding drops every leaf with verlet at its auto step: soften or weight the prototype, or lower --seconds, --population or --generations"
-                    .to_string()
-            }
-        });
-        remedies.push(format!(
-            "raise the limit with `--max-work {:.1e}`",
-            w.particle_steps() * 1.01
-        ));
+        let remedies: Vec<String> = self.remedies().iter().map(Remedy::to_string).collect();
         // The limit in the estimate's own time, so both read alike.
         let per_step = w.core_seconds() / w.particle_steps();
         let limit_time = if per_step.is_finite() && per_step > 0.0 {
@@ -1189,20 +1274,32 @@ mod tests {
             "{}",
             work.describe()
         );
-        let text = work
-            .check(&model, frame_dt, MAX_WORK / 10.0, Command::Drop)
-            .unwrap_err()
-            .to_string();
+        let err = work
+            .check(&model, frame_dt, MAX_WORK / 10.0, RunKind::Drop)
+            .unwrap_err();
+        let StepError::TooMuchWork(refused) = &err else {
+            panic!("not refused for its work: {err}");
+        };
+        // The remedies as data: the implicit step, then the limit that
+        // admits the run, above its estimate.
+        let remedies = refused.remedies();
+        assert!(matches!(remedies[0], Remedy::Implicit { steps, .. } if steps == 2400.0));
+        assert!(
+            matches!(remedies.last(), Some(&Remedy::RaiseWorkLimit { needed })
+            if needed > work.particle_steps())
+        );
+        let text = err.to_string();
+        // Unspelled by a front end, the settings read as their keys.
         for w in [
             "spring 0",
             "k = 1.000e8 N/m",
-            "`--integrator implicit` (stable at any step: 2400 steps)",
-            "--max-work",
+            "`integrator = implicit` (stable at any step: 2400 steps)",
+            "`max_work = ",
         ] {
             assert!(text.contains(w), "no {w:?} in {text}");
         }
         assert!(
-            work.check(&model, frame_dt, MAX_WORK, Command::Drop)
+            work.check(&model, frame_dt, MAX_WORK, RunKind::Drop)
                 .is_ok()
         );
     }

@@ -8,7 +8,7 @@ use crate::physics::model::Model;
 use crate::physics::params::{Integrator, TimeStep};
 use crate::physics::pose::PoseTracker;
 use crate::physics::run::{
-    Command, MAX_WORK, PoseFault, RunStats, StepError, Work, check_budget, hermite, resolve_step,
+    MAX_WORK, PoseFault, RunKind, RunStats, StepError, Work, check_budget, hermite, resolve_step,
     run_sampled_until, within,
 };
 use crate::physics::state::State;
@@ -125,7 +125,7 @@ pub fn drop_leaf_with_work(
     mut progress: Option<&mut dyn FnMut(u64, u64)>,
 ) -> Result<DropResult, DropError> {
     let frame_dt = 1.0 / FRAME_RATE;
-    work.check(model, frame_dt, max_work, Command::Drop)?;
+    work.check(model, frame_dt, max_work, RunKind::Drop)?;
     let dt = work.dt;
     let frames = (params.seconds * FRAME_RATE).round() as u64;
     let release = release_rotation(params.tilt_deg);
@@ -226,7 +226,7 @@ fn drop_lockstep<const L: usize>(
     let mut dt = [0.0; L];
     for k in 0..L {
         let work = drop_work(models[k], params[k]).ok()?;
-        work.check(models[k], frame_dt, MAX_WORK, Command::Drop)
+        work.check(models[k], frame_dt, MAX_WORK, RunKind::Drop)
             .ok()?;
         dt[k] = work.dt;
     }

@@ -19,6 +19,7 @@ use crate::physics::params::Integrator;
 use crate::physics::stability::{self, AUTO_SAFETY};
 use crate::physics::state::State;
 use crate::sim::drop;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::fmt;
@@ -489,19 +490,7 @@ pub fn run_case(
     let model = &case.model;
     let est = stability::estimate(model);
     let dt_max = est.dt_max(integrator);
-    // The particle a refusal names: the lighter end of the stiffest spring,
-    // or the lightest particle when no spring sets the limit.
-    let limiting = est
-        .stiffest_spring
-        .map(|s| {
-            let sp = &model.springs[s];
-            if model.mass[sp.i] <= model.mass[sp.j] {
-                sp.i
-            } else {
-                sp.j
-            }
-        })
-        .unwrap_or(est.lightest_particle);
+    let limiting = limiting_particle(model, &est);
     let mut row = StressRow {
         case: case.name.clone(),
         integrator,
@@ -520,6 +509,64 @@ pub fn run_case(
         warnings: Vec::new(),
         wall_s: 0.0,
     };
+    let step = ExplicitStep {
+        policy,
+        substep_cap,
+        dt_max,
+        limiting,
+    };
+    if refused_before_start(case, integrator, step, &mut row) {
+        return row;
+    }
+    let run = integrate(case, integrator, &mut row);
+    match run.failure {
+        Some(ref e) => record_failure(case, dt_max, run.h, e, &mut row),
+        None => record_finish(case, &run, &mut row),
+    }
+    row
+}
+
+/// The particle a refusal names: the lighter end of the stiffest spring,
+/// or the lightest particle when no spring sets the limit.
+fn limiting_particle(model: &Model, est: &stability::StabilityEstimate) -> usize {
+    est.stiffest_spring
+        .map(|s| {
+            let sp = &model.springs[s];
+            if model.mass[sp.i] <= model.mass[sp.j] {
+                sp.i
+            } else {
+                sp.j
+            }
+        })
+        .unwrap_or(est.lightest_particle)
+}
+
+/// What an explicit integrator's step is checked against.
+#[derive(Clone, Copy)]
+struct ExplicitStep {
+    policy: ExplicitPolicy,
+    substep_cap: u64,
+    dt_max: Option<f64>,
+    /// The particle a refusal names ([`limiting_particle`]).
+    limiting: usize,
+}
+
+/// Refuses (true, said in `row`) an explicit integrator with no stable
+/// step, or with a step above its estimate under
+/// [`ExplicitPolicy::Refuse`]; under [`ExplicitPolicy::Substep`] sets the
+/// sub-steps.
+fn refused_before_start(
+    case: &StressCase,
+    integrator: Integrator,
+    step: ExplicitStep,
+    row: &mut StressRow,
+) -> bool {
+    let ExplicitStep {
+        policy,
+        substep_cap,
+        dt_max,
+        limiting,
+    } = step;
     let refuse = |row: &mut StressRow, cause: &str, message: String| {
         row.failure = Some(Failure {
             step: 0,
@@ -533,7 +580,7 @@ pub fn run_case(
         match dt_max {
             Some(m) if m <= 0.0 => {
                 refuse(
-                    &mut row,
+                    row,
                     "no stable step",
                     format!(
                         "refused at step 0: {integrator} has no stable step on this model \
@@ -542,21 +589,22 @@ pub fn run_case(
                         fmt_limit(dt_max)
                     ),
                 );
-                return row;
+                return true;
             }
             Some(m) if case.dt > m => match policy {
                 ExplicitPolicy::Refuse => {
                     refuse(
-                        &mut row,
+                        row,
                         "dt exceeds the stability estimate",
                         format!(
                             "refused at step 0: dt = {:.3e} s exceeds the stability estimate \
                              dt_max = {m:.3e} s of {integrator} (limited at particle {limiting}); \
-                             use --explicit substep, a smaller dt or the implicit integrator",
-                            case.dt
+                             use {}, a smaller dt or the implicit integrator",
+                            case.dt,
+                            Setting::Explicit.set("substep")
                         ),
                     );
-                    return row;
+                    return true;
                 }
                 ExplicitPolicy::Substep => {
                     let wanted = (case.dt / (AUTO_SAFETY * m)).ceil();
@@ -575,6 +623,25 @@ pub fn run_case(
             _ => {}
         }
     }
+    false
+}
+
+/// A case's run: its end state and what was summed along the way.
+struct Integrated {
+    /// The time step of each sub-step, s.
+    h: f64,
+    state: State,
+    e0: Energy,
+    strain: f64,
+    work: f64,
+    turnover_work: f64,
+    failure: Option<SimError>,
+}
+
+/// Integrates `case` with `integrator` at `row`'s sub-steps, setting its
+/// wall time and steps.
+fn integrate(case: &StressCase, integrator: Integrator, row: &mut StressRow) -> Integrated {
+    let model = &case.model;
     let h = case.dt / row.substeps as f64;
     let outer = (case.seconds / case.dt).round().max(1.0) as u64;
     let mut state = case.initial.clone();
@@ -603,116 +670,143 @@ pub fn run_case(
     }
     row.wall_s = start.elapsed().as_secs_f64();
     row.steps = sim.steps();
-    match failure {
-        Some(e) => {
-            let (step, time, particle, cause) = match &e {
-                SimError::Diverged(d) => (
-                    d.step,
-                    d.time,
-                    Some(d.particle),
-                    format!(
-                        "{} {}",
-                        d.quantity,
-                        if d.value.is_finite() {
-                            "ran away"
-                        } else {
-                            "became non-finite"
-                        }
-                    ),
-                ),
-                SimError::SolverFailed { step, time, .. } => (
-                    *step,
-                    *time,
-                    None,
-                    "implicit solve did not converge".to_string(),
-                ),
-            };
-            row.message = match &e {
-                // A divergence message names dt_max itself.
-                SimError::Diverged(_) => e.to_string(),
-                SimError::SolverFailed { .. } => {
-                    format!("{e}; dt_max estimate {}", fmt_limit(dt_max))
-                }
-            };
-            if row.substeps > 1 {
-                row.message.push_str(&format!(
-                    "; {} sub-steps of {h:.3e} s per step",
-                    row.substeps
-                ));
-            }
-            row.failure = Some(Failure {
-                step,
-                time,
-                particle,
-                cause,
-            });
-            row.all_finite = [time, case.dt].iter().all(|v| v.is_finite())
-                && dt_max.is_none_or(f64::is_finite)
-                && !has_non_finite_text(&row.message);
-        }
-        None => {
-            let e1 = energy(model, &state);
-            let change = e1.total() - e0.total();
-            let turnover = (e1.gravitational - e0.gravitational).abs()
-                + turnover_work
-                + e0.kinetic
-                + e0.spring
-                + e0.bending
-                + e1.kinetic
-                + e1.spring
-                + e1.bending;
-            row.energy_change_j = Some(change);
-            row.nonconservative_work_j = Some(work);
-            row.energy_drift = (turnover > 0.0).then(|| (change - work) / turnover);
-            row.max_strain = Some(strain);
-            let state_finite = state
-                .position
-                .iter()
-                .chain(&state.velocity)
-                .all(|v| v.iter().all(|c| c.is_finite()));
-            row.all_finite = state_finite
-                && change.is_finite()
-                && work.is_finite()
-                && strain.is_finite()
-                && row.energy_drift.is_none_or(f64::is_finite);
-            // Finite is not the same as right: say when the numbers show it.
-            if let Some(d) = row.energy_drift.filter(|d| d.abs() > SUSPECT_DRIFT) {
-                row.warnings.push(format!(
-                    "energy drift {d:+.2}: the integration {} {:.0} % of the energy turnover",
-                    if d > 0.0 { "created" } else { "destroyed" },
-                    100.0 * d.abs()
-                ));
-            }
-            if strain > SUSPECT_STRAIN {
-                row.warnings.push(format!(
-                    "largest strain {strain:.1e}: a spring stretched by more than {SUSPECT_STRAIN} × its rest length"
-                ));
-            }
-            row.outcome = if row.all_finite {
-                Outcome::Ok
-            } else {
-                Outcome::Error
-            };
-            row.message = if row.all_finite {
-                format!(
-                    "finite after {:.3} s: energy drift {}, largest strain {:.3e}{}",
-                    case.seconds,
-                    row.energy_drift
-                        .map_or(format!("{change:.3e} J"), |d| format!("{d:+.3e}")),
-                    strain,
-                    if row.substeps > 1 {
-                        format!(", {} sub-steps of {h:.3e} s per step", row.substeps)
-                    } else {
-                        String::new()
-                    }
-                )
-            } else {
-                // The simulator checks every step, so this is a bug guard.
-                "the run finished with a non-finite state or energy".into()
-            };
-        }
+    Integrated {
+        h,
+        state,
+        e0,
+        strain,
+        work,
+        turnover_work,
+        failure,
     }
-    row
+}
+
+/// Says in `row` where and why the run failed.
+fn record_failure(
+    case: &StressCase,
+    dt_max: Option<f64>,
+    h: f64,
+    e: &SimError,
+    row: &mut StressRow,
+) {
+    let (step, time, particle, cause) = match &e {
+        SimError::Diverged(d) => (
+            d.step,
+            d.time,
+            Some(d.particle),
+            format!(
+                "{} {}",
+                d.quantity,
+                if d.value.is_finite() {
+                    "ran away"
+                } else {
+                    "became non-finite"
+                }
+            ),
+        ),
+        SimError::SolverFailed { step, time, .. } => (
+            *step,
+            *time,
+            None,
+            "implicit solve did not converge".to_string(),
+        ),
+    };
+    row.message = match &e {
+        // A divergence message names dt_max itself.
+        SimError::Diverged(_) => e.to_string(),
+        SimError::SolverFailed { .. } => {
+            format!("{e}; dt_max estimate {}", fmt_limit(dt_max))
+        }
+    };
+    if row.substeps > 1 {
+        row.message.push_str(&format!(
+            "; {} sub-steps of {h:.3e} s per step",
+            row.substeps
+        ));
+    }
+    row.failure = Some(Failure {
+        step,
+        time,
+        particle,
+        cause,
+    });
+    row.all_finite = [time, case.dt].iter().all(|v| v.is_finite())
+        && dt_max.is_none_or(f64::is_finite)
+        && !has_non_finite_text(&row.message);
+}
+
+/// Says in `row` what a run that finished shows: energy drift, strain,
+/// finiteness.
+fn record_finish(case: &StressCase, run: &Integrated, row: &mut StressRow) {
+    let model = &case.model;
+    let Integrated {
+        h,
+        ref state,
+        ref e0,
+        strain,
+        work,
+        turnover_work,
+        ..
+    } = *run;
+    let e1 = energy(model, state);
+    let change = e1.total() - e0.total();
+    let turnover = (e1.gravitational - e0.gravitational).abs()
+        + turnover_work
+        + e0.kinetic
+        + e0.spring
+        + e0.bending
+        + e1.kinetic
+        + e1.spring
+        + e1.bending;
+    row.energy_change_j = Some(change);
+    row.nonconservative_work_j = Some(work);
+    row.energy_drift = (turnover > 0.0).then(|| (change - work) / turnover);
+    row.max_strain = Some(strain);
+    let state_finite = state
+        .position
+        .iter()
+        .chain(&state.velocity)
+        .all(|v| v.iter().all(|c| c.is_finite()));
+    row.all_finite = state_finite
+        && change.is_finite()
+        && work.is_finite()
+        && strain.is_finite()
+        && row.energy_drift.is_none_or(f64::is_finite);
+    // Finite is not the same as right: say when the numbers show it.
+    if let Some(d) = row.energy_drift.filter(|d| d.abs() > SUSPECT_DRIFT) {
+        row.warnings.push(format!(
+            "energy drift {d:+.2}: the integration {} {:.0} % of the energy turnover",
+            if d > 0.0 { "created" } else { "destroyed" },
+            100.0 * d.abs()
+        ));
+    }
+    if strain > SUSPECT_STRAIN {
+        row.warnings.push(format!(
+            "largest strain {strain:.1e}: a spring stretched by more than {SUSPECT_STRAIN} × its rest length"
+        ));
+    }
+    row.outcome = if row.all_finite {
+        Outcome::Ok
+    } else {
+        Outcome::Error
+    };
+    row.message = if row.all_finite {
+        format!(
+            "finite after {:.3} s: energy drift {}, largest strain {:.3e}{}",
+            case.seconds,
+            row.energy_drift
+                .map_or(format!("{change:.3e} J"), |d| format!("{d:+.3e}")),
+            strain,
+            if row.substeps > 1 {
+                format!(", {} sub-steps of {h:.3e} s per step", row.substeps)
+            } else {
+                String::new()
+            }
+        )
+    } else {
+        // The simulator checks every step, so this is a bug guard.
+        "the run finished with a non-finite state or energy".into()
+    };
 }
 
 fn has_non_finite_text(s: &str) -> bool {

@@ -35,6 +35,7 @@ use crate::motion::classify::MotionClass;
 use crate::motion::describe::MotionTarget;
 use crate::output::export::drop_clip_released;
 use crate::util::io::write_atomic;
+use crate::util::setting::Setting;
 use base64::Engine as _;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -95,8 +96,11 @@ impl StudioSettings {
     pub fn validate(&self) -> Result<(), StudioError> {
         if !(GRID_RANGE[0]..=GRID_RANGE[1]).contains(&self.grid) {
             return Err(StudioError::Input(format!(
-                "--grid must be {} to {}, got {}",
-                GRID_RANGE[0], GRID_RANGE[1], self.grid
+                "{} must be {} to {}, got {}",
+                Setting::Grid,
+                GRID_RANGE[0],
+                GRID_RANGE[1],
+                self.grid
             )));
         }
         self.breed_settings()
@@ -327,9 +331,9 @@ impl Session {
         settings.validate()?;
         if dir.join(SESSION_FILE).exists() {
             return Err(StudioError::Input(format!(
-                "{} already holds a studio session; reopen it with --resume {}",
+                "{} already holds a studio session; reopen it with {}",
                 dir.display(),
-                dir.display()
+                Setting::Resume.set(dir.display())
             )));
         }
         std::fs::create_dir_all(dir).map_err(|e| file_error(dir, e))?;

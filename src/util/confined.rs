@@ -8,6 +8,7 @@
 //! reference is resolved through it and refused, with the reason, when it
 //! leaves them or is not a regular file.
 
+use crate::util::setting::Setting;
 use std::cell::Cell;
 use std::fs;
 use std::io::Read;
@@ -58,7 +59,7 @@ impl ReadScope {
         for dir in &policy.also_allowed {
             scope = scope
                 .allow(dir)
-                .map_err(|e| format!("--allow-references {e}"))?;
+                .map_err(|e| format!("{} {e}", Setting::AllowReferences))?;
         }
         Ok(scope)
     }
@@ -125,9 +126,10 @@ impl ReadScope {
         if total > self.max_memory {
             return Err(format!(
                 "{what} would need {bytes} bytes, which with the {} already read passes the read's \
-                 memory budget of {} bytes (--max-memory raises it)",
+                 memory budget of {} bytes ({} raises it)",
                 self.used.get(),
-                self.max_memory
+                self.max_memory,
+                Setting::MaxMemory
             ));
         }
         self.used.set(total);
@@ -151,8 +153,9 @@ impl ReadScope {
         if path.is_absolute() {
             return Err(format!(
                 "it is an absolute path; references are read only inside {} \
-                 (--allow-references DIR opens another folder)",
-                self.describe_roots()
+                 ({} opens another folder)",
+                self.describe_roots(),
+                Setting::AllowReferences.set("DIR")
             ));
         }
         if path.components().any(|c| matches!(c, Component::Prefix(_))) {
@@ -167,9 +170,10 @@ impl ReadScope {
         let real = fs::canonicalize(path).map_err(|e| format!("it cannot be found ({e})"))?;
         if !self.roots.iter().any(|r| real.starts_with(r)) {
             return Err(format!(
-                "it leads outside {} (to {}); --allow-references DIR opens another folder",
+                "it leads outside {} (to {}); {} opens another folder",
                 self.describe_roots(),
-                real.display()
+                real.display(),
+                Setting::AllowReferences.set("DIR")
             ));
         }
         let meta = fs::metadata(&real).map_err(|e| format!("it cannot be read ({e})"))?;

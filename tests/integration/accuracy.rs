@@ -335,7 +335,7 @@ fn a_reference_that_does_not_validate_is_refined() {
         broke
             .warnings
             .iter()
-            .any(|w| w.contains("refinement stopped") && w.contains("--reference-j")),
+            .any(|w| w.contains("refinement stopped") && w.contains("reference_j")),
         "{:?}",
         broke.warnings
     );

@@ -6,7 +6,7 @@
 //! as the rigid plate does.
 
 use leafmagic::leaf::plates::{
-    PlateShape, bending_energy_ratio, bending_energy_ratio_along, flexible, plate,
+    PlateField, PlateShape, bending_energy_ratio, bending_energy_ratio_along, flexible, plate,
 };
 use leafmagic::leaf::{AeroSpec, LeafSpec};
 use leafmagic::physics::model::{Model, STANDARD_GRAVITY};
@@ -68,7 +68,7 @@ fn a_bent_sheet_stores_a_continuum_sheets_energy() {
     )
     .unwrap();
     let err = flexible(strip, d).unwrap_err();
-    assert_eq!(err.field, "--bending-stiffness");
+    assert_eq!(err.field, PlateField::BendingStiffness);
     assert!(err.reason.contains("as stiffly one way"), "{err}");
 }
 
@@ -204,7 +204,7 @@ fn a_bad_bending_stiffness_is_refused_by_name() {
     let spec = plate(PlateShape::Square, 0.05, 1.0, PAPER, AeroSpec::unsteady()).unwrap();
     for bad in [0.0, -1e-4, f64::NAN, f64::INFINITY] {
         let err = flexible(spec.clone(), bad).unwrap_err();
-        assert_eq!(err.field, "--bending-stiffness");
+        assert_eq!(err.field, PlateField::BendingStiffness);
         assert!(err.reason.contains("finite number > 0"), "{err}");
     }
     let mut bent = spec.clone();

@@ -28,6 +28,7 @@ mod k8s;
 mod layers;
 mod leaves;
 mod like;
+mod long_functions;
 mod newcomer;
 mod particles;
 mod plate_cli;

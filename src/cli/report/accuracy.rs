@@ -77,92 +77,9 @@ pub fn sweep(
             report.runs
         )?;
         writeln!(out)?;
-        writeln!(
-            out,
-            "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
-            "integrator",
-            "order",
-            "exp.",
-            "pts",
-            "pairwise (finest 3)",
-            "stable dt",
-            "unstable at",
-            "check dt_max",
-            "ratio"
-        )?;
-        for s in &report.summaries {
-            let pairwise: Vec<String> = s
-                .pairwise_orders
-                .iter()
-                .rev()
-                .take(3)
-                .rev()
-                .map(|p| format!("{p:.2}"))
-                .collect();
-            let predicted = match s.predicted_dt_max {
-                None => "unbounded".to_string(),
-                Some(m) if m <= 0.0 => "none".to_string(),
-                Some(m) => format!("{m:.4e}"),
-            };
-            let ratio = match (
-                s.largest_stable_dt,
-                s.predicted_dt_max,
-                s.smallest_diverged_dt,
-            ) {
-                (Some(found), Some(m), Some(_)) if m > 0.0 => format!("{:.3}", found / m),
-                _ => "—".to_string(),
-            };
-            writeln!(
-                out,
-                "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
-                s.integrator.name(),
-                s.order.map_or("—".to_string(), |p| format!("{p:.3}")),
-                s.expected_order,
-                s.fit_points,
-                pairwise.join(" "),
-                s.largest_stable_dt
-                    .map_or("—".to_string(), |h| format!("{h:.4e}")),
-                s.smallest_diverged_dt
-                    .map_or("none".to_string(), |h| format!("{h:.4e}")),
-                predicted,
-                ratio
-            )?;
-        }
+        orders_table(out, report)?;
         writeln!(out)?;
-        writeln!(
-            out,
-            "{:<11} {:<44} cheapest run to error ≤ 1e-6",
-            "integrator", "cheapest run to error ≤ 1e-3"
-        )?;
-        for s in &report.summaries {
-            let cells: Vec<String> = s
-                .cheapest
-                .iter()
-                .zip(&s.extrapolated)
-                .map(|(c, x)| match (c, x) {
-                    (Some(c), _) => format!(
-                        "h {:.3e}: {:.1e} in {} ({} f)",
-                        c.dt,
-                        c.error,
-                        ms(c.wall_s),
-                        c.force_evals
-                    ),
-                    (None, Some(x)) => format!(
-                        "not reached; ≈ h {:.1e}, ≈ {} (extrap.)",
-                        x.dt,
-                        ms(x.wall_s)
-                    ),
-                    (None, None) => "not reached".to_string(),
-                })
-                .collect();
-            writeln!(
-                out,
-                "{:<11} {:<44} {}",
-                s.integrator.name(),
-                cells[0],
-                cells[1]
-            )?;
-        }
+        cheapest_table(out, report)?;
         for w in &report.warnings {
             writeln!(out, "warning: {w}")?;
         }
@@ -176,6 +93,102 @@ pub fn sweep(
         )?;
         writeln!(out, "finished in  {elapsed_s:.1} s")
     })
+}
+
+/// The table of each integrator's fitted order, pairwise orders and
+/// stable step against the estimate's.
+fn orders_table(out: &mut String, report: &SweepReport) -> std::fmt::Result {
+    writeln!(
+        out,
+        "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
+        "integrator",
+        "order",
+        "exp.",
+        "pts",
+        "pairwise (finest 3)",
+        "stable dt",
+        "unstable at",
+        "check dt_max",
+        "ratio"
+    )?;
+    for s in &report.summaries {
+        let pairwise: Vec<String> = s
+            .pairwise_orders
+            .iter()
+            .rev()
+            .take(3)
+            .rev()
+            .map(|p| format!("{p:.2}"))
+            .collect();
+        let predicted = match s.predicted_dt_max {
+            None => "unbounded".to_string(),
+            Some(m) if m <= 0.0 => "none".to_string(),
+            Some(m) => format!("{m:.4e}"),
+        };
+        let ratio = match (
+            s.largest_stable_dt,
+            s.predicted_dt_max,
+            s.smallest_diverged_dt,
+        ) {
+            (Some(found), Some(m), Some(_)) if m > 0.0 => format!("{:.3}", found / m),
+            _ => "—".to_string(),
+        };
+        writeln!(
+            out,
+            "{:<11} {:>6} {:>4} {:>4}  {:<22} {:>12} {:>12} {:>12} {:>7}",
+            s.integrator.name(),
+            s.order.map_or("—".to_string(), |p| format!("{p:.3}")),
+            s.expected_order,
+            s.fit_points,
+            pairwise.join(" "),
+            s.largest_stable_dt
+                .map_or("—".to_string(), |h| format!("{h:.4e}")),
+            s.smallest_diverged_dt
+                .map_or("none".to_string(), |h| format!("{h:.4e}")),
+            predicted,
+            ratio
+        )?;
+    }
+    Ok(())
+}
+
+/// The table of the cheapest run to each error, or its extrapolation.
+fn cheapest_table(out: &mut String, report: &SweepReport) -> std::fmt::Result {
+    writeln!(
+        out,
+        "{:<11} {:<44} cheapest run to error ≤ 1e-6",
+        "integrator", "cheapest run to error ≤ 1e-3"
+    )?;
+    for s in &report.summaries {
+        let cells: Vec<String> = s
+            .cheapest
+            .iter()
+            .zip(&s.extrapolated)
+            .map(|(c, x)| match (c, x) {
+                (Some(c), _) => format!(
+                    "h {:.3e}: {:.1e} in {} ({} f)",
+                    c.dt,
+                    c.error,
+                    ms(c.wall_s),
+                    c.force_evals
+                ),
+                (None, Some(x)) => format!(
+                    "not reached; ≈ h {:.1e}, ≈ {} (extrap.)",
+                    x.dt,
+                    ms(x.wall_s)
+                ),
+                (None, None) => "not reached".to_string(),
+            })
+            .collect();
+        writeln!(
+            out,
+            "{:<11} {:<44} {}",
+            s.integrator.name(),
+            cells[0],
+            cells[1]
+        )?;
+    }
+    Ok(())
 }
 
 /// A wall time in seconds from one second up, else in milliseconds.

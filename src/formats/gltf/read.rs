@@ -10,6 +10,7 @@ use crate::formats::error::ExportError;
 use crate::formats::sampling::{check_points, key_rate, sampled_frames};
 use crate::formats::skin::{self, Influences};
 use crate::util::confined::ReadScope;
+use crate::util::setting::Setting;
 use gltf::accessor::DataType::{F32, U8, U16, U32};
 use gltf::accessor::Dimensions;
 use gltf::animation::util::ReadOutputs;
@@ -152,10 +153,11 @@ fn named_animation(doc: &gltf::Document, want: &str) -> Result<usize, String> {
         .or_else(|| want.parse::<usize>().ok().filter(|&k| k < count))
         .ok_or_else(|| {
             if count == 0 {
-                format!("--animation {want}: it holds no animation")
+                format!("{}: it holds no animation", Setting::Animation.set(want))
             } else {
                 format!(
-                    "--animation {want}: no animation of that name; it holds {}",
+                    "{}: no animation of that name; it holds {}",
+                    Setting::Animation.set(want),
                     animation_names(doc.animations())
                 )
             }
@@ -198,11 +200,12 @@ fn check_one_take(doc: &gltf::Document) -> Result<(), String> {
                 })
                 .collect();
             return Err(format!(
-                "{} of its animations move node `{}` ({}): name the one to read with --animation NAME",
+                "{} of its animations move node `{}` ({}): name the one to read with {}",
                 moving.len(),
                 node.name()
                     .map_or_else(|| format!("#{}", node.index()), str::to_string),
-                animation_names(moving.into_iter())
+                animation_names(moving.into_iter()),
+                Setting::Animation.set("NAME")
             ));
         }
     }
@@ -274,10 +277,87 @@ fn read_gltf(
         .filter_map(|&i| doc.nodes().nth(i))
         .filter(|n| n.mesh().is_some())
         .collect();
-    // The nodes whose motion moves a mesh read: the mesh nodes, their
-    // skins' joints, and every node above them.
+    let moves_a_mesh = nodes_moving_meshes(&tree, &nodes);
+    let mut warnings = Vec::new();
+    let (tracks, t_start, t_end) = read_tracks(doc, only, &data, &moves_a_mesh, &mut warnings)?;
+    let (start, fps) = match grid {
+        Grid::From0(fps) => (0.0, fps.or(extras.fps).unwrap_or(DEFAULT_FPS)),
+        Grid::Keys => match key_rate(
+            tracks
+                .iter()
+                .flat_map(|(_, _, t)| t.times.windows(2).map(|w| w[1] as f64 - w[0] as f64))
+                .filter(|d| *d > 0.0)
+                .fold(f64::INFINITY, f64::min),
+        ) {
+            Some(rate) => (t_start, rate),
+            // No animation, or one key: a single frame.
+            None => (t_start.min(t_end).max(0.0), DEFAULT_FPS),
+        },
+    };
+    let frames = sampled_frames(start, t_end, fps).map_err(ExportError::Data)?;
+    let sampling = Sampling { start, fps, frames };
+    let animated = Animated {
+        doc,
+        tree: &tree,
+        tracks: &tracks,
+        data: &data,
+    };
+    let mut objects = Vec::new();
+    for node in nodes {
+        if let Some(object) = read_object(&animated, node, sampling, &objects, &mut warnings)? {
+            objects.push(object);
+        }
+    }
+    if objects.is_empty() {
+        return Err(ExportError::Data(
+            "the default scene has no node with a mesh".into(),
+        ));
+    }
+    let clip = Clip {
+        name: name.to_string(),
+        fps,
+        frames,
+        objects,
+        ground: extras.ground,
+        wind: extras.wind,
+        warnings,
+    };
+    clip.validate()?;
+    Ok(clip)
+}
+
+/// Tracks per (node, property).
+type Tracks = Vec<(usize, Property, Track)>;
+
+/// The frames a clip is sampled at: `frames` of them from `start`, s, at
+/// `fps`.
+#[derive(Clone, Copy, Debug)]
+struct Sampling {
+    start: f64,
+    fps: f64,
+    frames: usize,
+}
+
+impl Sampling {
+    /// The time of frame `k`, s.
+    fn time(self, k: usize) -> f64 {
+        self.start + k as f64 / self.fps
+    }
+}
+
+/// A document's nodes with what animates them, as read.
+struct Animated<'a> {
+    doc: &'a gltf::Document,
+    tree: &'a NodeTree,
+    tracks: &'a [(usize, Property, Track)],
+    data: &'a Reading<'a>,
+}
+
+/// The nodes whose motion moves a mesh read: the mesh nodes, their
+/// skins' joints, and every node above them.
+fn nodes_moving_meshes(tree: &NodeTree, nodes: &[gltf::Node<'_>]) -> Vec<bool> {
     let mut moves_a_mesh = vec![false; tree.parents.len()];
-    for node in &nodes {
+    for node in nodes {
         let skin = node.skin();
         let joints = skin.iter().flat_map(|s| s.joints().map(|j| j.index()));
         for start in std::iter::once(node.index()).chain(joints) {
@@ -288,9 +368,20 @@ fn read_gltf(
             }
         }
     }
-    let mut warnings = Vec::new();
-    // Tracks per (node, property).
-    let mut tracks: Vec<(usize, Property, Track)> = Vec::new();
+    moves_a_mesh
+}
+
+/// The tracks of the animations read (the one `only` names, else all), and
+/// the first and last key's times. A broken channel is refused if its
+/// node moves a mesh, else said in `warnings` and left out.
+fn read_tracks(
+    doc: &gltf::Document,
+    only: Option<usize>,
+    data: &Reading<'_>,
+    moves_a_mesh: &[bool],
+    warnings: &mut Vec<String>,
+) -> Result<(Tracks, f64, f64), ExportError> {
+    let mut tracks: Tracks = Vec::new();
     let mut t_end = 0.0f64;
     let mut t_start = f64::INFINITY;
     for anim in doc
@@ -299,7 +390,7 @@ fn read_gltf(
     {
         for ch in anim.channels() {
             let node = ch.target().node();
-            let track = match read_track(&ch, &data) {
+            let track = match read_track(&ch, data) {
                 Ok(track) => track,
                 Err(why) => {
                     let label = format!(
@@ -328,177 +419,179 @@ fn read_gltf(
             tracks.push((node.index(), ch.target().property(), track));
         }
     }
-    let (start, fps) = match grid {
-        Grid::From0(fps) => (0.0, fps.or(extras.fps).unwrap_or(DEFAULT_FPS)),
-        Grid::Keys => match key_rate(
-            tracks
-                .iter()
-                .flat_map(|(_, _, t)| t.times.windows(2).map(|w| w[1] as f64 - w[0] as f64))
-                .filter(|d| *d > 0.0)
-                .fold(f64::INFINITY, f64::min),
-        ) {
-            Some(rate) => (t_start, rate),
-            // No animation, or one key: a single frame.
-            None => (t_start.min(t_end).max(0.0), DEFAULT_FPS),
-        },
+    Ok((tracks, t_start, t_end))
+}
+
+/// The clip object of mesh node `node`, sampled at `sampling` (`None`,
+/// said in `warnings`, for a mesh with no primitive); `objects` are those
+/// read before it, whose names its own must differ from.
+fn read_object(
+    animated: &Animated<'_>,
+    node: gltf::Node<'_>,
+    sampling: Sampling,
+    objects: &[ClipObject],
+    warnings: &mut Vec<String>,
+) -> Result<Option<ClipObject>, ExportError> {
+    let Animated {
+        doc,
+        tree,
+        tracks,
+        data,
+    } = *animated;
+    let Some(mesh) = node.mesh() else {
+        return Ok(None);
     };
-    let frames = sampled_frames(start, t_end, fps).map_err(ExportError::Data)?;
+    let frames = sampling.frames;
     let parents = &tree.parents;
     // World transforms of every node at frame k, for meshes below animated
     // parents and for skins' joints: computed frame by frame, not held for
     // all frames (a long bake of a deep rig would hold gigabytes).
-    let worlds_at = |k: usize| world_matrices(doc, &tree, &tracks, start + k as f64 / fps);
-    let mut objects = Vec::new();
-    for node in nodes {
-        let Some(mesh) = node.mesh() else { continue };
-        let node_extras: NodeExtras = node
-            .extras()
-            .as_ref()
-            .and_then(|r| serde_json::from_str(r.get()).ok())
-            .unwrap_or_default();
-        let Some(MeshData {
-            base,
-            triangles,
-            segments,
-            targets,
-            influences,
-            unread,
-        }) = mesh_data(&node, &mesh, &data)?
-        else {
-            warnings.push(format!(
-                "node {} has mesh {}, which has no primitive: left out",
-                node.index(),
-                mesh.index()
-            ));
-            continue;
+    let worlds_at = |k: usize| world_matrices(doc, tree, tracks, sampling.time(k));
+    let node_extras: NodeExtras = node
+        .extras()
+        .as_ref()
+        .and_then(|r| serde_json::from_str(r.get()).ok())
+        .unwrap_or_default();
+    let Some(MeshData {
+        base,
+        triangles,
+        segments,
+        targets,
+        influences,
+        unread,
+    }) = mesh_data(&node, &mesh, data)?
+    else {
+        warnings.push(format!(
+            "node {} has mesh {}, which has no primitive: left out",
+            node.index(),
+            mesh.index()
+        ));
+        return Ok(None);
+    };
+    warnings.extend(unread);
+    let track = |p: Property| track_of(tracks, node.index(), p);
+    let default_weights: Vec<f64> = mesh
+        .weights()
+        .map(|w| w.iter().map(|&x| x as f64).collect())
+        .unwrap_or_else(|| vec![0.0; targets.len()]);
+    let weights_at =
+        |t: f64| track(Property::MorphTargetWeights).map_or(default_weights.clone(), |x| x.at(t));
+    let morphed = |i: usize, b: &[f32; 3], weights: &[f64]| morphed(&targets, i, b, weights);
+    // Below other nodes or skinned: placed vertex by vertex.
+    let composed = parents[node.index()].is_some() || node.skin().is_some();
+    if composed || !targets.is_empty() {
+        check_points(node.name().unwrap_or("a mesh"), frames, base.len())
+            .map_err(ExportError::Data)?;
+    }
+    let motion = if composed {
+        // The mesh's own vertices at frame k, morph targets applied.
+        let points_at = |k: usize| -> Vec<V3> {
+            let weights = weights_at(sampling.time(k));
+            base.iter()
+                .enumerate()
+                .map(|(i, b)| V3::from(morphed(i, b, &weights)))
+                .collect()
         };
-        warnings.extend(unread);
-        let track = |p: Property| track_of(&tracks, node.index(), p);
-        let default_weights: Vec<f64> = mesh
-            .weights()
-            .map(|w| w.iter().map(|&x| x as f64).collect())
-            .unwrap_or_else(|| vec![0.0; targets.len()]);
-        let weights_at = |t: f64| {
-            track(Property::MorphTargetWeights).map_or(default_weights.clone(), |x| x.at(t))
-        };
-        let morphed = |i: usize, b: &[f32; 3], weights: &[f64]| {
-            let mut p = b.map(f64::from);
-            for (target, w) in targets.iter().zip(weights) {
-                if *w != 0.0
-                    && let Some(d) = target.get(i)
-                {
-                    for c in 0..3 {
-                        p[c] += w * d[c] as f64;
-                    }
-                }
+        composed_motion(
+            &node,
+            frames,
+            worlds_at,
+            points_at,
+            influences.as_ref(),
+            data,
+        )?
+    } else {
+        own_motion(&node, tracks, sampling, &base, &targets, weights_at)
+    };
+    Ok(Some(ClipObject {
+        first_frame: 0,
+        name: object_name(doc, parents, &node, objects),
+        kind: if node_extras.kind.is_empty() {
+            "mesh".to_string()
+        } else {
+            node_extras.kind
+        },
+        label: node_extras.label,
+        regime: node_extras.regime,
+        features: node_extras.features.into_iter().collect(),
+        triangles,
+        segments,
+        body: None,
+        render: None,
+        motion,
+    }))
+}
+
+/// Vertex `i` at rest `b`, its morph `targets` weighted by `weights`.
+fn morphed(targets: &[Vec<[f32; 3]>], i: usize, b: &[f32; 3], weights: &[f64]) -> [f64; 3] {
+    let mut p = b.map(f64::from);
+    for (target, w) in targets.iter().zip(weights) {
+        if *w != 0.0
+            && let Some(d) = target.get(i)
+        {
+            for c in 0..3 {
+                p[c] += w * d[c] as f64;
             }
-            p
-        };
-        // Below other nodes or skinned: placed vertex by vertex.
-        let composed = parents[node.index()].is_some() || node.skin().is_some();
-        if composed || !targets.is_empty() {
-            check_points(node.name().unwrap_or("a mesh"), frames, base.len())
-                .map_err(ExportError::Data)?;
         }
-        let motion = if composed {
-            // The mesh's own vertices at frame k, morph targets applied.
-            let points_at = |k: usize| -> Vec<V3> {
-                let weights = weights_at(start + k as f64 / fps);
+    }
+    p
+}
+
+/// The motion of a mesh moved by its own node alone (a root, not
+/// skinned): rigid, or deforming where morph targets move its vertices.
+fn own_motion(
+    node: &gltf::Node<'_>,
+    tracks: &[(usize, Property, Track)],
+    sampling: Sampling,
+    base: &[[f32; 3]],
+    targets: &[Vec<[f32; 3]>],
+    weights_at: impl Fn(f64) -> Vec<f64>,
+) -> Motion {
+    let frames = sampling.frames;
+    let mut translation = Vec::with_capacity(frames);
+    let mut rotation = Vec::with_capacity(frames);
+    let mut scale = Vec::with_capacity(frames);
+    let mut weights = Vec::with_capacity(frames);
+    for k in 0..frames {
+        let t = sampling.time(k);
+        let (tr, r, s) = trs(node, tracks, t);
+        // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
+        let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
+        translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
+        rotation.push(q);
+        scale.push([s[0], s[1], s[2]]);
+        weights.push(weights_at(t));
+    }
+    let scaled = |p: [f64; 3], s: [f64; 3]| -> V3 {
+        from_gltf([
+            (p[0] * s[0]) as f32,
+            (p[1] * s[1]) as f32,
+            (p[2] * s[2]) as f32,
+        ])
+    };
+    if targets.is_empty() {
+        Motion::Rigid {
+            local: base
+                .iter()
+                .map(|p| scaled(p.map(f64::from), scale.first().copied().unwrap_or([1.0; 3])))
+                .collect(),
+            translation,
+            rotation,
+        }
+    } else {
+        let frames_out = (0..frames)
+            .map(|k| {
                 base.iter()
                     .enumerate()
-                    .map(|(i, b)| V3::from(morphed(i, b, &weights)))
-                    .collect()
-            };
-            composed_motion(
-                &node,
-                frames,
-                worlds_at,
-                points_at,
-                influences.as_ref(),
-                &data,
-            )?
-        } else {
-            let mut translation = Vec::with_capacity(frames);
-            let mut rotation = Vec::with_capacity(frames);
-            let mut scale = Vec::with_capacity(frames);
-            let mut weights = Vec::with_capacity(frames);
-            for k in 0..frames {
-                let t = start + k as f64 / fps;
-                let (tr, r, s) = trs(&node, &tracks, t);
-                // glTF [x, y, z, w] → the simulator's axes: (w, X, −Z, Y).
-                let q = UnitQuaternion::new_normalize(Quaternion::new(r[3], r[0], -r[2], r[1]));
-                translation.push(from_gltf([tr[0] as f32, tr[1] as f32, tr[2] as f32]));
-                rotation.push(q);
-                scale.push([s[0], s[1], s[2]]);
-                weights.push(weights_at(t));
-            }
-            let scaled = |p: [f64; 3], s: [f64; 3]| -> V3 {
-                from_gltf([
-                    (p[0] * s[0]) as f32,
-                    (p[1] * s[1]) as f32,
-                    (p[2] * s[2]) as f32,
-                ])
-            };
-            if targets.is_empty() {
-                Motion::Rigid {
-                    local: base
-                        .iter()
-                        .map(|p| {
-                            scaled(p.map(f64::from), scale.first().copied().unwrap_or([1.0; 3]))
-                        })
-                        .collect(),
-                    translation,
-                    rotation,
-                }
-            } else {
-                let frames_out = (0..frames)
-                    .map(|k| {
-                        base.iter()
-                            .enumerate()
-                            .map(|(i, b)| {
-                                translation[k]
-                                    + rotation[k] * scaled(morphed(i, b, &weights[k]), scale[k])
-                            })
-                            .collect()
+                    .map(|(i, b)| {
+                        translation[k]
+                            + rotation[k] * scaled(morphed(targets, i, b, &weights[k]), scale[k])
                     })
-                    .collect();
-                Motion::Deforming { frames: frames_out }
-            }
-        };
-        objects.push(ClipObject {
-            first_frame: 0,
-            name: object_name(doc, parents, &node, &objects),
-            kind: if node_extras.kind.is_empty() {
-                "mesh".to_string()
-            } else {
-                node_extras.kind
-            },
-            label: node_extras.label,
-            regime: node_extras.regime,
-            features: node_extras.features.into_iter().collect(),
-            triangles,
-            segments,
-            body: None,
-            render: None,
-            motion,
-        });
+                    .collect()
+            })
+            .collect();
+        Motion::Deforming { frames: frames_out }
     }
-    if objects.is_empty() {
-        return Err(ExportError::Data(
-            "the default scene has no node with a mesh".into(),
-        ));
-    }
-    let clip = Clip {
-        name: name.to_string(),
-        fps,
-        frames,
-        objects,
-        ground: extras.ground,
-        wind: extras.wind,
-        warnings,
-    };
-    clip.validate()?;
-    Ok(clip)
 }
 
 /// A glTF node tree, checked to be one: every node below at most one
@@ -771,6 +864,43 @@ struct MeshData {
     unread: Vec<String>,
 }
 
+/// How many JOINTS_n / WEIGHTS_n sets a primitive has, and each vertex's
+/// joints and weights from them.
+type SkinSets = (u32, Vec<Vec<usize>>, Vec<Vec<f64>>);
+
+/// Every JOINTS_n / WEIGHTS_n set of primitive `prim` of skinned `node`,
+/// four influences each: how many sets, and each of its `n` vertices'
+/// joints and weights.
+fn skin_sets(
+    node: &gltf::Node<'_>,
+    prim: &gltf::Primitive<'_>,
+    n: usize,
+    reading: &Reading<'_>,
+) -> Result<SkinSets, ExportError> {
+    let reader = prim.reader(reading.get());
+    let mut set = 0;
+    let (mut j, mut w) = (vec![Vec::new(); n], vec![Vec::new(); n]);
+    while let (Some(ja), Some(wa)) = (
+        prim.get(&gltf::Semantic::Joints(set)),
+        prim.get(&gltf::Semantic::Weights(set)),
+    ) {
+        check_accessor(&ja, &[U8, U16], Dimensions::Vec4, "joints", reading)?;
+        check_accessor(&wa, &[U8, U16, F32], Dimensions::Vec4, "weights", reading)?;
+        let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set)) else {
+            return Err(ExportError::Data(format!(
+                "mesh of node {}: joints or weights {set} lie outside their buffer",
+                node.index()
+            )));
+        };
+        for (v, (js, ws)) in js.into_u16().zip(ws.into_f32()).enumerate().take(n) {
+            j[v].extend(js.map(usize::from));
+            w[v].extend(ws.map(f64::from));
+        }
+        set += 1;
+    }
+    Ok((set, j, w))
+}
+
 /// The geometry of `node`'s `mesh` (`None` if it has no primitive).
 fn mesh_data<'a>(
     node: &gltf::Node<'a>,
@@ -871,28 +1001,7 @@ fn mesh_data<'a>(
             all.extend(t.iter().copied().chain(std::iter::repeat([0.0; 3])).take(n));
         }
         if node.skin().is_some() {
-            // Every JOINTS_n / WEIGHTS_n set, four influences each.
-            let mut set = 0;
-            let (mut j, mut w) = (vec![Vec::new(); n], vec![Vec::new(); n]);
-            while let (Some(ja), Some(wa)) = (
-                prim.get(&gltf::Semantic::Joints(set)),
-                prim.get(&gltf::Semantic::Weights(set)),
-            ) {
-                check_accessor(&ja, &[U8, U16], Dimensions::Vec4, "joints", reading)?;
-                check_accessor(&wa, &[U8, U16, F32], Dimensions::Vec4, "weights", reading)?;
-                let (Some(js), Some(ws)) = (reader.read_joints(set), reader.read_weights(set))
-                else {
-                    return Err(ExportError::Data(format!(
-                        "mesh of node {}: joints or weights {set} lie outside their buffer",
-                        node.index()
-                    )));
-                };
-                for (v, (js, ws)) in js.into_u16().zip(ws.into_f32()).enumerate().take(n) {
-                    j[v].extend(js.map(usize::from));
-                    w[v].extend(ws.map(f64::from));
-                }
-                set += 1;
-            }
+            let (set, j, w) = skin_sets(node, &prim, n, reading)?;
             if set == 0 || sets.is_some_and(|s| s != set) {
                 return Err(ExportError::Data(format!(
                     "mesh of node {} has a skin but primitive {k} has {set} JOINTS/WEIGHTS sets",

@@ -29,6 +29,7 @@ use crate::formats::clip::frame::Framed;
 use crate::formats::clip::look::{colour, material_name, shown};
 use crate::formats::clip::{Clip, ClipObject};
 use crate::formats::error::ExportError;
+use crate::util::setting::Setting;
 use gltf::json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};
@@ -779,8 +780,9 @@ impl GlbBuilder {
         let total = 12 + 8 + text.len().next_multiple_of(4) + 8 + bin.bytes.len();
         let length = u32::try_from(total).map_err(|_| {
             ExportError::Data(format!(
-                "{}: {total} bytes exceed the 4 GiB a .glb can hold; export fewer frames (--fps) or objects",
-                clip.name
+                "{}: {total} bytes exceed the 4 GiB a .glb can hold; export fewer frames ({}) or objects",
+                clip.name,
+                Setting::Fps
             ))
         })?;
         let glb = gltf::binary::Glb {

@@ -49,7 +49,7 @@ use std::path::Path;
 type V3 = Vector3<f64>;
 
 /// How to get a `.usdc` from a `.usda`, with Pixar's library.
-pub const USDC_HINT: &str = "leafmagic writes USD as text (--format usd or usda); convert it to \
+pub const USDC_HINT: &str = "leafmagic writes USD as text (the `usd` or `usda` format); convert it to \
     .usdc with Pixar's library: pip install usd-core, then python3 -c \"from pxr import Sdf; \
     Sdf.Layer.FindOrOpen('X.usda').Export('X.usdc')\"";
 

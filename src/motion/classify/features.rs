@@ -183,9 +183,42 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
         return f;
     }
 
-    // Pass 1: per interval — angular increments, yaw, vertical speed. The
-    // horizontal (pitch/roll) part of each increment is kept both in world
-    // axes and in body axes (mapped with the mid-interval orientation).
+    // Pass 1: per interval — angular increments, yaw, vertical speed.
+    let inc = increments(tr, i0, &mut f);
+    translation_and_yaw(tr, i0, size, duration, &inc, &mut f);
+    // The increments are dropped once the pitch is read from them.
+    let pitch = pitch_increments(inc, &mut f);
+    rotation_and_rocking(tr, i0, &pitch, duration, &mut f);
+    tilt_and_flips(tr, i0, duration, &mut f);
+    f
+}
+
+/// What pass 1 of [`extract`] gathers over the intervals.
+struct Increments {
+    /// Each interval's horizontal rotation, world axes.
+    world_h: Vec<[f64; 2]>,
+    /// The same in body axes.
+    body_h: Vec<Vector3<f64>>,
+    /// The net yaw, rad.
+    psi: f64,
+    /// The yaw's total, rad.
+    abs_rz: f64,
+    /// ∫ω_h ω_hᵀ dt, world axes.
+    s_world: Matrix2<f64>,
+    /// The same in body axes.
+    s_body: Matrix3<f64>,
+    /// ∫|ω|² dt.
+    w2: f64,
+}
+
+/// The angular increments of samples `i0..` (pass 1): per interval, the
+/// horizontal (pitch/roll) part of each increment in world axes and in body
+/// axes (mapped with the mid-interval orientation), the yaw, and their
+/// integrals; the largest gap and turn, and the descent speed's spread, go
+/// to `f`.
+fn increments(tr: &Trajectory, i0: usize, f: &mut Features) -> Increments {
+    let n = tr.time.len();
+    let m = n - i0;
     let mut world_h: Vec<[f64; 2]> = Vec::with_capacity(m - 1);
     let mut body_h: Vec<Vector3<f64>> = Vec::with_capacity(m - 1);
     let (mut psi, mut abs_rz) = (0.0f64, 0.0f64);
@@ -220,7 +253,28 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     } else {
         0.0
     };
+    Increments {
+        world_h,
+        body_h,
+        psi,
+        abs_rz,
+        s_world,
+        s_body,
+        w2,
+    }
+}
 
+/// Translation and yaw: descent, drift and the yaw's rate and consistency.
+fn translation_and_yaw(
+    tr: &Trajectory,
+    i0: usize,
+    size: f64,
+    duration: f64,
+    inc: &Increments,
+    f: &mut Features,
+) {
+    let n = tr.time.len();
+    let (psi, abs_rz, w2) = (inc.psi, inc.abs_rz, inc.w2);
     // Translation.
     let (pa, pb) = (tr.position[i0], tr.position[n - 1]);
     f.descent_m = pa.z - pb.z;
@@ -248,7 +302,18 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     } else {
         0.0
     };
+}
 
+/// The pitch increments about the dominant horizontal axis (its frame and
+/// share go to `f`).
+fn pitch_increments(inc: Increments, f: &mut Features) -> Vec<f64> {
+    let Increments {
+        world_h,
+        body_h,
+        s_world,
+        s_body,
+        ..
+    } = inc;
     // Dominant horizontal axis: the principal axis of ∫ω_h ω_hᵀ dt, fixed
     // either in the body or in the world, whichever explains more of the
     // horizontal rotation (ties go to the body). A body-fixed axis follows a
@@ -272,7 +337,7 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
             .max_by(|&a, &b| vals[a].total_cmp(&vals[b]))
             .unwrap_or(0)
     };
-    let pitch: Vec<f64> = if world_share > body_share + AXIS_FRAME_TIE {
+    if world_share > body_share + AXIS_FRAME_TIE {
         f.axis_frame = AxisFrame::World;
         f.horizontal_axis_share = world_share;
         let a = world
@@ -286,12 +351,19 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
             .eigenvectors
             .column(principal(body.eigenvalues.as_slice()));
         body_h.iter().map(|u| u.dot(&a)).collect()
-    };
-    drop((world_h, body_h));
+    }
+}
 
-    // Pass 2: pitch angle θ about that axis; net/total rotation and the
-    // turning points of θ (zig-zag with a minimum swing, so jitter is not
-    // counted as rocking).
+/// Pass 2: pitch angle θ about the dominant axis; net/total rotation and
+/// the turning points of θ (zig-zag with a minimum swing, so jitter is not
+/// counted as rocking).
+fn rotation_and_rocking(
+    tr: &Trajectory,
+    i0: usize,
+    pitch: &[f64],
+    duration: f64,
+    f: &mut Features,
+) {
     let swing = REVERSAL_MIN_SWING_DEG.to_radians();
     let (mut theta, mut total) = (0.0f64, 0.0f64);
     let mut dir = 0i8; // 0 = not yet moving by a full swing, ±1 = rising/falling
@@ -357,8 +429,12 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     };
     f.oscillation_period_s =
         (turns_n >= 3).then(|| 2.0 * (last_turn_t - first_turn_t) / (turns_n - 1) as f64);
+}
 
-    // Pass 3: per sample — tilt statistics and normal flips.
+/// Pass 3: per sample, tilt statistics and normal flips.
+fn tilt_and_flips(tr: &Trajectory, i0: usize, duration: f64, f: &mut Features) {
+    let n = tr.time.len();
+    let m = n - i0;
     let flip_z = FLIP_HYSTERESIS_DEG.to_radians().sin();
     let nz0 = normal_z(&tr.orientation[i0]);
     let pole = if nz0 >= 0.0 { 1.0 } else { -1.0 };
@@ -404,5 +480,4 @@ pub(super) fn extract(tr: &Trajectory, i0: usize, size: f64) -> Features {
     f.normal_tilt_mean_deg = nsum / wsum;
     let p10 = (0.1 * (m - 1) as f64).floor() as usize;
     f.tilt_p10_deg = *tilts.select_nth_unstable_by(p10, f64::total_cmp).1;
-    f
 }

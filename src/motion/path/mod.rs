@@ -80,6 +80,7 @@ pub use rules::{
 
 use crate::motion::class::{MotionClass, Regime};
 use crate::motion::trajectory::Trajectory;
+use crate::util::setting::Setting;
 use areas::measure_areas;
 use features::measure_path;
 use rules::decide;
@@ -285,10 +286,14 @@ pub fn classify_path_with(
 /// What to say of a record that rises at least as far as a fall must
 /// descend (`chords` of descent, negative): its vertical is most likely
 /// another axis, or points down (image rows count downward).
-pub(crate) fn rising_hint(chords: f64, min_chords: f64) -> &'static str {
+pub(crate) fn rising_hint(chords: f64, min_chords: f64) -> String {
     if chords <= -min_chords {
-        "; it rises instead: is its vertical the right axis (--up y for y up, --up=-y for a y that points down as image rows do)?"
+        format!(
+            "; it rises instead: is its vertical the right axis ({} for y up, {} for a y that points down as image rows do)?",
+            Setting::Up.set("y"),
+            Setting::Up.set("-y")
+        )
     } else {
-        ""
+        String::new()
     }
 }

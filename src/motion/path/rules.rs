@@ -176,6 +176,9 @@ enum RuleId {
 }
 
 /// The ordered rules of the module docs, step 5 (first match wins).
+// one piece: a table, read top to bottom in the order the rules are tried
+// and the module docs list them; the conditions built before it are those
+// several rules share or that depend on the inputs.
 fn rules(f: &PathFeatures, inputs: Inputs, cal: &Calibration) -> Vec<Rule<RuleId>> {
     use MotionClass as C;
     let rule = |id, class, regime, conds| Rule {

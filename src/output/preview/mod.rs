@@ -14,6 +14,7 @@ use crate::formats::gltf;
 use crate::motion::trajectory::Trajectory;
 use crate::output::export;
 use crate::util::confined::ReadPolicy;
+use crate::util::setting::Setting;
 use base64::Engine as _;
 use nalgebra::Vector3;
 
@@ -80,8 +81,8 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
         return load_file(input, file);
     }
     for (flag, given) in [
-        ("--animation", file.animation.is_some()),
-        ("--scale", file.scale.is_some()),
+        (Setting::Animation, file.animation.is_some()),
+        (Setting::Scale, file.scale.is_some()),
     ] {
         if given {
             return Err(ExportError::input(
@@ -193,14 +194,18 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
             return Err(ExportError::input(
                 input,
                 format!(
-                    "--scale {scale}: applies to an Alembic archive, which carries no unit; glTF is in metres, and USD says its metersPerUnit"
+                    "{}: applies to an Alembic archive, which carries no unit; glTF is in metres, and USD says its metersPerUnit",
+                    Setting::Scale.set(scale)
                 ),
             ));
         }
         if !(scale > 0.0 && scale.is_finite()) {
             return Err(ExportError::input(
                 input,
-                format!("--scale must be a positive number of metres per unit, got {scale}"),
+                format!(
+                    "{} must be a positive number of metres per unit, got {scale}",
+                    Setting::Scale
+                ),
             ));
         }
     }
@@ -631,9 +636,16 @@ fn fits_a_browser(clip: &Clip) -> Result<(), ExportError> {
         clip.fps,
         MAX_PAGE_DATA_CHARS as f64 / 1e6,
         if fits >= 1.0 {
-            format!("pass --fps {fits} or lower, or export it (--format abc, usd) for a client")
+            format!(
+                "pass {} or lower, or export it ({} abc, usd) for a client",
+                Setting::Fps.set(fits),
+                Setting::Format
+            )
         } else {
-            "export it instead (--format abc, usd) for a client".to_string()
+            format!(
+                "export it instead ({} abc, usd) for a client",
+                Setting::Format
+            )
         }
     )))
 }
@@ -845,7 +857,7 @@ mod tests {
         assert!(page_data_chars(&big) > 1_600_000_000);
         let e = html(&big, false).unwrap_err().to_string();
         assert!(
-            e.contains("more than a browser holds") && e.contains("--fps 8 or lower"),
+            e.contains("more than a browser holds") && e.contains("fps = 8 or lower"),
             "{e}"
         );
     }

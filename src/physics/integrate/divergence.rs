@@ -2,6 +2,7 @@
 //! it) or a failed implicit solve; and the limits that count as a runaway.
 
 use crate::physics::params::Integrator;
+use crate::util::setting::Setting;
 use std::fmt;
 
 /// Why a run stopped before its end.
@@ -61,7 +62,8 @@ fn solver_failed(step: u64, time: f64, iterations: usize, residual: f64) -> Stri
     };
     format!(
         "implicit solver did not converge at step {step} (t = {time:.6} s): {why} \
-         after {iterations} CG iterations; the system is ill-conditioned, try a smaller --dt"
+         after {iterations} CG iterations; the system is ill-conditioned, try a smaller {}",
+        Setting::Dt
     )
 }
 
@@ -144,7 +146,8 @@ impl fmt::Display for Divergence {
             Some(m) if d.dt > m => write!(
                 f,
                 ", above the estimated stable limit dt_max = {m:.3e} s: \
-                 the time step is too large for the stiffness; use the automatic step (`--dt auto`, or `dt = \"auto\"` in a scene file) or a step below dt_max"
+                 the time step is too large for the stiffness; use the automatic step (`{}`, or `dt = \"auto\"` in a scene file) or a step below dt_max",
+                Setting::Dt.set("auto")
             )?,
             Some(m) => write!(
                 f,

@@ -9,6 +9,7 @@ use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::state::State;
 use crate::sim::drop;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::time::Instant;
@@ -229,8 +230,9 @@ pub fn reference(
         return Err(AccuracyError::Settings(format!(
             "reference_j: the reference, RK4 at T/2^{j} = {coarse_h:.3e} s, is above RK4's \
              stable step {limit:.3e} s; simulate at most {:.3e} s at this j, or raise it \
-             (--reference-j, up to 30)",
-            limit * 2f64.powi(j as i32)
+             ({}, up to 30)",
+            limit * 2f64.powi(j as i32),
+            Setting::ReferenceJ
         )));
     }
     let coarse = run_steps(model, initial, Integrator::Rk4, coarse_h, 1 << j);

@@ -15,6 +15,7 @@ use crate::physics::model::Model;
 use crate::physics::params::Integrator;
 use crate::physics::stability;
 use crate::physics::state::State;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 
@@ -304,8 +305,10 @@ pub fn sweep(
     if let Some(next_s) = over_budget {
         warnings.push(format!(
             "reference refinement stopped at h_ref/2 = {:.3e} s: the next halving would take \
-             about {next_s:.0} s, past the {:.0} s allowed; --reference-j pins a finer one",
-            reference.dt, settings.refine_budget_s
+             about {next_s:.0} s, past the {:.0} s allowed; {} pins a finer one",
+            reference.dt,
+            settings.refine_budget_s,
+            Setting::ReferenceJ
         ));
     }
     if !reference_valid {
@@ -319,50 +322,7 @@ pub fn sweep(
         ));
     }
     for s in &mut summaries {
-        let fit: Vec<(f64, f64)> = rows
-            .iter()
-            .filter(|r| r.integrator == s.integrator)
-            .filter_map(|r| r.error.map(|e| (r.dt, e)))
-            .filter(|&(_, e)| {
-                e >= FIT_FLOOR_FACTOR * reference.self_difference && e <= FIT_MAX_ERROR
-            })
-            .collect();
-        s.fit_points = fit.len();
-        s.order = (fit.len() >= 3).then(|| loglog_slope(&fit));
-        s.pairwise_orders = fit
-            .windows(2)
-            .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
-            .collect();
-        let finest = rows
-            .iter()
-            .filter(|r| r.integrator == s.integrator && r.error.is_some_and(|e| e > 0.0))
-            .min_by(|a, b| a.dt.total_cmp(&b.dt));
-        s.extrapolated = TOLERANCES
-            .iter()
-            .zip(&s.cheapest)
-            .map(|(&tolerance, reached)| match (reached, s.order, finest) {
-                (None, Some(p), Some(f)) if p > 0.0 => {
-                    let e0 = f.error.unwrap_or(f64::NAN);
-                    let ratio = (e0 / tolerance).powf(1.0 / p);
-                    Some(Extrapolation {
-                        tolerance,
-                        dt: f.dt / ratio,
-                        wall_s: f.wall_s * ratio,
-                        force_evals: f.force_evals as f64 * ratio,
-                    })
-                }
-                _ => None,
-            })
-            .collect();
-        if s.order.is_none() {
-            warnings.push(format!(
-                "{}: only {} point(s) between {:.0} × the reference's self-difference and \
-                 {FIT_MAX_ERROR:.0e} chords; no order fitted",
-                s.integrator,
-                fit.len(),
-                FIT_FLOOR_FACTOR
-            ));
-        }
+        fit_order(s, &rows, reference.self_difference, &mut warnings);
     }
     Ok(SweepReport {
         seconds,
@@ -377,6 +337,55 @@ pub fn sweep(
         summaries,
         warnings,
     })
+}
+
+/// Fits `s`'s order of convergence to its integrator's errors in `rows`
+/// between [`FIT_FLOOR_FACTOR`] × the reference's `self_difference` and
+/// [`FIT_MAX_ERROR`], and extrapolates the tolerances it does not reach;
+/// says in `warnings` when too few points lie there.
+fn fit_order(s: &mut Summary, rows: &[SweepRow], self_difference: f64, warnings: &mut Vec<String>) {
+    let fit: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r.integrator == s.integrator)
+        .filter_map(|r| r.error.map(|e| (r.dt, e)))
+        .filter(|&(_, e)| e >= FIT_FLOOR_FACTOR * self_difference && e <= FIT_MAX_ERROR)
+        .collect();
+    s.fit_points = fit.len();
+    s.order = (fit.len() >= 3).then(|| loglog_slope(&fit));
+    s.pairwise_orders = fit
+        .windows(2)
+        .map(|w| (w[0].1 / w[1].1).ln() / (w[0].0 / w[1].0).ln())
+        .collect();
+    let finest = rows
+        .iter()
+        .filter(|r| r.integrator == s.integrator && r.error.is_some_and(|e| e > 0.0))
+        .min_by(|a, b| a.dt.total_cmp(&b.dt));
+    s.extrapolated = TOLERANCES
+        .iter()
+        .zip(&s.cheapest)
+        .map(|(&tolerance, reached)| match (reached, s.order, finest) {
+            (None, Some(p), Some(f)) if p > 0.0 => {
+                let e0 = f.error.unwrap_or(f64::NAN);
+                let ratio = (e0 / tolerance).powf(1.0 / p);
+                Some(Extrapolation {
+                    tolerance,
+                    dt: f.dt / ratio,
+                    wall_s: f.wall_s * ratio,
+                    force_evals: f.force_evals as f64 * ratio,
+                })
+            }
+            _ => None,
+        })
+        .collect();
+    if s.order.is_none() {
+        warnings.push(format!(
+            "{}: only {} point(s) between {:.0} × the reference's self-difference and \
+             {FIT_MAX_ERROR:.0e} chords; no order fitted",
+            s.integrator,
+            fit.len(),
+            FIT_FLOOR_FACTOR
+        ));
+    }
 }
 
 /// [`sweep`] on a copy of `model` with breaking switched off, noting it.

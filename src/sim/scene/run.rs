@@ -7,7 +7,7 @@ use crate::physics::integrate::SimError;
 use crate::physics::params::Integrator;
 use crate::physics::params::TimeStep;
 use crate::physics::pose::PoseTracker;
-use crate::physics::run::{Command, PoseFault, StepError, Work, check_budget, resolve_dt};
+use crate::physics::run::{PoseFault, RunKind, StepError, Work, check_budget, resolve_dt};
 use crate::physics::skip::SkipCounts;
 use crate::physics::state::State;
 use crate::util::io::particle_csv;
@@ -120,7 +120,7 @@ impl Scene {
             &self.model,
             1.0 / self.frame_rate,
             self.max_work,
-            Command::Scene,
+            RunKind::Scene,
         )?;
         let (frame_dt, dt) = (1.0 / self.frame_rate, work.dt);
         let frames = (seconds * self.frame_rate).round().max(1.0) as u64;
