@@ -33,9 +33,11 @@
 //! a second. `--refine N` meshes the plates N times finer across ("Is the
 //! experiment converged?"). `--draught SPEED,TIME` lets each release fall
 //! in its own random draught ("Paper that bends, and a draught in the
-//! room").
+//! room"). `--shape cross --cross-arm R` cuts crosses of span the bin's
+//! size and arms R × the span wide (the study's fourth shape, "Predictions
+//! for the held-out shapes").
 //!
-//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --films DIR --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N --draught SPEED,TIME KEY=VALUE ...]
+//! cargo run --release --example real_falls [-- --releases N --seed S --law NAME --shape NAME --films DIR --mix halves|filmed --flat-tilt LO,HI --bending N_M --refine N --draught SPEED,TIME --cross-arm R KEY=VALUE ...]
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
@@ -46,7 +48,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 /// What the example takes.
-const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle] [--films DIR] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/lab/real-falls.md, \"The law\")";
+const USAGE: &str = "usage: cargo run --release --example real_falls -- [--releases N] [--seed S] [--law NAME] [--shape square|circle|hexagon|rectangle|cross] [--films DIR] [--mix halves|filmed] [--flat-tilt LO,HI] [--bending N_M] [--refine N] [--draught SPEED,TIME] [--cross-arm W/S] [KEY=VALUE ...]\n  KEY=VALUE: any [aero] key of the law (docs/lab/real-falls.md, \"The law\")";
 
 /// Resamples of the real side's bootstrap: the 5th and 95th percentiles of
 /// 2,000 move by less than the printed digits between seeds.
@@ -116,7 +118,7 @@ fn run() -> Result<(), String> {
                 shape = Some(value(
                     &mut args,
                     "--shape",
-                    "square, circle, hexagon or rectangle",
+                    "square, circle, hexagon, rectangle or cross",
                 )?)
             }
             "--films" => films = Some(value(&mut args, "--films", "a folder of films")?),
@@ -142,6 +144,11 @@ fn run() -> Result<(), String> {
                 let [speed, correlation] = pair(&mut args, "--draught", "SPEED,TIME in m/s and s")?;
                 protocol.draught = Some(real_falls::Draught { speed, correlation });
                 protocol.check().map_err(|e| format!("--draught: {e}"))?;
+            }
+            "--cross-arm" => {
+                let r: f64 = value(&mut args, "--cross-arm", "an arm width over span")?;
+                protocol.cross_arm = Some(r);
+                protocol.check().map_err(|e| format!("--cross-arm: {e}"))?;
             }
             "--refine" => {
                 protocol.refine = value(&mut args, "--refine", "a whole number >= 1")?;
@@ -388,7 +395,7 @@ fn run() -> Result<(), String> {
     for ((r, drops), br) in cmp.real.iter().zip(&cmp.drops).zip(&by_real) {
         let bs = real_falls::sim_by_release(drops);
         let pair = |a: f64, b: f64| format!("{a:.2}/{b:.2}");
-        let edge_on = edge_on_speed(filmed, r.side, &aero)
+        let edge_on = edge_on_speed(filmed, r.side, protocol.plate_aspect(filmed), &aero)
             .map_or_else(|| "-".to_string(), |v| format!("{v:.2}"));
         let turn = |a: f64, b: f64| format!("{a:.0}/{b:.0}");
         println!(
@@ -446,14 +453,15 @@ fn run() -> Result<(), String> {
     Ok(())
 }
 
-/// The steady edge-on fall of the simulated plate of `shape` and `side`
+/// The steady edge-on fall of the simulated plate of `shape`, `side` and
+/// `aspect`
 /// in the experiment's air under the unsteady law
 /// ([`unsteady::edge_on_speed`]), m/s; `None` under another law.
-fn edge_on_speed(shape: PlateShape, side: f64, aero: &AeroSpec) -> Option<f64> {
+fn edge_on_speed(shape: PlateShape, side: f64, aspect: f64, aero: &AeroSpec) -> Option<f64> {
     let spec = plate(
         shape,
         side,
-        1.0,
+        aspect,
         real_falls::PAPER,
         real_falls::experiment_air(aero.clone()),
     )
@@ -488,6 +496,9 @@ fn print_protocol(protocol: &Protocol) {
             "a draught in the room: each horizontal component {} m/s r.m.s., correlated over {} s (real_falls::draught_field)",
             d.speed, d.correlation
         );
+    }
+    if let Some(r) = protocol.cross_arm {
+        println!("crosses' arms {r} of their span wide");
     }
     if let Some(d) = protocol.bending {
         println!("plates that bend: paper of bending stiffness {d:.2e} N·m (plates::flexible)");

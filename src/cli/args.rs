@@ -244,16 +244,21 @@ pub struct CheckArgs {
 /// Arguments of `plate`.
 #[derive(clap::Args, Debug)]
 pub struct PlateArgs {
-    /// Outline: square, circle, hexagon or rectangle.
+    /// Outline: square, circle, hexagon, rectangle or cross.
     #[arg(long)]
     pub shape: PlateShape,
     /// Twice the inradius, metres: a square's side, a circle's diameter, a
-    /// hexagon's flat-to-flat width, a rectangle's width (short side).
+    /// hexagon's flat-to-flat width, a rectangle's width (short side); a
+    /// cross's span, tip to tip.
     #[arg(long, allow_negative_numbers = true)]
     pub size: f64,
     /// Length over width (rectangles only; at least 1).
     #[arg(long, default_value_t = 1.0, allow_negative_numbers = true)]
     pub aspect: f64,
+    /// The width of each of a cross's two arms, metres (crosses only, and
+    /// required for them; above 0 and below --size).
+    #[arg(long, allow_negative_numbers = true)]
+    pub arm_width: Option<f64>,
     /// Mass per area, kg/m² (70 g/m² paper by default).
     #[arg(long, default_value_t = PAPER_AREAL_DENSITY, allow_negative_numbers = true)]
     pub areal_density: f64,
@@ -339,6 +344,12 @@ pub struct ClassifyArgs {
     /// Classify every fall of an animation file (each moving mesh, and each particle of an Alembic points cache) and print one line each with the counts per class, instead of naming one with --object.
     #[arg(long, conflicts_with = "object")]
     pub all: bool,
+    /// The classes each fall should have, comma-separated (floater, spinner, lilter, undetermined): every fall is checked, each one of another class is named, and the command fails if there is any (for a pipeline's tests).
+    #[arg(long, value_delimiter = ',', num_args = 1.., value_name = "CLASS[,CLASS]", value_parser = parse_class)]
+    pub expect: Vec<MotionClass>,
+    /// Also write the verdicts of --expect as JUnit XML to this file (one testcase per fall, a failure where its class is not expected), for a CI pipeline's test report.
+    #[arg(long, value_name = "FILE", requires = "expect")]
+    pub junit: Option<PathBuf>,
 }
 
 /// Arguments of `accuracy`.
@@ -602,6 +613,11 @@ fn parse_target(s: &str) -> Result<MotionClass, String> {
         }
         Ok(class) => Ok(class),
     }
+}
+
+/// `--expect`: a class by name (any of the four, undetermined too).
+fn parse_class(s: &str) -> Result<MotionClass, String> {
+    s.parse::<MotionClass>().map_err(|e| e.to_string())
 }
 
 /// `--tilt`: `X,Y` degrees, or `X` alone (Y is then 0).

@@ -46,7 +46,7 @@ pub enum Command {
     Export(ExportArgs),
     /// Drop a leaf from rest in still air and record its fall.
     Drop(DropArgs),
-    /// Write a flat plate (square, circle, hexagon or rectangle) of paper as a
+    /// Write a flat plate (square, circle, hexagon, rectangle or cross) of paper as a
     /// leaf file: a uniform rigid plate, 70 g/m² and the unsteady law by default.
     Plate(PlateArgs),
     /// Report the stable time step of a leaf for each integrator, with warnings.

@@ -3,31 +3,42 @@
 
 use super::args::{ClassifyArgs, CompareArgs, EachFile, FallArgs};
 use super::{input, report};
-use anyhow::{Result, bail};
+use anyhow::{Context, Result, bail};
+use leafmagic::motion::class::MotionClass;
+use leafmagic::motion::classify::Classification;
 use leafmagic::motion::describe::{self, Descriptors};
 use serde_json::json;
+use std::path::Path;
 
 /// `classify`: names the motion of a recorded fall, or with `--all` of
 /// every fall of an animation file.
 pub fn classify(args: ClassifyArgs) -> Result<()> {
+    let expectation = Expectation::of(&args);
     if args.all {
-        return classify_all(&args.fall);
+        return classify_all(&args.fall, expectation.as_ref());
     }
-    let args = args.fall;
+    let args = &args.fall;
     let fall = args.read()?;
     let (traj, c) = (&fall.record.trajectory, &fall.classification);
     if args.json {
-        // The classification's own fields in their order, then the notes.
+        // The classification's own fields in their order, then the notes
+        // and, with --expect, the verdict.
         #[derive(serde::Serialize)]
         struct Noted<'a> {
             #[serde(flatten)]
             classification: &'a leafmagic::motion::classify::Classification,
             #[serde(flatten)]
             notes: ReadingNotes<'a>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            expected: Option<Vec<&'static str>>,
+            #[serde(skip_serializing_if = "Option::is_none")]
+            as_expected: Option<bool>,
         }
         let noted = Noted {
             classification: c,
             notes: ReadingNotes::of(&fall),
+            expected: expectation.as_ref().map(Expectation::names),
+            as_expected: expectation.as_ref().map(|e| e.holds(c.class)),
         };
         println!("{}", serde_json::to_string_pretty(&noted)?);
     } else {
@@ -36,12 +47,116 @@ pub fn classify(args: ClassifyArgs) -> Result<()> {
             report::motion::classified(&args.trajectory, traj.len(), c)
         );
     }
-    Ok(())
+    match &expectation {
+        Some(e) => {
+            // A CSV record is its file; an object is named as in the file.
+            let name = match fall.record.object.as_deref() {
+                Some(object) => object.to_string(),
+                None => args.trajectory.display().to_string(),
+            };
+            e.check(&args.trajectory, &[(name, c)], args.json)
+        }
+        None => Ok(()),
+    }
+}
+
+/// `classify --expect` (and `--junit`): the classes every fall should
+/// have, and where to write the verdicts for a CI pipeline.
+struct Expectation<'a> {
+    /// The expected classes, each once, in the order given.
+    classes: Vec<MotionClass>,
+    junit: Option<&'a Path>,
+}
+
+impl<'a> Expectation<'a> {
+    /// The expectation `--expect` sets, if it is given.
+    fn of(args: &'a ClassifyArgs) -> Option<Expectation<'a>> {
+        if args.expect.is_empty() {
+            return None;
+        }
+        let mut classes = Vec::new();
+        for &c in &args.expect {
+            if !classes.contains(&c) {
+                classes.push(c);
+            }
+        }
+        Some(Expectation {
+            classes,
+            junit: args.junit.as_deref(),
+        })
+    }
+
+    /// Whether a fall of `class` is as expected.
+    fn holds(&self, class: MotionClass) -> bool {
+        self.classes.contains(&class)
+    }
+
+    /// The expected classes' names.
+    fn names(&self) -> Vec<&'static str> {
+        self.classes.iter().map(|c| c.as_str()).collect()
+    }
+
+    /// The expected classes in words: `floater or spinner`.
+    fn either(&self) -> String {
+        report::motion::either(&self.classes)
+    }
+
+    /// Judges `falls` (name, classification) of `file`: prints the
+    /// verdicts (unless the output is JSON, which carries them), writes the
+    /// JUnit report if asked, and fails naming every fall of another class.
+    fn check(&self, file: &Path, falls: &[(String, &Classification)], json: bool) -> Result<()> {
+        use leafmagic::output::junit::{TestCase, junit_xml};
+        let wrong: Vec<&(String, &Classification)> =
+            falls.iter().filter(|(_, c)| !self.holds(c.class)).collect();
+        if !json {
+            print!(
+                "{}",
+                report::motion::verdicts(&self.classes, falls.len(), &wrong)
+            );
+        }
+        if let Some(path) = self.junit {
+            let cases: Vec<TestCase> = falls
+                .iter()
+                .map(|(name, c)| TestCase {
+                    name: name.clone(),
+                    classname: file.display().to_string(),
+                    failure: (!self.holds(c.class)).then(|| {
+                        format!(
+                            "{name}: classified {} ({}), expected {}",
+                            c.class,
+                            c.regime,
+                            self.either()
+                        )
+                    }),
+                })
+                .collect();
+            let suite = format!("leafmagic classify {}", file.display());
+            leafmagic::util::io::write_atomic(path, junit_xml(&suite, &cases).as_bytes())
+                .with_context(|| format!("--junit: cannot write {}", path.display()))?;
+        }
+        if wrong.is_empty() {
+            return Ok(());
+        }
+        let named: Vec<String> = wrong
+            .iter()
+            .map(|(name, c)| format!("`{name}` {} ({})", c.class, c.regime))
+            .collect();
+        bail!(
+            "{}: {} of {} fall{} {} not {}: {}",
+            file.display(),
+            wrong.len(),
+            falls.len(),
+            if falls.len() == 1 { "" } else { "s" },
+            if wrong.len() == 1 { "is" } else { "are" },
+            self.either(),
+            named.join(", ")
+        )
+    }
 }
 
 /// `classify --all`: every fall of an animation file, each classified as
 /// `classify FILE --object NAME` classifies it ([`fall::classify_objects`]).
-fn classify_all(args: &FallArgs) -> Result<()> {
+fn classify_all(args: &FallArgs, expectation: Option<&Expectation>) -> Result<()> {
     use leafmagic::formats::fall::{self, AnimationFormat};
     use leafmagic::motion::trajectory::UpAxis;
     let path = &args.trajectory;
@@ -87,7 +202,7 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             .filter_map(|(o, c)| {
                 let c = c.as_ref()?;
                 let (first, last) = o.life_s(clip.fps);
-                Some(json!({
+                let mut v = json!({
                     "object": o.name,
                     "first_s": first,
                     "last_s": last,
@@ -95,7 +210,11 @@ fn classify_all(args: &FallArgs) -> Result<()> {
                     "regime": c.regime.as_str(),
                     "inputs": c.inputs,
                     "reason": c.reason,
-                }))
+                });
+                if let Some(e) = expectation {
+                    v["as_expected"] = json!(e.holds(c.class));
+                }
+                Some(v)
             })
             .collect();
         let left_out: Vec<&str> = clip
@@ -105,18 +224,32 @@ fn classify_all(args: &FallArgs) -> Result<()> {
             .filter(|(_, c)| c.is_none())
             .map(|(o, _)| o.name.as_str())
             .collect();
-        let out = json!({
+        let mut out = json!({
             "file": path.display().to_string(),
             "rate_hz": clip.fps,
             "objects": objects,
             "left_out": left_out,
             "warnings": clip.warnings,
         });
+        if let Some(e) = expectation {
+            out["expected"] = json!(e.names());
+        }
         println!("{}", serde_json::to_string_pretty(&out)?);
     } else {
         print!("{}", report::motion::classified_each(path, &clip, &classes));
     }
-    Ok(())
+    match expectation {
+        Some(e) => {
+            let falls: Vec<(String, &Classification)> = clip
+                .objects
+                .iter()
+                .zip(&classes)
+                .filter_map(|(o, c)| Some((o.name.clone(), c.as_ref()?)))
+                .collect();
+            e.check(path, &falls, args.json)
+        }
+        None => Ok(()),
+    }
 }
 
 /// What reading a fall noticed, as `classify --json` and `describe --json`

@@ -3,10 +3,10 @@
 //! with `--bending-stiffness` a sheet that bends, [`flexible`]).
 
 use super::args::PlateArgs;
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use leafmagic::leaf::AeroLawName;
 use leafmagic::leaf::AeroSpec;
-use leafmagic::leaf::plates::{flexible, plate as build_plate};
+use leafmagic::leaf::plates::{PlateShape, flexible, plate as build_plate};
 
 /// Linear-law coefficients of a `--law linear` plate: the paper's
 /// prototypes' values (prototypes/leaf-a.toml).
@@ -23,6 +23,36 @@ fn mass_text(kg: f64) -> String {
     }
 }
 
+/// The library's aspect of the plate asked for: `--aspect` as given, or
+/// for a cross its span over its arm width (`--size` / `--arm-width`).
+fn plate_aspect(args: &PlateArgs) -> Result<f64> {
+    match (args.shape, args.arm_width) {
+        (PlateShape::Cross, _) if args.aspect != 1.0 => bail!(
+            "--aspect: a cross has none: its arms are --size long (tip to tip) and --arm-width wide"
+        ),
+        (PlateShape::Cross, None) => {
+            bail!("--shape cross needs --arm-width: the width of each arm, metres")
+        }
+        (PlateShape::Cross, Some(w)) => {
+            let span = args.size;
+            if !(span.is_finite() && span > 0.0) {
+                bail!("--size: must be a finite number > 0 m (a cross's span), got {span}");
+            }
+            if !(w.is_finite() && w > 0.0 && w < span) {
+                bail!(
+                    "--arm-width: must be above 0 and below the cross's span (--size {span} m), got {w}"
+                );
+            }
+            Ok(span / w)
+        }
+        (other, Some(_)) => bail!(
+            "--arm-width: only a cross has arms (a {} has none)",
+            other.as_str()
+        ),
+        (_, None) => Ok(args.aspect),
+    }
+}
+
 /// `plate`: builds the plate, checks it makes a valid model and writes it
 /// (to `--out`, atomically, or to standard output).
 pub fn plate(args: PlateArgs) -> Result<()> {
@@ -30,7 +60,8 @@ pub fn plate(args: PlateArgs) -> Result<()> {
         AeroLawName::Linear => AeroSpec::linear(LINEAR_ALPHA.0, LINEAR_ALPHA.1),
         law => AeroSpec::named(law),
     };
-    let mut spec = build_plate(args.shape, args.size, args.aspect, args.areal_density, aero)?;
+    let aspect = plate_aspect(&args)?;
+    let mut spec = build_plate(args.shape, args.size, aspect, args.areal_density, aero)?;
     if let Some(d) = args.bending_stiffness {
         spec = flexible(spec, d)?;
     }

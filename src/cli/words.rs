@@ -43,6 +43,7 @@ pub fn flag(setting: Setting) -> &'static str {
         Setting::Resume => "--resume",
         Setting::Size => "--size",
         Setting::Aspect => "--aspect",
+        Setting::ArmWidth => "--arm-width",
         Setting::ArealDensity => "--areal-density",
         Setting::BendingStiffness => "--bending-stiffness",
         Setting::Object => "--object",

@@ -178,6 +178,9 @@ mod tests {
             (PlateShape::Rectangle, 1.5),
             (PlateShape::Hexagon, 1.0),
             (PlateShape::Circle, 1.0),
+            (PlateShape::Cross, 3.0),
+            (PlateShape::Cross, 1.25),
+            (PlateShape::Cross, 7.0),
         ] {
             let size = 0.05;
             let spec = plate(shape, size, aspect, 0.07, AeroSpec::unsteady()).unwrap();
@@ -239,6 +242,22 @@ mod tests {
             bad(PlateShape::Rectangle, 0.05, 0.5, 0.07),
             PlateField::Aspect
         );
+        assert_eq!(
+            bad(PlateShape::Cross, 0.05, 1.0, 0.07),
+            PlateField::ArmWidth
+        );
+        assert_eq!(
+            bad(PlateShape::Cross, 0.05, 0.5, 0.07),
+            PlateField::ArmWidth
+        );
+        assert_eq!(
+            bad(PlateShape::Cross, 0.05, f64::INFINITY, 0.07),
+            PlateField::ArmWidth
+        );
+        assert_eq!(
+            bad(PlateShape::Cross, 0.05, f64::NAN, 0.07),
+            PlateField::ArmWidth
+        );
     }
 
     #[test]
@@ -271,6 +290,10 @@ pub enum PlateShape {
     /// A rectangle, long side along x; size = its width (the short side),
     /// length = aspect × width.
     Rectangle,
+    /// A plus of two equal arms along x and y; size = its span, tip to tip;
+    /// aspect = span over arm width (each arm's length over its width,
+    /// above 1), so an arm is size / aspect wide.
+    Cross,
 }
 
 impl PlateShape {
@@ -281,6 +304,7 @@ impl PlateShape {
             PlateShape::Circle => "circle",
             PlateShape::Hexagon => "hexagon",
             PlateShape::Rectangle => "rectangle",
+            PlateShape::Cross => "cross",
         }
     }
 }
@@ -293,8 +317,9 @@ impl std::str::FromStr for PlateShape {
             "circle" => Ok(PlateShape::Circle),
             "hexagon" => Ok(PlateShape::Hexagon),
             "rectangle" => Ok(PlateShape::Rectangle),
+            "cross" => Ok(PlateShape::Cross),
             other => Err(format!(
-                "unknown plate shape '{other}': expected square, circle, hexagon or rectangle"
+                "unknown plate shape '{other}': expected square, circle, hexagon, rectangle or cross"
             )),
         }
     }
@@ -335,6 +360,8 @@ pub enum PlateField {
     Size,
     /// The aspect ratio.
     Aspect,
+    /// A cross's arm width.
+    ArmWidth,
     /// The areal density.
     ArealDensity,
     /// Size and areal density together (the particles' masses).
@@ -350,6 +377,7 @@ impl std::fmt::Display for PlateField {
         match self {
             PlateField::Size => write!(f, "{}", Setting::Size),
             PlateField::Aspect => write!(f, "{}", Setting::Aspect),
+            PlateField::ArmWidth => write!(f, "{}", Setting::ArmWidth),
             PlateField::ArealDensity => write!(f, "{}", Setting::ArealDensity),
             PlateField::SizeAndDensity => {
                 write!(f, "{} and {}", Setting::Size, Setting::ArealDensity)
@@ -379,12 +407,16 @@ fn density_tag(sigma: f64) -> String {
 /// rigid body, the uniform rigid plate of the falling-plate literature.
 /// Squares and rectangles: [`PLATE_CELLS`] cells across, each cut into four
 /// triangles about its centre (symmetric about both centre lines and, for
-/// a square, both diagonals); hexagons: a triangular lattice of
-/// [`PLATE_RINGS`] rings; circles: the same rings laid on circles.
+/// a square, both diagonals); crosses: the same cells, about a square's
+/// across the span ([`PLATE_CELLS`] of them), at least two across an arm
+/// and as nearly square along it; hexagons: a triangular
+/// lattice of [`PLATE_RINGS`] rings; circles: the same rings laid on
+/// circles.
 ///
 /// # Errors
 /// A size, aspect or density that is not finite and positive (an aspect
-/// other than 1 on a shape that has none), naming the flag.
+/// other than 1 on a shape that has none; a cross's arm not narrower than
+/// its span), naming the flag.
 pub fn plate(
     shape: PlateShape,
     size: f64,
@@ -426,8 +458,21 @@ pub fn plate_meshed(
     };
     positive(PlateField::Size, size, "m")?;
     positive(PlateField::ArealDensity, sigma, "kg/m²")?;
-    positive(PlateField::Aspect, aspect, "")?;
-    if shape != PlateShape::Rectangle && aspect != 1.0 {
+    if shape == PlateShape::Cross {
+        // A span over arm width of 1 or less is a square or nothing.
+        if !(aspect.is_finite() && aspect > 1.0) {
+            return Err(PlateError {
+                field: PlateField::ArmWidth,
+                reason: format!(
+                    "a cross's arms must be wider than 0 and narrower than its span ({size} m), got {} m",
+                    size / aspect
+                ),
+            });
+        }
+    } else {
+        positive(PlateField::Aspect, aspect, "")?;
+    }
+    if !matches!(shape, PlateShape::Rectangle | PlateShape::Cross) && aspect != 1.0 {
         return Err(PlateError {
             field: PlateField::Aspect,
             reason: format!(
@@ -448,10 +493,22 @@ pub fn plate_meshed(
     // Counted before anything is allocated: a long rectangle's cells grow
     // with its aspect (grid_mesh: (nx + 1)(ny + 1) corners and nx ny centres).
     let along = (cells as f64 * aspect / 2.0).ceil().max(cells as f64);
+    // A cross's cells are about a square's across its span (the long arm
+    // carries most of its moment of inertia), at least two across an arm,
+    // and about as long as wide along the arm beyond the centre square.
+    let arm_across = (cells as f64 / aspect).ceil().max(2.0);
+    let arm_cells = (arm_across * 0.5 * (aspect - 1.0)).ceil().max(1.0);
     let particles = match shape {
         PlateShape::Square | PlateShape::Rectangle => {
             let (nx, ny) = (along, cells as f64);
             (nx + 1.0) * (ny + 1.0) + nx * ny
+        }
+        // cross_mesh: the centre square's cells and four arms' (a corner and
+        // a centre per cell, at most, plus the rims).
+        PlateShape::Cross => {
+            let n = arm_across;
+            let cross_cells = n * n + 4.0 * n * arm_cells;
+            2.0 * cross_cells + 4.0 * (n + 1.0) + 2.0 * (2.0 * arm_cells + n + 1.0)
         }
         // ring_mesh: the centre and 6k points on ring k.
         PlateShape::Hexagon | PlateShape::Circle => 1.0 + 3.0 * rings as f64 * (rings as f64 + 1.0),
@@ -475,6 +532,9 @@ pub fn plate_meshed(
         PlateShape::Rectangle => grid_mesh(aspect * size, size, along as usize, cells),
         PlateShape::Hexagon => ring_mesh(size / 3f64.sqrt(), rings, false),
         PlateShape::Circle => ring_mesh(0.5 * size, rings, true),
+        PlateShape::Cross => {
+            cross_mesh(size, size / aspect, arm_across as usize, arm_cells as usize)
+        }
     };
     let mut mass = vec![0.0; points.len()];
     for t in &triangles {
@@ -518,10 +578,10 @@ pub fn plate_meshed(
             alpha_t: None,
         })
         .collect();
-    let aspect_tag = if shape == PlateShape::Rectangle {
-        format!("-x{aspect}")
-    } else {
-        String::new()
+    let aspect_tag = match shape {
+        PlateShape::Rectangle => format!("-x{aspect}"),
+        PlateShape::Cross => format!("-arm{:.1}mm", size / aspect * 1e3),
+        _ => String::new(),
     };
     Ok(LeafSpec {
         name: format!(
@@ -572,6 +632,63 @@ fn grid_mesh(length: f64, width: f64, nx: usize, ny: usize) -> (Vec<[f64; 2]>, V
             ];
             for k in 0..4 {
                 triangles.push([centre, ring[k], ring[(k + 1) % 4]]);
+            }
+        }
+    }
+    (points, triangles)
+}
+
+/// A plus of span `span` (tip to tip) whose two arms, along x and y, are
+/// `width` wide: the centre square in `across` × `across` cells and each
+/// arm beyond it in `across` × `along` cells, each cell cut into four
+/// counter-clockwise triangles about its centre as in [`grid_mesh`], so
+/// the mesh is symmetric about both centre lines and both diagonals.
+fn cross_mesh(
+    span: f64,
+    width: f64,
+    across: usize,
+    along: usize,
+) -> (Vec<[f64; 2]>, Vec<[usize; 3]>) {
+    let (h, w) = (0.5 * span, 0.5 * width);
+    // The grid lines, the same along x and y: tip to root, across the
+    // centre square, root to tip (the ends exact, so the span is).
+    let mut lines: Vec<f64> = (0..along)
+        .map(|i| -h + (h - w) * i as f64 / along as f64)
+        .collect();
+    lines.extend((0..across).map(|i| -w + width * i as f64 / across as f64));
+    lines.extend((0..along).map(|i| w + (h - w) * i as f64 / along as f64));
+    lines.push(h);
+    let k = lines.len() - 1;
+    let in_band = |i: usize| (along..along + across).contains(&i);
+    let mut index = vec![usize::MAX; (k + 1) * (k + 1)];
+    let mut points = Vec::new();
+    let mut triangles = Vec::new();
+    for j in 0..k {
+        for i in 0..k {
+            if !(in_band(i) || in_band(j)) {
+                continue;
+            }
+            let mut node = |a: usize, b: usize| {
+                let slot = &mut index[b * (k + 1) + a];
+                if *slot == usize::MAX {
+                    *slot = points.len();
+                    points.push([lines[a], lines[b]]);
+                }
+                *slot
+            };
+            let ring = [
+                node(i, j),
+                node(i + 1, j),
+                node(i + 1, j + 1),
+                node(i, j + 1),
+            ];
+            let centre = points.len();
+            points.push([
+                0.5 * (lines[i] + lines[i + 1]),
+                0.5 * (lines[j] + lines[j + 1]),
+            ]);
+            for q in 0..4 {
+                triangles.push([centre, ring[q], ring[(q + 1) % 4]]);
             }
         }
     }
@@ -642,7 +759,24 @@ pub fn uniform_plate_moments(shape: PlateShape, size: f64, aspect: f64) -> [f64;
         // Regular hexagon of side s: I = (5/24) M s² about any in-plane axis.
         PlateShape::Hexagon => [5.0 / 24.0 * size * size / 3.0; 2],
         PlateShape::Circle => [size * size / 16.0; 2],
+        PlateShape::Cross => {
+            let [area, second] = cross_area_and_second_moment(size, size / aspect);
+            [second / area; 2]
+        }
     }
+}
+
+/// A plus of span `span` and arm width `width` (m): its area 2 S W − W², m²,
+/// and its second moment of area about either arm's axis, m⁴: the union of
+/// the two arms (S × W and W × S) less the centre square they share,
+/// (S W³ + W S³ − W⁴) / 12. By the plus's fourfold symmetry every in-plane
+/// axis through its centre has that moment.
+pub fn cross_area_and_second_moment(span: f64, width: f64) -> [f64; 2] {
+    let (s, w) = (span, width);
+    [
+        2.0 * s * w - w * w,
+        (s * w.powi(3) + w * s.powi(3) - w.powi(4)) / 12.0,
+    ]
 }
 
 /// Bending stiffness (flexural rigidity D = E t³ / 12(1 − ν²)) of 70 g/m²

@@ -53,6 +53,8 @@ pub enum Setting {
     Size,
     /// A rectangle's length over its width.
     Aspect,
+    /// A cross plate's arm width.
+    ArmWidth,
     /// A plate's mass per area, kg/m².
     ArealDensity,
     /// A flexible plate's bending stiffness, N·m.
@@ -106,6 +108,7 @@ impl Setting {
             Setting::Resume => "resume",
             Setting::Size => "size",
             Setting::Aspect => "aspect",
+            Setting::ArmWidth => "arm_width",
             Setting::ArealDensity => "areal_density",
             Setting::BendingStiffness => "bending_stiffness",
             Setting::Object => "object",

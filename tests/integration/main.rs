@@ -16,6 +16,7 @@ mod contact;
 #[allow(dead_code)]
 mod corpus;
 mod docs_links;
+mod expectations;
 mod export;
 mod fuzz;
 mod genome;

@@ -201,6 +201,7 @@ fn bad_plate_flags_are_refused_by_name_and_write_nothing() {
     ]
     .into_iter()
     .chain(bad_stiffness)
+    .chain(bad_crosses())
     {
         let mut all = args.clone();
         all.extend(["--out", out_s]);
@@ -211,6 +212,107 @@ fn bad_plate_flags_are_refused_by_name_and_write_nothing() {
         let first = err.lines().next().unwrap_or("");
         assert!(first.contains(flag), "{args:?}: {err}");
         assert!(!out.exists(), "{args:?} wrote a file");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Crosses refused, each with the flag its message must name first: an
+/// arm that is not narrower than the span or not wider than nothing, an
+/// arm width on another shape, a cross without one or with an aspect.
+fn bad_crosses() -> Vec<(Vec<&'static str>, &'static str)> {
+    let cross = |more: &[&'static str]| {
+        let mut args = vec!["--shape", "cross", "--size", "0.05"];
+        args.extend(more);
+        args
+    };
+    let mut bad: Vec<(Vec<&'static str>, &'static str)> =
+        ["0", "-0.01", "0.05", "0.06", "nan", "inf"]
+            .into_iter()
+            .map(|w| (cross(&["--arm-width", w]), "--arm-width"))
+            .collect();
+    bad.extend([
+        (cross(&[]), "--arm-width"),
+        (cross(&["--arm-width", "0.01", "--aspect", "2"]), "--aspect"),
+        (
+            vec!["--shape", "square", "--size", "0.05", "--arm-width", "0.01"],
+            "--arm-width",
+        ),
+        (
+            vec!["--shape", "cross", "--size", "-0.05", "--arm-width", "0.01"],
+            "--size",
+        ),
+    ]);
+    bad
+}
+
+/// `plate --shape cross`: a plus of span S (tip to tip) and arm width W
+/// has the plus's exact area 2 S W − W², the mass σ × area, its centroid
+/// at the centre, every particle inside the plus and tips at ±S/2, and the
+/// principal moments of inertia of the uniform plus (within the 2 % the
+/// other plates' lumped mass holds): σ I, σ I, 2 σ I about the centre, I
+/// the second moment of area about an arm's axis, worked out here as the
+/// two arms' rectangles (b h³ / 12 each) less the centre square both count.
+#[test]
+fn a_cross_has_the_plus_s_area_mass_centroid_and_moments() {
+    use leafmagic::leaf::plates::principal_moments;
+    let dir = dir("cross");
+    for (span, arm, sigma) in [
+        (0.05, 0.05 / 3.0, 0.07),
+        (0.09, 0.012, 0.07),
+        (0.04, 0.036, 0.2),
+        (0.06, 0.001, 0.07),
+    ] {
+        let out = dir.join("cross.toml");
+        let (span_s, arm_s, sigma_s) = (span.to_string(), arm.to_string(), sigma.to_string());
+        let run = plate(&[
+            "--shape",
+            "cross",
+            "--size",
+            &span_s,
+            "--arm-width",
+            &arm_s,
+            "--areal-density",
+            &sigma_s,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let model = LeafSpec::read(&out).unwrap().model().unwrap();
+        let rectangle = |b: f64, h: f64| b * h.powi(3) / 12.0;
+        let area = span * arm + arm * span - arm * arm;
+        let second = rectangle(span, arm) + rectangle(arm, span) - rectangle(arm, arm);
+        let close = |got: f64, want: f64, tol: f64| (got / want - 1.0).abs() < tol;
+        let what = format!("span {span}, arm {arm}");
+        assert!(close(model.surface_area(), area, 1e-12), "{what}");
+        assert!(close(model.total_mass(), sigma * area, 1e-12), "{what}");
+        let centre = model.centre_of_mass(&model.rest_position);
+        assert!(centre.norm() < 1e-12 * span, "{what}: {centre}");
+        let reach = model
+            .rest_position
+            .iter()
+            .map(|p| p.x.abs().max(p.y.abs()))
+            .fold(0.0, f64::max);
+        assert!(close(reach, 0.5 * span, 1e-12), "{what}: {reach}");
+        for p in &model.rest_position {
+            let inside = p.x.abs().min(p.y.abs()) <= 0.5 * arm * (1.0 + 1e-12);
+            assert!(inside && p.z == 0.0, "{what}: {p} is outside the plus");
+        }
+        let [a, b, c] = principal_moments(&model);
+        let want = sigma * second;
+        println!(
+            "{what}: principal moments {:.4}, {:.4}, {:.4} of the uniform plus's",
+            a / want,
+            b / want,
+            c / (2.0 * want)
+        );
+        assert!(
+            close(a, want, 0.02) && close(b, want, 0.02) && close(c, 2.0 * want, 0.02),
+            "{what}"
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -348,7 +348,14 @@ pub fn simulate_bin(
     centres: &[[f64; 2]; 2],
 ) -> Result<(BinStats, Vec<SimulatedDrop>), ExperimentError> {
     run.protocol.check().map_err(ExperimentError::Protocol)?;
-    let mut spec = plate_meshed(shape, side, 1.0, PAPER, aero.clone(), run.protocol.refine)?;
+    let mut spec = plate_meshed(
+        shape,
+        side,
+        run.protocol.plate_aspect(shape),
+        PAPER,
+        aero.clone(),
+        run.protocol.refine,
+    )?;
     if let Some(d) = run.protocol.bending {
         spec = leafmagic::leaf::plates::flexible(spec, d)?;
     }

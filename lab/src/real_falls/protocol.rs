@@ -67,6 +67,9 @@ pub struct Protocol {
     /// A draught in the room ([`Draught`]): `None` is still air, the
     /// experiment's and the cross-check's.
     pub draught: Option<Draught>,
+    /// A cross's arm width over its span (crosses only, which need it: the
+    /// plates are `leafmagic plate --shape cross --arm-width` ratio × size).
+    pub cross_arm: Option<f64>,
 }
 
 /// A draught in the room: a uniform horizontal wind, each component a
@@ -142,8 +145,9 @@ pub fn draught_field(
 
 impl Protocol {
     /// Refuses a tilt range that is not 0 ≤ lo ≤ hi ≤ 90°, a bending
-    /// stiffness that is not finite and positive, a refinement of 0 or a
-    /// draught without a positive speed and correlation time, naming it.
+    /// stiffness that is not finite and positive, a refinement of 0, a
+    /// draught without a positive speed and correlation time or a cross's
+    /// arm not between 0 and its span, naming it.
     ///
     /// # Errors
     /// The reason, for the caller to prefix with where the range came from.
@@ -164,6 +168,13 @@ impl Protocol {
         if self.refine == 0 {
             return Err("mesh refinement 0: expected a whole number >= 1".to_string());
         }
+        if let Some(r) = self.cross_arm
+            && !(r > 0.0 && r < 1.0)
+        {
+            return Err(format!(
+                "cross arm {r}: expected an arm width over span between 0 and 1"
+            ));
+        }
         if let Some(d) = self.draught
             && !(d.speed.is_finite()
                 && d.speed > 0.0
@@ -179,6 +190,19 @@ impl Protocol {
     }
 }
 
+impl Protocol {
+    /// The aspect [`leafmagic::leaf::plates::plate`] takes for a plate of
+    /// `shape`: a cross's span over its arm width ([`Protocol::cross_arm`];
+    /// without it 1, which `plate` refuses for a cross, naming the arm),
+    /// 1 for the other outlines.
+    pub fn plate_aspect(&self, shape: leafmagic::leaf::plates::PlateShape) -> f64 {
+        match (shape, self.cross_arm) {
+            (leafmagic::leaf::plates::PlateShape::Cross, Some(r)) => 1.0 / r,
+            _ => 1.0,
+        }
+    }
+}
+
 impl Default for Protocol {
     fn default() -> Self {
         Self {
@@ -187,6 +211,7 @@ impl Default for Protocol {
             bending: None,
             refine: 1,
             draught: None,
+            cross_arm: None,
         }
     }
 }

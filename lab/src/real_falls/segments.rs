@@ -102,7 +102,7 @@ pub fn read_films(
             Ok(shape) if shape != PlateShape::Rectangle => shape,
             _ => {
                 return Err(bad(&format!(
-                    "column 2 (shape) is {:?}: expected square, circle or hexagon",
+                    "column 2 (shape) is {:?}: expected square, circle, hexagon or cross",
                     f[1].trim()
                 )));
             }

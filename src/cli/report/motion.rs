@@ -3,6 +3,7 @@
 //! descriptors side by side (`compare`).
 
 use super::text;
+use leafmagic::motion::class::MotionClass;
 use leafmagic::motion::classify::Classification;
 use leafmagic::motion::describe::{self, Descriptors};
 use leafmagic::motion::path::PathFeatures;
@@ -152,6 +153,39 @@ pub fn classified_each(
                 if left == 1 { "" } else { "s" },
                 if left == 1 { "does" } else { "do" }
             )?;
+        }
+        Ok(())
+    })
+}
+
+/// Classes in words, as `--expect` lists them: `floater`, `floater or
+/// spinner`, `floater, spinner or lilter`.
+pub fn either(classes: &[MotionClass]) -> String {
+    let names: Vec<&str> = classes.iter().map(|c| c.as_str()).collect();
+    match names.split_last() {
+        None => String::new(),
+        Some((last, [])) => (*last).to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+    }
+}
+
+/// `classify --expect`: the expected classes, how many of the `falls`
+/// falls have one, and each that does not (its name, class and regime).
+pub fn verdicts(
+    expected: &[MotionClass],
+    falls: usize,
+    wrong: &[&(String, &Classification)],
+) -> String {
+    text(|out| {
+        writeln!(out, "expected        {}", either(expected))?;
+        writeln!(
+            out,
+            "as expected     {} of {falls} fall{}",
+            falls - wrong.len(),
+            if falls == 1 { "" } else { "s" }
+        )?;
+        for (name, c) in wrong {
+            writeln!(out, "not expected    {name}: {} ({})", c.class, c.regime)?;
         }
         Ok(())
     })
