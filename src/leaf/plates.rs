@@ -440,6 +440,61 @@ pub fn plate_meshed(
     aero: AeroSpec,
     refine: usize,
 ) -> Result<LeafSpec, PlateError> {
+    check_arguments(shape, size, aspect, sigma, refine)?;
+    let (points, triangles) = mesh(shape, size, aspect, refine)?;
+    let mass = lumped_masses(&points, &triangles, shape, size, sigma)?;
+    let particles = points
+        .iter()
+        .zip(&mass)
+        .map(|(p, &m)| ParticleSpec {
+            position: [p[0], p[1], 0.0],
+            mass: m,
+            fixed: false,
+            drag: 0.0,
+        })
+        .collect();
+    let triangles = triangles
+        .into_iter()
+        .map(|corners| TriangleSpec {
+            corners,
+            flap: None,
+            alpha_n: None,
+            alpha_t: None,
+        })
+        .collect();
+    let aspect_tag = match shape {
+        PlateShape::Rectangle => format!("-x{aspect}"),
+        PlateShape::Cross => format!("-arm{:.1}mm", size / aspect * 1e3),
+        _ => String::new(),
+    };
+    Ok(LeafSpec {
+        name: format!(
+            "plate-{}-{:.1}mm{aspect_tag}-{}",
+            shape.as_str(),
+            size * 1e3,
+            density_tag(sigma)
+        ),
+        aero,
+        bounds: Default::default(),
+        bending: None,
+        gravity: [0.0, 0.0, -STANDARD_GRAVITY],
+        particles,
+        springs: Vec::new(),
+        triangles,
+        folds: Vec::new(),
+        wind: Default::default(),
+        rigid: true,
+    })
+}
+
+/// The plate's arguments checked before anything is meshed.
+fn check_arguments(
+    shape: PlateShape,
+    size: f64,
+    aspect: f64,
+    sigma: f64,
+    refine: usize,
+) -> Result<(), PlateError> {
     if refine == 0 {
         return Err(PlateError {
             field: PlateField::Refine,
@@ -489,6 +544,15 @@ pub fn plate_meshed(
             ),
         });
     }
+    Ok(())
+}
+
+/// Points in the plate's plane and counter-clockwise triangles of them.
+type PlaneMesh = (Vec<[f64; 2]>, Vec<[usize; 3]>);
+
+/// The plate's points (in its plane) and counter-clockwise triangles,
+/// counted before anything is allocated.
+fn mesh(shape: PlateShape, size: f64, aspect: f64, refine: usize) -> Result<PlaneMesh, PlateError> {
     let (cells, rings) = (PLATE_CELLS * refine, PLATE_RINGS * refine);
     // Counted before anything is allocated: a long rectangle's cells grow
     // with its aspect (grid_mesh: (nx + 1)(ny + 1) corners and nx ny centres).
@@ -536,8 +600,20 @@ pub fn plate_meshed(
             cross_mesh(size, size / aspect, arm_across as usize, arm_cells as usize)
         }
     };
+    Ok((points, triangles))
+}
+
+/// Each particle's mass: a third of each triangle it is a corner of, at
+/// areal density `sigma`; refused where f64 cannot hold them.
+fn lumped_masses(
+    points: &[[f64; 2]],
+    triangles: &[[usize; 3]],
+    shape: PlateShape,
+    size: f64,
+    sigma: f64,
+) -> Result<Vec<f64>, PlateError> {
     let mut mass = vec![0.0; points.len()];
-    for t in &triangles {
+    for t in triangles {
         let [a, b, c] = t.map(|i| Vector3::new(points[i][0], points[i][1], 0.0));
         let share = sigma * 0.5 * (b - a).cross(&(c - a)).norm() / 3.0;
         for &i in t {
@@ -559,48 +635,7 @@ pub fn plate_meshed(
             ),
         });
     }
-    let particles = points
-        .iter()
-        .zip(&mass)
-        .map(|(p, &m)| ParticleSpec {
-            position: [p[0], p[1], 0.0],
-            mass: m,
-            fixed: false,
-            drag: 0.0,
-        })
-        .collect();
-    let triangles = triangles
-        .into_iter()
-        .map(|corners| TriangleSpec {
-            corners,
-            flap: None,
-            alpha_n: None,
-            alpha_t: None,
-        })
-        .collect();
-    let aspect_tag = match shape {
-        PlateShape::Rectangle => format!("-x{aspect}"),
-        PlateShape::Cross => format!("-arm{:.1}mm", size / aspect * 1e3),
-        _ => String::new(),
-    };
-    Ok(LeafSpec {
-        name: format!(
-            "plate-{}-{:.1}mm{aspect_tag}-{}",
-            shape.as_str(),
-            size * 1e3,
-            density_tag(sigma)
-        ),
-        aero,
-        bounds: Default::default(),
-        bending: None,
-        gravity: [0.0, 0.0, -STANDARD_GRAVITY],
-        particles,
-        springs: Vec::new(),
-        triangles,
-        folds: Vec::new(),
-        wind: Default::default(),
-        rigid: true,
-    })
+    Ok(mass)
 }
 
 /// A `length` (x) × `width` (y) rectangle of nx × ny cells, each cut into
