@@ -377,7 +377,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     // ~1 %, well inside AUTO_SAFETY; its own limit is the drag bound.
     // Only the model's own law gives a non-zero rate. The unsteady law's
     // bound divides by each particle's effective mass, added mass included.
-    let quadratic_rate = crate::physics::aero::explicit_drag_rate(model);
+    let law_rate = crate::physics::aero::explicit_drag_rate(model);
     let c_eff = network.mode_damping(&y);
     // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
     // an unbounded mode, not a zero one: `max` would make it 0 and hide it.
@@ -408,8 +408,8 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         mode_damping_rate: c_eff,
         damping_rate_max,
         zeta,
-        drag_rate: network.air.rate_max.max(quadratic_rate),
-        explicit_drag_rate: quadratic_rate,
+        drag_rate: network.air.rate_max.max(law_rate),
+        explicit_drag_rate: law_rate,
         tumbling_rate: crate::physics::aero::tumbling_rate(model),
         stiffest_spring: bounds.stiffest,
         mass_lost_to_added_mass,

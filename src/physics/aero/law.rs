@@ -196,3 +196,44 @@ pub fn all_names() -> &'static [&'static str] {
 pub fn key(name: &str) -> Option<Key> {
     all_keys().iter().find(|k| k.name == name).copied()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::physics::aero::keys::{KeyKind, KeyValue};
+
+    /// Every key a law declares is read into its coefficients: set alone,
+    /// each one moves them off the defaults (a key declared but not read
+    /// would be accepted and ignored).
+    #[test]
+    fn every_declared_key_reaches_the_coefficients() {
+        for name in [AeroLawName::Quadratic, AeroLawName::Unsteady] {
+            let defaults = AeroLaw::from_keys(name, &AeroKeys::default()).unwrap();
+            for key in name.keys() {
+                let mut keys = AeroKeys::default();
+                let value = match key.kind {
+                    KeyKind::Number => KeyValue::Number(0.123_456),
+                    KeyKind::Flag => KeyValue::Flag(true),
+                };
+                keys.set(*key, value);
+                let law = AeroLaw::from_keys(name, &keys).unwrap();
+                assert_ne!(law, defaults, "{}: {} is not read", name.as_str(), key.name);
+            }
+        }
+        assert!(AeroLaw::from_keys(AeroLawName::Linear, &AeroKeys::default()).is_err());
+    }
+
+    /// A key of another law is refused, naming the key and both laws.
+    #[test]
+    fn another_laws_key_names_the_key_and_the_laws() {
+        let mut keys = AeroKeys::default();
+        keys.set(key("cl_amplitude").unwrap(), KeyValue::Number(1.0));
+        let err = AeroLaw::from_keys(AeroLawName::Unsteady, &keys).unwrap_err();
+        assert_eq!(err.item, "aero.cl_amplitude");
+        assert!(
+            err.reason.contains("law = \"unsteady\"") && err.reason.contains("\"quadratic\""),
+            "{}",
+            err.reason
+        );
+    }
+}
