@@ -2,7 +2,7 @@
 //! linear law and under the unsteady law (`[aero] law = "unsteady"`), each
 //! as `drop` runs it: `--dt auto`, so the time includes choosing the step
 //! (under the unsteady law that measures the air's rates by some thousand
-//! force evaluations, [`leafmagic::physics::forces::unsteady::drag_rate`]).
+//! force evaluations, [`leafmagic::physics::aero::unsteady::drag_rate`]).
 //! The bound: the unsteady law at most 2× the linear law's cost.
 //! `stepping` pairs time the same drops at the step fixed beforehand, and
 //! `choose_step` pairs the choice of the step alone (what `drop` adds).

@@ -16,7 +16,7 @@ use leafmagic::leaf::plates::{self, square_card};
 use leafmagic::leaf::recipes::Recipe;
 use leafmagic::leaf::{AeroSpec, LeafSpec};
 use leafmagic::motion::classify::{Classification, MotionClass, classify};
-use leafmagic::physics::model::AIR_DENSITY;
+use leafmagic::physics::aero::quadratic::AIR_DENSITY;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;

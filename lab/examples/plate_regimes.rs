@@ -14,7 +14,8 @@
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::class::Regime;
-use leafmagic::physics::model::{AIR_DENSITY_20C, STANDARD_GRAVITY as G};
+use leafmagic::physics::aero::unsteady::AIR_DENSITY_20C;
+use leafmagic::physics::model::STANDARD_GRAVITY as G;
 use leafmagic_lab::strips::{
     SCALED_DURATION, SIGMAS, StripFall, WIDTHS, classify_plate_fall, fit_exponents, strip_fall,
     strip_seconds,

@@ -41,7 +41,7 @@
 
 use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
-use leafmagic::physics::forces::unsteady;
+use leafmagic::physics::aero::unsteady;
 use leafmagic::physics::model::AeroLaw;
 use leafmagic_lab::real_falls::{self, BinStats, Protocol, ReleaseStats};
 use std::path::{Path, PathBuf};

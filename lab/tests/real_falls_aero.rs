@@ -14,7 +14,7 @@ use leafmagic::leaf::plates::{PlateShape, plate};
 use leafmagic::leaf::{AeroLawName, AeroSpec};
 use leafmagic::motion::class::Regime;
 use leafmagic::motion::classify::{Classification, classify};
-use leafmagic::physics::model::AIR_DENSITY_20C;
+use leafmagic::physics::aero::unsteady::AIR_DENSITY_20C;
 use leafmagic::sim::drop::{DropParams, drop_leaf};
 use leafmagic_lab::real_falls::{self, Label};
 use std::path::Path;
@@ -618,7 +618,7 @@ fn the_fastest_descent_is_exact_on_a_free_fall_and_a_steady_one() {
 /// more than 5 % (docs/lab/real-falls.md, "How fast real paper dives").
 #[test]
 fn real_paper_dives_faster_than_the_laws_steady_edge_on_fall() {
-    use leafmagic::physics::forces::unsteady;
+    use leafmagic::physics::aero::unsteady;
     use leafmagic::physics::model::AeroLaw;
     let real = squares();
     let aero = real_falls::experiment_air(AeroSpec::unsteady());

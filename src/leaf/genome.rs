@@ -148,8 +148,8 @@ impl Genome {
                 };
             }
         }
-        if let Some(t) = leaf.aero.alpha_t.as_mut() {
-            *t *= self.drag_ratio;
+        if let Some(t) = leaf.aero.number("alpha_t") {
+            leaf.aero.set_number("alpha_t", t * self.drag_ratio);
         }
         if self.camber != 0.0 || self.petiole_mass != 0.0 {
             let ys: Vec<f64> = proto.particles.iter().map(|p| p.position[1]).collect();

@@ -3,7 +3,7 @@
 //! (docs/design/falling-plates.md, "Dimensionless groups").
 
 use crate::leaf::{AeroSpec, BendingSpec, LeafSpec, ParticleSpec, SpringSpec, TriangleSpec};
-use crate::physics::model::AIR_DENSITY;
+use crate::physics::aero::quadratic::AIR_DENSITY;
 use crate::physics::model::{Model, STANDARD_GRAVITY};
 use crate::util::setting::Setting;
 use nalgebra::{Matrix3, Vector3};

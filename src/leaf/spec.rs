@@ -3,11 +3,14 @@
 //! prototypes (figure 4) are embedded so the tool runs without any file.
 //! Every field is documented in `prototypes/README.md`.
 
+use crate::physics::aero::keys::{AeroKeys, Key, KeyKind, KeyValue};
+use crate::physics::aero::law as laws;
+/// The name of an aerodynamic law in a leaf file (the law's own type).
+pub use crate::physics::aero::law::AeroLawName;
 use crate::physics::field::WindField;
 use crate::physics::model::{
     AeroLaw, Hinge, Model, ModelError, ModelParts, RigidGroup, STANDARD_GRAVITY, Spring, Triangle,
 };
-use crate::physics::model::{QuadraticAero, UnsteadyAero};
 use crate::util::bad_input::BadInput;
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
@@ -65,162 +68,114 @@ fn default_gravity() -> [f64; 3] {
 
 /// The aerodynamic law of a leaf: `[aero] law = "linear"` (eq. 9–10, the
 /// default) with `alpha_n`, `alpha_t`; `law = "quadratic"`
-/// ([`crate::physics::forces::quadratic`]) or `law = "unsteady"`
-/// ([`crate::physics::forces::unsteady`]) with optional overrides of their
-/// literature coefficients.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+/// ([`crate::physics::aero::quadratic`]) or `law = "unsteady"`
+/// ([`crate::physics::aero::unsteady`]) with optional overrides of their
+/// literature coefficients. Each law declares its own keys
+/// ([`AeroLawName::keys`]); this table holds the ones a file sets, and the
+/// law turns them into its coefficients ([`AeroSpec::resolve`]).
+#[derive(Clone, Debug, PartialEq)]
 pub struct AeroSpec {
     /// Which law; `linear` is the paper's.
-    #[serde(default)]
-    #[serde(deserialize_with = "law_name")]
     pub law: AeroLawName,
-    /// Normal coefficient αⁿ, kg/(m²·s) (linear law; required there).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub alpha_n: Option<f64>,
-    /// Tangential coefficient αᵗ, kg/(m²·s) (linear law; required there).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub alpha_t: Option<f64>,
-    /// Air density ρ, kg/m³ (quadratic law, default 1.2; unsteady, 1.204).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub air_density: Option<f64>,
-    /// C_D edge-on (quadratic law, default 0.4; unsteady: form drag beyond
-    /// skin friction, default 0).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cd_parallel: Option<f64>,
-    /// C_D face-on (quadratic and unsteady laws; default 2.4).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cd_normal: Option<f64>,
-    /// C_L★ in C_L = C_L★ sin 2α (quadratic law; default 1.2).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cl_amplitude: Option<f64>,
-    /// Centre of pressure at small angle of attack, fraction of the chord
-    /// behind the leading edge (quadratic law; default 0.25).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub cop_leading: Option<f64>,
-    /// C_R of the rotational lift (quadratic law, default 0; unsteady, π).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotational_lift: Option<f64>,
-    /// Kinematic viscosity ν, m²/s (unsteady law; default 1.516e-5).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kinematic_viscosity: Option<f64>,
-    /// Factor on the potential-flow added mass (unsteady law; default 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub added_mass: Option<f64>,
-    /// Factor on laminar skin friction (unsteady law; default 1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub skin_friction: Option<f64>,
-    /// C_T of the translational circulation (unsteady law; default 1.2).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub translational_lift: Option<f64>,
-    /// μ₁ of the rotational damping (unsteady law; default 0.2).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotational_damping: Option<f64>,
-    /// μ₂ of the rotational damping beyond drag (unsteady law; default 0).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotational_damping_quadratic: Option<f64>,
-    /// Share of the plate's rotation that drag and translational lift see
-    /// (unsteady law; default 0, APW's model; 1: strip theory).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub rotation_drag: Option<f64>,
-    /// Buoyancy on or off (unsteady law; default off).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub buoyancy: Option<bool>,
-    /// Density of the leaf's material for buoyancy, kg/m³ (unsteady law;
-    /// default 1008, paper).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub solid_density: Option<f64>,
-    /// Gain on the lagged centre of pressure (unsteady law; default 0.6;
-    /// 0 turns the term off).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pressure_lag_gain: Option<f64>,
-    /// The centre of pressure's lag in chord transits (unsteady law;
-    /// default 3).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub pressure_lag: Option<f64>,
-    /// The wake's rocking couple C_W on a plate falling face-on (unsteady
-    /// law; default 0, off).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub wake_couple: Option<f64>,
-    /// The wake's Strouhal number (unsteady law; default 0.15).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub wake_strouhal: Option<f64>,
-    /// The share of the Munk couple relieved at broadside (unsteady law;
-    /// default 0, off).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub munk_relief: Option<f64>,
+    /// The keys set besides `law`, of any law (another law's key is refused
+    /// by [`AeroSpec::resolve`], by name).
+    keys: AeroKeys,
 }
 
 fn law_name<'de, D: serde::Deserializer<'de>>(d: D) -> Result<AeroLawName, D::Error> {
     crate::util::named::by_name(d, &["linear", "quadratic", "unsteady"])
 }
 
-/// The name of an aerodynamic law in a leaf file.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum AeroLawName {
-    /// The paper's linear law, eq. 9–10.
-    #[default]
-    Linear,
-    /// Quadratic drag with lift and a moving centre of pressure.
-    Quadratic,
-    /// Added mass, translational and rotational circulation, rotational
-    /// damping, drag by angle of attack and skin friction.
-    Unsteady,
-}
-
-impl AeroLawName {
-    /// The name as leaf files write it.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            AeroLawName::Linear => "linear",
-            AeroLawName::Quadratic => "quadratic",
-            AeroLawName::Unsteady => "unsteady",
+impl Serialize for AeroSpec {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut table = s.serialize_struct("AeroSpec", 1 + self.keys.iter().count())?;
+        table.serialize_field("law", &self.law)?;
+        // In one order whatever the file's, as when each key was a field.
+        for key in laws::all_keys() {
+            let Some(value) = self.keys.get(key.name) else {
+                continue;
+            };
+            match value {
+                KeyValue::Number(x) => table.serialize_field(key.name, &x)?,
+                KeyValue::Flag(b) => table.serialize_field(key.name, &b)?,
+            }
         }
+        table.end()
     }
 }
 
-impl std::str::FromStr for AeroLawName {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Self, String> {
-        match s {
-            "linear" => Ok(AeroLawName::Linear),
-            "quadratic" => Ok(AeroLawName::Quadratic),
-            "unsteady" => Ok(AeroLawName::Unsteady),
-            other => Err(format!(
-                "unknown aerodynamic law '{other}': expected linear, quadratic or unsteady"
-            )),
+impl<'de> Deserialize<'de> for AeroSpec {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        use serde::de::{self, MapAccess, Visitor};
+        /// `law`, or a key of some law; an unknown name is refused as
+        /// serde refuses an unknown field (naming it and every known one).
+        enum Field {
+            Law,
+            Key(Key),
         }
+        impl<'de> Deserialize<'de> for Field {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                struct Name;
+                impl Visitor<'_> for Name {
+                    type Value = Field;
+                    fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                        f.write_str("field identifier")
+                    }
+                    fn visit_str<E: de::Error>(self, v: &str) -> Result<Field, E> {
+                        if v == "law" {
+                            return Ok(Field::Law);
+                        }
+                        laws::key(v)
+                            .map(Field::Key)
+                            .ok_or_else(|| E::unknown_field(v, laws::all_names()))
+                    }
+                }
+                d.deserialize_identifier(Name)
+            }
+        }
+        struct Law(AeroLawName);
+        impl<'de> Deserialize<'de> for Law {
+            fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                law_name(d).map(Law)
+            }
+        }
+        struct Table;
+        impl<'de> Visitor<'de> for Table {
+            type Value = AeroSpec;
+            fn expecting(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str("struct AeroSpec")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<AeroSpec, A::Error> {
+                let mut law = None;
+                let mut keys = AeroKeys::default();
+                while let Some(field) = map.next_key::<Field>()? {
+                    match field {
+                        Field::Law if law.is_some() => {
+                            return Err(de::Error::duplicate_field("law"));
+                        }
+                        Field::Law => law = Some(map.next_value::<Law>()?.0),
+                        Field::Key(key) => {
+                            if keys.get(key.name).is_some() {
+                                return Err(de::Error::duplicate_field(key.name));
+                            }
+                            let value = match key.kind {
+                                KeyKind::Number => KeyValue::Number(map.next_value()?),
+                                KeyKind::Flag => KeyValue::Flag(map.next_value()?),
+                            };
+                            keys.set(key, value);
+                        }
+                    }
+                }
+                Ok(AeroSpec {
+                    law: law.unwrap_or_default(),
+                    keys,
+                })
+            }
+        }
+        d.deserialize_struct("AeroSpec", laws::all_names(), Table)
     }
 }
-
-/// Which laws read each optional `[aero]` key (the linear law's `alpha_n`,
-/// `alpha_t` apart).
-const KEY_LAWS: [(&str, &[AeroLawName]); 20] = {
-    use AeroLawName::{Quadratic as Q, Unsteady as U};
-    [
-        ("air_density", &[Q, U]),
-        ("cd_parallel", &[Q, U]),
-        ("cd_normal", &[Q, U]),
-        ("cl_amplitude", &[Q]),
-        ("cop_leading", &[Q]),
-        ("rotational_lift", &[Q, U]),
-        ("kinematic_viscosity", &[U]),
-        ("added_mass", &[U]),
-        ("skin_friction", &[U]),
-        ("translational_lift", &[U]),
-        ("rotational_damping", &[U]),
-        ("rotational_damping_quadratic", &[U]),
-        ("rotation_drag", &[U]),
-        ("buoyancy", &[U]),
-        ("solid_density", &[U]),
-        ("pressure_lag_gain", &[U]),
-        ("pressure_lag", &[U]),
-        ("wake_couple", &[U]),
-        ("wake_strouhal", &[U]),
-        ("munk_relief", &[U]),
-    ]
-};
 
 impl AeroSpec {
     /// This table with `KEY = VALUE` lines added (as a leaf file's `[aero]`
@@ -237,11 +192,10 @@ impl AeroSpec {
 
     /// The paper's linear law with these coefficients.
     pub fn linear(alpha_n: f64, alpha_t: f64) -> AeroSpec {
-        AeroSpec {
-            alpha_n: Some(alpha_n),
-            alpha_t: Some(alpha_t),
-            ..AeroSpec::named(AeroLawName::Linear)
-        }
+        let mut spec = AeroSpec::named(AeroLawName::Linear);
+        spec.set_number("alpha_n", alpha_n);
+        spec.set_number("alpha_t", alpha_t);
+        spec
     }
 
     /// The quadratic law with the literature's coefficients.
@@ -258,162 +212,49 @@ impl AeroSpec {
     pub fn named(law: AeroLawName) -> AeroSpec {
         AeroSpec {
             law,
-            alpha_n: None,
-            alpha_t: None,
-            air_density: None,
-            cd_parallel: None,
-            cd_normal: None,
-            cl_amplitude: None,
-            cop_leading: None,
-            rotational_lift: None,
-            kinematic_viscosity: None,
-            added_mass: None,
-            skin_friction: None,
-            translational_lift: None,
-            rotational_damping: None,
-            rotational_damping_quadratic: None,
-            rotation_drag: None,
-            buoyancy: None,
-            solid_density: None,
-            pressure_lag_gain: None,
-            pressure_lag: None,
-            wake_couple: None,
-            wake_strouhal: None,
-            munk_relief: None,
+            keys: AeroKeys::default(),
         }
     }
 
-    /// Which optional keys are set.
-    fn set_keys(&self) -> [(&'static str, bool); 20] {
-        let set = [
-            self.air_density.is_some(),
-            self.cd_parallel.is_some(),
-            self.cd_normal.is_some(),
-            self.cl_amplitude.is_some(),
-            self.cop_leading.is_some(),
-            self.rotational_lift.is_some(),
-            self.kinematic_viscosity.is_some(),
-            self.added_mass.is_some(),
-            self.skin_friction.is_some(),
-            self.translational_lift.is_some(),
-            self.rotational_damping.is_some(),
-            self.rotational_damping_quadratic.is_some(),
-            self.rotation_drag.is_some(),
-            self.buoyancy.is_some(),
-            self.solid_density.is_some(),
-            self.pressure_lag_gain.is_some(),
-            self.pressure_lag.is_some(),
-            self.wake_couple.is_some(),
-            self.wake_strouhal.is_some(),
-            self.munk_relief.is_some(),
-        ];
-        std::array::from_fn(|k| (KEY_LAWS[k].0, set[k]))
+    /// The number key `name` is set to (`alpha_n`, `cd_normal`, ...), if set.
+    pub fn number(&self, name: &str) -> Option<f64> {
+        self.keys.number(name)
     }
 
-    /// The model's law. Each law's own fields are required or defaulted,
-    /// the other laws' fields are rejected by name (a coefficient that
-    /// would be silently ignored is a mistake).
+    /// The flag key `name` is set to (`buoyancy`), if set.
+    pub fn flag(&self, name: &str) -> Option<bool> {
+        self.keys.flag(name)
+    }
+
+    /// Sets the number key `name` (of any law: [`AeroSpec::resolve`] judges
+    /// whether it belongs to this one).
+    ///
+    /// # Panics
+    /// If no law has a number key `name` (a name in code, not from a file).
+    pub fn set_number(&mut self, name: &str, value: f64) {
+        match laws::key(name) {
+            Some(key) if key.kind == KeyKind::Number => self.keys.set(key, KeyValue::Number(value)),
+            _ => panic!("no aerodynamic law has a number key {name:?}"),
+        }
+    }
+
+    /// Whether this table's law reads key `name`.
+    pub fn takes(&self, name: &str) -> bool {
+        self.law.keys().iter().any(|k| k.name == name)
+    }
+
+    /// Unsets key `name`.
+    pub fn remove(&mut self, name: &str) {
+        self.keys.remove(name);
+    }
+
+    /// The model's law with its coefficients: each law's own keys set or
+    /// defaulted, its required ones present, the other laws' keys rejected
+    /// by name (a coefficient that would be silently ignored is a mistake).
+    /// Their ranges are the law's one validation, which [`Model::new`]
+    /// runs.
     pub fn resolve(&self) -> Result<AeroLaw, ModelError> {
-        let field = |name: &str, reason: String| ModelError {
-            item: format!("aero.{name}"),
-            reason,
-        };
-        let law = self.law;
-        let own_keys = || {
-            KEY_LAWS
-                .iter()
-                .filter(|(_, laws)| laws.contains(&law))
-                .map(|(k, _)| *k)
-                .collect::<Vec<_>>()
-                .join(", ")
-        };
-        for (k, (name, set)) in self.set_keys().into_iter().enumerate() {
-            if set && !KEY_LAWS[k].1.contains(&law) {
-                let owners: Vec<String> = KEY_LAWS[k]
-                    .1
-                    .iter()
-                    .map(|l| format!("\"{}\"", l.as_str()))
-                    .collect();
-                let takes = if law == AeroLawName::Linear {
-                    "alpha_n and alpha_t".to_string()
-                } else {
-                    own_keys()
-                };
-                return Err(field(
-                    name,
-                    format!(
-                        "belongs to law = {}; law = \"{}\" takes {takes}",
-                        owners.join(" or "),
-                        law.as_str()
-                    ),
-                ));
-            }
-        }
-        match law {
-            AeroLawName::Linear => {
-                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
-                    if value.is_none() {
-                        return Err(field(
-                            name,
-                            "required by law = \"linear\" (kg/(m²·s))".to_string(),
-                        ));
-                    }
-                }
-                return Ok(AeroLaw::Linear);
-            }
-            _ => {
-                for (name, value) in [("alpha_n", self.alpha_n), ("alpha_t", self.alpha_t)] {
-                    if value.is_some() {
-                        return Err(field(
-                            name,
-                            format!(
-                                "not used by law = \"{}\" (remove it; its coefficients are {})",
-                                law.as_str(),
-                                own_keys()
-                            ),
-                        ));
-                    }
-                }
-            }
-        }
-        if law == AeroLawName::Quadratic {
-            let d = QuadraticAero::default();
-            let law = QuadraticAero {
-                air_density: self.air_density.unwrap_or(d.air_density),
-                cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
-                cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
-                cl_amplitude: self.cl_amplitude.unwrap_or(d.cl_amplitude),
-                cop_leading: self.cop_leading.unwrap_or(d.cop_leading),
-                rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
-            };
-            law.validate()?;
-            return Ok(AeroLaw::Quadratic(law));
-        }
-        let d = UnsteadyAero::default();
-        let law = UnsteadyAero {
-            air_density: self.air_density.unwrap_or(d.air_density),
-            kinematic_viscosity: self.kinematic_viscosity.unwrap_or(d.kinematic_viscosity),
-            added_mass: self.added_mass.unwrap_or(d.added_mass),
-            cd_normal: self.cd_normal.unwrap_or(d.cd_normal),
-            cd_parallel: self.cd_parallel.unwrap_or(d.cd_parallel),
-            skin_friction: self.skin_friction.unwrap_or(d.skin_friction),
-            translational_lift: self.translational_lift.unwrap_or(d.translational_lift),
-            rotational_lift: self.rotational_lift.unwrap_or(d.rotational_lift),
-            rotational_damping: self.rotational_damping.unwrap_or(d.rotational_damping),
-            rotational_damping_quadratic: self
-                .rotational_damping_quadratic
-                .unwrap_or(d.rotational_damping_quadratic),
-            rotation_drag: self.rotation_drag.unwrap_or(d.rotation_drag),
-            buoyancy: self.buoyancy.unwrap_or(d.buoyancy),
-            solid_density: self.solid_density.unwrap_or(d.solid_density),
-            pressure_lag_gain: self.pressure_lag_gain.unwrap_or(d.pressure_lag_gain),
-            pressure_lag: self.pressure_lag.unwrap_or(d.pressure_lag),
-            wake_couple: self.wake_couple.unwrap_or(d.wake_couple),
-            wake_strouhal: self.wake_strouhal.unwrap_or(d.wake_strouhal),
-            munk_relief: self.munk_relief.unwrap_or(d.munk_relief),
-        };
-        law.validate()?;
-        Ok(AeroLaw::Unsteady(law))
+        AeroLaw::from_keys(self.law, &self.keys)
     }
 }
 
@@ -817,23 +658,23 @@ impl LeafSpec {
         let aero = self.aero.resolve()?;
         let mut triangles = Vec::with_capacity(self.triangles.len());
         for (k, t) in self.triangles.iter().enumerate() {
-            let (alpha_n, alpha_t) = match aero {
-                AeroLaw::Linear => (
-                    t.alpha_n.or(self.aero.alpha_n).unwrap_or_default(),
-                    t.alpha_t.or(self.aero.alpha_t).unwrap_or_default(),
-                ),
-                law => {
-                    if t.alpha_n.is_some() || t.alpha_t.is_some() {
-                        return Err(ModelError {
-                            item: format!("triangle[{k}].alpha_n"),
-                            reason: format!(
-                                "per-triangle α is not used by law = \"{}\"",
-                                law.name()
-                            ),
-                        });
-                    }
-                    (0.0, 0.0)
+            let (alpha_n, alpha_t) = if aero.uses_triangle_alpha() {
+                (
+                    t.alpha_n
+                        .or(self.aero.number("alpha_n"))
+                        .unwrap_or_default(),
+                    t.alpha_t
+                        .or(self.aero.number("alpha_t"))
+                        .unwrap_or_default(),
+                )
+            } else {
+                if t.alpha_n.is_some() || t.alpha_t.is_some() {
+                    return Err(ModelError {
+                        item: format!("triangle[{k}].alpha_n"),
+                        reason: format!("per-triangle α is not used by law = \"{}\"", aero.name()),
+                    });
                 }
+                (0.0, 0.0)
             };
             triangles.push(Triangle {
                 corners: t.corners,

@@ -368,23 +368,6 @@ pub const MAX_BREED_WORK: f64 = 1e10;
 /// slower on the drop. Machines differ by 2×: a guide, not a promise.
 pub const REFERENCE_RATE: f64 = 9e7;
 
-/// What one triangle costs a step under `law`, in elements of
-/// [`REFERENCE_RATE`]: the linear law's is one element's; the quadratic
-/// law's measured at 4.7 (prototype A) and 5.1 (a rigid 5 cm plate), the
-/// unsteady law's at 10 and 10.6 (drops at a fixed step on this machine:
-/// A at dt = 1.6e-7 s, 2.1, 3.5 and 5.8 s under the three laws, against
-/// 2.0 s quoted for all three before; the plate, 0.037, 0.078 and 0.152 s
-/// for 20 s of fall). Without it a run under the unsteady law took three
-/// to seven times the time its note quoted.
-fn triangle_cost(law: &crate::physics::model::AeroLaw) -> usize {
-    use crate::physics::model::AeroLaw;
-    match law {
-        AeroLaw::Linear => 1,
-        AeroLaw::Quadratic(_) => 5,
-        AeroLaw::Unsteady(_) => 10,
-    }
-}
-
 /// What one member of a rigid body resting on the ground costs a step, in
 /// elements of [`REFERENCE_RATE`]: a contact of the body's projected
 /// Gauss–Seidel solve, about a dozen sweeps (crate::physics::contact).
@@ -420,7 +403,7 @@ pub struct Work {
     pub particles: usize,
     /// Particles, springs, triangles and hinges: what a step touches, for
     /// the time estimate (a triangle under the quadratic or unsteady law
-    /// counts as several, `triangle_cost`).
+    /// counts as several, [`crate::physics::aero::triangle_cost`]).
     pub elements: usize,
     /// Steps of one run.
     pub steps: f64,
@@ -489,7 +472,7 @@ impl Work {
     ) -> Work {
         let elements = model.len()
             + model.springs.len()
-            + model.triangles.len() * triangle_cost(&model.aero)
+            + model.triangles.len() * crate::physics::aero::triangle_cost(&model.aero)
             + model.hinges.len();
         Work {
             particles: model.len(),

@@ -72,8 +72,8 @@ pub struct StabilityEstimate {
     pub zeta: f64,
     /// Largest drag rate γ of any particle, 1/s: α A / m under the linear
     /// law; under the quadratic and unsteady laws their bounds at the
-    /// reference speed ([`crate::physics::forces::quadratic::drag_rate`],
-    /// [`crate::physics::forces::unsteady::drag_rate`]).
+    /// reference speed ([`crate::physics::aero::quadratic::drag_rate`],
+    /// [`crate::physics::aero::unsteady::drag_rate`]).
     pub drag_rate: f64,
     /// The part of [`StabilityEstimate::drag_rate`] that the implicit
     /// integrator treats explicitly (the quadratic law, and the unsteady
@@ -83,7 +83,7 @@ pub struct StabilityEstimate {
     /// Fastest rate at which a plate of the model can tumble under the
     /// unsteady law, 1/s (0 under the other laws, which do not turn a
     /// plate by its own rotation):
-    /// [`crate::physics::forces::unsteady::tumbling_rate`]. An explicit step
+    /// [`crate::physics::aero::unsteady::tumbling_rate`]. An explicit step
     /// evaluates the rotational lift, the Munk moment and the damping at
     /// the start of a turn of Ω h radians, so its error grows as (Ω h)²;
     /// [`MAX_TURN_PER_STEP`] bounds it.
@@ -292,11 +292,7 @@ fn effective_mass_roots(
 /// The unsteady law's rest added-mass tensors of every particle, `None`
 /// under the other laws and without added mass.
 fn rest_tensors(model: &Model) -> Option<Vec<Matrix3<f64>>> {
-    let crate::physics::model::AeroLaw::Unsteady(law) = &model.aero else {
-        return None;
-    };
-    (law.air_density * law.added_mass > 0.0)
-        .then(|| crate::physics::forces::unsteady::rest_added_mass_tensors(law, model))
+    crate::physics::aero::rest_added_mass_tensors(model)
 }
 
 /// The free particle, if any, whose added mass at rest under the unsteady
@@ -381,8 +377,7 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
     // ~1 %, well inside AUTO_SAFETY; its own limit is the drag bound.
     // Only the model's own law gives a non-zero rate. The unsteady law's
     // bound divides by each particle's effective mass, added mass included.
-    let quadratic_rate = crate::physics::forces::quadratic::drag_rate(model)
-        + crate::physics::forces::unsteady::drag_rate(model);
+    let law_rate = crate::physics::aero::explicit_drag_rate(model);
     let c_eff = network.mode_damping(&y);
     // A NaN ω² (k/m overflowed to inf, then inf − inf in the iteration) is
     // an unbounded mode, not a zero one: `max` would make it 0 and hide it.
@@ -413,9 +408,9 @@ pub fn estimate(model: &Model) -> StabilityEstimate {
         mode_damping_rate: c_eff,
         damping_rate_max,
         zeta,
-        drag_rate: network.air.rate_max.max(quadratic_rate),
-        explicit_drag_rate: quadratic_rate,
-        tumbling_rate: crate::physics::forces::unsteady::tumbling_rate(model),
+        drag_rate: network.air.rate_max.max(law_rate),
+        explicit_drag_rate: law_rate,
+        tumbling_rate: crate::physics::aero::tumbling_rate(model),
         stiffest_spring: bounds.stiffest,
         mass_lost_to_added_mass,
         lightest_particle: lightest,
@@ -736,22 +731,7 @@ fn air_damping(model: &Model) -> AirDamping {
     for (i, b) in blocks.iter_mut().enumerate() {
         *b = nalgebra::Matrix3::identity() * model.particle_drag[i];
     }
-    for tri in &model.triangles {
-        let [a, b, c] = tri.corners;
-        let x = &model.rest_position;
-        let big_n = (x[b] - x[a]).cross(&(x[c] - x[a]));
-        let doubled = big_n.norm();
-        if doubled == 0.0 {
-            continue;
-        }
-        let nrm = big_n / doubled;
-        let blk = (nalgebra::Matrix3::identity() * tri.alpha_t
-            + nrm * nrm.transpose() * (tri.alpha_n - tri.alpha_t))
-            * (0.5 * doubled);
-        for &i in &tri.corners {
-            blocks[i] += blk;
-        }
-    }
+    crate::physics::aero::linear::add_damping_blocks(model, &mut blocks);
     let rate_max = (0..n)
         .filter(|&i| !model.fixed[i])
         .map(|i| {

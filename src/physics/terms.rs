@@ -112,15 +112,15 @@ impl Terms {
             Decision {
                 name: "triangle aerodynamics",
                 kept: self.aero,
-                reason: match model.aero {
-                    crate::physics::model::AeroLaw::Linear => {
-                        count(model.triangles.len(), "triangles")
-                    }
-                    law => format!(
+                // The paper's law, the default, goes without saying.
+                reason: if model.aero == crate::physics::model::AeroLaw::default() {
+                    count(model.triangles.len(), "triangles")
+                } else {
+                    format!(
                         "{}, {} law",
                         count(model.triangles.len(), "triangles"),
-                        law.name()
-                    ),
+                        model.aero.name()
+                    )
                 },
             },
             Decision {

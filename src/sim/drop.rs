@@ -113,7 +113,7 @@ pub fn drop_leaf_within(
 /// for the same model and parameters: a caller that shows the work first
 /// (`drop`) chooses the step once. Under the unsteady law choosing it
 /// measures the air's rates by many force evaluations
-/// ([`crate::physics::forces::unsteady::drag_rate`]).
+/// ([`crate::physics::aero::unsteady::drag_rate`]).
 ///
 /// # Errors
 /// As [`drop_leaf_within`].

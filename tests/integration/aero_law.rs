@@ -4,10 +4,9 @@
 
 use leafmagic::leaf::plates::square_card;
 use leafmagic::leaf::{AeroSpec, LeafSpec, PROTOTYPE_A};
-use leafmagic::physics::forces::quadratic;
-use leafmagic::physics::model;
+use leafmagic::physics::aero::quadratic;
+use leafmagic::physics::aero::quadratic::QuadraticAero;
 use leafmagic::physics::model::AeroLaw;
-use leafmagic::physics::model::QuadraticAero;
 use leafmagic::physics::params::Integrator;
 use leafmagic::physics::params::TimeStep;
 use leafmagic::physics::stability;
@@ -50,7 +49,7 @@ fn quadratic_law_reads_with_defaults_and_overrides() {
             law.air_density,
             law.cd_parallel
         ),
-        (2.6, 0.3, 1.0, model::CD_PARALLEL)
+        (2.6, 0.3, 1.0, quadratic::CD_PARALLEL)
     );
     // Round trip through TOML keeps the law.
     let again = LeafSpec::from_toml(&spec.to_toml(), "again").unwrap();

@@ -1,6 +1,12 @@
 //! Lockstep batches (issue 20): every lane of a batch of mutated leaves ends
 //! bit for bit where a lone `Simulator` ends, whatever its neighbours, with
 //! each lane on its own auto step.
+//!
+//! The linear aerodynamic law is written once, over a lane type
+//! (`physics::aero::linear::kernel`): a lone drop runs it on `f64`, the
+//! batch's generic lanes on `L` of them, and the AVX2 step
+//! (`physics::batch`'s `avx2.rs`) is its one hand-vectorised
+//! specialisation. These tests are what hold the three to the same bits.
 
 use leafmagic::leaf::LeafSpec;
 use leafmagic::leaf::genome::{Genome, mutate};
@@ -34,7 +40,9 @@ fn auto_dt(model: &Model) -> f64 {
 /// Lanes of different leaves, steps and tilts, each stepped for its own
 /// number of steps (the batch keeps a finished lane still), against each
 /// leaf dropped alone; with the CPU's widest vectors (the kernel written
-/// with intrinsics, and the generic one), and with the baseline's.
+/// with intrinsics, and the generic one), and with the baseline's: the
+/// linear law's one kernel on `f64` (the lone drops), on four generic
+/// lanes, and in its AVX2 form, bit for bit.
 #[test]
 fn every_lane_is_bit_identical_to_a_lone_drop() {
     #[derive(Clone, Copy, Debug, PartialEq)]

@@ -213,7 +213,8 @@ fn flat_card_falls_at_the_quadratic_terminal_speed() {
     let vz = (traj.position[n - 1].z - traj.position[n - 121].z)
         / (traj.time[n - 1] - traj.time[n - 121]);
     let expect = (2.0 * sigma * leafmagic::physics::model::STANDARD_GRAVITY
-        / (leafmagic::physics::model::AIR_DENSITY * leafmagic::physics::model::CD_NORMAL))
+        / (leafmagic::physics::aero::quadratic::AIR_DENSITY
+            * leafmagic::physics::aero::quadratic::CD_NORMAL))
         .sqrt();
     assert!((-vz - expect).abs() < 1e-6 * expect, "{} vs {expect}", -vz);
 }
@@ -253,7 +254,11 @@ fn card_classes_follow_density_floater_lilter_spinner() {
         let model = square_card(side, sigma, AeroSpec::quadratic())
             .model()
             .unwrap();
-        let i_star = plates::i_star(&model, side, leafmagic::physics::model::AIR_DENSITY);
+        let i_star = plates::i_star(
+            &model,
+            side,
+            leafmagic::physics::aero::quadratic::AIR_DENSITY,
+        );
         let n = |c| classes.iter().filter(|&&x| x == c).count();
         println!(
             "σ = {sigma} kg/m², I* = {i_star:.3}: {} floaters, {} lilters, {} spinners, {} undetermined",

@@ -72,8 +72,11 @@ fn new_genes_change_the_leaf_as_documented() {
         ..g.clone()
     }
     .to_leaf(&proto);
-    assert_eq!(drag.aero.alpha_n, proto.aero.alpha_n);
-    assert!((drag.aero.alpha_t.unwrap() - 3.0 * proto.aero.alpha_t.unwrap()).abs() < 1e-15);
+    assert_eq!(drag.aero.number("alpha_n"), proto.aero.number("alpha_n"));
+    assert!(
+        (drag.aero.number("alpha_t").unwrap() - 3.0 * proto.aero.number("alpha_t").unwrap()).abs()
+            < 1e-15
+    );
 
     // Camber 0.1: the particles at mid-y rise by 0.1 × the extent along y,
     // the ends stay.

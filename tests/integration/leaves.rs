@@ -76,7 +76,7 @@ fn flat_leaf_terminal_speed_matches_the_linear_law() {
     }
     let model = spec.model().unwrap();
     let sigma = model.total_mass() / model.surface_area();
-    let v_flat = sigma * STANDARD_GRAVITY / (3.0 * spec.aero.alpha_n.unwrap());
+    let v_flat = sigma * STANDARD_GRAVITY / (3.0 * spec.aero.number("alpha_n").unwrap());
     let params = DropParams {
         seconds: 2.0,
         tilt_deg: [0.0, 0.0],

@@ -3,7 +3,7 @@
 //! step").
 
 use leafmagic::leaf::LeafSpec;
-use leafmagic::physics::forces::unsteady;
+use leafmagic::physics::aero::unsteady;
 use leafmagic::physics::model::{AeroLaw, Model};
 use leafmagic::physics::params::{Integrator, TimeStep};
 use leafmagic::physics::stability;
@@ -301,7 +301,7 @@ fn overdamped_modes_keep_a_verlet_limit() {
 
 /// Dense C at the rest shape: the springs' dashpots, the hinges' damping
 /// (c g gᵀ) and the paper's linear air law, whose corner i of a triangle of
-/// area A and normal n takes −A (αᵗ I + (αⁿ − αᵗ) n nᵀ) vᵢ (src/physics/forces/aero.rs),
+/// area A and normal n takes −A (αᵗ I + (αⁿ − αᵗ) n nᵀ) vᵢ (src/physics/aero/linear/kernel.rs),
 /// plus each particle's own drag.
 fn dense_damping(model: &Model) -> DMatrix<f64> {
     let mut c = dense_network(model, |s| s.damping, |h| h.damping);

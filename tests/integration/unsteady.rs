@@ -6,11 +6,12 @@
 
 use leafmagic::leaf::AeroSpec;
 use leafmagic::leaf::plates::{PlateShape, plate, plate_meshed};
-use leafmagic::physics::forces::Forces;
-use leafmagic::physics::forces::unsteady::{
+use leafmagic::physics::aero::unsteady::UnsteadyAero;
+use leafmagic::physics::aero::unsteady::{
     BLASIUS, PressureLag, added_mass_energy, plate_added_masses, unsteady_forces,
 };
-use leafmagic::physics::model::{AeroLaw, Model, UnsteadyAero};
+use leafmagic::physics::forces::Forces;
+use leafmagic::physics::model::{AeroLaw, Model};
 use nalgebra::{Matrix3, Vector3};
 
 type V3 = Vector3<f64>;
@@ -496,7 +497,7 @@ fn unsteady_leaf_files_read_defaults_and_refuse_bad_values() {
 /// linear law has none.
 #[test]
 fn the_tumbling_bound_is_twice_the_face_on_speed_over_the_width() {
-    use leafmagic::physics::forces::unsteady::tumbling_rate;
+    use leafmagic::physics::aero::unsteady::tumbling_rate;
     use leafmagic::physics::stability;
     for (shape, width, aspect) in [
         (PlateShape::Square, 0.04, 1.0),

@@ -407,11 +407,13 @@ pub fn simulate_bin(
 /// The experiment's air in an `[aero]` table of law `law`: its density and
 /// viscosity (the unsteady law), its density (the quadratic law).
 pub fn experiment_air(mut aero: AeroSpec) -> AeroSpec {
-    if aero.law != leafmagic::leaf::AeroLawName::Linear {
-        aero.air_density.get_or_insert(AIR_DENSITY);
-    }
-    if aero.law == leafmagic::leaf::AeroLawName::Unsteady {
-        aero.kinematic_viscosity.get_or_insert(AIR_VISCOSITY);
+    for (key, value) in [
+        ("air_density", AIR_DENSITY),
+        ("kinematic_viscosity", AIR_VISCOSITY),
+    ] {
+        if aero.takes(key) && aero.number(key).is_none() {
+            aero.set_number(key, value);
+        }
     }
     aero
 }

@@ -340,7 +340,10 @@ impl Law<4> {
         }
     }
 
-    /// `Law::aero` in AVX registers.
+    /// `Law::aero` in AVX registers: the linear law's kernel
+    /// (`aero::linear::kernel::LinearTriangle`) in its one hand-vectorised
+    /// form, operation for operation, so it stays bit-identical to it (the
+    /// batch tests check it).
     #[target_feature(enable = "avx2")]
     #[inline]
     fn aero_avx2(&self, x: &[V3Lanes<4>], v: &[V3Lanes<4>], force: &mut [V3Lanes<4>]) {

@@ -18,9 +18,10 @@
 //! [`Simulator::step`]: crate::physics::integrate::Simulator::step
 //! [`Simulator`]: crate::physics::integrate::Simulator
 
+use crate::physics::aero::linear::kernel::{Lane, LinearTriangle};
 use crate::physics::forces::hinge_rest;
 use crate::physics::integrate::{RUNAWAY_DISTANCE, runaway_speed};
-use crate::physics::model::{AeroLaw, Model};
+use crate::physics::model::Model;
 use crate::physics::state::State;
 use crate::physics::terms::Terms;
 use nalgebra::Vector3;
@@ -151,7 +152,9 @@ impl<const L: usize> Batch<L> {
                         .all(|(a, b)| a.corners == b.corners),
             )?;
             let unsupported = |what| Err(BatchError::Unsupported { lane, what });
-            if !matches!(m.aero, AeroLaw::Linear) {
+            // The lanes step the linear law's kernel: the law whose force
+            // is each triangle's α.
+            if !m.aero.uses_triangle_alpha() {
                 return unsupported("an aerodynamic law other than the linear one");
             }
             if Terms::needed(m) != supported {
@@ -467,8 +470,8 @@ impl<const L: usize> Law<L> {
         }
     }
 
-    /// `forces::triangle_aero_solved` under the linear law in still air,
-    /// lane by lane.
+    /// The linear law in still air, lane by lane: the kernel a lone drop
+    /// runs ([`LinearTriangle`], `aero::linear::linear_forces`) over `F<L>`.
     #[inline(always)]
     fn aero(&self, x: &[V3Lanes<L>], v: &[V3Lanes<L>], force: &mut [V3Lanes<L>]) {
         for (&[a, b, c3], [alpha_n, alpha_t]) in self.triangles.iter().zip(&self.aero) {
@@ -476,18 +479,13 @@ impl<const L: usize> Law<L> {
             let big_n = cross(sub(vec(&x[b]), xa), sub(vec(&x[c3]), xa));
             let n2 = dot(big_n, big_n);
             let acts = n2.gt_min_positive();
-            let doubled_area = n2.sqrt();
-            let area = F::splat(0.5) * doubled_area;
-            let tangential = F(*alpha_t) * area;
-            let normal_excess = (F(*alpha_n) - F(*alpha_t)) / (F::splat(2.0) * doubled_area);
+            let law = LinearTriangle::new(big_n, n2, F(*alpha_n), F(*alpha_t));
             for i in [a, b, c3] {
-                let vi = vec(&v[i]);
-                let along = normal_excess * dot(big_n, vi);
+                // Still air: v_r = −v, the force subtracted.
+                let term = law.corner_force(vec(&v[i]));
                 for c in 0..3 {
                     let f = F(force[i][c]);
-                    force[i][c] = (f - (tangential * vi[c] + big_n[c] * along))
-                        .select(acts, f)
-                        .0;
+                    force[i][c] = (f - term[c]).select(acts, f).0;
                 }
             }
         }
@@ -500,11 +498,18 @@ impl<const L: usize> Law<L> {
 #[derive(Clone, Copy, Debug)]
 struct F<const L: usize>(Lanes<L>);
 
-impl<const L: usize> F<L> {
+impl<const L: usize> Lane for F<L> {
     #[inline(always)]
     fn splat(v: f64) -> Self {
         F([v; L])
     }
+    #[inline(always)]
+    fn sqrt(self) -> Self {
+        self.map(f64::sqrt)
+    }
+}
+
+impl<const L: usize> F<L> {
     #[inline(always)]
     fn map(self, f: impl Fn(f64) -> f64) -> Self {
         F(self.0.map(f))
@@ -512,10 +517,6 @@ impl<const L: usize> F<L> {
     #[inline(always)]
     fn zip(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {
         F(std::array::from_fn(|k| f(self.0[k], o.0[k])))
-    }
-    #[inline(always)]
-    fn sqrt(self) -> Self {
-        self.map(f64::sqrt)
     }
     /// `f64::max` lane by lane.
     #[inline(always)]

@@ -1,26 +1,27 @@
 //! Force terms, each a function that adds its contribution into a force
 //! accumulator (one entry per particle). The paper's equations are quoted in
 //! each doc comment; [`Forces`] sums them in a fixed order so results are
-//! reproducible bit for bit.
+//! reproducible bit for bit. The triangles' aerodynamics belong to the
+//! aerodynamic law, one module per law in [`crate::physics::aero`]; this
+//! module calls it like any other term.
 
-mod aero;
 mod drag;
 mod gravity;
 mod hinges;
-pub mod quadratic;
 mod springs;
-mod surfaces;
 mod tears;
-pub mod unsteady;
 
-pub use aero::{triangle_aero, triangle_aero_intact, triangle_aero_solved};
+/// The triangles' aerodynamics, which each law owns
+/// ([`crate::physics::aero`]).
+pub use crate::physics::aero::{triangle_aero, triangle_aero_intact, triangle_aero_solved};
 pub use drag::particle_drag;
 pub use gravity::gravity;
 pub use hinges::{MIN_HINGE_HEIGHT_RATIO, dihedral, fold_rate, hinge_rest, hinges};
 pub use springs::springs;
 pub use tears::{Tears, edge_springs, hinge_springs};
 
-use crate::physics::model::{AeroLaw, Model};
+use crate::physics::aero::unsteady;
+use crate::physics::model::Model;
 use crate::physics::rigid;
 use crate::physics::skip::{SkipCounts, WindSkip};
 use crate::physics::terms::Terms;
@@ -116,7 +117,7 @@ impl Forces {
                 Vec::new()
             },
             torn: Tears::default(),
-            added: if terms.aero && matches!(model.aero, AeroLaw::Unsteady(_)) {
+            added: if terms.aero && model.aero.adds_mass() {
                 vec![Matrix3::zeros(); model.len()]
             } else {
                 Vec::new()

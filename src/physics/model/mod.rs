@@ -6,20 +6,15 @@
 //! [`crate::physics::state::State`]. Construction validates every item, so the
 //! simulator can assume finite masses, stiffnesses and in-range indices.
 
-mod aero_law;
 mod elements;
-mod error;
+pub(crate) mod error;
 mod ground;
 mod rigid_body;
 mod surface_geometry;
 
-pub use aero_law::{
-    AIR_DENSITY, AIR_DENSITY_20C, AIR_VISCOSITY_20C, APW_ROTATIONAL_LIFT, AeroLaw, CD_NORMAL,
-    CD_PARALLEL, CL_AMPLITUDE, COP_LEADING, PAPER_DENSITY, QuadraticAero, ROTATIONAL_LIFT,
-    UNSTEADY_CD_NORMAL, UNSTEADY_CD_PARALLEL, UNSTEADY_PRESSURE_LAG, UNSTEADY_PRESSURE_LAG_GAIN,
-    UNSTEADY_ROTATIONAL_DAMPING, UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC, UNSTEADY_ROTATIONAL_LIFT,
-    UNSTEADY_TRANSLATIONAL_LIFT, UNSTEADY_WAKE_STROUHAL, UnsteadyAero,
-};
+/// The model's aerodynamic law, held as data; the law itself (its
+/// coefficients, keys, forces and bounds) is [`crate::physics::aero`].
+pub use crate::physics::aero::law::AeroLaw;
 pub use elements::{DEGENERATE_TRIANGLE_RATIO, Hinge, Spring, Triangle};
 pub use error::ModelError;
 pub use ground::Ground;
@@ -146,7 +141,7 @@ impl Model {
         check_hinges(&parts)?;
         check_law_and_surroundings(&parts)?;
         let rigid = rigid_bodies(&parts)?;
-        let surfaces = if matches!(parts.aero, AeroLaw::Unsteady(_)) {
+        let surfaces = if parts.aero.needs_surface_geometry() {
             let corners: Vec<[usize; 3]> = parts.triangles.iter().map(|t| t.corners).collect();
             surface_geometry(&parts.rest_position, &corners)
         } else {
@@ -450,12 +445,8 @@ fn check_law_and_surroundings(parts: &ModelParts) -> Result<(), ModelError> {
     for (axis, value) in parts.gravity.iter().enumerate() {
         finite(&format!("gravity[{axis}]"), *value)?;
     }
-    match &parts.aero {
-        AeroLaw::Linear => {}
-        AeroLaw::Quadratic(law) => law.validate()?,
-        AeroLaw::Unsteady(law) => law.validate()?,
-    }
-    if parts.aero != AeroLaw::Linear {
+    parts.aero.validate()?;
+    if !parts.aero.uses_triangle_alpha() {
         // These laws replace the linear one: leftover α would be ignored
         // by the forces yet damp the implicit step and the stability
         // estimate.

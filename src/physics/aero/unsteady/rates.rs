@@ -3,8 +3,10 @@
 //! which the law's velocity-dependent forces act, measured on the free
 //! particles and on each rigid body ([`drag_rate`]).
 
+use super::coefficients::UnsteadyAero;
 use super::triangle_forces::{SPEED_MARGIN, V3, cd_parallel, unsteady_forces};
-use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
+use crate::physics::aero::law::AeroLaw;
+use crate::physics::model::{Model, SurfaceGeometry};
 use nalgebra::Matrix3;
 use std::ops::AddAssign;
 
@@ -665,7 +667,7 @@ fn body_rate(law: &UnsteadyAero, model: &Model, v_ref: f64, q_ref: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::physics::model::{AeroLaw, ModelParts, RigidGroup, Triangle};
+    use crate::physics::model::{ModelParts, RigidGroup, Triangle};
 
     /// Appends a flat square of `cells` × `cells` cells (two triangles
     /// each, side `side`) at `origin` to `parts`, tilted by `tilt` about x,

@@ -1,9 +1,11 @@
 //! The unsteady law's forces on every triangle (module docs of [`super`]
 //! give the equations and their sources).
 
+use super::coefficients::UnsteadyAero;
 use super::lag::{LagCouple, PressureLag, angle_of_attack, lag_at, pressure_offset};
-use crate::physics::forces::surfaces::surface;
-use crate::physics::model::{AeroLaw, Model, SurfaceGeometry, UnsteadyAero};
+use crate::physics::aero::law::AeroLaw;
+use crate::physics::aero::surfaces::surface;
+use crate::physics::model::{Model, SurfaceGeometry};
 use nalgebra::{Matrix3, Vector3};
 
 /// A vector in space.
@@ -19,7 +21,7 @@ pub const MIN_REYNOLDS: f64 = 1.0;
 
 /// Factor on the fastest steady fall ([`edge_on_speed`](super::edge_on_speed)) that bounds the
 /// air speed of any triangle for the stability estimate (as the quadratic
-/// law's [`crate::physics::forces::quadratic::SPEED_MARGIN`]).
+/// law's [`crate::physics::aero::quadratic::SPEED_MARGIN`]).
 pub const SPEED_MARGIN: f64 = 2.0;
 
 /// Edge-on drag coefficient C_D∥ at in-plane relative speed `speed` along

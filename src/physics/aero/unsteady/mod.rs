@@ -43,7 +43,7 @@
 //! The first term, −m_k n nᵀ a_k, is the added mass proper: it is moved to
 //! the left of Newton's law and solved, (m_i I + M_i) a_i = f_i with
 //! M_i = Σ m_k n nᵀ over the triangles at particle i — a 3 × 3 system per
-//! particle ([`super::Forces::acceleration`]), or the 6 × 6 of a rigid
+//! particle ([`crate::physics::forces::Forces::acceleration`]), or the 6 × 6 of a rigid
 //! body ([`crate::physics::rigid`]). Lagged explicitly it would be
 //! unstable for a body lighter than its added mass. The wind's own
 //! acceleration (the force an accelerating stream puts on a body at rest)
@@ -135,7 +135,7 @@
 //! (d / c) n, d its distance from the plate's centre along an axis fixed
 //! in the plate: a couple that acts only near face-on. The equations,
 //! their integration and what the term leaves out are in
-//! `src/physics/forces/unsteady/wake.rs`; what it does to the real falls
+//! `src/physics/aero/unsteady/wake.rs`; what it does to the real falls
 //! in docs/lab/real-falls.md, "A wake that rocks the face-on fall".
 //!
 //! # Munk relief
@@ -160,7 +160,7 @@
 //! cosᵠα forms; what the term does there is in docs/lab/real-falls.md, "Munk
 //! relief near broadside".
 //!
-//! Coefficients and defaults: [`UnsteadyAero`](crate::physics::model::UnsteadyAero) (docs/lab/real-falls.md has the
+//! Coefficients and defaults: [`UnsteadyAero`] (docs/lab/real-falls.md has the
 //! table). One set serves every shape and size; the lengths come from each
 //! leaf's own geometry. The defaults C_D⊥ = 2.6, C_D∥ = 0.65, C_T = 1.2,
 //! C_R = 1.5, μ₁ = 0.1, G = 0.6 and k = 3 were fitted as one set to the
@@ -173,11 +173,18 @@
 //! continuous through face-on (cos α above), which moved the fit a little
 //! (docs/lab/real-falls.md, "A couple without a jump").
 
+pub mod coefficients;
 mod lag;
 mod rates;
 mod triangle_forces;
 mod wake;
 
+pub use coefficients::{
+    AIR_DENSITY_20C, AIR_VISCOSITY_20C, PAPER_DENSITY, UNSTEADY_CD_NORMAL, UNSTEADY_CD_PARALLEL,
+    UNSTEADY_PRESSURE_LAG, UNSTEADY_PRESSURE_LAG_GAIN, UNSTEADY_ROTATION_DRAG,
+    UNSTEADY_ROTATIONAL_DAMPING, UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC, UNSTEADY_ROTATIONAL_LIFT,
+    UNSTEADY_TRANSLATIONAL_LIFT, UNSTEADY_WAKE_STROUHAL, UnsteadyAero,
+};
 pub use lag::{PressureLag, pressure_offset};
 pub use rates::{
     MEASURED_MARGIN, drag_rate, drag_rate_parts, edge_on_speed, face_on_speed, free_particle_rate,
@@ -187,3 +194,12 @@ pub use triangle_forces::{
     BLASIUS, MIN_REYNOLDS, SPEED_MARGIN, added_mass_energy, cd_parallel, plate_added_masses,
     seed_flow_start, unsteady_forces,
 };
+
+/// What one triangle costs a step under this law, in elements of
+/// [`crate::physics::run::REFERENCE_RATE`]: measured at 10 (prototype A)
+/// and 10.6 (a rigid 5 cm plate) by drops at a fixed step (A at
+/// dt = 1.6e-7 s: 2.1, 3.5 and 5.8 s under the linear, quadratic and
+/// unsteady laws; the plate, 0.037, 0.078 and 0.152 s for 20 s of fall).
+/// Without it a run under this law took three to seven times the time its
+/// note quoted.
+pub const TRIANGLE_COST: usize = 10;

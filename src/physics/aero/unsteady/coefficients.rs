@@ -1,212 +1,21 @@
-//! Which aerodynamic law a model's triangles obey, and the coefficients of
-//! the quadratic and unsteady laws with their sources. The forces themselves
-//! are in [`crate::physics::forces`] (the linear law of eq. 9–10,
-//! [`crate::physics::forces::quadratic`] and
-//! [`crate::physics::forces::unsteady`]).
+//! The unsteady law's coefficients, their sources, defaults and leaf-file
+//! keys, and its one validation (the equations and where each coefficient
+//! comes from: [`crate::physics::aero::unsteady`]). Adding a coefficient is
+//! a field, its default, its key, its line in [`UnsteadyAero::from_keys`]
+//! and, if numeric, in [`UnsteadyAero::coefficients`], all here.
 
-use super::error::ModelError;
+use crate::physics::aero::keys::{AeroKeys, Key};
+use crate::physics::model::error::ModelError;
 use serde::{Deserialize, Serialize};
 
-/// Which aerodynamic law turns relative wind into force on triangles.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum AeroLaw {
-    /// The paper's linear law, eq. 9–10: F = αⁿ A vⁿ + αᵗ A vᵗ at each corner.
-    #[default]
-    Linear,
-    /// Quadratic drag with lift and a moving centre of pressure, per
-    /// triangle ([`crate::physics::forces::quadratic`]); the triangles' α must then be 0.
-    Quadratic(QuadraticAero),
-    /// Unsteady thin-plate aerodynamics per triangle: added mass with its
-    /// fluid impulse, translational and rotational circulation, rotational
-    /// damping, drag by angle of attack with skin friction
-    /// ([`crate::physics::forces::unsteady`]); the triangles' α must be 0.
-    Unsteady(UnsteadyAero),
-}
-
-impl AeroLaw {
-    /// The name leaf and scene files give the law (`[aero] law = "..."`).
-    pub fn name(&self) -> &'static str {
-        match self {
-            AeroLaw::Linear => "linear",
-            AeroLaw::Quadratic(_) => "quadratic",
-            AeroLaw::Unsteady(_) => "unsteady",
-        }
-    }
-}
-
-/// Density of air at 20 °C and sea level, kg/m³.
-pub const AIR_DENSITY: f64 = 1.2;
-/// Drag coefficient of a plate moving in its own plane (α = 0); Wang, Birch
-/// & Dickinson 2004 / APW 2005: 1.4 − cos 0.
-pub const CD_PARALLEL: f64 = 0.4;
-/// Drag coefficient of a plate moving face-on (α = π/2): 1.4 − cos π.
-pub const CD_NORMAL: f64 = 2.4;
-/// Amplitude of the lift coefficient C_L = C_L★ sin 2α (WBD 2004, APW 2005).
-pub const CL_AMPLITUDE: f64 = 1.2;
-/// Position of the centre of pressure at α → 0, as a fraction of the chord
-/// behind the leading edge (thin-aerofoil theory's quarter chord).
-pub const COP_LEADING: f64 = 0.25;
-
-/// C_R of the rotational circulation: 0 by default (see the module docs);
-/// APW 2005 use π ([`APW_ROTATIONAL_LIFT`]).
-pub const ROTATIONAL_LIFT: f64 = 0.0;
-
-/// Andersen, Pesavento & Wang's C_R (docs/design/falling-plates.md, "APW
-/// quasi-steady model"), available as an override.
-pub const APW_ROTATIONAL_LIFT: f64 = std::f64::consts::PI;
-
-/// Coefficients of the quadratic law (see the module docs for the
-/// equations). The defaults are the literature's.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct QuadraticAero {
-    /// Air density ρ, kg/m³.
-    pub air_density: f64,
-    /// C_D at zero angle of attack (edge-on).
-    pub cd_parallel: f64,
-    /// C_D at 90° (face-on).
-    pub cd_normal: f64,
-    /// C_L★ in C_L = C_L★ sin 2α.
-    pub cl_amplitude: f64,
-    /// Centre of pressure at α → 0, fraction of the chord behind the leading
-    /// edge (0.5 = the centre at every angle).
-    pub cop_leading: f64,
-    /// C_R of the rotational circulation Γ = ½ C_R c² ω (0 = none).
-    pub rotational_lift: f64,
-}
-
-impl Default for QuadraticAero {
-    fn default() -> Self {
-        QuadraticAero {
-            air_density: AIR_DENSITY,
-            cd_parallel: CD_PARALLEL,
-            cd_normal: CD_NORMAL,
-            cl_amplitude: CL_AMPLITUDE,
-            cop_leading: COP_LEADING,
-            rotational_lift: ROTATIONAL_LIFT,
-        }
-    }
-}
-
-impl QuadraticAero {
-    /// Every coefficient finite and in its physical range; errors name the
-    /// field as `aero.<name>`.
-    pub fn validate(&self) -> Result<(), ModelError> {
-        let err = |name: &str, reason: String| ModelError {
-            item: format!("aero.{name}"),
-            reason,
-        };
-        let fields = [
-            ("air_density", self.air_density),
-            ("cd_parallel", self.cd_parallel),
-            ("cd_normal", self.cd_normal),
-            ("cl_amplitude", self.cl_amplitude),
-            ("cop_leading", self.cop_leading),
-            ("rotational_lift", self.rotational_lift),
-        ];
-        for (name, value) in fields {
-            if !value.is_finite() {
-                return Err(err(name, format!("must be a finite number, got {value}")));
-            }
-        }
-        if self.air_density <= 0.0 {
-            return Err(err(
-                "air_density",
-                format!("must be > 0 kg/m³, got {}", self.air_density),
-            ));
-        }
-        // An edge-on plate without drag would fall freely for ever (and the
-        // stability estimate would have no speed bound).
-        if self.cd_parallel <= 0.0 {
-            return Err(err(
-                "cd_parallel",
-                format!(
-                    "must be > 0 (edge-on drag bounds the fall speed), got {}",
-                    self.cd_parallel
-                ),
-            ));
-        }
-        if self.cd_normal < self.cd_parallel {
-            return Err(err(
-                "cd_normal",
-                format!(
-                    "must be ≥ cd_parallel ({}): a plate is draggier face-on, got {}",
-                    self.cd_parallel, self.cd_normal
-                ),
-            ));
-        }
-        // In-plane drag C_D∥ + (C_D⊥ − C_D∥ − 2C_L★) sin²α must stay ≥ 0 or
-        // the air would push a sliding plate forwards.
-        if self.cl_amplitude < 0.0 || 2.0 * self.cl_amplitude > self.cd_normal {
-            return Err(err(
-                "cl_amplitude",
-                format!(
-                    "must be in [0, cd_normal/2 = {}] (larger lift makes the in-plane drag negative), got {}",
-                    0.5 * self.cd_normal,
-                    self.cl_amplitude
-                ),
-            ));
-        }
-        if !(0.0..=0.5).contains(&self.cop_leading) {
-            return Err(err(
-                "cop_leading",
-                format!(
-                    "must be in [0, 0.5] (fraction of the chord behind the leading edge), got {}",
-                    self.cop_leading
-                ),
-            ));
-        }
-        Ok(())
-    }
-
-    /// C_D(α) and C_L(α), α in radians.
-    pub fn coefficients(&self, alpha: f64) -> (f64, f64) {
-        let (s, c) = alpha.sin_cos();
-        (
-            self.cd_parallel * c * c + self.cd_normal * s * s,
-            self.cl_amplitude * (2.0 * alpha).sin(),
-        )
-    }
-
-    /// Bound on ‖∂(wᵢ F)/∂v‖ / (½ ρ A |v|) for the corner share wᵢ of a
-    /// triangle's force, where `lever` = r_max/hᵢ (the centroid's largest
-    /// distance to a corner over the corner's height).
-    ///
-    /// F = ½ρA|v|² c(α) in the turning frame (v̂, l̂), so
-    /// ‖∂F/∂v‖ ≤ ½ρA|v| (3|c| + |c′|): 2|c| from |v|², |c| from the frame
-    /// turning and |c′| from α changing (both at rate ≤ 1/|v| per unit
-    /// velocity). The share is wᵢ ≤ 1/3 + (1 − 2α/π) lever, and it moves by
-    /// ‖∂wᵢ/∂v‖ ≤ (1 + 2/π) lever/|v| (the centre of pressure shifts by at
-    /// most r_max (1 + 2/π)/|v| per unit velocity, since 1 − 2α/π ≤ cos α),
-    /// adding |c| (1 + 2/π) lever. Maximised over α on a fine grid: the
-    /// share is largest at small α, where the force is smallest.
-    pub fn corner_rate_bound(&self, lever: f64) -> f64 {
-        let n = 512;
-        let step = std::f64::consts::FRAC_PI_2 / n as f64;
-        let shift = 1.0 + std::f64::consts::FRAC_2_PI;
-        (0..=n)
-            .map(|k| {
-                let a = k as f64 * step;
-                let (cd, cl) = self.coefficients(a);
-                let c = cd.hypot(cl);
-                // Exact derivatives of the two coefficients.
-                let dcd = (self.cd_normal - self.cd_parallel) * (2.0 * a).sin();
-                let dcl = 2.0 * self.cl_amplitude * (2.0 * a).cos();
-                let share = 1.0 / 3.0 + (1.0 - a * std::f64::consts::FRAC_2_PI) * lever;
-                share * (3.0 * c + dcd.hypot(dcl)) + c * shift * lever
-            })
-            .fold(0.0, f64::max)
-    }
-}
-
 /// Density of dry air at 20 °C and 101.325 kPa, kg/m³: the unsteady law's
-/// default (the quadratic law keeps its rounded [`AIR_DENSITY`]).
+/// default (the quadratic law keeps its rounded [`AIR_DENSITY`](crate::physics::aero::quadratic::AIR_DENSITY)).
 pub const AIR_DENSITY_20C: f64 = 1.204;
 /// Kinematic viscosity of dry air at 20 °C, m²/s.
 pub const AIR_VISCOSITY_20C: f64 = 1.516e-5;
 
 /// The unsteady law's coefficients. Every one has a source in
-/// [`crate::physics::forces::unsteady`]'s module docs; one set serves every
+/// [`crate::physics::aero::unsteady`]'s module docs; one set serves every
 /// shape and size (the lengths the law needs come from the leaf's own
 /// geometry, [`crate::physics::model::SurfaceGeometry`]).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
@@ -249,12 +58,12 @@ pub struct UnsteadyAero {
     /// G c∥ (f(α_L) − f(α)) cos α upstream of where it acts in steady flow, α_L
     /// the angle of attack lagged by [`Self::pressure_lag`] (default
     /// [`UNSTEADY_PRESSURE_LAG_GAIN`]; 0 leaves the term out;
-    /// [`crate::physics::forces::unsteady`]).
+    /// [`crate::physics::aero::unsteady`]).
     pub pressure_lag_gain: f64,
     /// k, the lag's time constant in chord transits: τ = k c∥/|u|.
     pub pressure_lag: f64,
     /// C_W, the wake's rocking couple on a plate falling face-on (default
-    /// 0: off; [`crate::physics::forces::unsteady`], "Wake").
+    /// 0: off; [`crate::physics::aero::unsteady`], "Wake").
     #[serde(default)]
     pub wake_couple: f64,
     /// St, the Strouhal number of the wake's shedding on the plate's
@@ -263,7 +72,7 @@ pub struct UnsteadyAero {
     pub wake_strouhal: f64,
     /// β, the share of the Munk couple relieved at broadside: the couple
     /// times 1 − β sin⁶α (default 0: the whole potential-flow couple;
-    /// [`crate::physics::forces::unsteady`], "Munk relief").
+    /// [`crate::physics::aero::unsteady`], "Munk relief").
     #[serde(default)]
     pub munk_relief: f64,
 }
@@ -300,7 +109,7 @@ pub const UNSTEADY_ROTATIONAL_LIFT: f64 = 1.5;
 /// Default μ₁: 0.1, half APW 2005's 0.2.
 pub const UNSTEADY_ROTATIONAL_DAMPING: f64 = 0.1;
 /// Default μ₂: none (APW's 0.2 stops the real squares' tumbling glide; see
-/// [`crate::physics::forces::unsteady`] and docs/lab/real-falls.md).
+/// [`crate::physics::aero::unsteady`] and docs/lab/real-falls.md).
 pub const UNSTEADY_ROTATIONAL_DAMPING_QUADRATIC: f64 = 0.0;
 /// Default share of the plate's rotation in drag and translational lift:
 /// none, as in APW 2005, whose drag and circulation act on the plate's
@@ -349,6 +158,57 @@ impl Default for UnsteadyAero {
 }
 
 impl UnsteadyAero {
+    /// The `[aero]` keys of `law = "unsteady"`, one per coefficient.
+    pub const KEYS: &[Key] = &[
+        Key::number("air_density"),
+        Key::number("cd_parallel"),
+        Key::number("cd_normal"),
+        Key::number("rotational_lift"),
+        Key::number("kinematic_viscosity"),
+        Key::number("added_mass"),
+        Key::number("skin_friction"),
+        Key::number("translational_lift"),
+        Key::number("rotational_damping"),
+        Key::number("rotational_damping_quadratic"),
+        Key::number("rotation_drag"),
+        Key::flag("buoyancy"),
+        Key::number("solid_density"),
+        Key::number("pressure_lag_gain"),
+        Key::number("pressure_lag"),
+        Key::number("wake_couple"),
+        Key::number("wake_strouhal"),
+        Key::number("munk_relief"),
+    ];
+
+    /// The coefficients `keys` set, the others at their defaults.
+    pub fn from_keys(keys: &AeroKeys) -> UnsteadyAero {
+        let d = UnsteadyAero::default();
+        let or = |name: &str, default: f64| keys.number(name).unwrap_or(default);
+        UnsteadyAero {
+            air_density: or("air_density", d.air_density),
+            kinematic_viscosity: or("kinematic_viscosity", d.kinematic_viscosity),
+            added_mass: or("added_mass", d.added_mass),
+            cd_normal: or("cd_normal", d.cd_normal),
+            cd_parallel: or("cd_parallel", d.cd_parallel),
+            skin_friction: or("skin_friction", d.skin_friction),
+            translational_lift: or("translational_lift", d.translational_lift),
+            rotational_lift: or("rotational_lift", d.rotational_lift),
+            rotational_damping: or("rotational_damping", d.rotational_damping),
+            rotational_damping_quadratic: or(
+                "rotational_damping_quadratic",
+                d.rotational_damping_quadratic,
+            ),
+            rotation_drag: or("rotation_drag", d.rotation_drag),
+            buoyancy: keys.flag("buoyancy").unwrap_or(d.buoyancy),
+            solid_density: or("solid_density", d.solid_density),
+            pressure_lag_gain: or("pressure_lag_gain", d.pressure_lag_gain),
+            pressure_lag: or("pressure_lag", d.pressure_lag),
+            wake_couple: or("wake_couple", d.wake_couple),
+            wake_strouhal: or("wake_strouhal", d.wake_strouhal),
+            munk_relief: or("munk_relief", d.munk_relief),
+        }
+    }
+
     /// The coefficients by name, as leaf files spell them.
     pub fn coefficients(&self) -> [(&'static str, f64); 17] {
         [

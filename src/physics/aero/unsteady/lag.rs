@@ -3,7 +3,8 @@
 //! ([`PressureLag`]) and its exponential time differencing.
 
 use super::wake;
-use crate::physics::model::{AeroLaw, Model};
+use crate::physics::aero::law::AeroLaw;
+use crate::physics::model::Model;
 
 /// The lagged angle of attack α_L of every triangle: the state of the
 /// law's lagged centre of pressure, carried by the simulator from step to
