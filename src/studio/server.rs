@@ -657,6 +657,7 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
         "breeding": lock(&app.job).as_ref().map(|j| j.progress(usize::MAX)),
         "breed_error": lock(&app.breed_error).clone(),
         "settings": file.settings,
+        "aero_law": session.prototype().aero.law,
         "dir": session.dir().display().to_string(),
         "generation": node,
         "next_scale": session.next_scale(),

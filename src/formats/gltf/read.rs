@@ -50,6 +50,8 @@ struct LeafmagicExtras {
     ground: Option<f64>,
     #[serde(default)]
     wind: Vec<WindGlyph>,
+    #[serde(default)]
+    aero_law: String,
 }
 
 #[derive(Deserialize, Default)]
@@ -495,6 +497,7 @@ fn read_gltf(
         objects,
         ground: extras.ground,
         wind: extras.wind,
+        aero_law: extras.aero_law,
         warnings,
     };
     clip.validate()?;

@@ -759,6 +759,7 @@ impl GlbBuilder {
                 "end_s": clip.duration(),
                 "ground": clip.ground,
                 "wind": clip.wind,
+                "aero_law": (!clip.aero_law.is_empty()).then_some(&clip.aero_law),
             }})),
             name: Some(format!("{}-scene", clip.name)),
             nodes,

@@ -122,6 +122,7 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
             .map_or("run".to_string(), |n| n.to_string_lossy().into_owned());
         let spacing = GRID_SPACING_CHORDS * extent;
         let mut clip = export::side_by_side(&name, objects, fps, spacing)?;
+        clip.aero_law = run.proto.aero.law.as_str().to_string();
         if let (Some(like), Some(example)) = (&run.settings().like, run.example()) {
             let size = like.size_m.unwrap_or(extent);
             let mut o = example_object(&example, size, &clip, spacing)?;
@@ -343,6 +344,7 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         objects,
         ground: None,
         wind: Vec::new(),
+        aero_law: String::new(),
         warnings: Vec::new(),
     };
     clip.validate_read()?;
@@ -454,6 +456,7 @@ pub fn from_record(
         objects: vec![object, trail],
         ground: None,
         wind: Vec::new(),
+        aero_law: String::new(),
         warnings: Vec::new(),
     };
     clip.validate_read()?;
@@ -657,7 +660,12 @@ pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
     let (middle, tail) = rest
         .split_once("/*VIEWER*/")
         .expect("page.html has a /*VIEWER*/ placeholder");
-    let head = head.replace("{{TITLE}}", &escape_html(&clip.name));
+    // The title says the law the falls were simulated under, when known.
+    let title = match clip.aero_law.as_str() {
+        "" => clip.name.clone(),
+        law => format!("{} ({law} aerodynamics)", clip.name),
+    };
+    let head = head.replace("{{TITLE}}", &escape_html(&title));
     Ok([head.as_str(), &data, middle, VIEWER, tail].concat())
 }
 
@@ -690,6 +698,7 @@ mod tests {
             }],
             ground: Some(0.0),
             wind: vec![],
+            aero_law: String::new(),
             warnings: vec![],
         }
     }
