@@ -66,14 +66,11 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 None => None,
             };
             let (prototype, like) = choose_prototype(&args, from.as_ref(), example.as_ref())?;
-            // run.toml records the law always: --law's, or the prototype's own.
-            let law = match args.law {
-                Some(law) => law.law(),
-                None => LeafSpec::load(&prototype)?.aero.law,
-            };
+            // run.toml's settings name --law when given (a run without it is
+            // the bytes it always was); its prototype_leaf is under the law.
             let settings = BreedSettings {
                 prototype,
-                law: Some(law),
+                law: args.law.map(|l| l.law()),
                 initial_scale: args.initial_scale,
                 target: args.target.unwrap_or(MotionClass::Floater),
                 population: args.population,
