@@ -314,6 +314,10 @@ impl Run {
         settings.validate()?;
         let proto = LeafSpec::load(&settings.prototype)
             .map_err(|e| BreedError::Refused(format!("{}: {e}", Setting::Prototype)))?;
+        let proto = match settings.law {
+            Some(law) => proto.under_law(law),
+            None => proto,
+        };
         // Every variant lies within the bounds, and generation 0 and CMA-ES
         // start from the prototype: bounds that exclude it define no search.
         Genome::of_prototype(&proto).check(&proto).map_err(|e| {

@@ -18,6 +18,11 @@ pub const MAX_RELEASES: usize = 64;
 pub struct BreedSettings {
     /// Prototype name as given (`a`, `b` or a path).
     pub prototype: String,
+    /// The aerodynamic law the prototype and its variants fall under
+    /// ([`crate::leaf::LeafSpec::under_law`]); absent, the prototype file's
+    /// own. `run.toml`'s `prototype_leaf` is the prototype under it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub law: Option<crate::leaf::AeroLawName>,
     /// The motion class bred for.
     pub target: MotionClass,
     /// Individuals per generation.
@@ -86,6 +91,7 @@ impl BreedSettings {
     pub fn default_run() -> BreedSettings {
         BreedSettings {
             prototype: "a".to_string(),
+            law: None,
             target: MotionClass::Floater,
             population: 100,
             generations: 8,

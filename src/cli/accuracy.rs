@@ -18,7 +18,7 @@ const LONG_SWEEP_S: f64 = 60.0;
 /// and reports it.
 pub fn accuracy(args: AccuracyArgs) -> Result<()> {
     let started = Instant::now();
-    let (name, model, initial) = input::problem(&args.leaf)?;
+    let (name, model, initial) = input::problem(&args.leaf, args.law)?;
     let seconds = args.seconds.unwrap_or(if args.long { 10.0 } else { 1.0 });
     if !(seconds > 0.0 && seconds.is_finite()) {
         bail!("--seconds must be a positive number, got {seconds}");

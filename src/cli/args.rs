@@ -111,6 +111,14 @@ pub struct BreedArgs {
     /// Refuse a run whose estimated work (particles × steps of every drop) exceeds this.
     #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
     pub max_work: f64,
+    /// Aerodynamic law the prototype and every variant fall under, over the prototype's [aero]:
+    /// `paper` (the paper's linear law, eq. 9–10; a prototype of another law gets αⁿ = 0.47,
+    /// αᵗ = 0.047) or `real` (the unsteady law validated against real paper, default
+    /// coefficients) [default: the prototype's; the embedded prototypes': paper]. run.toml
+    /// records it; with --resume it must be the run's. `linear`, `unsteady`, `quadratic` are
+    /// accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
     /// Finish the run in this directory (after a kill, or to extend nothing: a complete run just reports).
     #[arg(long, conflicts_with_all = ["prototype", "target", "population", "generations", "seed", "seconds", "out", "archive", "like", "size", "target_features", "releases", "strategy", "initial_scale", "start_from"])]
     pub resume: Option<PathBuf>,
@@ -138,6 +146,42 @@ impl From<StrategyKind> for leafmagic::breed::settings::Strategy {
             StrategyKind::Hybrid => Strategy::Hybrid,
             StrategyKind::Random => Strategy::Random,
         }
+    }
+}
+
+/// `--law`: the aerodynamic law a leaf falls under, named for the user:
+/// the paper's, or the one validated against real paper. The leaf files'
+/// names (`linear`, `unsteady`, `quadratic`) are accepted as aliases, so
+/// `plate --law unsteady` scripts keep working.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LawArg {
+    /// The paper's linear law (eq. 9–10).
+    #[value(alias = "linear")]
+    Paper,
+    /// The unsteady law validated against real paper squares.
+    #[value(alias = "unsteady")]
+    Real,
+    /// Quadratic drag with lift (a reference, not validated).
+    Quadratic,
+}
+
+impl LawArg {
+    /// The library's name of the law.
+    pub fn law(self) -> AeroLawName {
+        match self {
+            LawArg::Paper => AeroLawName::Linear,
+            LawArg::Real => AeroLawName::Unsteady,
+            LawArg::Quadratic => AeroLawName::Quadratic,
+        }
+    }
+}
+
+/// The word `--law` uses for a leaf file's law, as outputs print it.
+pub fn law_word(law: AeroLawName) -> &'static str {
+    match law {
+        AeroLawName::Linear => "paper",
+        AeroLawName::Unsteady => "real",
+        AeroLawName::Quadratic => "quadratic",
     }
 }
 
@@ -220,6 +264,12 @@ pub struct DropArgs {
     /// Refuse a drop whose estimated work (particles × steps) exceeds this.
     #[arg(long, default_value_t = leafmagic::physics::run::MAX_WORK, value_parser = parse_work)]
     pub max_work: f64,
+    /// Aerodynamic law, over the leaf file's [aero]: `paper` (the paper's linear law, eq. 9–10;
+    /// a leaf of another law gets the prototypes' αⁿ = 0.47, αᵗ = 0.047) or `real` (the
+    /// unsteady law validated against real paper, default coefficients) [default: the file's;
+    /// the embedded prototypes': paper]. `linear`, `unsteady` and `quadratic` are accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
 }
 
 /// Arguments of `check`.
@@ -239,6 +289,12 @@ pub struct CheckArgs {
     /// With --stress --explicit substep: the most sub-steps per step (a warning says when it clamps).
     #[arg(long, default_value_t = stress::DEFAULT_SUBSTEP_CAP)]
     pub substep_cap: u64,
+    /// Aerodynamic law, over the leaf file's [aero]: `paper` (the paper's linear law, eq. 9–10;
+    /// a leaf of another law gets the prototypes' αⁿ = 0.47, αᵗ = 0.047) or `real` (the
+    /// unsteady law validated against real paper, default coefficients) [default: the file's;
+    /// the embedded prototypes': paper]. `linear`, `unsteady` and `quadratic` are accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
 }
 
 /// Arguments of `plate`.
@@ -262,9 +318,11 @@ pub struct PlateArgs {
     /// Mass per area, kg/m² (70 g/m² paper by default).
     #[arg(long, default_value_t = PAPER_AREAL_DENSITY, allow_negative_numbers = true)]
     pub areal_density: f64,
-    /// Aerodynamic law: linear, quadratic or unsteady.
-    #[arg(long, default_value = "unsteady")]
-    pub law: AeroLawName,
+    /// Aerodynamic law: `real` (the unsteady law validated against real paper), `paper` (the
+    /// paper's linear law, with its prototypes' αⁿ = 0.47, αᵗ = 0.047) or `quadratic`; the old
+    /// names `unsteady` and `linear` are accepted too.
+    #[arg(long, default_value = "real")]
+    pub law: LawArg,
     /// Make the plate a sheet that bends, of this bending stiffness D =
     /// E t³/12(1 − ν²), N·m (70 g/m² paper: about 2.5e-4), instead of one
     /// rigid body: hinges on every shared edge, springs on every edge.
@@ -376,6 +434,12 @@ pub struct AccuracyArgs {
     /// The integrators to sweep or compare, comma-separated [default: all five]. The reference is RK4's either way.
     #[arg(long, value_delimiter = ',', num_args = 1..)]
     pub integrators: Vec<Integrator>,
+    /// Aerodynamic law, over the leaf file's [aero]: `paper` (the paper's linear law, eq. 9–10;
+    /// a leaf of another law gets the prototypes' αⁿ = 0.47, αᵗ = 0.047) or `real` (the
+    /// unsteady law validated against real paper, default coefficients) [default: the file's;
+    /// the embedded prototypes': paper]. `linear`, `unsteady` and `quadratic` are accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
 }
 
 /// Arguments of `scene`.
@@ -412,6 +476,12 @@ pub struct SceneArgs {
     /// Refuse a scene whose recorded frames would take more memory than this many bytes.
     #[arg(long, default_value_t = leafmagic::sim::scene::MAX_MEMORY, value_parser = parse_work)]
     pub max_memory: f64,
+    /// Aerodynamic law of every leaf, over each leaf file's [aero]: `paper` (the paper's
+    /// linear law, eq. 9–10; a leaf of another law gets the prototypes' αⁿ = 0.47,
+    /// αᵗ = 0.047) or `real` (the unsteady law validated against real paper, default
+    /// coefficients) [default: the files']. `linear`, `unsteady`, `quadratic` are accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
 }
 
 /// Arguments of `compare`.
@@ -666,8 +736,14 @@ pub struct StudioArgs {
     /// The session directory [default: runs/studio-<prototype>-s<seed>].
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Aerodynamic law of the prototype and every candidate, over the prototype's [aero]:
+    /// `paper` (the paper's linear law; a prototype of another law gets αⁿ = 0.47,
+    /// αᵗ = 0.047) or `real` (the unsteady law validated against real paper) [default: the
+    /// prototype's; the embedded ones': paper]. `linear`, `unsteady`, `quadratic` are accepted too.
+    #[arg(long)]
+    pub law: Option<LawArg>,
     /// Reopen the session in DIR where it was (its own settings apply).
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["prototype", "target", "seed", "grid", "seconds", "out"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["prototype", "target", "seed", "grid", "seconds", "out", "law"])]
     pub resume: Option<PathBuf>,
     /// An example fall (a CSV record `t,x,y,z[,qw,qx,qy,qz]` in seconds and metres, z up, or an animation file) shown beside the kept leaves and bred toward by Auto N; read once, at the start.
     #[arg(long, value_name = "FILE", conflicts_with = "resume")]

@@ -2,7 +2,7 @@
 //! evaluated by the executor asked for, or one shard of a generation
 //! evaluated, or a generation's shards merged into the run.
 
-use super::args::{BreedArgs, ExecutorKind, MergeArgs, ShardArgs};
+use super::args::{BreedArgs, ExecutorKind, MergeArgs, ShardArgs, law_word};
 use super::progress::Bar;
 use super::{input, report};
 use anyhow::{Context, Result, bail};
@@ -18,7 +18,26 @@ use std::time::Instant;
 /// generations and reports them.
 pub fn breed(args: BreedArgs) -> Result<()> {
     let mut run = match &args.resume {
-        Some(dir) => Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?,
+        Some(dir) => {
+            let run = Run::resume(dir, &mut |m| eprintln!("leafmagic: {m}"))?;
+            // A run is bred under one law: --resume with another is refused.
+            let law = run.proto.aero.law;
+            if let Some(asked) = args.law {
+                if asked.law() != law {
+                    bail!(
+                        "--resume {}: the run was bred under --law {} ({} aerodynamics), not --law \
+                         {} ({}); resume it without --law or with --law {}, or breed anew with --out",
+                        dir.display(),
+                        law_word(law),
+                        law.as_str(),
+                        law_word(asked.law()),
+                        asked.law().as_str(),
+                        law_word(law)
+                    );
+                }
+            }
+            run
+        }
         None => {
             // The run started from, read (and checked) once.
             let from = match &args.start_from {
@@ -47,8 +66,11 @@ pub fn breed(args: BreedArgs) -> Result<()> {
                 None => None,
             };
             let (prototype, like) = choose_prototype(&args, from.as_ref(), example.as_ref())?;
+            // run.toml's settings name --law when given (a run without it is
+            // the bytes it always was); its prototype_leaf is under the law.
             let settings = BreedSettings {
                 prototype,
+                law: args.law.map(|l| l.law()),
                 initial_scale: args.initial_scale,
                 target: args.target.unwrap_or(MotionClass::Floater),
                 population: args.population,
@@ -94,7 +116,7 @@ pub fn breed(args: BreedArgs) -> Result<()> {
             let dir = args
                 .out
                 .clone()
-                .unwrap_or_else(|| default_run_dir(&settings));
+                .unwrap_or_else(|| default_run_dir(&settings, args.law.is_some()));
             let run = match example {
                 Some(example) => {
                     Run::create_like(&dir, settings, args.max_work, example.trajectory)?
@@ -131,6 +153,8 @@ pub fn breed(args: BreedArgs) -> Result<()> {
         "{}",
         report::breed::generations(run.history(), run.settings().like.is_some())
     );
+    let law = run.proto.aero.law;
+    println!("law: {} ({} aerodynamics)", law_word(law), law.as_str());
     if let Some(target) = &run.settings().like {
         print_like(&run, target)?;
     }
@@ -313,8 +337,10 @@ pub fn merge(args: MergeArgs) -> Result<()> {
 
 /// The default run directory,
 /// `runs/<prototype>-<aim>-s<seed>-n<population>-g<generations>`, the aim
-/// being the target class, `like-<example>` or `[<class>-]features`.
-fn default_run_dir(s: &BreedSettings) -> PathBuf {
+/// being the target class, `like-<example>` or `[<class>-]features`; a
+/// `--law` given names itself after the prototype (`a-real-floater-…`), so
+/// the same breed under each law has its own directory.
+fn default_run_dir(s: &BreedSettings, law_given: bool) -> PathBuf {
     let stem = |p: &str| {
         std::path::Path::new(p)
             .file_stem()
@@ -328,8 +354,12 @@ fn default_run_dir(s: &BreedSettings) -> PathBuf {
         },
         Some(t) => format!("like-{}", stem(&t.source)),
     };
+    let law = match s.law {
+        Some(law) if law_given => format!("-{}", law_word(law)),
+        _ => String::new(),
+    };
     PathBuf::from("runs").join(format!(
-        "{}-{aim}-s{}-n{}-g{}",
+        "{}{law}-{aim}-s{}-n{}-g{}",
         stem(&s.prototype),
         s.seed,
         s.population,

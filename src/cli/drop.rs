@@ -2,7 +2,7 @@
 //! steps of a leaf (or, with `--stress`, every integrator on stiff and
 //! extreme cases of it).
 
-use super::args::{CheckArgs, DropArgs};
+use super::args::{CheckArgs, DropArgs, law_word};
 use super::{input, report};
 use anyhow::{Context, Result, bail};
 use leafmagic::motion::classify;
@@ -15,7 +15,7 @@ use std::time::Instant;
 
 /// `drop`: drops the leaf, writes what was asked for and reports the fall.
 pub fn drop(args: DropArgs) -> Result<()> {
-    let (spec, model) = input::leaf(&args.leaf)?;
+    let (spec, model) = input::leaf(&args.leaf, args.law)?;
     if !(args.seconds > 0.0 && args.seconds.is_finite()) {
         bail!("--seconds must be a positive number, got {}", args.seconds);
     }
@@ -71,6 +71,8 @@ pub fn drop(args: DropArgs) -> Result<()> {
     if args.json {
         let out = json!({
             "leaf": spec.name,
+            "law": law_word(spec.aero.law),
+            "aero_law": spec.aero.law,
             "integrator": stats.integrator,
             "dt": stats.dt,
             "steps": stats.steps,
@@ -88,10 +90,15 @@ pub fn drop(args: DropArgs) -> Result<()> {
     } else {
         print!(
             "{}",
-            report::drop::fall(&spec.name, &model, stats, &class, args.out.as_deref())
+            report::drop::fall(&named(&spec), &model, stats, &class, args.out.as_deref())
         );
     }
     Ok(())
+}
+
+/// A leaf's name and law for a report: `leaf-a, paper law`.
+fn named(spec: &leafmagic::leaf::LeafSpec) -> String {
+    format!("{}, {} law", spec.name, law_word(spec.aero.law))
 }
 
 /// `check`: the stability estimate of a leaf and each integrator's stable
@@ -100,7 +107,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
     if args.stress {
         return check_stress(args);
     }
-    let (spec, model) = input::leaf(&args.leaf)?;
+    let (spec, model) = input::leaf(&args.leaf, args.law)?;
     let est = stability::estimate(&model);
     // What `drop` refuses, `check` refuses, with the same message.
     leafmagic::physics::run::check_estimate(&est)
@@ -129,6 +136,8 @@ pub fn check(args: CheckArgs) -> Result<()> {
             .collect();
         let out = json!({
             "leaf": spec.name,
+            "law": law_word(spec.aero.law),
+            "aero_law": spec.aero.law,
             "omega_max": est.omega_max,
             "omega_bounds": [est.omega_lower, est.omega_upper],
             "power_iteration_converged": est.power_converged,
@@ -150,7 +159,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
     }
     print!(
         "{}",
-        report::drop::stability(&spec.name, &model, &est, &rows)
+        report::drop::stability(&named(&spec), &model, &est, &rows)
     );
     Ok(())
 }
@@ -158,7 +167,7 @@ pub fn check(args: CheckArgs) -> Result<()> {
 /// `check --stress`: every stress case of the leaf with every integrator.
 fn check_stress(args: CheckArgs) -> Result<()> {
     let started = Instant::now();
-    let (name, model, initial) = input::problem(&args.leaf)?;
+    let (name, model, initial) = input::problem(&args.leaf, args.law)?;
     let cases = stress::cases(&model, &initial)
         .map_err(|e| anyhow::anyhow!("{}: cannot build a stress case: {e}", args.leaf))?;
     let rows = stress::run_matrix(&cases, args.explicit, args.substep_cap);

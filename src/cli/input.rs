@@ -2,6 +2,7 @@
 //! prototype, a recorded fall), with the checks and error contexts that
 //! several commands share.
 
+use super::args::{LawArg, law_word};
 use anyhow::{Result, bail};
 use leafmagic::formats::fall::{self, AnimationFall, AnimationFormat, RecordedFall};
 use leafmagic::leaf::LeafSpec;
@@ -13,9 +14,25 @@ use leafmagic::physics::state::State;
 use leafmagic::sim::accuracy;
 use std::path::Path;
 
-/// A leaf file, or `a` / `b` for the embedded prototypes, and its model;
-/// a scene file given instead is named as one, with the command it wants.
-pub fn leaf(arg: &str) -> Result<(LeafSpec, Model)> {
+/// A leaf file, or `a` / `b` for the embedded prototypes, under `--law`
+/// if given ([`LeafSpec::under_law`]), and its model; a scene file given
+/// instead is named as one, with the command it wants.
+pub fn leaf(arg: &str, law: Option<LawArg>) -> Result<(LeafSpec, Model)> {
+    let (spec, model) = leaf_as_written(arg)?;
+    match law {
+        Some(law) if law.law() != spec.aero.law => {
+            let spec = spec.under_law(law.law());
+            let model = spec
+                .model()
+                .map_err(|e| anyhow::anyhow!("{arg} under --law {}: {e}", law_word(law.law())))?;
+            Ok((spec, model))
+        }
+        _ => Ok((spec, model)),
+    }
+}
+
+/// [`leaf`] under its own file's law.
+fn leaf_as_written(arg: &str) -> Result<(LeafSpec, Model)> {
     LeafSpec::load_with_model(arg).map_err(|e| {
         let hint = (toml_kind(Path::new(arg)) == Some(TomlKind::Scene)).then(|| {
             format!(
@@ -56,10 +73,12 @@ pub fn toml_kind(path: &Path) -> Option<TomlKind> {
 /// What `accuracy` and `check --stress` run: a named model and its initial
 /// state. A leaf is dropped as `drop` drops it; a scene file, once scenes
 /// exist, brings its own model and state through this same function.
-pub fn problem(arg: &str) -> Result<(String, Model, State)> {
-    let (spec, model) = leaf(arg)?;
+/// The name says the law: `leaf-a (paper law)`.
+pub fn problem(arg: &str, law: Option<LawArg>) -> Result<(String, Model, State)> {
+    let (spec, model) = leaf(arg, law)?;
     let initial = accuracy::default_release(&model);
-    Ok((spec.name, model, initial))
+    let name = format!("{} ({} law)", spec.name, law_word(spec.aero.law));
+    Ok((name, model, initial))
 }
 
 /// The chord `classify` assumes for a CSV record when no `--size` is

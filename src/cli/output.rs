@@ -110,7 +110,8 @@ pub fn export(args: ExportArgs) -> Result<()> {
             o.translate(Vector3::new(0.0, 0.0, args.start_height));
             o.render = render.clone();
             let name = o.name.clone();
-            let clip = leafmagic::output::export::side_by_side(&name, vec![o], args.fps, 0.0)?;
+            let mut clip = leafmagic::output::export::side_by_side(&name, vec![o], args.fps, 0.0)?;
+            clip.aero_law = run.proto.aero.law.as_str().to_string();
             files += write_clip(&clip, format, &staging, &name, args.host_fps)?.len();
         }
         Ok(Some(files))

@@ -4,13 +4,8 @@
 
 use super::args::PlateArgs;
 use anyhow::{Context, Result, bail};
-use leafmagic::leaf::AeroLawName;
-use leafmagic::leaf::AeroSpec;
 use leafmagic::leaf::plates::{PlateShape, flexible, plate as build_plate};
-
-/// Linear-law coefficients of a `--law linear` plate: the paper's
-/// prototypes' values (prototypes/leaf-a.toml).
-const LINEAR_ALPHA: (f64, f64) = (0.47, 0.047);
+use leafmagic::leaf::{AeroLawName, AeroSpec, PAPER_ALPHA};
 
 /// A plate's mass for the report: grams, as paper is weighed, or
 /// kilograms in scientific notation from a kilogram up (grams of a huge
@@ -56,8 +51,9 @@ fn plate_aspect(args: &PlateArgs) -> Result<f64> {
 /// `plate`: builds the plate, checks it makes a valid model and writes it
 /// (to `--out`, atomically, or to standard output).
 pub fn plate(args: PlateArgs) -> Result<()> {
-    let aero = match args.law {
-        AeroLawName::Linear => AeroSpec::linear(LINEAR_ALPHA.0, LINEAR_ALPHA.1),
+    // A `--law paper` plate takes the paper's prototypes' coefficients.
+    let aero = match args.law.law() {
+        AeroLawName::Linear => AeroSpec::linear(PAPER_ALPHA.0, PAPER_ALPHA.1),
         law => AeroSpec::named(law),
     };
     let aspect = plate_aspect(&args)?;
@@ -74,12 +70,13 @@ pub fn plate(args: PlateArgs) -> Result<()> {
                 .with_context(|| format!("cannot write {}", path.display()))?;
             let model = spec.model()?;
             eprintln!(
-                "wrote {} ({}: {} particles, {} triangles, {})",
+                "wrote {} ({}: {} particles, {} triangles, {}, {} law)",
                 path.display(),
                 spec.name,
                 model.len(),
                 model.triangles.len(),
-                mass_text(model.total_mass())
+                mass_text(model.total_mass()),
+                super::args::law_word(spec.aero.law)
             );
         }
         None => print!("{text}"),

@@ -19,6 +19,7 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         max_work: args.max_work,
         max_memory: args.max_memory,
         seconds: args.seconds,
+        law: args.law.map(|l| l.law()),
     };
     let scene = Scene::load_within(&args.file, &limits).map_err(|e| {
         let hint = (input::toml_kind(&args.file) == Some(input::TomlKind::Leaf)).then(|| {
@@ -38,6 +39,8 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         if args.json {
             let out = json!({
                 "scene": scene.name,
+                "law": law_of(&scene),
+                "aero_law": scene.model.aero.name(),
                 "particles": scene.model.len(),
                 "springs": scene.model.springs.len(),
                 "triangles": scene.model.triangles.len(),
@@ -124,6 +127,8 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     if args.json {
         let out = json!({
             "scene": scene.name,
+            "law": law_of(&scene),
+            "aero_law": scene.model.aero.name(),
             "stats": s,
             "wall_s": s.wall_s,
             "wall_per_simulated_s": s.wall_s / s.simulated_s,
@@ -139,6 +144,16 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         report::scene::summary(&scene, s, &dir, written.len(), export_note.as_deref())
     );
     Ok(())
+}
+
+/// The scene's law as `--law` names it.
+fn law_of(scene: &Scene) -> &'static str {
+    scene
+        .model
+        .aero
+        .name()
+        .parse()
+        .map_or("unknown", super::args::law_word)
 }
 
 /// Why the scene steps at `dt`, as `scene --explain` prints it: the fixed

@@ -14,6 +14,10 @@ pub fn studio(args: StudioArgs) -> Result<()> {
         None => {
             let proto = LeafSpec::load(&args.prototype)
                 .with_context(|| format!("--prototype {}", args.prototype))?;
+            let proto = match args.law {
+                Some(law) => proto.under_law(law.law()),
+                None => proto,
+            };
             let settings = StudioSettings {
                 grid: args.grid,
                 seconds: args.seconds,
@@ -48,10 +52,17 @@ pub fn studio(args: StudioArgs) -> Result<()> {
                 // `studio` again with the same settings reopens it where it
                 // was, as an animator coming back expects.
                 None => {
-                    let dir = default_dir(&args.prototype, args.seed);
+                    let dir = default_dir(
+                        &args.prototype,
+                        args.law.map(|l| super::args::law_word(l.law())),
+                        args.seed,
+                    );
                     if dir.join(leafmagic::studio::session::SESSION_FILE).exists() {
                         let session = Session::open(&dir)?;
-                        if session.file().settings != settings || args.like.is_some() {
+                        if session.file().settings != settings
+                            || session.prototype().aero.law != proto.aero.law
+                            || args.like.is_some()
+                        {
                             anyhow::bail!(
                                 "{} holds a session with other settings; reopen it with --resume {}, or start another with --out DIR",
                                 dir.display(),
@@ -96,8 +107,9 @@ fn create(dir: &Path, settings: StudioSettings, proto: LeafSpec) -> Result<Sessi
     Ok(Session::create(dir, settings, proto)?)
 }
 
-/// `runs/studio-<prototype>-s<seed>`, a file prototype by its stem.
-fn default_dir(prototype: &str, seed: u64) -> PathBuf {
+/// `runs/studio-<prototype>-s<seed>`, a file prototype by its stem, with
+/// `-<law>` after it when `--law` is given (`studio-a-real-s1991`).
+fn default_dir(prototype: &str, law: Option<&str>, seed: u64) -> PathBuf {
     let stem = Path::new(prototype)
         .file_stem()
         .map_or("leaf".into(), |s| s.to_string_lossy());
@@ -111,5 +123,6 @@ fn default_dir(prototype: &str, seed: u64) -> PathBuf {
             }
         })
         .collect();
-    PathBuf::from("runs").join(format!("studio-{name}-s{seed}"))
+    let law = law.map(|l| format!("-{l}")).unwrap_or_default();
+    PathBuf::from("runs").join(format!("studio-{name}{law}-s{seed}"))
 }

@@ -12,6 +12,6 @@ pub mod recipes;
 pub mod spec;
 
 pub use spec::{
-    AeroLawName, AeroSpec, BendingSpec, Bounds, FoldSpec, LeafError, LeafSpec, PROTOTYPE_A,
-    PROTOTYPE_B, ParticleSpec, SpringSpec, TriangleSpec,
+    AeroLawName, AeroSpec, BendingSpec, Bounds, FoldSpec, LeafError, LeafSpec, PAPER_ALPHA,
+    PROTOTYPE_A, PROTOTYPE_B, ParticleSpec, SpringSpec, TriangleSpec,
 };

@@ -258,6 +258,13 @@ impl AeroSpec {
     }
 }
 
+/// The paper's linear-law coefficients (αⁿ, αᵗ), kg/(m²·s): those of its
+/// two prototypes (`prototypes/leaf-a.toml`, `leaf-b.toml`). A leaf of
+/// another law falls under the paper's law with these
+/// ([`LeafSpec::under_law`]); `leafmagic plate` gives them to a linear-law
+/// plate.
+pub const PAPER_ALPHA: (f64, f64) = (0.47, 0.047);
+
 /// Bending hinges on every edge shared by two triangles, resisting changes of
 /// the fold angle from its value in the folded rest shape.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -446,6 +453,34 @@ fn is_zero(x: &f64) -> bool {
 pub type LeafError = BadInput;
 
 impl LeafSpec {
+    /// This leaf under the aerodynamic law `law`, all else kept (layout,
+    /// masses, folds, bounds, wind). A leaf already of that law keeps its
+    /// own coefficients; otherwise its `[aero]` becomes the law's defaults:
+    /// the paper's linear law with [`PAPER_ALPHA`] (the prototypes' αⁿ, αᵗ),
+    /// the unsteady and quadratic laws with their literature coefficients
+    /// (and triangles' own αⁿ, αᵗ, which only the linear law reads, are
+    /// dropped).
+    pub fn under_law(self, law: AeroLawName) -> LeafSpec {
+        if self.aero.law == law {
+            return self;
+        }
+        let aero = match law {
+            AeroLawName::Linear => AeroSpec::linear(PAPER_ALPHA.0, PAPER_ALPHA.1),
+            other => AeroSpec::named(other),
+        };
+        let mut triangles = self.triangles;
+        if law != AeroLawName::Linear {
+            for t in &mut triangles {
+                (t.alpha_n, t.alpha_t) = (None, None);
+            }
+        }
+        LeafSpec {
+            aero,
+            triangles,
+            ..self
+        }
+    }
+
     /// Parses and validates TOML text; `source` names it in errors.
     pub fn from_toml(text: &str, source: &str) -> Result<LeafSpec, LeafError> {
         LeafSpec::from_toml_with_model(text, source).map(|(spec, _)| spec)
@@ -708,6 +743,34 @@ impl LeafSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The paper's coefficients are its prototypes' own; a leaf keeps its
+    /// law's coefficients under that law, and under another law it builds
+    /// (the prototypes under the unsteady law and back).
+    #[test]
+    fn under_law_switches_the_law_and_keeps_the_rest() {
+        for p in ["a", "b"] {
+            let spec = LeafSpec::load(p).unwrap();
+            assert_eq!(spec.aero, AeroSpec::linear(PAPER_ALPHA.0, PAPER_ALPHA.1));
+            assert_eq!(spec.clone().under_law(AeroLawName::Linear), spec);
+            let real = spec.clone().under_law(AeroLawName::Unsteady);
+            assert_eq!(real.aero, AeroSpec::unsteady());
+            assert_eq!(real.particles, spec.particles);
+            assert_eq!(real.folds, spec.folds);
+            assert!(matches!(
+                real.model().unwrap().aero,
+                crate::physics::model::AeroLaw::Unsteady(_)
+            ));
+            assert_eq!(real.clone().under_law(AeroLawName::Linear), spec);
+        }
+        let mut odd = LeafSpec::load("a").unwrap();
+        odd.aero = AeroSpec::linear(1.0, 0.5);
+        odd.triangles[0].alpha_n = Some(2.0);
+        assert_eq!(odd.clone().under_law(AeroLawName::Linear), odd);
+        let quadratic = odd.under_law(AeroLawName::Quadratic);
+        assert_eq!(quadratic.triangles[0].alpha_n, None);
+        quadratic.model().unwrap();
+    }
 
     #[test]
     fn embedded_prototypes_load_and_round_trip() {

@@ -695,6 +695,7 @@ fn state_json(app: &Shared, session: &Session) -> serde_json::Value {
         "breed_error": lock(&app.breed_error).clone(),
         "taste_judgements": preference.as_ref().map(|p| p.judgements),
         "settings": file.settings,
+        "aero_law": session.prototype().aero.law,
         "dir": session.dir().display().to_string(),
         "generation": node,
         "next_scale": session.next_scale(),

@@ -220,7 +220,8 @@
   function showStatus(text) {
     if (text) { statusEl.textContent = text; return; }
     const g = state.generation;
-    statusEl.textContent = 'generation ' + g.index + (g.parent === null ? '' : ' (from g' + g.parent + ')') +
+    statusEl.textContent = (state.aero_law === 'unsteady' ? 'real-paper law' : state.aero_law === 'linear' ? "paper's law" : state.aero_law + ' law') +
+      ' · generation ' + g.index + (g.parent === null ? '' : ' (from g' + g.parent + ')') +
       ' · its variation ' + fmt(g.scale, 2) + ' · picked: ' +
       (picks.length ? picks.map(function (k) { return '#' + cells[k].c.id; }).join(', ') : 'none (click or 1–9, 0)') +
       ' · Enter breeds, Backspace goes back · ' + state.dir;

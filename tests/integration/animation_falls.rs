@@ -71,6 +71,7 @@ fn written(dir: &Path, file: &str, object: ClipObject, fps: f64) -> (Clip, PathB
         objects: vec![object],
         ground: None,
         wind: vec![],
+        aero_law: String::new(),
         warnings: vec![],
     };
     let path = dir.join(file);
@@ -698,6 +699,7 @@ fn ambiguous_or_broken_animation_files_are_refused_clearly() {
         objects: vec![a, b],
         ground: None,
         wind: vec![],
+        aero_law: String::new(),
         warnings: vec![],
     };
     let path = dir.join("two.glb");

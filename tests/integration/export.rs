@@ -662,6 +662,7 @@ fn pc2_is_byte_for_byte_the_specified_layout() {
         }],
         ground: None,
         wind: vec![],
+        aero_law: String::new(),
         warnings: vec![],
     };
     let dir = scratch("pc2-hand");
@@ -1065,6 +1066,7 @@ fn bad_input_is_refused_with_the_file_and_the_reason() {
         objects: vec![],
         ground: None,
         wind: vec![],
+        aero_law: String::new(),
         warnings: vec![],
     };
     assert!(
@@ -1566,6 +1568,7 @@ fn a_rigid_plate_is_exported_as_a_rigid_object() {
             objects: vec![o],
             ground: None,
             wind: Vec::new(),
+            aero_law: String::new(),
             warnings: vec![],
         })
         .unwrap()

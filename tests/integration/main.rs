@@ -26,6 +26,7 @@ mod hostile_usd;
 mod integrators;
 mod invariants;
 mod k8s;
+mod law;
 mod layers;
 mod leaves;
 mod like;

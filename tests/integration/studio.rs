@@ -1459,3 +1459,43 @@ fn studio_auto_breeds_toward_typed_descriptors() {
     }
     assert_eq!(gens[3]["parent"], 2);
 }
+
+/// `studio --law real`: the session's prototype falls under the real-paper
+/// law (prototype.toml says so, as the page's state does), and the same
+/// seed's candidates fall otherwise than under the paper's law; a session
+/// is reopened with its own law only (`--resume` takes no `--law`).
+#[test]
+fn studio_law_sets_the_session_law_and_the_state_says_it() {
+    let descents = |law: &str| {
+        let dir = scratch(&format!("law-{law}"));
+        let out = dir.to_str().unwrap().to_string();
+        let mut args = vec!["--out", out.as_str(), "--law", law];
+        args.extend(SMALL);
+        let s = Studio::start(&args, &dir);
+        let state = s.api("/api/state", "");
+        let proto = std::fs::read_to_string(dir.join("prototype.toml")).unwrap();
+        let candidates = state["candidates"].as_array().unwrap().clone();
+        let d: Vec<f64> = candidates
+            .iter()
+            .map(|c| c["descent_m_s"].as_f64().unwrap_or(f64::NAN))
+            .collect();
+        (state["aero_law"].clone(), proto, d, dir)
+    };
+    let (real_law, real_proto, real, dir) = descents("real");
+    let (paper_law, paper_proto, paper, _) = descents("paper");
+    assert_eq!((real_law, paper_law), ("unsteady".into(), "linear".into()));
+    assert!(real_proto.contains("law = \"unsteady\""), "{real_proto}");
+    assert!(paper_proto.contains("law = \"linear\""), "{paper_proto}");
+    assert_ne!(real, paper);
+    let refused = Command::new(env!("CARGO_BIN_EXE_leafmagic"))
+        .args([
+            "studio",
+            "--resume",
+            dir.to_str().unwrap(),
+            "--law",
+            "paper",
+        ])
+        .output()
+        .unwrap();
+    assert!(!refused.status.success());
+}

@@ -119,6 +119,11 @@ pub fn summary(
         )?;
         writeln!(
             out,
+            "law             {} aerodynamics",
+            scene.model.aero.name()
+        )?;
+        writeln!(
+            out,
             "integrator      {} (dt = {:.4e} s, {} steps, {} force evaluations)",
             s.integrator, s.dt, s.steps, s.force_evaluations
         )?;

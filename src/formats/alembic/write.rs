@@ -455,9 +455,16 @@ pub fn write_abc(clip: &Clip, path: &Path) -> Result<usize, ExportError> {
         children.push((id, XFORM, group));
     }
     let top = object(&mut f, 0, &children);
+    // The archive's metadata (`key=value;…`): the law the falls were
+    // simulated under, when known, beside the application.
+    let law = if clip.aero_law.is_empty() {
+        String::new()
+    } else {
+        format!(";leafmagic_aero_law={}", clip.aero_law)
+    };
     let metadata = f.data(
         format!(
-            "_ai_Application=leafmagic {};FramesPerTimeUnit={}",
+            "_ai_Application=leafmagic {};FramesPerTimeUnit={}{law}",
             env!("CARGO_PKG_VERSION"),
             clip.fps
         )

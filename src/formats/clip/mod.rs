@@ -274,6 +274,10 @@ pub struct Clip {
     pub ground: Option<f64>,
     /// The wind primitives as glyphs.
     pub wind: Vec<WindGlyph>,
+    /// The aerodynamic law the falls were simulated under, as leaf files
+    /// name it (`linear`, `unsteady`, `quadratic`); empty when not known (a
+    /// file from elsewhere). Written into the files' metadata.
+    pub aero_law: String,
     /// What the reader of a file left out or doubted without refusing the
     /// file, one sentence each, for the user to see (`warning: FILE: …`).
     pub warnings: Vec<String>,
@@ -320,6 +324,7 @@ impl Clip {
             objects,
             ground: None,
             wind: Vec::new(),
+            aero_law: String::new(),
             warnings: Vec::new(),
         }
     }
@@ -412,6 +417,7 @@ impl Clip {
             objects,
             ground: self.ground,
             wind: self.wind.clone(),
+            aero_law: self.aero_law.clone(),
             warnings: self.warnings.clone(),
         }
     }

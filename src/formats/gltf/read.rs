@@ -51,6 +51,10 @@ struct LeafmagicExtras {
     ground: Option<f64>,
     #[serde(default)]
     wind: Vec<WindGlyph>,
+    /// Absent or null in a file written before the law was recorded, or
+    /// of falls whose law is not known.
+    #[serde(default)]
+    aero_law: Option<String>,
 }
 
 #[derive(Deserialize, Default)]
@@ -320,6 +324,7 @@ fn read_gltf(
         objects,
         ground: extras.ground,
         wind: extras.wind,
+        aero_law: extras.aero_law.unwrap_or_default(),
         warnings,
     };
     clip.validate()?;

@@ -184,6 +184,23 @@ fn sampler_channel(
     });
 }
 
+/// The scene's `extras.leafmagic`: the clip's rate and span, ground and
+/// wind, and the law its falls were simulated under when known.
+fn scene_extras(clip: &Clip) -> serde_json::Value {
+    let mut leafmagic = js!({
+        "fps": clip.fps,
+        "frames": clip.frames,
+        "start_s": 0.0,
+        "end_s": clip.duration(),
+        "ground": clip.ground,
+        "wind": clip.wind,
+    });
+    if !clip.aero_law.is_empty() {
+        leafmagic["aero_law"] = js!(clip.aero_law);
+    }
+    js!({ "leafmagic": leafmagic })
+}
+
 fn raw_extras(value: serde_json::Value) -> Option<Box<json::extras::RawValue>> {
     serde_json::value::to_raw_value(&value).ok()
 }
@@ -753,14 +770,7 @@ impl GlbBuilder {
         }
         let scene = root.push(json::Scene {
             extensions: None,
-            extras: raw_extras(js!({"leafmagic": {
-                "fps": clip.fps,
-                "frames": clip.frames,
-                "start_s": 0.0,
-                "end_s": clip.duration(),
-                "ground": clip.ground,
-                "wind": clip.wind,
-            }})),
+            extras: raw_extras(scene_extras(clip)),
             name: Some(format!("{}-scene", clip.name)),
             nodes,
         });

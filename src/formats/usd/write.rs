@@ -253,6 +253,18 @@ fn usda(clip: &Clip, host_fps: f64) -> Result<String, ExportError> {
             d(clip.fps)
         ))
     ));
+    if !clip.aero_law.is_empty() {
+        // The law the falls were simulated under, where a pipeline reads a
+        // layer's own data.
+        t.line("customLayerData = {");
+        t.depth += 1;
+        t.line(&format!(
+            "string leafmagic_aero_law = {}",
+            quoted(&clip.aero_law)
+        ));
+        t.depth -= 1;
+        t.line("}");
+    }
     t.line(&format!("defaultPrim = \"{root_id}\""));
     t.line(&format!(
         "endTimeCode = {}",

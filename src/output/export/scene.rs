@@ -111,6 +111,7 @@ pub(crate) fn build_scene_clip(
             .iter()
             .map(WindGlyph::of)
             .collect(),
+        aero_law: scene.model.aero.name().to_string(),
         warnings: Vec::new(),
     };
     clip.validate()?;

@@ -18,6 +18,10 @@ type V3 = Vector3<f64>;
 struct SummaryFile {
     scene: String,
     source: String,
+    /// The leaves' law (`scene --law` may have set it over the files'
+    /// that compile here); absent in a summary written before it.
+    #[serde(default)]
+    aero_law: String,
     #[serde(rename = "object", default)]
     objects: Vec<SummaryObject>,
 }
@@ -166,5 +170,9 @@ pub fn from_scene_dir(dir: &Path, fps: f64) -> Result<Clip, ExportError> {
         .iter()
         .map(|p| p.as_ref().map(|(_, f)| f.as_slice()))
         .collect();
-    build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)
+    let mut clip = build_scene_clip(&scene, &time, &pose_refs, &particle_refs, fps)?;
+    if !summary.aero_law.is_empty() {
+        clip.aero_law = summary.aero_law;
+    }
+    Ok(clip)
 }

@@ -123,6 +123,7 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
             .map_or("run".to_string(), |n| n.to_string_lossy().into_owned());
         let spacing = GRID_SPACING_CHORDS * extent;
         let mut clip = export::side_by_side(&name, objects, fps, spacing)?;
+        clip.aero_law = run.proto.aero.law.as_str().to_string();
         if let (Some(like), Some(example)) = (&run.settings().like, run.example()) {
             let size = like.size_m.unwrap_or(extent);
             let mut o = example_object(&example, size, &clip, spacing)?;
@@ -348,6 +349,7 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         objects,
         ground: None,
         wind: Vec::new(),
+        aero_law: String::new(),
         warnings: Vec::new(),
     };
     clip.validate_read()?;
@@ -459,6 +461,7 @@ pub fn from_record(
         objects: vec![object, trail],
         ground: None,
         wind: Vec::new(),
+        aero_law: String::new(),
         warnings: Vec::new(),
     };
     clip.validate_read()?;
@@ -669,7 +672,12 @@ pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
     let (middle, tail) = rest
         .split_once("/*VIEWER*/")
         .expect("page.html has a /*VIEWER*/ placeholder");
-    let head = head.replace("{{TITLE}}", &escape_html(&clip.name));
+    // The title says the law the falls were simulated under, when known.
+    let title = match clip.aero_law.as_str() {
+        "" => clip.name.clone(),
+        law => format!("{} ({law} aerodynamics)", clip.name),
+    };
+    let head = head.replace("{{TITLE}}", &escape_html(&title));
     Ok([head.as_str(), &data, middle, VIEWER, tail].concat())
 }
 
@@ -702,6 +710,7 @@ mod tests {
             }],
             ground: Some(0.0),
             wind: vec![],
+            aero_law: String::new(),
             warnings: vec![],
         }
     }

@@ -14,7 +14,8 @@ use crate::physics::run::{MAX_WORK, REFERENCE_RATE, approximate_duration};
 use crate::physics::stability;
 use std::collections::HashMap;
 
-/// The limits a scene is held to, and the duration it will run for.
+/// The limits a scene is held to, and what the command line sets over the
+/// file: the duration it will run for and the law its leaves fall under.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Limits {
     /// Particle-steps (`scene --max-work`).
@@ -23,6 +24,9 @@ pub struct Limits {
     pub max_memory: f64,
     /// The run's duration when not the file's (`scene --seconds`).
     pub seconds: Option<f64>,
+    /// The aerodynamic law of every leaf when not its file's (`scene
+    /// --law`, [`crate::leaf::LeafSpec::under_law`]).
+    pub law: Option<crate::leaf::AeroLawName>,
 }
 
 impl Default for Limits {
@@ -31,6 +35,7 @@ impl Default for Limits {
             max_work: MAX_WORK,
             max_memory: MAX_MEMORY,
             seconds: None,
+            law: None,
         }
     }
 }
@@ -150,7 +155,8 @@ fn estimate(spec: &SceneSpec, ctx: &Ctx<'_>, frame_dt: f64) -> Estimate {
                 "a" | "b" => LeafSpec::load(&obj.leaf),
                 p => LeafSpec::read(&ctx.base.join(p)),
             }
-            .ok()?;
+            .ok()
+            .map(|s| ctx.under_law(s))?;
             let model = file.model().ok()?;
             let dt = stability::estimate(&model).auto_step(spec.integrator, frame_dt);
             Some((model.len() as f64, file.rigid, dt))

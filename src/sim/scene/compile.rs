@@ -58,7 +58,16 @@ impl Scene {
     ) -> Result<Scene, SceneError> {
         let spec: SceneSpec =
             toml::from_str(text).map_err(|e| BadInput::toml_parse(file, text, &e))?;
-        compile(&spec, &Ctx { text, file, base }, limits)
+        compile(
+            &spec,
+            &Ctx {
+                text,
+                file,
+                base,
+                law: limits.law,
+            },
+            limits,
+        )
     }
 
     /// Compiles an already parsed scene (for programs that build or edit
@@ -70,6 +79,7 @@ impl Scene {
                 text: "",
                 file,
                 base,
+                law: None,
             },
             &Limits::default(),
         )

@@ -16,9 +16,19 @@ pub(super) struct Ctx<'a> {
     pub(super) text: &'a str,
     pub(super) file: &'a str,
     pub(super) base: &'a Path,
+    /// The law every leaf falls under, over its file's (`scene --law`).
+    pub(super) law: Option<crate::leaf::AeroLawName>,
 }
 
 impl Ctx<'_> {
+    /// A leaf under the scene's `--law`, if one is given.
+    pub(super) fn under_law(&self, spec: crate::leaf::LeafSpec) -> crate::leaf::LeafSpec {
+        match self.law {
+            Some(law) => spec.under_law(law),
+            None => spec,
+        }
+    }
+
     pub(super) fn err(&self, field: impl Into<String>, message: impl Into<String>) -> SceneError {
         BadInput::in_toml(self.file, self.text, field, message)
     }

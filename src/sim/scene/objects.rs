@@ -71,6 +71,7 @@ pub(super) fn add_leaf(
         "a" | "b" => LeafSpec::load(&obj.leaf),
         p => LeafSpec::read(&ctx.base.join(p)),
     }
+    .map(|s| ctx.under_law(s))
     .map_err(|e| {
         ctx.err(
             field("leaf"),

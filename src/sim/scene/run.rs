@@ -284,6 +284,8 @@ struct ObjectSummary {
 struct Summary<'a> {
     scene: &'a str,
     source: &'a str,
+    /// The leaves' aerodynamic law (`scene --law` or their files').
+    aero_law: &'static str,
     #[serde(flatten)]
     stats: &'a RunStats,
     kept: Vec<String>,
@@ -486,6 +488,7 @@ impl SceneRun {
         let summary = Summary {
             scene: &scene.name,
             source: &scene.source,
+            aero_law: scene.model.aero.name(),
             stats: &self.stats,
             kept: decisions
                 .iter()
