@@ -2,7 +2,7 @@
 //! named by its path in the file and held to its bounds, substituted into
 //! the parsed document before it is compiled.
 
-use super::problem::Where;
+use super::error::Where;
 use crate::sim::scene::SceneSpec;
 use crate::util::bad_input::BadInput;
 

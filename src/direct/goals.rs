@@ -2,8 +2,8 @@
 //! of a goal's leaves, whether it met the goal and how far it was from it
 //! (0 when met), measured on the leaf's centre of mass at the frames.
 
+use super::error::Where;
 use super::geometry::{Aabb, Cylinder, Polygon};
-use super::problem::Where;
 use crate::sim::scene::{GoalKind, GoalSpec, ObjectKind, Scene, SceneSpec, Shape};
 use crate::util::bad_input::BadInput;
 use nalgebra::{Vector2, Vector3};

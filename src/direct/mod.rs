@@ -9,19 +9,24 @@
 //! It runs scenes, so it sits above `sim` (whose scene files carry the two
 //! tables and ignore them) and beside `breed`, whose CMA-ES it uses.
 //!
-//! Its files, one job each: `geometry` (regions and distances to them),
+//! Its files, one job each: `error` (where a table's error is reported),
+//! `geometry` (regions and distances to them),
 //! `goals` (goals checked and judged on a run's tracks), `free` (free
 //! parameters: paths into the file, bounds, substitution), `problem` (a
 //! scene file with both, and one evaluation), `search` (CMA-ES and the
 //! random baseline over threads), `files` (the solved scene and the
 //! history written).
 
+pub mod error;
 pub mod files;
 pub mod free;
 pub mod geometry;
 pub mod goals;
 pub mod problem;
 pub mod search;
+
+#[cfg(test)]
+mod tests;
 
 pub use problem::{Evaluation, Problem};
 pub use search::{Method, Outcome, Record, Settings, search};

@@ -3,26 +3,12 @@
 //! the free values (substituted, compiled, run as far as the last goal
 //! looks, and judged).
 
+use super::error::Where;
 use super::free::{self, Free};
 use super::goals::{self, Goal, GoalResult, Tracks};
 use crate::sim::scene::{Scene, SceneSpec};
 use crate::util::bad_input::BadInput;
 use std::path::{Path, PathBuf};
-
-/// Where a field's error is reported: the file and its text.
-pub struct Where<'a> {
-    /// The file as named.
-    pub file: &'a str,
-    /// Its text (for line numbers).
-    pub text: &'a str,
-}
-
-impl Where<'_> {
-    /// `field` is refused for `reason`.
-    pub fn err(&self, field: impl Into<String>, reason: impl Into<String>) -> BadInput {
-        BadInput::in_toml(self.file, self.text, field, reason)
-    }
-}
 
 /// A leaf of a run that failed (diverged) counts this far from every goal,
 /// m: far worse than any leaf that ran.
