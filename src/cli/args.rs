@@ -423,6 +423,9 @@ pub struct DirectArgs {
     /// Print one JSON object instead of the report.
     #[arg(long)]
     pub json: bool,
+    /// Refuse a search whose estimated work (particles × steps × runs, the baseline's included) exceeds this.
+    #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
+    pub max_work: f64,
 }
 
 /// Arguments of `compare`.

@@ -26,6 +26,17 @@ pub fn direct(args: DirectArgs) -> Result<()> {
         .work(Some(problem.seconds))
         .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
     let runs = 2 * settings.budget;
+    let total = work.particle_steps() * runs as f64;
+    if total > args.max_work {
+        anyhow::bail!(
+            "{}: this search needs about {total:.2e} particle-steps ({runs} runs of {} particles × {:.0} steps, the baseline's included), more than the limit of {:.1e}: lower --budget, or raise the limit with `--max-work {:.1e}`",
+            args.file.display(),
+            work.particles,
+            work.steps,
+            args.max_work,
+            total * 1.01
+        );
+    }
     eprintln!(
         "direct: {} free parameters, {} goals; {} runs of {:.2} s ({} CMA-ES, {} random), each {} particles × {:.0} steps: {:.2e} particle-steps in all",
         problem.free.len(),
@@ -36,7 +47,7 @@ pub fn direct(args: DirectArgs) -> Result<()> {
         settings.budget,
         work.particles,
         work.steps,
-        work.particle_steps() * runs as f64
+        total
     );
     let started = Instant::now();
     let terminal = std::io::stderr().is_terminal();
@@ -88,7 +99,7 @@ pub fn direct(args: DirectArgs) -> Result<()> {
             "baseline_objective": base.evaluation.objective,
             "baseline_goals": goal_json(base),
             "baseline_parameters": base.values,
-            "particle_steps": work.particle_steps() * runs as f64,
+            "particle_steps": total,
             "wall_s": wall,
             "out": out,
             "files": files,

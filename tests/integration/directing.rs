@@ -263,6 +263,19 @@ fn bad_directing_input_names_the_file_the_line_and_the_field() {
         .unwrap();
     assert!(!o.status.success());
     assert!(String::from_utf8_lossy(&o.stderr).contains("--budget"));
+    // The work is said, and bounded, before the search starts.
+    let o = leafmagic()
+        .arg("direct")
+        .arg(scene_path("direct-letter"))
+        .args(["--budget", "1000", "--max-work", "1e9"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains("more than the limit of 1.0e9") && err.contains("--max-work"),
+        "{err}"
+    );
     // `scene` runs a file with goals and free parameters, ignoring them.
     let o = leafmagic()
         .arg("scene")
