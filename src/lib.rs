@@ -22,6 +22,8 @@
 //!   accuracy sweeps, the stress matrix.
 //! - [`breed`]: the paper's section 4.1 loop, automated: populations,
 //!   evaluation, selection, the run directory, shards and executors.
+//! - [`direct`]: directing leaves: a scene's goals and free parameters, and
+//!   the search (CMA-ES against a random baseline) that meets the goals.
 //! - [`output`]: what leaves leafmagic: clips of its own drops and scene
 //!   runs (written through [`formats`]) and the HTML preview.
 //! - [`studio`]: choosing leaves by eye in the browser: a session of
@@ -33,6 +35,7 @@
 #![warn(missing_docs)]
 
 pub mod breed;
+pub mod direct;
 pub mod formats;
 pub mod leaf;
 pub mod motion;

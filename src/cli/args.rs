@@ -484,6 +484,31 @@ pub struct SceneArgs {
     pub law: Option<LawArg>,
 }
 
+/// Arguments of `direct`.
+#[derive(clap::Args, Debug)]
+pub struct DirectArgs {
+    /// Scene file with [[goal]] and [[free]] tables (see docs/guide/directing.md).
+    pub file: PathBuf,
+    /// Scene runs CMA-ES may make; random search, the baseline, makes as many more.
+    #[arg(long, default_value_t = 200)]
+    pub budget: usize,
+    /// Seed of every sample (same seed, same bytes on any number of threads).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Output directory (default runs/direct-<name>-s<seed>).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Print one JSON object instead of the report.
+    #[arg(long)]
+    pub json: bool,
+    /// Refuse a search whose estimated work (particles × steps × runs, the baseline's included) exceeds this.
+    #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
+    pub max_work: f64,
+}
+
 /// Arguments of `compare`.
 #[derive(clap::Args, Debug)]
 pub struct CompareArgs {

@@ -3,13 +3,14 @@
 //! the top layer and may use every library layer; none of them uses it.
 //!
 //! `args` is what each subcommand accepts; `breed`, `drop`, `accuracy`,
-//! `motion`, `scene` and `output` do the commands' work (with `input`, the
+//! `motion`, `scene`, `direct` and `output` do the commands' work (with `input`, the
 //! loading they share, and `progress`, the bar of `breed`); `report` formats
 //! what a person reads, `words` names the library's settings as flags. This file: the top-level parser and the dispatch.
 
 mod accuracy;
 mod args;
 mod breed;
+mod direct;
 mod drop;
 mod input;
 mod motion;
@@ -23,8 +24,8 @@ mod words;
 
 use anyhow::Result;
 use args::{
-    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DropArgs, ExportArgs, FallArgs,
-    MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs, StudioArgs,
+    AccuracyArgs, BreedArgs, CheckArgs, ClassifyArgs, CompareArgs, DirectArgs, DropArgs,
+    ExportArgs, FallArgs, MergeArgs, PlateArgs, PreviewArgs, SceneArgs, ShardArgs, StudioArgs,
 };
 use clap::{Parser, Subcommand};
 
@@ -62,6 +63,9 @@ pub enum Command {
     Accuracy(AccuracyArgs),
     /// Run a scene file and write per-object trajectories and a summary.
     Scene(SceneArgs),
+    /// Search a scene's free parameters (wind strengths, positions, leaf releases) for values
+    /// that meet its goals (where and when the leaves go): CMA-ES, with random search as baseline.
+    Direct(DirectArgs),
     /// Motion descriptors of two falls side by side, and their distance.
     Compare(CompareArgs),
     /// Write one self-contained HTML page that plays a breeding run's best
@@ -110,6 +114,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Describe(args) => motion::describe(args),
         Command::Accuracy(args) => accuracy::accuracy(args),
         Command::Scene(args) => scene::scene(args),
+        Command::Direct(args) => direct::direct(args),
         Command::Compare(args) => motion::compare(args),
         Command::Preview(args) => output::preview(args),
         Command::Studio(args) => studio::studio(args),

@@ -14,7 +14,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The layers, lowest first, with what each may import.
-const LAYERS: [(&str, &[&str]); 9] = [
+const LAYERS: [(&str, &[&str]); 10] = [
     ("util", &[]),
     ("physics", &["util"]),
     ("motion", &["util"]),
@@ -22,6 +22,10 @@ const LAYERS: [(&str, &[&str]); 9] = [
     ("leaf", &["physics", "util"]),
     ("sim", &["physics", "motion", "leaf", "util"]),
     ("breed", &["sim", "leaf", "motion", "physics", "util"]),
+    (
+        "direct",
+        &["breed", "sim", "leaf", "motion", "physics", "util"],
+    ),
     (
         "output",
         &[

@@ -15,6 +15,7 @@ mod contact;
 // Shared with lab/examples/real_falls_classify.rs, which uses all of it.
 #[allow(dead_code)]
 mod corpus;
+mod directing;
 mod docs_links;
 mod expectations;
 mod export;

@@ -2,6 +2,7 @@
 //! field is documented in `scenes/README.md`. [`super::compile`] checks the
 //! values and builds the model.
 
+use super::goal_spec::{FreeSpec, GoalSpec};
 use crate::physics::field::WindField;
 use crate::physics::model::Ground;
 use crate::physics::model::STANDARD_GRAVITY;
@@ -57,6 +58,12 @@ pub struct SceneSpec {
     /// Ropes (chains of particles and springs).
     #[serde(default, rename = "rope")]
     pub ropes: Vec<RopeObject>,
+    /// Goals for `direct` (a plain run ignores them).
+    #[serde(default, rename = "goal")]
+    pub goals: Vec<GoalSpec>,
+    /// Free parameters for `direct` (a plain run ignores them).
+    #[serde(default, rename = "free")]
+    pub free: Vec<FreeSpec>,
 }
 
 fn default_frame_rate() -> f64 {
