@@ -384,7 +384,9 @@ fn crosses_are_predicted_with_the_arm_width_given() {
     let err = real_falls::predict(PlateShape::Cross, &real, &aero, 2, 1, &Default::default())
         .unwrap_err()
         .to_string();
-    assert!(err.contains("--arm-width"), "{err}");
+    // Named as the library names it (the command line spells it --arm-width).
+    let arm_width = leafmagic::util::setting::Setting::ArmWidth.to_string();
+    assert!(err.contains(&arm_width), "{err}");
     let protocol = real_falls::Protocol {
         cross_arm: Some(1.0 / 3.0),
         ..Default::default()

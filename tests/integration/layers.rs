@@ -510,10 +510,6 @@ const NOT_OUR_FLAGS: &[(&str, &[&str], &str)] = &[
     ),
 ];
 
-/// Modules another change rewrites; their messages get the library's words
-/// when it lands (issue 59).
-const NOT_YET: &[&str] = &["sim::scene::bounds", "sim::scene::run"];
-
 #[test]
 fn the_library_names_no_command_line_flag() {
     // The library names a setting as `Setting` (`util::setting`), which
@@ -521,9 +517,6 @@ fn the_library_names_no_command_line_flag() {
     // wrong for the studio and for anything else that calls it.
     let mut found = Vec::new();
     for (module, path) in library_files() {
-        if NOT_YET.contains(&module.as_str()) {
-            continue;
-        }
         let text = std::fs::read_to_string(&path).unwrap();
         for (line, literal) in string_literals(&text) {
             for flag in flags_in(&literal) {

@@ -14,13 +14,6 @@ const MAX_LINES: usize = 150;
 /// What the comment above a longer function holds, then why.
 const MARKER: &str = "one piece:";
 
-/// Folders another change rewrites now, left to it (issue 59): checked
-/// again once it lands.
-const NOT_YET: &[&str] = &["sim/scene"];
-
-/// Functions not yet split, by file and name (issue 59).
-const NOT_YET_SPLIT: &[(&str, &str)] = &[];
-
 /// Every `.rs` file under `src/`.
 fn sources() -> Vec<PathBuf> {
     let mut out = Vec::new();
@@ -111,12 +104,9 @@ fn no_function_runs_past_150_lines_unless_it_says_why() {
             .unwrap()
             .to_string_lossy()
             .replace('\\', "/");
-        if NOT_YET.iter().any(|d| rel.starts_with(d)) {
-            continue;
-        }
         let text = std::fs::read_to_string(&path).unwrap();
         for (name, line, length, marked) in long_functions(&text, MAX_LINES) {
-            if !marked && !NOT_YET_SPLIT.contains(&(rel.as_str(), name.as_str())) {
+            if !marked {
                 found.push(format!("src/{rel}:{line}: {name}, {length} lines"));
             }
         }

@@ -12,6 +12,7 @@ use super::spec::{DtSpec, SceneSpec, Shape};
 use crate::leaf::LeafSpec;
 use crate::physics::run::{MAX_WORK, REFERENCE_RATE, approximate_duration};
 use crate::physics::stability;
+use crate::util::setting::Setting;
 use std::collections::HashMap;
 
 /// The limits a scene is held to, and what the command line sets over the
@@ -97,15 +98,15 @@ pub(super) fn check(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<
                 "the scene would record about {bytes:.1e} bytes ({} particles and {} poses at \
                  {} frames: {} s at {} frames per second), more than the limit of {:.1e} bytes \
                  (estimated from the file, before anything was built); use fewer copies, a \
-                 shorter duration (or --seconds) or a lower frame_rate, or raise the limit \
-                 with `--max-memory {:.1e}`",
+                 shorter duration (or {}) or a lower frame_rate, or raise the limit with `{}`",
                 count(e.recorded_particles),
                 count(e.poses),
                 count(frames),
                 seconds,
                 rate,
                 limits.max_memory,
-                bytes * 1.01
+                Setting::Duration,
+                Setting::MaxMemory.set(format_args!("{:.1e}", bytes * 1.01)),
             ),
         ));
     }
@@ -126,13 +127,13 @@ pub(super) fn check(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<
                 "the scene needs at least {work:.1e} particle-steps ({} particles × at least {} \
                  steps in {} s), {core} of one core or more, past the limit of {:.1e} \
                  particle-steps (estimated from the file, before anything was built); use \
-                 fewer copies or a shorter duration (or --seconds), or raise the limit with \
-                 `--max-work {:.1e}`",
+                 fewer copies or a shorter duration (or {}), or raise the limit with `{}`",
                 count(e.particles),
                 count(steps),
                 seconds,
                 limits.max_work,
-                work * 1.01
+                Setting::Duration,
+                Setting::MaxWork.set(format_args!("{:.1e}", work * 1.01)),
             ),
         ));
     }

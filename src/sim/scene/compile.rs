@@ -10,12 +10,12 @@ use super::compiled::{ObjectKind, Scene};
 use super::error::{Ctx, SceneError, check_name};
 use super::objects::{SplitMix, add_leaf, add_rigid, add_rope, add_sheet};
 use super::shapes::Part;
-use super::spec::{DtSpec, SceneSpec};
+use super::spec::{DtSpec, FixedPoint, SceneSpec};
 use crate::physics::field::{
     Flow, LineSink, LineSource, LineVortex, PointSink, PointSource, Uniform, WindField,
 };
 use crate::physics::integrate::{RUNAWAY_DISTANCE, runaway_speed};
-use crate::physics::model::{AeroLaw, Model, ModelError};
+use crate::physics::model::{Model, ModelError};
 use crate::physics::params::TimeStep;
 use crate::physics::state::State;
 use crate::util::bad_input::BadInput;
@@ -103,6 +103,79 @@ fn inert(p: &crate::physics::field::Primitive) -> Option<&'static str> {
 }
 
 fn compile(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<Scene, SceneError> {
+    check_settings(spec, ctx, limits)?;
+
+    let mut b = Builder::default();
+    let mut names: HashMap<String, String> = HashMap::new();
+    let mut primitives = Vec::new();
+    for (i, p) in spec.wind.primitives().iter().enumerate() {
+        match inert(p) {
+            Some(why) => b.pruned.push(format!("wind[{i}]: {why}")),
+            None => primitives.push(p.clone()),
+        }
+    }
+    let mut rng = SplitMix(spec.seed);
+
+    for (k, obj) in spec.leaves.iter().enumerate() {
+        add_leaf(ctx, &mut b, &mut names, &mut rng, k, obj)?;
+    }
+    for (k, obj) in spec.rigid.iter().enumerate() {
+        add_rigid(ctx, &mut b, &mut names, k, obj)?;
+    }
+    for (k, obj) in spec.sheets.iter().enumerate() {
+        add_sheet(ctx, &mut b, &mut names, k, obj)?;
+    }
+    for (k, obj) in spec.fixed.iter().enumerate() {
+        add_fixed(ctx, &mut b, &mut names, k, obj)?;
+    }
+    for (k, obj) in spec.ropes.iter().enumerate() {
+        add_rope(ctx, &mut b, &mut names, k, obj)?;
+    }
+    if b.parts.mass.is_empty() {
+        return Err(ctx.err("(document)", "the scene has no objects"));
+    }
+
+    check_one_law(ctx, &b)?;
+    b.parts.gravity = V3::from(spec.gravity);
+    b.parts.wind = WindField::new(primitives);
+    b.parts.ground = spec.ground;
+    let velocity = std::mem::take(&mut b.velocity);
+    let model = Model::new(std::mem::take(&mut b.parts)).map_err(|e: ModelError| {
+        let owner = b
+            .owner_of(&e.item)
+            .unwrap_or_else(|| "(document)".to_string());
+        ctx.err(owner, format!("{} (model item {})", e.reason, e.item))
+    })?;
+    let mut initial = State::at_rest(&model);
+    initial.velocity = velocity;
+    check_start(ctx, &b, &model, &initial)?;
+    let dt = match spec.dt {
+        DtSpec::Auto => TimeStep::Auto,
+        DtSpec::Seconds(h) => TimeStep::Fixed(h),
+    };
+    if dt == TimeStep::Auto {
+        check_auto_step(spec, ctx, &b, &model, dt)?;
+    }
+    Ok(Scene {
+        name: spec.name.clone(),
+        description: spec.description.clone(),
+        source: ctx.file.to_string(),
+        model,
+        initial,
+        objects: b.objects,
+        integrator: spec.integrator,
+        dt,
+        duration: spec.duration,
+        frame_rate: spec.frame_rate,
+        pruned: b.pruned,
+        max_work: limits.max_work,
+        max_memory: limits.max_memory,
+    })
+}
+
+/// The scene's own settings checked, and its work and memory bounded from
+/// the file before anything is built ([`super::bounds`]).
+fn check_settings(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<(), SceneError> {
     // The scene's name becomes a directory name.
     check_name(ctx, "name", &spec.name, &mut HashMap::new())?;
     ctx.positive("duration", spec.duration)?;
@@ -126,93 +199,78 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<Scene, Sc
         .validate()
         .map_err(|e| ctx.err(e.item.clone(), e.reason.clone()))?;
     super::bounds::check(spec, ctx, limits)?;
+    Ok(())
+}
 
-    let mut b = Builder::default();
-    let mut names: HashMap<String, String> = HashMap::new();
-    let mut primitives = Vec::new();
-    for (i, p) in spec.wind.primitives().iter().enumerate() {
-        match inert(p) {
-            Some(why) => b.pruned.push(format!("wind[{i}]: {why}")),
-            None => primitives.push(p.clone()),
-        }
-    }
-    let mut rng = SplitMix(spec.seed);
+/// A `[[fixed]]` point: one fixed particle of unit mass.
+fn add_fixed(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    names: &mut HashMap<String, String>,
+    k: usize,
+    obj: &FixedPoint,
+) -> Result<(), SceneError> {
+    let path = format!("fixed[{k}]");
+    check_name(ctx, &format!("{path}.name"), &obj.name, names)?;
+    ctx.vector(&format!("{path}.position"), &obj.position)?;
+    let part = Part {
+        mass: vec![1.0],
+        position: vec![V3::zeros()],
+        fixed: vec![true],
+        ..Default::default()
+    };
+    let ids = b.add_part(
+        &path,
+        &part,
+        &[],
+        (0.0, 0.0),
+        V3::zeros(),
+        UnitQuaternion::identity(),
+        V3::from(obj.position),
+        V3::zeros(),
+        V3::zeros(),
+    );
+    b.push_object(obj.name.clone(), ObjectKind::Fixed, ids, None, false, &path);
+    Ok(())
+}
 
-    for (k, obj) in spec.leaves.iter().enumerate() {
-        add_leaf(ctx, &mut b, &mut names, &mut rng, k, obj)?;
+/// Rigid bodies and sheets carry linear-law coefficients; under a law
+/// that replaces them they would be silently ignored, so say so instead.
+fn check_one_law(ctx: &Ctx<'_>, b: &Builder) -> Result<(), SceneError> {
+    let Some(first) = &b.aero_from else {
+        return Ok(());
+    };
+    if b.parts.aero.uses_triangle_alpha() {
+        return Ok(());
     }
-    for (k, obj) in spec.rigid.iter().enumerate() {
-        add_rigid(ctx, &mut b, &mut names, k, obj)?;
-    }
-    for (k, obj) in spec.sheets.iter().enumerate() {
-        add_sheet(ctx, &mut b, &mut names, k, obj)?;
-    }
-    for (k, obj) in spec.fixed.iter().enumerate() {
-        let path = format!("fixed[{k}]");
-        check_name(ctx, &format!("{path}.name"), &obj.name, &mut names)?;
-        ctx.vector(&format!("{path}.position"), &obj.position)?;
-        let part = Part {
-            mass: vec![1.0],
-            position: vec![V3::zeros()],
-            fixed: vec![true],
-            ..Default::default()
-        };
-        let ids = b.add_part(
-            &path,
-            &part,
-            &[],
-            (0.0, 0.0),
-            V3::zeros(),
-            UnitQuaternion::identity(),
-            V3::from(obj.position),
-            V3::zeros(),
-            V3::zeros(),
-        );
-        b.push_object(obj.name.clone(), ObjectKind::Fixed, ids, None, false, &path);
-    }
-    for (k, obj) in spec.ropes.iter().enumerate() {
-        add_rope(ctx, &mut b, &mut names, k, obj)?;
-    }
-    if b.parts.mass.is_empty() {
-        return Err(ctx.err("(document)", "the scene has no objects"));
-    }
-
-    if let (AeroLaw::Quadratic(_) | AeroLaw::Unsteady(_), Some(first)) =
-        (&b.parts.aero, &b.aero_from)
+    if let Some(t) = b
+        .parts
+        .triangles
+        .iter()
+        .position(|t| t.alpha_n != 0.0 || t.alpha_t != 0.0)
     {
-        // Rigid bodies and sheets carry linear-law coefficients; under the
-        // quadratic or unsteady law they would be silently ignored, so say
-        // so instead.
-        if let Some(t) = b
-            .parts
-            .triangles
-            .iter()
-            .position(|t| t.alpha_n != 0.0 || t.alpha_t != 0.0)
-        {
-            return Err(ctx.err(
-                b.triangle_owner[t].clone(),
-                format!(
-                    "has linear-law coefficients αⁿ, αᵗ, but {first} uses the {} law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)",
-                    b.parts.aero.name()
-                ),
-            ));
-        }
+        return Err(ctx.err(
+            b.triangle_owner[t].clone(),
+            format!(
+                "has linear-law coefficients αⁿ, αᵗ, but {first} uses the {} law; a scene has one aerodynamic law (set them to 0 or use linear-law leaves)",
+                b.parts.aero.name()
+            ),
+        ));
     }
-    b.parts.gravity = V3::from(spec.gravity);
-    b.parts.wind = WindField::new(primitives);
-    b.parts.ground = spec.ground;
-    let velocity = std::mem::take(&mut b.velocity);
-    let model = Model::new(std::mem::take(&mut b.parts)).map_err(|e: ModelError| {
-        let owner = b
-            .owner_of(&e.item)
-            .unwrap_or_else(|| "(document)".to_string());
-        ctx.err(owner, format!("{} (model item {})", e.reason, e.item))
-    })?;
-    let mut initial = State::at_rest(&model);
-    initial.velocity = velocity;
+    Ok(())
+}
+
+/// No particle placed or launched past where the simulator counts it as
+/// run away (it would be reported as diverging at step 0).
+fn check_start(
+    ctx: &Ctx<'_>,
+    b: &Builder,
+    model: &Model,
+    initial: &State,
+) -> Result<(), SceneError> {
     // Past these the simulator counts a particle as run away: one placed
     // or launched there would be reported as diverging at step 0.
-    let speed_limit = runaway_speed(&model);
+    let speed_limit = runaway_speed(model);
     for (i, (x, v)) in initial.position.iter().zip(&initial.velocity).enumerate() {
         let (key, value, limit, unit, what) = if x.norm() > RUNAWAY_DISTANCE {
             (
@@ -239,36 +297,29 @@ fn compile(spec: &SceneSpec, ctx: &Ctx<'_>, limits: &Limits) -> Result<Scene, Sc
             ),
         ));
     }
-    let dt = match spec.dt {
-        DtSpec::Auto => TimeStep::Auto,
-        DtSpec::Seconds(h) => TimeStep::Fixed(h),
-    };
-    if dt == TimeStep::Auto {
-        // dt = auto on a model too stiff or light for the integrator: the
-        // error names the object of the stiffest spring (else `dt`).
-        crate::physics::run::resolve_dt(&model, spec.integrator, dt, 1.0 / spec.frame_rate)
-            .and_then(|h| crate::physics::run::check_steps(spec.duration, h, spec.integrator))
-            .map_err(|e| {
-                let stiffest = crate::physics::stability::estimate(&model)
-                    .stiffest_spring
-                    .and_then(|k| b.owner_of(&format!("spring[{k}]")))
-                    .unwrap_or_else(|| "dt".to_string());
-                ctx.err(stiffest, format!("dt = auto: {e}"))
-            })?;
-    }
-    Ok(Scene {
-        name: spec.name.clone(),
-        description: spec.description.clone(),
-        source: ctx.file.to_string(),
-        model,
-        initial,
-        objects: b.objects,
-        integrator: spec.integrator,
-        dt,
-        duration: spec.duration,
-        frame_rate: spec.frame_rate,
-        pruned: b.pruned,
-        max_work: limits.max_work,
-        max_memory: limits.max_memory,
-    })
+    Ok(())
+}
+
+/// `dt = auto` on a model too stiff or light for the integrator: the
+/// error names the object of the stiffest spring (else `dt`).
+fn check_auto_step(
+    spec: &SceneSpec,
+    ctx: &Ctx<'_>,
+    b: &Builder,
+    model: &Model,
+    dt: TimeStep,
+) -> Result<(), SceneError> {
+    // dt = auto on a model too stiff or light for the integrator: the
+    // error names the object of the stiffest spring (else `dt`).
+    crate::physics::run::resolve_dt(model, spec.integrator, dt, 1.0 / spec.frame_rate)
+        .and_then(|h| crate::physics::run::check_steps(spec.duration, h, spec.integrator))
+        .map_err(|e| {
+            let stiffest = crate::physics::stability::estimate(model)
+                .stiffest_spring
+                .and_then(|k| b.owner_of(&format!("spring[{k}]")))
+                .unwrap_or_else(|| "dt".to_string());
+            ctx.err(stiffest, format!("dt = auto: {e}"))
+        })?;
+
+    Ok(())
 }

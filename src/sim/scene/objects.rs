@@ -9,7 +9,7 @@ use super::error::{Ctx, SceneError, check_name};
 use super::shapes::{self, Part};
 use super::spec::{LeafObject, Pin, RigidObject, RopeObject, Shape, SheetObject};
 use crate::leaf::LeafSpec;
-use crate::physics::model::{AeroLaw, Model, ModelParts, Spring, Triangle};
+use crate::physics::model::{Model, ModelParts, Spring, Triangle};
 use nalgebra::{Unit, UnitQuaternion, Vector3};
 use std::collections::HashMap;
 
@@ -55,59 +55,8 @@ pub(super) fn add_leaf(
 ) -> Result<(), SceneError> {
     let path = format!("leaf[{k}]");
     let field = |f: &str| format!("{path}.{f}");
-    ctx.vector(&field("position"), &obj.position)?;
-    ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
-    ctx.vector(&field("velocity"), &obj.velocity)?;
-    ctx.vector(&field("angular_velocity"), &obj.angular_velocity)?;
-    ctx.vector(&field("spread"), &obj.spread)?;
-    if obj.spread.iter().any(|&s| s < 0.0) {
-        return Err(ctx.err(field("spread"), "must be ≥ 0 along every axis"));
-    }
-    ctx.non_negative(&field("tilt_deg"), obj.tilt_deg)?;
-    if obj.count == 0 {
-        return Err(ctx.err(field("count"), "must be ≥ 1"));
-    }
-    let spec = match obj.leaf.as_str() {
-        "a" | "b" => LeafSpec::load(&obj.leaf),
-        p => LeafSpec::read(&ctx.base.join(p)),
-    }
-    .map(|s| ctx.under_law(s))
-    .map_err(|e| {
-        ctx.err(
-            field("leaf"),
-            format!("cannot use leaf '{}': {e}", obj.leaf),
-        )
-    })?;
-    if !spec.wind.is_still() {
-        return Err(ctx.err(
-            field("leaf"),
-            format!(
-                "leaf '{}' carries its own wind; in a scene the wind is the scene's [[wind]]",
-                obj.leaf
-            ),
-        ));
-    }
-    let leaf = spec
-        .model()
-        .map_err(|e| ctx.err(field("leaf"), format!("invalid leaf '{}': {e}", obj.leaf)))?;
-    match &b.aero_from {
-        None => {
-            b.aero_from = Some(path.clone());
-            b.parts.aero = leaf.aero;
-        }
-        Some(first) if b.parts.aero != leaf.aero => {
-            return Err(ctx.err(
-                field("leaf"),
-                format!(
-                    "leaf '{}' uses the {} aerodynamic law but {first} uses the {}; a scene has one law for all its leaves",
-                    obj.leaf,
-                    law_name(&leaf.aero),
-                    law_name(&b.parts.aero)
-                ),
-            ));
-        }
-        Some(_) => {}
-    }
+    let (spec, leaf) = checked_leaf(ctx, &path, obj)?;
+    one_law(ctx, b, &path, obj, &leaf)?;
     // A leaf file that is one rigid body (`rigid = true`: every plate of
     // `leafmagic plate`, which has no springs) stays one unless the scene
     // says otherwise; its particles would otherwise fly apart.
@@ -149,22 +98,7 @@ pub(super) fn add_leaf(
             format!("{}-{copy:03}", obj.name)
         };
         check_name(ctx, &field("name"), &name, names)?;
-        let offset = V3::new(
-            obj.spread[0] * rng.signed(),
-            obj.spread[1] * rng.signed(),
-            obj.spread[2] * rng.signed(),
-        );
-        let tilt_axis = rng.unit() * std::f64::consts::TAU;
-        let tilt = obj.tilt_deg.to_radians() * rng.unit();
-        let yaw = if obj.random_yaw {
-            rng.unit() * std::f64::consts::TAU
-        } else {
-            0.0
-        };
-        let axis = Unit::new_normalize(V3::new(tilt_axis.cos(), tilt_axis.sin(), 0.0));
-        let rotation = UnitQuaternion::from_axis_angle(&V3::z_axis(), yaw)
-            * UnitQuaternion::from_axis_angle(&axis, tilt)
-            * base;
+        let (offset, rotation) = release(obj, rng, base);
         let start = b.parts.mass.len();
         let ids = b.add_part(
             &path,
@@ -177,41 +111,7 @@ pub(super) fn add_leaf(
             V3::from(obj.velocity),
             V3::from(obj.angular_velocity),
         );
-        // Triangles keep their own coefficients; springs and hinges keep
-        // their rest lengths and angles (both unchanged by a rigid motion).
-        for t in &leaf.triangles {
-            b.parts.triangles.push(Triangle {
-                corners: t.corners.map(|c| start + c),
-                ..*t
-            });
-            b.triangle_owner.push(path.clone());
-        }
-        if rigid {
-            if copy == 0 && (!leaf.springs.is_empty() || !leaf.hinges.is_empty()) {
-                b.pruned.push(format!(
-                    "{path} ({}): {} springs and {} hinges per copy inside a rigid body (internal forces cancel)",
-                    obj.name,
-                    leaf.springs.len(),
-                    leaf.hinges.len()
-                ));
-            }
-        } else {
-            for s in &leaf.springs {
-                b.parts.springs.push(Spring {
-                    i: start + s.i,
-                    j: start + s.j,
-                    ..*s
-                });
-                b.spring_owner.push(path.clone());
-            }
-            for h in &leaf.hinges {
-                let mut h = *h;
-                h.edge = h.edge.map(|c| start + c);
-                h.apexes = h.apexes.map(|c| start + c);
-                b.parts.hinges.push(h);
-                b.hinge_owner.push(path.clone());
-            }
-        }
+        add_elements(b, &path, obj, &leaf, start, rigid, copy == 0);
         let pose = PoseFrame {
             model: leaf.clone(),
             initial: rotation,
@@ -220,6 +120,160 @@ pub(super) fn add_leaf(
         b.set_surface(leaf.triangles.iter().map(|t| t.corners).collect());
     }
     Ok(())
+}
+
+/// A `[[leaf]]` table's numbers checked, and its leaf file read (under
+/// the scene's law, if it sets one) and made a model.
+fn checked_leaf(
+    ctx: &Ctx<'_>,
+    path: &str,
+    obj: &LeafObject,
+) -> Result<(LeafSpec, Model), SceneError> {
+    let field = |f: &str| format!("{path}.{f}");
+    ctx.vector(&field("position"), &obj.position)?;
+    ctx.vector(&field("rotation_deg"), &obj.rotation_deg)?;
+    ctx.vector(&field("velocity"), &obj.velocity)?;
+    ctx.vector(&field("angular_velocity"), &obj.angular_velocity)?;
+    ctx.vector(&field("spread"), &obj.spread)?;
+    if obj.spread.iter().any(|&s| s < 0.0) {
+        return Err(ctx.err(field("spread"), "must be ≥ 0 along every axis"));
+    }
+    ctx.non_negative(&field("tilt_deg"), obj.tilt_deg)?;
+    if obj.count == 0 {
+        return Err(ctx.err(field("count"), "must be ≥ 1"));
+    }
+    let spec = match obj.leaf.as_str() {
+        "a" | "b" => LeafSpec::load(&obj.leaf),
+        p => LeafSpec::read(&ctx.base.join(p)),
+    }
+    .map(|s| ctx.under_law(s))
+    .map_err(|e| {
+        ctx.err(
+            field("leaf"),
+            format!("cannot use leaf '{}': {e}", obj.leaf),
+        )
+    })?;
+    if !spec.wind.is_still() {
+        return Err(ctx.err(
+            field("leaf"),
+            format!(
+                "leaf '{}' carries its own wind; in a scene the wind is the scene's [[wind]]",
+                obj.leaf
+            ),
+        ));
+    }
+    let leaf = spec
+        .model()
+        .map_err(|e| ctx.err(field("leaf"), format!("invalid leaf '{}': {e}", obj.leaf)))?;
+    Ok((spec, leaf))
+}
+
+/// A scene has one aerodynamic law for all its leaves: the first leaf's,
+/// which every other must share.
+fn one_law(
+    ctx: &Ctx<'_>,
+    b: &mut Builder,
+    path: &str,
+    obj: &LeafObject,
+    leaf: &Model,
+) -> Result<(), SceneError> {
+    let field = |f: &str| format!("{path}.{f}");
+    match &b.aero_from {
+        None => {
+            b.aero_from = Some(path.to_string());
+            b.parts.aero = leaf.aero;
+        }
+        Some(first) if b.parts.aero != leaf.aero => {
+            return Err(ctx.err(
+                field("leaf"),
+                format!(
+                    "leaf '{}' uses the {} aerodynamic law but {first} uses the {}; a scene has one law for all its leaves",
+                    obj.leaf,
+                    leaf.aero.name(),
+                    b.parts.aero.name()
+                ),
+            ));
+        }
+        Some(_) => {}
+    }
+    Ok(())
+}
+
+/// Where and how a copy is released: its offset within the group's
+/// spread, and its attitude (a random tilt about a random horizontal
+/// axis, a random yaw if asked, then the group's rotation `base`). The
+/// draws' order is part of a scene's seed.
+fn release(
+    obj: &LeafObject,
+    rng: &mut SplitMix,
+    base: UnitQuaternion<f64>,
+) -> (V3, UnitQuaternion<f64>) {
+    let offset = V3::new(
+        obj.spread[0] * rng.signed(),
+        obj.spread[1] * rng.signed(),
+        obj.spread[2] * rng.signed(),
+    );
+    let tilt_axis = rng.unit() * std::f64::consts::TAU;
+    let tilt = obj.tilt_deg.to_radians() * rng.unit();
+    let yaw = if obj.random_yaw {
+        rng.unit() * std::f64::consts::TAU
+    } else {
+        0.0
+    };
+    let axis = Unit::new_normalize(V3::new(tilt_axis.cos(), tilt_axis.sin(), 0.0));
+    let rotation = UnitQuaternion::from_axis_angle(&V3::z_axis(), yaw)
+        * UnitQuaternion::from_axis_angle(&axis, tilt)
+        * base;
+    (offset, rotation)
+}
+
+/// A copy's triangles, and unless it is rigid its springs and hinges, its
+/// particles numbered from `start`; a rigid leaf's internal forces are
+/// pruned, said once (for the first copy).
+fn add_elements(
+    b: &mut Builder,
+    path: &str,
+    obj: &LeafObject,
+    leaf: &Model,
+    start: usize,
+    rigid: bool,
+    first: bool,
+) {
+    // Triangles keep their own coefficients; springs and hinges keep
+    // their rest lengths and angles (both unchanged by a rigid motion).
+    for t in &leaf.triangles {
+        b.parts.triangles.push(Triangle {
+            corners: t.corners.map(|c| start + c),
+            ..*t
+        });
+        b.triangle_owner.push(path.to_string());
+    }
+    if rigid {
+        if first && (!leaf.springs.is_empty() || !leaf.hinges.is_empty()) {
+            b.pruned.push(format!(
+            "{path} ({}): {} springs and {} hinges per copy inside a rigid body (internal forces cancel)",
+            obj.name,
+            leaf.springs.len(),
+            leaf.hinges.len()
+        ));
+        }
+    } else {
+        for s in &leaf.springs {
+            b.parts.springs.push(Spring {
+                i: start + s.i,
+                j: start + s.j,
+                ..*s
+            });
+            b.spring_owner.push(path.to_string());
+        }
+        for h in &leaf.hinges {
+            let mut h = *h;
+            h.edge = h.edge.map(|c| start + c);
+            h.apexes = h.apexes.map(|c| start + c);
+            b.parts.hinges.push(h);
+            b.hinge_owner.push(path.to_string());
+        }
+    }
 }
 
 pub(super) fn add_rigid(
@@ -566,9 +620,4 @@ pub(super) fn add_rope(
         &path,
     );
     Ok(())
-}
-
-/// The name of an aerodynamic law as leaf files spell it.
-fn law_name(law: &AeroLaw) -> &'static str {
-    law.name()
 }

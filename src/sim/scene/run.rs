@@ -11,6 +11,7 @@ use crate::physics::run::{PoseFault, RunKind, StepError, Work, check_budget, res
 use crate::physics::skip::SkipCounts;
 use crate::physics::state::State;
 use crate::util::io::particle_csv;
+use crate::util::setting::Setting;
 use nalgebra::Vector3;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -30,10 +31,10 @@ pub enum RunError {
     #[error(
         "recording this scene would take about {:.2e} bytes (every recorded particle and pose \
          at every frame), more than the limit of {limit:.1e}: lower `frame_rate` or the duration \
-         (or --seconds), record fewer deforming objects, or raise the limit with \
-         `--max-memory {:.1e}`",
+         (or {}), record fewer deforming objects, or raise the limit with `{}`",
         .bytes,
-        .bytes * 1.01
+        Setting::Duration,
+        Setting::MaxMemory.set(format_args!("{:.1e}", .bytes * 1.01))
     )]
     Memory {
         /// The estimate, bytes.
@@ -337,11 +338,11 @@ impl Staged {
             message,
         };
         if dir.exists() && !dir.is_dir() {
-            return Err(refuse(
+            return Err(refuse(format!(
                 "is a file, not a directory; a scene writes a folder of files: name another \
-                 --out or remove the file"
-                    .to_string(),
-            ));
+                 {} or remove the file",
+                Setting::Out
+            )));
         }
         if dir.is_dir() && !dir.join("summary.toml").exists() {
             let empty = std::fs::read_dir(dir)
@@ -349,12 +350,12 @@ impl Staged {
                 .next()
                 .is_none();
             if !empty {
-                return Err(refuse(
+                return Err(refuse(format!(
                     "exists and is not a scene's output (no summary.toml); a scene's output \
                      replaces its directory as a whole, so it will not replace this one: name \
-                     another --out"
-                        .to_string(),
-                ));
+                     another {}",
+                    Setting::Out
+                )));
             }
         }
         // Staging folders of killed runs go; a live one's stays.
