@@ -489,12 +489,12 @@ pub struct SceneArgs {
 pub struct DirectArgs {
     /// Scene file with [[goal]] and [[free]] tables (see docs/guide/directing.md).
     pub file: PathBuf,
-    /// Scene runs CMA-ES may make; random search, the baseline, makes as many more.
-    #[arg(long, default_value_t = 200)]
-    pub budget: usize,
-    /// Seed of every sample (same seed, same bytes on any number of threads).
-    #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    /// Scene runs CMA-ES may make; random search, the baseline, makes as many more [default: 200; with --resume, the search's].
+    #[arg(long)]
+    pub budget: Option<usize>,
+    /// Seed of every sample (same seed, same bytes on any number of threads and after kill + resume) [default: 0; with --resume, the search's].
+    #[arg(long)]
+    pub seed: Option<u64>,
     /// Worker threads (default: all cores).
     #[arg(long)]
     pub threads: Option<usize>,
@@ -504,6 +504,9 @@ pub struct DirectArgs {
     /// Print one JSON object instead of the report.
     #[arg(long)]
     pub json: bool,
+    /// Go on with the search whose output directory is DIR (killed or not) from its last whole batch: the same bytes as a search never stopped. The scene file, --budget and --seed must be the search's.
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<PathBuf>,
     /// Refuse a search whose estimated work (particles × steps × runs, the baseline's included) exceeds this.
     #[arg(long, default_value_t = leafmagic::physics::run::MAX_BREED_WORK, value_parser = parse_work)]
     pub max_work: f64,

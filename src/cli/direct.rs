@@ -4,23 +4,36 @@
 
 use super::args::DirectArgs;
 use anyhow::Result;
+use leafmagic::breed::verify::content_hash;
+use leafmagic::direct::files::{CHECKPOINT_FILE, Checkpoint, read_checkpoint};
 use leafmagic::direct::{self, Problem, Settings};
 use serde_json::json;
 use std::io::IsTerminal;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// `direct`: loads the problem, says the work, searches, writes, reports.
+/// `direct`: loads the problem (and the checkpoint to resume from), says
+/// the work, searches, writes, reports.
 pub fn direct(args: DirectArgs) -> Result<()> {
     let problem = Problem::load(&args.file)?;
-    if args.budget == 0 {
-        anyhow::bail!("--budget: a budget of 0 scene runs: give at least 1");
-    }
+    let scene_hash = content_hash(
+        &std::fs::read(&args.file).map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?,
+    );
+    let resumed = match &args.resume {
+        Some(dir) => Some(resumable(&args, dir, &scene_hash)?),
+        None => None,
+    };
     let settings = Settings {
-        budget: args.budget,
-        seed: args.seed,
+        budget: args
+            .budget
+            .or(resumed.as_ref().map(|c| c.budget))
+            .unwrap_or(200),
+        seed: args.seed.or(resumed.as_ref().map(|c| c.seed)).unwrap_or(0),
         threads: args.threads.unwrap_or(0),
     };
+    if settings.budget == 0 {
+        anyhow::bail!("--budget: a budget of 0 scene runs: give at least 1");
+    }
     let work = problem
         .scene
         .work(Some(problem.seconds))
@@ -49,9 +62,34 @@ pub fn direct(args: DirectArgs) -> Result<()> {
         work.steps,
         total
     );
+    let out = args.resume.clone().or(args.out.clone()).unwrap_or_else(|| {
+        PathBuf::from("runs").join(format!("direct-{}-s{}", problem.spec.name, settings.seed))
+    });
     let started = Instant::now();
     let terminal = std::io::stderr().is_terminal();
-    let outcome = direct::search(&problem, &settings, |done, total, best| {
+    let total = 2 * settings.budget;
+    let scene = args.file.display().to_string();
+    let start = resumed.map(|c| c.state);
+    if let Some(state) = &start {
+        eprintln!(
+            "direct: resuming {} at {}/{total} runs",
+            out.display(),
+            state.history.len()
+        );
+    }
+    let outcome = direct::search(&problem, &settings, start, |state, best| {
+        direct::files::write_checkpoint(
+            &out,
+            &Checkpoint {
+                scene: scene.clone(),
+                scene_hash: scene_hash.clone(),
+                budget: settings.budget,
+                seed: settings.seed,
+                state: state.clone(),
+            },
+        )
+        .map_err(|e| anyhow::anyhow!("{}: {e}", out.join(CHECKPOINT_FILE).display()))?;
+        let done = state.history.len();
         if terminal || done == total || done == settings.budget {
             eprintln!(
                 "direct: {done}/{total} runs, best {} so far: objective {:.4}, {:.0} % met ({:.0} s)",
@@ -61,11 +99,9 @@ pub fn direct(args: DirectArgs) -> Result<()> {
                 started.elapsed().as_secs_f64()
             );
         }
+        Ok::<(), anyhow::Error>(())
     })?;
     let wall = started.elapsed().as_secs_f64();
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("runs").join(format!("direct-{}-s{}", problem.spec.name, settings.seed))
-    });
     let files = direct::files::write(&out, &problem, &settings, &outcome)?;
     let (best, base) = (outcome.best(), outcome.baseline());
     let goal_json = |r: &direct::Record| {
@@ -150,4 +186,51 @@ pub fn direct(args: DirectArgs) -> Result<()> {
         files[1].display()
     );
     Ok(())
+}
+
+/// The checkpoint in `dir`, refused when the scene file's bytes, the
+/// budget or the seed asked for are not the search's (the thread count is
+/// free), or when --out names another directory.
+fn resumable(args: &DirectArgs, dir: &Path, scene_hash: &str) -> Result<Checkpoint> {
+    if let Some(out) = &args.out
+        && out != dir
+    {
+        anyhow::bail!(
+            "--out {} with --resume {}: a resumed search writes where it began; leave --out out",
+            out.display(),
+            dir.display()
+        );
+    }
+    let cp = read_checkpoint(dir)?;
+    let at = dir.join(CHECKPOINT_FILE);
+    if cp.scene_hash != scene_hash {
+        anyhow::bail!(
+            "{}: not the scene the search in {} began on ({}, as {} records it): its bytes differ; resume with that file unchanged, or start a new search",
+            args.file.display(),
+            dir.display(),
+            cp.scene,
+            at.display()
+        );
+    }
+    if let Some(b) = args.budget
+        && b != cp.budget
+    {
+        anyhow::bail!(
+            "--budget {b}: the search in {} has a budget of {} ({}); leave --budget out to go on with it",
+            dir.display(),
+            cp.budget,
+            at.display()
+        );
+    }
+    if let Some(s) = args.seed
+        && s != cp.seed
+    {
+        anyhow::bail!(
+            "--seed {s}: the search in {} has seed {} ({}); leave --seed out to go on with it",
+            dir.display(),
+            cp.seed,
+            at.display()
+        );
+    }
+    Ok(cp)
 }

@@ -1,11 +1,70 @@
 //! What a search leaves on disk: the solved scene (a plain scene file
-//! `leafmagic scene` runs and exports) and the history of every run, each
-//! written atomically, the same bytes for the same input and seed.
+//! `leafmagic scene` runs and exports), the history of every run, and the
+//! checkpoint a killed search resumes from, each written atomically, the
+//! same bytes for the same input and seed.
 
 use super::problem::Problem;
-use super::search::{Outcome, Settings};
+use super::search::{Outcome, Settings, State};
+use crate::util::bad_input::BadInput;
 use crate::util::io::write_atomic;
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// The checkpoint's name in the output directory.
+pub const CHECKPOINT_FILE: &str = "checkpoint.json";
+
+/// What a search was started on and where it stands after its last whole
+/// batch: rewritten after every batch, kept when the search ends.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Checkpoint {
+    /// The scene file as named when the search began.
+    pub scene: String,
+    /// The hash of its bytes ([`crate::breed::verify::content_hash`]): an
+    /// edited file is a different problem.
+    pub scene_hash: String,
+    /// [`Settings::budget`].
+    pub budget: usize,
+    /// [`Settings::seed`] (the thread count is free: it changes no byte).
+    pub seed: u64,
+    /// Where the search stands.
+    pub state: State,
+}
+
+/// Writes `checkpoint` as `out/checkpoint.json` (made if missing),
+/// atomically: a kill leaves the previous batch's or this one's.
+///
+/// # Errors
+/// A file that cannot be written.
+pub fn write_checkpoint(out: &Path, checkpoint: &Checkpoint) -> std::io::Result<()> {
+    std::fs::create_dir_all(out)?;
+    let json = serde_json::to_vec(checkpoint).map_err(std::io::Error::other)?;
+    write_atomic(&out.join(CHECKPOINT_FILE), &json)
+}
+
+/// Reads `dir/checkpoint.json`.
+///
+/// # Errors
+/// A file that is missing, unreadable or not a checkpoint, named.
+pub fn read_checkpoint(dir: &Path) -> Result<Checkpoint, BadInput> {
+    let path = dir.join(CHECKPOINT_FILE);
+    let refuse = |reason: String| BadInput {
+        file: path.display().to_string(),
+        line: None,
+        field: "checkpoint".into(),
+        reason,
+    };
+    let text = std::fs::read_to_string(&path).map_err(|e| {
+        refuse(format!(
+            "cannot be read ({e}): is this the output directory of a search?"
+        ))
+    })?;
+    serde_json::from_str(&text).map_err(|e| BadInput {
+        file: path.display().to_string(),
+        line: Some(e.line()),
+        field: "checkpoint".into(),
+        reason: format!("not a search's checkpoint: {e}"),
+    })
+}
 
 /// The solved scene's text: the best values in place, `[[free]]` removed,
 /// a header saying how it was found and how well it meets each goal.

@@ -564,7 +564,7 @@ impl Tracks {
 }
 
 /// One leaf against one goal.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct LeafVerdict {
     /// Whether it met the goal.
     pub met: bool,
@@ -573,7 +573,7 @@ pub struct LeafVerdict {
 }
 
 /// A goal judged on a run.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct GoalResult {
     /// The fraction of its leaves that met it.
     pub met_fraction: f64,

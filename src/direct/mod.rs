@@ -14,8 +14,8 @@
 //! `goals` (goals checked and judged on a run's tracks), `free` (free
 //! parameters: paths into the file, bounds, substitution), `problem` (a
 //! scene file with both, and one evaluation), `search` (CMA-ES and the
-//! random baseline over threads), `files` (the solved scene and the
-//! history written).
+//! random baseline over threads), `files` (the solved scene, the
+//! history and the checkpoint a search resumes from written and read).
 
 pub mod error;
 pub mod files;
@@ -29,4 +29,4 @@ pub mod search;
 mod tests;
 
 pub use problem::{Evaluation, Problem};
-pub use search::{Method, Outcome, Record, Settings, search};
+pub use search::{Method, Outcome, Record, Settings, State, search};

@@ -36,7 +36,7 @@ pub struct Problem {
 }
 
 /// One choice of the free values, judged.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Evaluation {
     /// Per goal.
     pub goals: Vec<GoalResult>,

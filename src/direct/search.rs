@@ -3,7 +3,10 @@
 //! over the threads; and random search with the same budget as the
 //! baseline it must beat. Every sample comes from its own seeded stream and
 //! results are gathered in sample order, so the same seed gives the same
-//! history on any number of threads.
+//! history on any number of threads. After each whole batch the search
+//! hands its [`State`] out to be saved, and a saved state goes on to the
+//! same history as a search never stopped: each batch's draws derive from
+//! the seed and the batch's place, never from an RNG carried along.
 
 use super::problem::{Evaluation, Problem};
 use crate::breed::cmaes::CmaState;
@@ -13,6 +16,7 @@ use rand::SeedableRng;
 use rand::rngs::Xoshiro256PlusPlus;
 use rand_distr::{Distribution, Uniform};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 /// The random baseline's stream (never a generation number).
 const RANDOM_STREAM: u64 = u64::MAX - 1;
@@ -31,7 +35,7 @@ pub struct Settings {
 }
 
 /// Which search made an evaluation.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum Method {
     /// CMA-ES.
     Cma,
@@ -50,7 +54,7 @@ impl Method {
 }
 
 /// One scene run of the search.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Record {
     /// Which search.
     pub method: Method,
@@ -87,6 +91,18 @@ impl Outcome {
     }
 }
 
+/// Where a search stands after a whole batch: all it needs to go on.
+/// Random search has begun once `history` holds the budget's CMA-ES runs.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct State {
+    /// CMA-ES's distribution after its last generation.
+    pub cma: CmaState,
+    /// CMA-ES's generations made.
+    pub generation: usize,
+    /// Every run so far, in the order sampled.
+    pub history: Vec<Record>,
+}
+
 /// CMA-ES's samples per generation for `n` parameters: the usual
 /// 4 + ⌊3 ln n⌋, at least 6 so a generation keeps a few cores busy.
 pub fn lambda(n: usize) -> usize {
@@ -94,23 +110,28 @@ pub fn lambda(n: usize) -> usize {
 }
 
 /// Searches `problem`'s free parameters for its goals: CMA-ES with
-/// `settings.budget` runs, then random search with as many;
-/// `progress(done, total, best so far)` after each batch.
+/// `settings.budget` runs, then random search with as many, going on from
+/// `resumed` if given (a state this search, same problem and settings,
+/// handed out); `after_batch(state, best so far)` after each batch, the
+/// best being CMA-ES's while it runs, then random search's.
 ///
 /// # Errors
-/// A budget of 0, or a thread pool that cannot start.
-pub fn search(
+/// A budget of 0, a thread pool that cannot start, a resumed state that
+/// does not fit the problem, or `after_batch`'s error.
+pub fn search<E: From<BadInput>>(
     problem: &Problem,
     settings: &Settings,
-    mut progress: impl FnMut(usize, usize, &Record),
-) -> Result<Outcome, BadInput> {
+    resumed: Option<State>,
+    mut after_batch: impl FnMut(&State, &Record) -> Result<(), E>,
+) -> Result<Outcome, E> {
     if settings.budget == 0 {
         return Err(BadInput {
             file: problem.file.clone(),
             line: None,
             field: "budget".into(),
             reason: "a budget of 0 scene runs: give at least 1".into(),
-        });
+        }
+        .into());
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(settings.threads)
@@ -123,6 +144,9 @@ pub fn search(
         })?;
     let n = problem.free.len();
     let total = 2 * settings.budget;
+    if let Some(state) = &resumed {
+        check_resumed(problem, settings, state)?;
+    }
     let run_all = |units: &[Vec<f64>]| -> Vec<(Vec<f64>, Evaluation)> {
         pool.install(|| {
             units
@@ -136,18 +160,36 @@ pub fn search(
         })
     };
     let better = |a: &Record, b: &Record| a.evaluation.objective < b.evaluation.objective;
-    let mut history: Vec<Record> = Vec::with_capacity(total);
+    let mut state = resumed.unwrap_or_else(|| State {
+        cma: CmaState::start(vec![0.5; n], &vec![1.0; n], START_SIGMA, lambda(n)),
+        generation: 0,
+        history: Vec::with_capacity(total),
+    });
+    // The bests of a resumed history, found as the runs were first made.
     let mut best: Option<usize> = None;
-
-    let mut cma = CmaState::start(vec![0.5; n], &vec![1.0; n], START_SIGMA, lambda(n));
-    let mut generation = 0;
+    let mut baseline: Option<usize> = None;
+    for k in 0..state.history.len() {
+        let slot = if k < settings.budget {
+            &mut best
+        } else {
+            &mut baseline
+        };
+        if slot.is_none_or(|b| better(&state.history[k], &state.history[b])) {
+            *slot = Some(k);
+        }
+    }
+    let State {
+        cma,
+        generation,
+        history,
+    } = &mut state;
     while history.len() < settings.budget {
         let size = cma.lambda.min(settings.budget - history.len());
         let units: Vec<Vec<f64>> = (0..size)
             .map(|i| {
                 cma.sample(&mut Xoshiro256PlusPlus::seed_from_u64(stream_seed(
                     settings.seed,
-                    generation as u64,
+                    *generation as u64,
                     i as u64,
                 )))
             })
@@ -170,7 +212,7 @@ pub fn search(
         for (values, evaluation) in results {
             history.push(Record {
                 method: Method::Cma,
-                generation,
+                generation: *generation,
                 values,
                 evaluation,
             });
@@ -179,19 +221,20 @@ pub fn search(
                 best = Some(k);
             }
         }
-        generation += 1;
-        progress(
-            history.len(),
-            total,
-            &history[best.expect("a run was made")],
-        );
+        *generation += 1;
+        let b = best.expect("a run was made");
+        let snapshot = State {
+            cma: cma.clone(),
+            generation: *generation,
+            history: history.clone(),
+        };
+        after_batch(&snapshot, &history[b])?;
     }
     let best = best.expect("a budget of at least 1 makes a run");
 
     let uniform = Uniform::new(0.0, 1.0).expect("a valid range");
-    let mut baseline: Option<usize> = None;
     let batch = lambda(n);
-    let mut done = 0;
+    let mut done = history.len() - settings.budget;
     while done < settings.budget {
         let size = batch.min(settings.budget - done);
         let units: Vec<Vec<f64>> = (done..done + size)
@@ -217,16 +260,77 @@ pub fn search(
             }
         }
         done += size;
-        progress(
-            history.len(),
-            total,
-            &history[baseline.expect("a run was made")],
-        );
+        let b = baseline.expect("a run was made");
+        let snapshot = State {
+            cma: cma.clone(),
+            generation: *generation,
+            history: history.clone(),
+        };
+        after_batch(&snapshot, &history[b])?;
     }
     Ok(Outcome {
-        history,
+        history: state.history,
         best,
         baseline: baseline.expect("a budget of at least 1 makes a run"),
-        generations: generation,
+        generations: state.generation,
     })
+}
+
+/// A resumed state must be one this problem and these settings could have
+/// reached: a distribution and runs over the free parameters, no more runs
+/// than both searches make, CMA-ES's generations covering its runs.
+fn check_resumed(problem: &Problem, settings: &Settings, state: &State) -> Result<(), BadInput> {
+    let n = problem.free.len();
+    let refuse = |field: &str, reason: String| BadInput {
+        file: problem.file.clone(),
+        line: None,
+        field: field.into(),
+        reason,
+    };
+    state
+        .cma
+        .check(n)
+        .map_err(|e| refuse(&format!("checkpoint cma.{}", e.field), e.reason))?;
+    if state.history.len() > 2 * settings.budget {
+        return Err(refuse(
+            "checkpoint history",
+            format!(
+                "{} runs, more than the {} of a budget of {}",
+                state.history.len(),
+                2 * settings.budget,
+                settings.budget
+            ),
+        ));
+    }
+    let cma_runs = state.history.len().min(settings.budget);
+    if state.generation * state.cma.lambda < cma_runs
+        || state.generation > cma_runs.div_ceil(state.cma.lambda.max(1))
+    {
+        return Err(refuse(
+            "checkpoint generation",
+            format!(
+                "{} generations of {} do not make the {cma_runs} CMA-ES runs recorded",
+                state.generation, state.cma.lambda
+            ),
+        ));
+    }
+    if let Some((k, r)) = state.history.iter().enumerate().find(|(k, r)| {
+        r.values.len() != n
+            || r.evaluation.goals.len() != problem.goals.len()
+            || (r.method == Method::Cma) != (*k < settings.budget)
+    }) {
+        return Err(refuse(
+            &format!("checkpoint history[{k}]"),
+            format!(
+                "a {} run with {} values and {} goals, not one of this search's ({} free parameters, {} goals, the first {} runs CMA-ES's)",
+                r.method.name(),
+                r.values.len(),
+                r.evaluation.goals.len(),
+                n,
+                problem.goals.len(),
+                settings.budget
+            ),
+        ));
+    }
+    Ok(())
 }

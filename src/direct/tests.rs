@@ -163,7 +163,7 @@ fn a_budget_of_zero_is_refused() {
         seed: 0,
         threads: 1,
     };
-    let e = search(&p, &settings, |_, _, _| {}).unwrap_err();
+    let e = search(&p, &settings, None, |_, _| Ok::<(), BadInput>(())).unwrap_err();
     assert_eq!((e.file.as_str(), e.field.as_str()), ("d.toml", "budget"));
 }
 

@@ -1,9 +1,11 @@
 //! `leafmagic direct` (issue 62): goals met on the shipped examples, judged
 //! by the test itself on a plain `scene` run of the solved file; the same
-//! bytes on one and two threads; bad input named by file, line and field.
+//! bytes on one and two threads and after kill + resume; bad input named
+//! by file, line and field.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 fn leafmagic() -> Command {
     Command::new(env!("CARGO_BIN_EXE_leafmagic"))
@@ -165,13 +167,9 @@ fn leaves_land_on_a_letter() {
     assert!(inside as f64 >= 0.9 * 15.0, "{inside} of 15 inside");
 }
 
-#[test]
-fn the_same_seed_gives_the_same_bytes_on_one_and_two_threads() {
-    let dir = scratch("threads");
-    let file = dir.join("breeze.toml");
-    std::fs::write(
-        &file,
-        r#"name = "breeze"
+/// A small search: two leaves through a gate, the breeze and their
+/// release free.
+const BREEZE: &str = r#"name = "breeze"
 duration = 1.0
 
 [[leaf]]
@@ -202,9 +200,13 @@ max = 1.5
 parameter = "leaf[l].position[1]"
 min = -0.5
 max = 0.5
-"#,
-    )
-    .unwrap();
+"#;
+
+#[test]
+fn the_same_seed_gives_the_same_bytes_on_one_and_two_threads() {
+    let dir = scratch("threads");
+    let file = dir.join("breeze.toml");
+    std::fs::write(&file, BREEZE).unwrap();
     let mut reports = Vec::new();
     for threads in ["1", "2"] {
         let out = dir.join(threads);
@@ -285,4 +287,119 @@ fn bad_directing_input_names_the_file_the_line_and_the_field() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+}
+
+/// The report without what may differ between two runs of one search: the
+/// wall time and where the files went.
+fn comparable(mut r: serde_json::Value) -> serde_json::Value {
+    for k in ["wall_s", "out", "files"] {
+        r.as_object_mut().unwrap().remove(k);
+    }
+    r
+}
+
+#[test]
+fn a_search_killed_and_resumed_gives_the_bytes_of_one_never_stopped() {
+    let dir = scratch("resume");
+    let file = dir.join("breeze.toml");
+    std::fs::write(&file, BREEZE).unwrap();
+    let settings = ["--budget", "60", "--seed", "5"];
+    let whole = dir.join("whole");
+    let report = comparable(direct(
+        &file,
+        &whole,
+        &[&settings[..], &["--threads", "2"]].concat(),
+    ));
+    // Killed (SIGKILL) as soon as its first batch is saved, on one thread.
+    let killed = dir.join("killed");
+    let mut child = leafmagic()
+        .arg("direct")
+        .arg(&file)
+        .arg("--out")
+        .arg(&killed)
+        .args(settings)
+        .args(["--threads", "1", "--json"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let checkpoint = killed.join("checkpoint.json");
+    let start = Instant::now();
+    while !checkpoint.exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let saved: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&checkpoint).unwrap()).unwrap();
+    let runs = saved["state"]["history"].as_array().unwrap().len();
+    assert!(
+        runs < 120 && !killed.join("solved.toml").exists(),
+        "the search finished ({runs} runs) before it could be killed; the test did not test resuming"
+    );
+    // Resumed on another thread count, the settings taken from the checkpoint.
+    let o = leafmagic()
+        .arg("direct")
+        .arg(&file)
+        .arg("--resume")
+        .arg(&killed)
+        .args(["--threads", "2", "--json"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let resumed = comparable(serde_json::from_slice(&o.stdout).unwrap());
+    assert_eq!(resumed, report);
+    for f in ["solved.toml", "history.csv"] {
+        assert!(
+            std::fs::read(whole.join(f)).unwrap() == std::fs::read(killed.join(f)).unwrap(),
+            "{f} differs after kill and resume"
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(killed.join("history.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        121
+    );
+    // What is not the search's is refused, named.
+    let refused = |file: &Path, args: &[&str]| -> String {
+        let o = leafmagic()
+            .arg("direct")
+            .arg(file)
+            .arg("--resume")
+            .arg(&killed)
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(!o.status.success());
+        String::from_utf8_lossy(&o.stderr).to_string()
+    };
+    let err = refused(&file, &["--seed", "6"]);
+    assert!(err.contains("--seed 6") && err.contains("seed 5"), "{err}");
+    let err = refused(&file, &["--budget", "30"]);
+    assert!(
+        err.contains("--budget 30") && err.contains("budget of 60"),
+        "{err}"
+    );
+    let edited = dir.join("edited.toml");
+    std::fs::write(&edited, BREEZE.replace("at = 0.8", "at = 0.7")).unwrap();
+    let err = refused(&edited, &[]);
+    assert!(
+        err.contains("edited.toml") && err.contains("bytes differ"),
+        "{err}"
+    );
+    let o = leafmagic()
+        .arg("direct")
+        .arg(&file)
+        .arg("--resume")
+        .arg(dir.join("nowhere"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    assert!(
+        String::from_utf8_lossy(&o.stderr).contains("checkpoint.json"),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
 }
