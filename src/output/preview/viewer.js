@@ -37,8 +37,8 @@
     const missed = v.filter(function (x) { return !x[1].met; });
     o.color = missed.length ? MISSED : MET;
     o.label = missed.length
-      ? missed.map(function (x) { return 'missed ' + x[0] + ' by ' + x[1].distance.toFixed(3) + ' m'; }).join(', ')
-      : 'met ' + v.map(function (x) { return x[0]; }).join(', ');
+      ? 'missed: ' + missed.map(function (x) { return x[0] + ' (' + x[1].distance.toFixed(3) + ' m off)'; }).join(', ')
+      : 'met: ' + v.map(function (x) { return x[0]; }).join(', ');
   });
   const F = data.frames, fps = data.fps, T = Math.max(0, (F - 1) / fps);
   // More labelled objects than this in view, and only the followed one is labelled.
