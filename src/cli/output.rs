@@ -253,8 +253,9 @@ pub fn preview(args: PreviewArgs) -> Result<()> {
             .unwrap_or_else(|| first.with_extension("compare.html"));
         (leafmagic::output::preview::together(parts, args.fps)?, out)
     };
-    let html = leafmagic::output::preview::html(&preview.clip, preview.grid)
-        .map_err(|e| anyhow::anyhow!("{}: {e}", first.display()))?;
+    let html =
+        leafmagic::output::preview::html_with(&preview.clip, preview.grid, preview.goals.as_ref())
+            .map_err(|e| anyhow::anyhow!("{}: {e}", first.display()))?;
     leafmagic::util::io::write_atomic(&out, html.as_bytes())
         .with_context(|| format!("cannot write {}", out.display()))?;
     println!(
@@ -352,6 +353,7 @@ fn preview_record(
         clip,
         grid: false,
         classified: vec![0],
+        goals: None,
     })
 }
 

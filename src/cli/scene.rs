@@ -4,6 +4,7 @@
 use super::args::SceneArgs;
 use super::{input, output, report};
 use anyhow::Result;
+use leafmagic::direct;
 use leafmagic::physics::model::AeroLaw;
 use leafmagic::physics::params::TimeStep;
 use leafmagic::physics::run;
@@ -70,13 +71,22 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     let failed = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: {e}", args.file.display());
     let work = scene.work(args.seconds).map_err(|e| failed(&e))?;
     let mut bar = super::progress::long_run(&work, &scene.model, frame, "scene", args.max_work);
+    // A directed scene's goals are judged on the run, as `direct` judges
+    // them, for `preview` to show (goals.json).
+    let text = std::fs::read_to_string(&args.file).map_err(|e| failed(&e))?;
+    let goals = direct::record::goals_of(&text, &args.file.display().to_string(), &scene)?;
+    let mut judging = (!goals.is_empty()).then(|| direct::record::Judging::new(&scene, goals));
     let run = scene
-        .run_observed(args.seconds, |k, _| {
+        .run_watched(args.seconds, |k, _, state| {
             if let Some(b) = &bar {
                 b.set_position(k);
             }
+            if let Some(j) = &mut judging {
+                j.record(&scene, &state.position);
+            }
         })
         .map_err(|e| failed(&e))?;
+    let verdicts = judging.map(|j| j.finish(&scene));
     if let Some(b) = bar.take() {
         b.finish_and_clear();
     }
@@ -88,6 +98,11 @@ pub fn scene(args: SceneArgs) -> Result<()> {
     // leaves the previous output as it was and names the file.
     let staged = scene::Staged::new(&dir)?;
     let mut written = run.write_staged(&scene, &staged)?;
+    if let Some(v) = &verdicts {
+        let json = serde_json::to_string_pretty(v)?;
+        let path = staged.write(scene::GOALS_FILE, json.as_bytes())?;
+        written.push(staged.final_path(&path));
+    }
     let mut export_note = None;
     if let Some(format) = args.export {
         let started = Instant::now();
@@ -135,6 +150,11 @@ pub fn scene(args: SceneArgs) -> Result<()> {
             "out": dir,
             "export": export_note,
             "files": written,
+            "goals": verdicts.as_ref().map(|v| v.goals.iter().map(|g| json!({
+                "name": g.name,
+                "met_fraction": g.met_fraction,
+                "mean_distance": g.mean_distance,
+            })).collect::<Vec<_>>()),
         });
         println!("{}", serde_json::to_string_pretty(&out)?);
         return Ok(());
@@ -143,6 +163,15 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         "{}",
         report::scene::summary(&scene, s, &dir, written.len(), export_note.as_deref())
     );
+    for g in verdicts.iter().flat_map(|v| &v.goals) {
+        println!(
+            "goal {}: {:.0} % of {} leaves met it, mean distance {:.4} m",
+            g.name,
+            100.0 * g.met_fraction,
+            g.leaves.len(),
+            g.mean_distance
+        );
+    }
     Ok(())
 }
 

@@ -15,7 +15,8 @@
 //! parameters: paths into the file, bounds, substitution), `problem` (a
 //! scene file with both, and one evaluation), `search` (CMA-ES and the
 //! random baseline over threads), `files` (the solved scene, the
-//! history and the checkpoint a search resumes from written and read).
+//! history and the checkpoint a search resumes from written and read),
+//! `record` (a plain scene run's goals judged, for `goals.json`).
 
 pub mod error;
 pub mod files;
@@ -23,6 +24,7 @@ pub mod free;
 pub mod geometry;
 pub mod goals;
 pub mod problem;
+pub mod record;
 pub mod search;
 
 #[cfg(test)]

@@ -278,7 +278,22 @@ fn bad_directing_input_names_the_file_the_line_and_the_field() {
         err.contains("more than the limit of 1.0e9") && err.contains("--max-work"),
         "{err}"
     );
-    // `scene` runs a file with goals and free parameters, ignoring them.
+    // `scene` judges the goals for `preview`, so it refuses the bad one too.
+    let o = leafmagic()
+        .arg("scene")
+        .arg(&file)
+        .arg("--out")
+        .arg(dir.join("refused"))
+        .output()
+        .unwrap();
+    assert!(!o.status.success());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        err.contains(&format!("bad.toml:{line}: goal[0].leaves: names no leaf")),
+        "{err}"
+    );
+    // `scene` runs a file with goals and free parameters, ignoring the free
+    // ones.
     let o = leafmagic()
         .arg("scene")
         .arg(scene_path("direct-letter"))

@@ -1828,3 +1828,185 @@ fn alembic_export_writes_rigid_and_deforming_objects_and_refuses_a_rope() {
     assert!(rigid > 0, "the mixed scene has a rigid body");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+// ----- a directed scene's goals on the page -----
+
+/// A small directed scene: two leaves released over a square on the
+/// ground and two 2 m away (which cannot land on it), a mark the near ones
+/// pass at 0.3 s and a box the far ones stay in; one free number, so that
+/// the direct layer reads it as a problem.
+const DIRECTED: &str = r#"
+name = "goals"
+duration = 1.5
+frame_rate = 30
+seed = 2
+[ground]
+height = 0.0
+static_friction = 0.8
+kinetic_friction = 0.6
+[[leaf]]
+name = "near"
+leaf = "a"
+count = 2
+position = [0.0, 0.0, 0.4]
+spread = [0.05, 0.05, 0.02]
+[[leaf]]
+name = "far"
+leaf = "a"
+count = 2
+position = [2.0, 0.0, 0.4]
+spread = [0.05, 0.05, 0.02]
+[[goal]]
+name = "on the square"
+leaves = ["near", "far"]
+kind = "land"
+polygon = [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]]
+[[goal]]
+name = "by the mark"
+leaves = "near"
+kind = "pass"
+point = [0.0, 0.0, 0.3]
+tolerance = 0.2
+at = 0.3
+[[goal]]
+name = "in the box"
+leaves = "far"
+kind = "stay"
+min = [1.5, -0.5, 0.0]
+max = [2.5, 0.5, 1.0]
+until = 1.0
+[[free]]
+parameter = "leaf[near].position[2]"
+min = 0.3
+max = 0.6
+"#;
+
+/// The data of a preview page.
+fn page_data(page: &Path) -> Value {
+    let page = std::fs::read_to_string(page).unwrap();
+    let start = page.find("id=\"leafmagic-data\"").unwrap();
+    let start = start + page[start..].find('>').unwrap() + 1;
+    let end = start + page[start..].find("</script>").unwrap();
+    serde_json::from_str(&page[start..end]).unwrap()
+}
+
+/// The goal outline's amber as the page draws it ([1, 0.72, 0.2]).
+fn amber(p: [u8; 3]) -> bool {
+    let [r, g, b] = p.map(i32::from);
+    r > 200 && (140..=220).contains(&g) && b < 110
+}
+
+/// A missed leaf's red, shaded.
+fn reddish(p: [u8; 3]) -> bool {
+    let [r, g, b] = p.map(i32::from);
+    r > 60 && r > g + 40 && r > b + 40
+}
+
+#[test]
+fn the_preview_of_a_directed_scene_draws_its_goals_and_the_direct_judges_verdicts() {
+    let dir = scratch("directed");
+    let file = dir.join("goals.toml");
+    std::fs::write(&file, DIRECTED).unwrap();
+    let out = dir.join("out");
+    let o = leafmagic()
+        .arg("scene")
+        .arg(&file)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let recorded: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("goals.json")).unwrap()).unwrap();
+    // The oracle: the direct layer's own evaluation of the file's values.
+    let problem =
+        leafmagic::direct::Problem::from_toml(DIRECTED, "goals.toml", &dir).expect("a problem");
+    let written: Vec<f64> = problem.free.iter().map(|f| f.written).collect();
+    let judged = problem.evaluate(&written);
+    assert!(judged.failed.is_none());
+    let goals = recorded["goals"].as_array().unwrap();
+    assert_eq!(goals.len(), 3);
+    let (mut met, mut missed) = (0, 0);
+    for ((g, r), want) in goals.iter().zip(&judged.goals).zip(&problem.goals) {
+        assert_eq!(g["name"], want.name.as_str());
+        assert_eq!(g["met_fraction"].as_f64().unwrap(), r.met_fraction);
+        let leaves = g["leaves"].as_array().unwrap();
+        assert_eq!(leaves.len(), r.leaves.len());
+        for (l, v) in leaves.iter().zip(&r.leaves) {
+            assert_eq!(l["met"].as_bool().unwrap(), v.met, "{g}");
+            assert_eq!(l["distance"].as_f64().unwrap(), v.distance, "{g}");
+            if v.met {
+                met += 1;
+            } else {
+                missed += 1;
+            }
+        }
+    }
+    // Neither all met nor all missed: the far leaves cannot land on the
+    // square 2 m away.
+    assert!(met > 0 && missed >= 2, "{met} met, {missed} missed");
+    assert_eq!(goals[0]["kind"], "land");
+    assert_eq!(goals[0]["polygon"][2], serde_json::json!([0.5, 0.5]));
+    assert_eq!(goals[1]["point"], serde_json::json!([0.0, 0.0, 0.3]));
+    assert_eq!(goals[1]["tolerance"], 0.2);
+    assert_eq!(goals[2]["max"], serde_json::json!([2.5, 0.5, 1.0]));
+
+    // The page holds the goals and verdicts, on leaves it draws.
+    let page = dir.join("page.html");
+    let preview = |page: &Path| {
+        let o = leafmagic()
+            .arg("preview")
+            .arg(&out)
+            .arg("--out")
+            .arg(page)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    preview(&page);
+    let data = page_data(&page);
+    assert_eq!(&data["goals"], &recorded["goals"]);
+    let names: Vec<&str> = data["objects"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|o| o["name"].as_str().unwrap())
+        .collect();
+    for g in goals {
+        for l in g["leaves"].as_array().unwrap() {
+            assert!(names.contains(&l["name"].as_str().unwrap()), "{l}");
+        }
+    }
+
+    // Drawn: the goals' amber outlines and the missed leaves' red, which a
+    // page of the same run without its goals has none of.
+    let Some(browser) = chromium() else {
+        crate::common::missing_tool(
+            "the_preview_of_a_directed_scene_draws...",
+            "no chromium (apt-get install chromium)",
+        );
+        return;
+    };
+    let bare = dir.join("bare.html");
+    std::fs::remove_file(out.join("goals.json")).unwrap();
+    preview(&bare);
+    assert_eq!(page_data(&bare)["goals"], serde_json::json!([]));
+    let count = |page: &Path, name: &str| {
+        let px = screenshot(&browser, page, "t=0.2", &dir.join(name));
+        (
+            px.iter().filter(|&&p| amber(p)).count(),
+            px.iter().filter(|&&p| reddish(p)).count(),
+        )
+    };
+    let (goal_px, red_px) = count(&page, "goals.png");
+    let (bare_goal_px, bare_red_px) = count(&bare, "bare.png");
+    eprintln!(
+        "goals drawn: {goal_px} amber, {red_px} red px; without: {bare_goal_px}, {bare_red_px}"
+    );
+    assert!(
+        goal_px >= 200 && bare_goal_px < 20,
+        "{goal_px} vs {bare_goal_px}"
+    );
+    assert!(red_px >= 20 && bare_red_px < 5, "{red_px} vs {bare_red_px}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -13,6 +13,7 @@ use crate::formats::fall::{self, AnimationFormat};
 use crate::formats::gltf;
 use crate::motion::trajectory::Trajectory;
 use crate::output::export;
+use crate::sim::scene::{GOALS_FILE, GoalsRecord};
 use crate::util::confined::ReadPolicy;
 use crate::util::setting::Setting;
 use base64::Engine as _;
@@ -43,6 +44,9 @@ pub struct Preview {
     /// The objects of a file labelled with their fall's class here
     /// ([`label_falls`]), by index.
     pub classified: Vec<usize>,
+    /// A directed scene's goals and its leaves' verdicts (its output's
+    /// `goals.json`), drawn on the page.
+    pub goals: Option<GoalsRecord>,
 }
 
 /// How to read a file for [`load`]: the ones that apply to it.
@@ -96,6 +100,7 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
         clip,
         grid: false,
         classified: Vec::new(),
+        goals: None,
     };
     if input.join("run.toml").is_file() {
         let run = Run::open(input).map_err(|e| ExportError::input(input, e.to_string()))?;
@@ -137,15 +142,32 @@ pub fn load(input: &Path, top: usize, file: FileOptions<'_>) -> Result<Preview, 
             clip,
             grid: true,
             classified: Vec::new(),
+            goals: None,
         });
     }
     if input.join("summary.toml").is_file() {
-        return Ok(plain(export::from_scene_dir(input, fps)?));
+        let mut preview = plain(export::from_scene_dir(input, fps)?);
+        preview.goals = scene_goals(input)?;
+        return Ok(preview);
     }
     Err(ExportError::input(
         input,
         "neither a breeding run (no run.toml) nor a scene output directory (no summary.toml)",
     ))
+}
+
+/// The goals a directed scene's run recorded beside its summary
+/// ([`GOALS_FILE`]), if it has any.
+fn scene_goals(dir: &Path) -> Result<Option<GoalsRecord>, ExportError> {
+    let path = dir.join(GOALS_FILE);
+    if !path.is_file() {
+        return Ok(None);
+    }
+    let text = std::fs::read_to_string(&path)
+        .map_err(|e| ExportError::input(&path, format!("cannot read: {e}")))?;
+    let record: GoalsRecord = serde_json::from_str(&text)
+        .map_err(|e| ExportError::input(&path, format!("not a scene's goals record: {e}")))?;
+    Ok(Some(record))
 }
 
 /// The example fall of a `--like` run as one more object of the row of its
@@ -243,6 +265,7 @@ fn load_file(input: &Path, file: FileOptions<'_>) -> Result<Preview, ExportError
         clip,
         grid: false,
         classified,
+        goals: None,
     })
 }
 
@@ -357,6 +380,7 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         clip,
         grid: true,
         classified,
+        goals: None,
     })
 }
 
@@ -479,6 +503,12 @@ const TRAIL_POINTS: usize = 2000;
 /// object's vertex positions per frame of its life (from clip frame
 /// `first`) as base64 float32; of a marker, its centre and its size.
 pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
+    data_json_with(clip, grid, None)
+}
+
+/// [`data_json`] with a directed scene's `goals` and verdicts, which the
+/// viewer draws (regions, boxes, marks) and shows on each leaf.
+pub fn data_json_with(clip: &Clip, grid: bool, goals: Option<&GoalsRecord>) -> serde_json::Value {
     let b64 = base64::engine::general_purpose::STANDARD;
     let objects: Vec<serde_json::Value> = clip
         .objects
@@ -527,6 +557,7 @@ pub fn data_json(clip: &Clip, grid: bool) -> serde_json::Value {
         "grid": grid,
         "ground": clip.ground,
         "wind": clip.wind,
+        "goals": goals.map_or(&[][..], |g| &g.goals[..]),
         "objects": objects,
     })
 }
@@ -560,6 +591,32 @@ fn finite_in_page(clip: &Clip) -> Result<(), ExportError> {
                 "its {} wind primitive has a number that is not finite",
                 w.kind
             ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses goals with a number that is not finite, which JSON would write
+/// as `null` and the page would draw nowhere.
+fn goals_finite(name: &str, record: &GoalsRecord) -> Result<(), ExportError> {
+    for g in &record.goals {
+        let numbers = g
+            .polygon
+            .iter()
+            .flatten()
+            .flatten()
+            .chain(g.min.iter().flatten())
+            .chain(g.max.iter().flatten())
+            .chain(g.point.iter().flatten())
+            .chain(g.tolerance.iter())
+            .chain(g.ground.iter())
+            .chain([&g.from, &g.to, &g.met_fraction, &g.mean_distance])
+            .chain(g.leaves.iter().map(|l| &l.distance));
+        if numbers.into_iter().any(|x| !x.is_finite()) {
+            return Err(ExportError::Data(format!(
+                "{name}: goal '{}' has a number that is not finite",
+                g.name
+            )));
         }
     }
     Ok(())
@@ -657,11 +714,23 @@ fn fits_a_browser(clip: &Clip) -> Result<(), ExportError> {
 /// for a grid of bred leaves). Its objects may live a part of it
 /// ([`Clip::validate_read`]): the page shows each over its own life.
 pub fn html(clip: &Clip, grid: bool) -> Result<String, ExportError> {
+    html_with(clip, grid, None)
+}
+
+/// [`html`] with a directed scene's `goals` drawn ([`data_json_with`]).
+pub fn html_with(
+    clip: &Clip,
+    grid: bool,
+    goals: Option<&GoalsRecord>,
+) -> Result<String, ExportError> {
     clip.validate_read()?;
+    if let Some(g) = goals {
+        goals_finite(&clip.name, g)?;
+    }
     finite_in_page(clip)?;
     fits_a_browser(clip)?;
     let data = inert_json(
-        &serde_json::to_string(&data_json(clip, grid))
+        &serde_json::to_string(&data_json_with(clip, grid, goals))
             .map_err(|e| ExportError::Data(format!("cannot serialise the page data: {e}")))?,
     );
     // Split the template rather than search-and-replace in the result, so

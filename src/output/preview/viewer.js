@@ -24,6 +24,22 @@
       tris: o.tris, segs: mk ? [0, 1, 2, 3, 4, 5] : o.segs, P: P, first: o.first || 0, still: !!o.still,
       frames: o.n > 0 ? P.length / (o.n * 3) : 1, shown: true, cur: new Float32Array(n * 3) };
   });
+  // A directed scene's verdicts: each leaf coloured by whether it met all
+  // its goals, and labelled with those it missed and by how far.
+  const GOAL = [1.0, 0.72, 0.2], MET = [0.3, 0.9, 0.4], MISSED = [0.95, 0.25, 0.25];
+  const verdicts = {};
+  (data.goals || []).forEach(function (g) {
+    g.leaves.forEach(function (l) { (verdicts[l.name] = verdicts[l.name] || []).push([g.name, l]); });
+  });
+  objs.forEach(function (o) {
+    const v = verdicts[o.name];
+    if (!v) return;
+    const missed = v.filter(function (x) { return !x[1].met; });
+    o.color = missed.length ? MISSED : MET;
+    o.label = missed.length
+      ? 'missed: ' + missed.map(function (x) { return x[0] + ' (' + x[1].distance.toFixed(3) + ' m off)'; }).join(', ')
+      : 'met: ' + v.map(function (x) { return x[0]; }).join(', ');
+  });
   const F = data.frames, fps = data.fps, T = Math.max(0, (F - 1) / fps);
   // More labelled objects than this in view, and only the followed one is labelled.
   const MAX_LABELS = 40;
@@ -252,6 +268,41 @@
     return L;
   }
   const windLines = glyphs();
+  // The goals, still: a landing polygon on the ground, boxes, and marks
+  // as rings of their tolerance in the three planes (an entered bin is
+  // drawn as the object it is).
+  function goalLines() {
+    const L = [];
+    function seg(a, b) { L.push([a, b, GOAL]); }
+    (data.goals || []).forEach(function (g) {
+      if (g.polygon) {
+        const z = (g.ground || 0) + 1e-3, n = g.polygon.length;
+        g.polygon.forEach(function (p, i) {
+          const q = g.polygon[(i + 1) % n];
+          seg([p[0], p[1], z], [q[0], q[1], z]);
+        });
+      }
+      if (g.min && g.max) {
+        const a = g.min, b = g.max;
+        function c(i) { return [i & 1 ? b[0] : a[0], i & 2 ? b[1] : a[1], i & 4 ? b[2] : a[2]]; }
+        for (let i = 0; i < 8; i++) [1, 2, 4].forEach(function (bit) { if (!(i & bit)) seg(c(i), c(i | bit)); });
+      }
+      if (g.point) {
+        const p = g.point, r = g.tolerance || 0, n = 32;
+        [[0, 1], [0, 2], [1, 2]].forEach(function (ax) {
+          let prev = null;
+          for (let i = 0; i <= n; i++) {
+            const q = p.slice(), a = 2 * Math.PI * i / n;
+            q[ax[0]] += r * Math.cos(a); q[ax[1]] += r * Math.sin(a);
+            if (prev) seg(prev, q);
+            prev = q;
+          }
+        });
+      }
+    });
+    return L;
+  }
+  const goalGlyphs = goalLines();
   function groundLines(c) {
     if (data.ground === null || data.ground === undefined) return [];
     const z = data.ground;
@@ -291,7 +342,7 @@
       for (let k = 0; k < o.segs.length; k += 2) lines.push([v(o.segs[k]), v(o.segs[k + 1]), o.color]);
     });
     const clipped = [];
-    groundLines(c).concat(windLines, lines).forEach(function (ln) {
+    groundLines(c).concat(windLines, goalGlyphs, lines).forEach(function (ln) {
       const l = clipLine(ln, cam);
       if (l) clipped.push(l);
     });

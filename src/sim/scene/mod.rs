@@ -19,7 +19,8 @@
 //! anything is built), `objects` (placing each kind of object), `shapes` (the
 //! built-in shapes' particles), `builder` (the model's parts as they
 //! accumulate, with each item's owner), `goal_spec` (the `[[goal]]` and `[[free]]` tables
-//! that `direct` reads and a plain run ignores), `error` (errors and the checks that
+//! that `direct` reads and a plain run ignores), `goal_record` (the goals and
+//! each leaf's verdict on a run, as `goals.json`), `error` (errors and the checks that
 //! raise them, with line numbers from [`crate::util::toml_lines`]), `compiled` (the compiled
 //! scene), `run` (running and writing it), `skips` (what exact skipping
 //! leaves out, for `--explain`); this file re-exports what they make public.
@@ -32,6 +33,7 @@ mod builder;
 mod compile;
 mod compiled;
 mod error;
+mod goal_record;
 mod goal_spec;
 mod objects;
 mod run;
@@ -43,6 +45,7 @@ pub use bounds::Limits;
 pub use builder::{MAX_PARTICLES, MAX_SPRINGS};
 pub use compiled::{MAX_MEMORY, ObjectKind, PoseFrame, Scene, SceneObject};
 pub use error::SceneError;
+pub use goal_record::{GOALS_FILE, GoalRecord, GoalsRecord, LeafRecord};
 pub use goal_spec::{FreeSpec, GoalKind, GoalSpec, LeafNames};
 pub use run::{OutputError, RunError, RunStats, SceneRun, Staged, default_out_dir};
 pub use skips::GroupSkips;

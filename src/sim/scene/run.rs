@@ -204,6 +204,16 @@ impl Scene {
         seconds: Option<f64>,
         mut progress: impl FnMut(u64, u64),
     ) -> Result<SceneRun, RunError> {
+        self.run_watched(seconds, |k, total, _| progress(k, total))
+    }
+
+    /// [`Scene::run_observed`], also showing `watch` each frame's state
+    /// (what a judge of the run's goals records).
+    pub fn run_watched(
+        &self,
+        seconds: Option<f64>,
+        mut watch: impl FnMut(u64, u64, &State),
+    ) -> Result<SceneRun, RunError> {
         let bytes = self.recorded_bytes(seconds);
         if bytes > self.max_memory {
             return Err(RunError::Memory {
@@ -236,7 +246,7 @@ impl Scene {
         let mut time = Vec::new();
         let mut scratch = Vec::new();
         let (stats, final_state) = self.run_until(seconds, |k, s| {
-            progress(k, total);
+            watch(k, total, s);
             time.push(s.time);
             for (o, obj) in self.objects.iter().enumerate() {
                 scratch.clear();
