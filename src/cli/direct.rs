@@ -34,34 +34,7 @@ pub fn direct(args: DirectArgs) -> Result<()> {
     if settings.budget == 0 {
         anyhow::bail!("--budget: a budget of 0 scene runs: give at least 1");
     }
-    let work = problem
-        .scene
-        .work(Some(problem.seconds))
-        .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
-    let runs = 2 * settings.budget;
-    let total = work.particle_steps() * runs as f64;
-    if total > args.max_work {
-        anyhow::bail!(
-            "{}: this search needs about {total:.2e} particle-steps ({runs} runs of {} particles × {:.0} steps, the baseline's included), more than the limit of {:.1e}: lower --budget, or raise the limit with `--max-work {:.1e}`",
-            args.file.display(),
-            work.particles,
-            work.steps,
-            args.max_work,
-            total * 1.01
-        );
-    }
-    eprintln!(
-        "direct: {} free parameters, {} goals; {} runs of {:.2} s ({} CMA-ES, {} random), each {} particles × {:.0} steps: {:.2e} particle-steps in all",
-        problem.free.len(),
-        problem.goals.len(),
-        runs,
-        problem.seconds,
-        settings.budget,
-        settings.budget,
-        work.particles,
-        work.steps,
-        total
-    );
+    let particle_steps = bound_work(&args, &problem, &settings)?;
     let out = args.resume.clone().or(args.out.clone()).unwrap_or_else(|| {
         PathBuf::from("runs").join(format!("direct-{}-s{}", problem.spec.name, settings.seed))
     });
@@ -103,6 +76,66 @@ pub fn direct(args: DirectArgs) -> Result<()> {
     })?;
     let wall = started.elapsed().as_secs_f64();
     let files = direct::files::write(&out, &problem, &settings, &outcome)?;
+    report(
+        &args,
+        &problem,
+        &settings,
+        &outcome,
+        &files,
+        wall,
+        &out,
+        particle_steps,
+    )
+}
+
+/// The search's work, said before it starts and refused past
+/// `--max-work`: particle-steps over the budget's runs and the baseline's.
+fn bound_work(args: &DirectArgs, problem: &Problem, settings: &Settings) -> Result<f64> {
+    let work = problem
+        .scene
+        .work(Some(problem.seconds))
+        .map_err(|e| anyhow::anyhow!("{}: {e}", args.file.display()))?;
+    let runs = 2 * settings.budget;
+    let total = work.particle_steps() * runs as f64;
+    if total > args.max_work {
+        anyhow::bail!(
+            "{}: this search needs about {total:.2e} particle-steps ({runs} runs of {} particles × {:.0} steps, the baseline's included), more than the limit of {:.1e}: lower --budget, or raise the limit with `--max-work {:.1e}`",
+            args.file.display(),
+            work.particles,
+            work.steps,
+            args.max_work,
+            total * 1.01
+        );
+    }
+    eprintln!(
+        "direct: {} free parameters, {} goals; {} runs of {:.2} s ({} CMA-ES, {} random), each {} particles × {:.0} steps: {:.2e} particle-steps in all",
+        problem.free.len(),
+        problem.goals.len(),
+        runs,
+        problem.seconds,
+        settings.budget,
+        settings.budget,
+        work.particles,
+        work.steps,
+        total
+    );
+    Ok(total)
+}
+
+/// The search's result: each goal's met fraction and distance against
+/// random search's with the same budget, the solved values and the files
+/// (with `--json`, as one JSON document).
+#[allow(clippy::too_many_arguments)]
+fn report(
+    args: &DirectArgs,
+    problem: &Problem,
+    settings: &Settings,
+    outcome: &direct::Outcome,
+    files: &[PathBuf],
+    wall: f64,
+    out: &Path,
+    particle_steps: f64,
+) -> Result<()> {
     let (best, base) = (outcome.best(), outcome.baseline());
     let goal_json = |r: &direct::Record| {
         problem
@@ -135,7 +168,7 @@ pub fn direct(args: DirectArgs) -> Result<()> {
             "baseline_objective": base.evaluation.objective,
             "baseline_goals": goal_json(base),
             "baseline_parameters": base.values,
-            "particle_steps": total,
+            "particle_steps": particle_steps,
             "wall_s": wall,
             "out": out,
             "files": files,

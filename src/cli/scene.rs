@@ -10,6 +10,7 @@ use leafmagic::physics::params::TimeStep;
 use leafmagic::physics::run;
 use leafmagic::sim::scene::{self, Scene};
 use serde_json::json;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 /// `scene`: loads, compiles and runs a scene file, or with `--explain`
@@ -32,41 +33,9 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         });
         anyhow::anyhow!("{e}{}", hint.unwrap_or_default())
     })?;
-    let decisions = scene.explain();
     let frame = 1.0 / scene.frame_rate;
     if args.explain {
-        let dt = run::resolve_dt(&scene.model, scene.integrator, scene.dt, frame);
-        let why = dt.as_ref().ok().map(|&h| step_reason(&scene, h));
-        if args.json {
-            let out = json!({
-                "scene": scene.name,
-                "law": law_of(&scene),
-                "aero_law": scene.model.aero.name(),
-                "particles": scene.model.len(),
-                "springs": scene.model.springs.len(),
-                "triangles": scene.model.triangles.len(),
-                "hinges": scene.model.hinges.len(),
-                "rigid_bodies": scene.model.rigid.len(),
-                "integrator": scene.integrator,
-                "dt": dt.as_ref().ok(),
-                "dt_reason": why,
-                "kept": decisions.iter().filter(|d| d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
-                "left_out": decisions.iter().filter(|d| !d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
-                "pruned": scene.pruned,
-                "wind_skips_at_start": scene.wind_skips(0.0).iter().map(|g| json!({
-                    "objects": g.objects,
-                    "evaluated": g.reached,
-                    "skipped": g.skipped.iter().map(|(i, why)| json!({"primitive": i, "why": why})).collect::<Vec<_>>(),
-                })).collect::<Vec<_>>(),
-            });
-            println!("{}", serde_json::to_string_pretty(&out)?);
-            return Ok(());
-        }
-        print!(
-            "{}",
-            report::scene::explain(&scene, &dt, why.as_deref(), &decisions)
-        );
-        return Ok(());
+        return explain(&args, &scene);
     }
     let failed = |e: &dyn std::fmt::Display| anyhow::anyhow!("{}: {e}", args.file.display());
     let work = scene.work(args.seconds).map_err(|e| failed(&e))?;
@@ -103,40 +72,18 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         let path = staged.write(scene::GOALS_FILE, json.as_bytes())?;
         written.push(staged.final_path(&path));
     }
-    let mut export_note = None;
-    if let Some(format) = args.export {
-        let started = Instant::now();
-        let clip = leafmagic::output::export::from_scene_run(&scene, &run, args.export_fps)?;
-        let files = output::write_clip(
-            &clip,
+    let export_note = match args.export {
+        Some(format) => Some(export_into(
+            &args,
             format,
-            staged.path(),
-            &scene.name,
-            args.export_host_fps,
-        )
-        .map_err(|e| {
-            // Name the file as it would have been in the output.
-            let message = format!("{e:#}").replace(
-                &staged.path().display().to_string(),
-                &dir.display().to_string(),
-            );
-            anyhow::anyhow!("{message}; nothing was changed in {}", dir.display())
-        })?;
-        let bytes: u64 = files
-            .iter()
-            .filter_map(|f| std::fs::metadata(f).ok())
-            .map(|m| m.len())
-            .sum();
-        let files: Vec<_> = files.iter().map(|f| staged.final_path(f)).collect();
-        export_note = Some(report::scene::export_note(
-            format,
-            &clip,
-            files.len(),
-            bytes,
-            started.elapsed().as_secs_f64(),
-        ));
-        written.extend(files);
-    }
+            &scene,
+            &run,
+            &staged,
+            &dir,
+            &mut written,
+        )?),
+        None => None,
+    };
     staged.commit()?;
     let s = &run.stats;
     if args.json {
@@ -173,6 +120,91 @@ pub fn scene(args: SceneArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// `scene --explain`: what the compiled scene keeps and leaves out, and
+/// its step.
+fn explain(args: &SceneArgs, scene: &Scene) -> Result<()> {
+    let decisions = scene.explain();
+    let frame = 1.0 / scene.frame_rate;
+    let dt = run::resolve_dt(&scene.model, scene.integrator, scene.dt, frame);
+    let why = dt.as_ref().ok().map(|&h| step_reason(scene, h));
+    if args.json {
+        let out = json!({
+            "scene": scene.name,
+            "law": law_of(scene),
+            "aero_law": scene.model.aero.name(),
+            "particles": scene.model.len(),
+            "springs": scene.model.springs.len(),
+            "triangles": scene.model.triangles.len(),
+            "hinges": scene.model.hinges.len(),
+            "rigid_bodies": scene.model.rigid.len(),
+            "integrator": scene.integrator,
+            "dt": dt.as_ref().ok(),
+            "dt_reason": why,
+            "kept": decisions.iter().filter(|d| d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
+            "left_out": decisions.iter().filter(|d| !d.kept).map(|d| json!({"term": d.name, "reason": d.reason})).collect::<Vec<_>>(),
+            "pruned": scene.pruned,
+            "wind_skips_at_start": scene.wind_skips(0.0).iter().map(|g| json!({
+                "objects": g.objects,
+                "evaluated": g.reached,
+                "skipped": g.skipped.iter().map(|(i, why)| json!({"primitive": i, "why": why})).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        });
+        println!("{}", serde_json::to_string_pretty(&out)?);
+        return Ok(());
+    }
+    print!(
+        "{}",
+        report::scene::explain(scene, &dt, why.as_deref(), &decisions)
+    );
+    Ok(())
+}
+
+/// `scene --export`: the run written as an animation file into the staged
+/// output (named as it will be once committed), its files added to
+/// `written`; the note the report prints.
+fn export_into(
+    args: &SceneArgs,
+    format: leafmagic::formats::Format,
+    scene: &Scene,
+    run: &scene::SceneRun,
+    staged: &scene::Staged,
+    dir: &Path,
+    written: &mut Vec<PathBuf>,
+) -> Result<String> {
+    let started = Instant::now();
+    let clip = leafmagic::output::export::from_scene_run(scene, run, args.export_fps)?;
+    let files = output::write_clip(
+        &clip,
+        format,
+        staged.path(),
+        &scene.name,
+        args.export_host_fps,
+    )
+    .map_err(|e| {
+        // Name the file as it would have been in the output.
+        let message = format!("{e:#}").replace(
+            &staged.path().display().to_string(),
+            &dir.display().to_string(),
+        );
+        anyhow::anyhow!("{message}; nothing was changed in {}", dir.display())
+    })?;
+    let bytes: u64 = files
+        .iter()
+        .filter_map(|f| std::fs::metadata(f).ok())
+        .map(|m| m.len())
+        .sum();
+    let files: Vec<_> = files.iter().map(|f| staged.final_path(f)).collect();
+    let note = report::scene::export_note(
+        format,
+        &clip,
+        files.len(),
+        bytes,
+        started.elapsed().as_secs_f64(),
+    );
+    written.extend(files);
+    Ok(note)
 }
 
 /// The scene's law as `--law` names it.

@@ -124,24 +124,7 @@ pub fn search<E: From<BadInput>>(
     resumed: Option<State>,
     mut after_batch: impl FnMut(&State, &Record) -> Result<(), E>,
 ) -> Result<Outcome, E> {
-    if settings.budget == 0 {
-        return Err(BadInput {
-            file: problem.file.clone(),
-            line: None,
-            field: "budget".into(),
-            reason: "a budget of 0 scene runs: give at least 1".into(),
-        }
-        .into());
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(settings.threads)
-        .build()
-        .map_err(|e| BadInput {
-            file: problem.file.clone(),
-            line: None,
-            field: "threads".into(),
-            reason: format!("cannot start the threads: {e}"),
-        })?;
+    let pool = thread_pool(problem, settings)?;
     let n = problem.free.len();
     let total = 2 * settings.budget;
     if let Some(state) = &resumed {
@@ -165,19 +148,7 @@ pub fn search<E: From<BadInput>>(
         generation: 0,
         history: Vec::with_capacity(total),
     });
-    // The bests of a resumed history, found as the runs were first made.
-    let mut best: Option<usize> = None;
-    let mut baseline: Option<usize> = None;
-    for k in 0..state.history.len() {
-        let slot = if k < settings.budget {
-            &mut best
-        } else {
-            &mut baseline
-        };
-        if slot.is_none_or(|b| better(&state.history[k], &state.history[b])) {
-            *slot = Some(k);
-        }
-    }
+    let (mut best, mut baseline) = bests(&state.history, settings.budget);
     let State {
         cma,
         generation,
@@ -185,15 +156,7 @@ pub fn search<E: From<BadInput>>(
     } = &mut state;
     while history.len() < settings.budget {
         let size = cma.lambda.min(settings.budget - history.len());
-        let units: Vec<Vec<f64>> = (0..size)
-            .map(|i| {
-                cma.sample(&mut Xoshiro256PlusPlus::seed_from_u64(stream_seed(
-                    settings.seed,
-                    *generation as u64,
-                    i as u64,
-                )))
-            })
-            .collect();
+        let units = cma_samples(cma, settings.seed, *generation, size);
         let results = run_all(&units);
         // Ranked best first, ties by sample order: the update learns from
         // the points in the unit box.
@@ -232,21 +195,11 @@ pub fn search<E: From<BadInput>>(
     }
     let best = best.expect("a budget of at least 1 makes a run");
 
-    let uniform = Uniform::new(0.0, 1.0).expect("a valid range");
     let batch = lambda(n);
     let mut done = history.len() - settings.budget;
     while done < settings.budget {
         let size = batch.min(settings.budget - done);
-        let units: Vec<Vec<f64>> = (done..done + size)
-            .map(|e| {
-                let mut rng = Xoshiro256PlusPlus::seed_from_u64(stream_seed(
-                    settings.seed,
-                    RANDOM_STREAM,
-                    e as u64,
-                ));
-                (0..n).map(|_| uniform.sample(&mut rng)).collect()
-            })
-            .collect();
+        let units = uniform_samples(settings.seed, n, done, size);
         for (values, evaluation) in run_all(&units) {
             history.push(Record {
                 method: Method::Random,
@@ -274,6 +227,69 @@ pub fn search<E: From<BadInput>>(
         baseline: baseline.expect("a budget of at least 1 makes a run"),
         generations: state.generation,
     })
+}
+
+/// The pool a search runs on; a budget of 0 refused first.
+fn thread_pool(problem: &Problem, settings: &Settings) -> Result<rayon::ThreadPool, BadInput> {
+    if settings.budget == 0 {
+        return Err(BadInput {
+            file: problem.file.clone(),
+            line: None,
+            field: "budget".into(),
+            reason: "a budget of 0 scene runs: give at least 1".into(),
+        });
+    }
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(settings.threads)
+        .build()
+        .map_err(|e| BadInput {
+            file: problem.file.clone(),
+            line: None,
+            field: "threads".into(),
+            reason: format!("cannot start the threads: {e}"),
+        })
+}
+
+/// The best of CMA-ES's runs (the first `budget`) and of random search's
+/// (the rest) in `history`, as they were found when the runs were made:
+/// the first of equal objectives.
+fn bests(history: &[Record], budget: usize) -> (Option<usize>, Option<usize>) {
+    let better = |a: &Record, b: &Record| a.evaluation.objective < b.evaluation.objective;
+    let (mut best, mut baseline): (Option<usize>, Option<usize>) = (None, None);
+    for k in 0..history.len() {
+        let slot = if k < budget { &mut best } else { &mut baseline };
+        if slot.is_none_or(|b| better(&history[k], &history[b])) {
+            *slot = Some(k);
+        }
+    }
+    (best, baseline)
+}
+
+/// CMA-ES's `size` samples of `generation`, each from its own stream of
+/// the seed: the same points whatever the threads and after a resume.
+fn cma_samples(cma: &CmaState, seed: u64, generation: usize, size: usize) -> Vec<Vec<f64>> {
+    (0..size)
+        .map(|i| {
+            cma.sample(&mut Xoshiro256PlusPlus::seed_from_u64(stream_seed(
+                seed,
+                generation as u64,
+                i as u64,
+            )))
+        })
+        .collect()
+}
+
+/// Random search's runs `done..done + size`, uniform in the unit box, run
+/// `e` from stream `e` of the seed's random-search streams.
+fn uniform_samples(seed: u64, n: usize, done: usize, size: usize) -> Vec<Vec<f64>> {
+    let uniform = Uniform::new(0.0, 1.0).expect("a valid range");
+    (done..done + size)
+        .map(|e| {
+            let mut rng =
+                Xoshiro256PlusPlus::seed_from_u64(stream_seed(seed, RANDOM_STREAM, e as u64));
+            (0..n).map(|_| uniform.sample(&mut rng)).collect()
+        })
+        .collect()
 }
 
 /// A resumed state must be one this problem and these settings could have
