@@ -365,16 +365,7 @@ pub fn together(parts: Vec<(String, Preview)>, fps: Option<f64>) -> Result<Previ
         .map(|o| o.first_frame + o.frame_count())
         .max()
         .unwrap_or(1);
-    let clip = Clip {
-        name: "compare".to_string(),
-        fps,
-        frames,
-        objects,
-        ground: None,
-        wind: Vec::new(),
-        aero_law: String::new(),
-        warnings: Vec::new(),
-    };
+    let clip = Clip::bare("compare", fps, frames, objects);
     clip.validate_read()?;
     Ok(Preview {
         clip,
@@ -478,16 +469,7 @@ pub fn from_record(
         },
         first_frame: 0,
     };
-    let clip = Clip {
-        name: name.to_string(),
-        fps,
-        frames,
-        objects: vec![object, trail],
-        ground: None,
-        wind: Vec::new(),
-        aero_law: String::new(),
-        warnings: Vec::new(),
-    };
+    let clip = Clip::bare(name, fps, frames, vec![object, trail]);
     clip.validate_read()?;
     Ok(clip)
 }
