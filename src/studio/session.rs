@@ -564,14 +564,48 @@ impl Session {
     /// breed toward (what "More like this" and "Auto N toward #id" aim at):
     /// its shown drop's descriptors, gated on its class.
     pub fn fall_target(&self, id: u64) -> Result<MotionTarget, StudioError> {
+        like_target(&self.proto, self.on_grid(id)?, self.file.settings.seconds)
+    }
+
+    /// Candidate `id` of the current generation; refused if it is not there.
+    fn on_grid(&self, id: u64) -> Result<&Candidate, StudioError> {
         let (node, generation) = self.current();
-        let Some(c) = generation.candidates.iter().find(|c| c.id == id) else {
-            return Err(StudioError::Input(format!(
-                "candidate {id} is not in generation {} (its ids: {:?})",
-                node.index, node.ids
-            )));
-        };
-        like_target(&self.proto, c, self.file.settings.seconds)
+        generation
+            .candidates
+            .iter()
+            .find(|c| c.id == id)
+            .ok_or_else(|| {
+                StudioError::Input(format!(
+                    "candidate {id} is not in generation {} (its ids: {:?})",
+                    node.index, node.ids
+                ))
+            })
+    }
+
+    /// `pending` turned toward `target`: [`LIKE_POOL`] times the grid of
+    /// children of `parents` (variations, crossovers and wild cards at its
+    /// scale and seed), evaluated by their distance to `target`, the
+    /// grid's worth closest kept ([`Pending::evaluate`]).
+    fn toward_target(
+        &self,
+        pending: &mut Pending,
+        parents: &[(u64, &Genome)],
+        target: MotionTarget,
+    ) {
+        let grid = self.file.settings.grid;
+        let children = children_of(
+            parents,
+            self.archive_offer(pending.node.index),
+            &self.proto,
+            grid * LIKE_POOL,
+            pending.node.scale,
+            pending.node.seed,
+            self.file.next_id,
+        );
+        pending.node.ids = children.iter().map(|c| c.id).collect();
+        pending.children = children;
+        pending.settings.like = Some(target);
+        pending.keep = Some(grid);
     }
 
     /// "More like this": a generation bred from candidate `id` of the
@@ -581,30 +615,11 @@ impl Session {
     /// times the grid of variations (and wild cards) are evaluated and the
     /// grid's worth closest kept ([`Pending::evaluate`]).
     pub fn plan_like(&self, id: u64, scale: Option<f64>) -> Result<Pending, StudioError> {
-        let (node, generation) = self.current();
-        let Some(c) = generation.candidates.iter().find(|c| c.id == id) else {
-            return Err(StudioError::Input(format!(
-                "candidate {id} is not in generation {} (its ids: {:?})",
-                node.index, node.ids
-            )));
-        };
+        let c = self.on_grid(id)?;
         let target = like_target(&self.proto, c, self.file.settings.seconds)?;
-        let grid = self.file.settings.grid;
         let mut pending = self.plan(&[id], scale)?;
-        let children = children_of(
-            &[(id, &c.genome)],
-            self.archive_offer(pending.node.index),
-            &self.proto,
-            grid * LIKE_POOL,
-            pending.node.scale,
-            pending.node.seed,
-            self.file.next_id,
-        );
-        pending.node.ids = children.iter().map(|c| c.id).collect();
+        self.toward_target(&mut pending, &[(id, &c.genome)], target);
         pending.node.like = Some(id);
-        pending.children = children;
-        pending.settings.like = Some(target);
-        pending.keep = Some(grid);
         Ok(pending)
     }
 
@@ -677,23 +692,11 @@ impl Session {
                 .filter_map(|id| generation.candidates.iter().find(|c| c.id == *id))
                 .map(|c| (c.id, &c.genome))
                 .collect();
-            let children = children_of(
-                &parents,
-                self.archive_offer(pending.node.index),
-                &self.proto,
-                self.file.settings.grid * LIKE_POOL,
-                pending.node.scale,
-                pending.node.seed,
-                self.file.next_id,
-            );
-            pending.node.ids = children.iter().map(|c| c.id).collect();
+            self.toward_target(&mut pending, &parents, target);
             match toward {
                 Some(t) => pending.node.toward = Some(t.clone()),
                 None => pending.node.example = true,
             }
-            pending.children = children;
-            pending.settings.like = Some(target);
-            pending.keep = Some(self.file.settings.grid);
         }
         Ok(pending)
     }
