@@ -51,10 +51,7 @@ fn refusal<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> String {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("leafmagic-anim-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    super::common::scratch("anim", name)
 }
 
 /// A one-object clip at `fps` (as many frames as the object has), written

@@ -630,10 +630,7 @@ fn the_default_breed_limit_is_about_ten_minutes_and_the_quick_start_fits() {
 /// speed, drift ratio and rotation rate.
 #[test]
 fn a_class_breed_returns_a_spread_of_robust_leaves_not_ties() {
-    use leafmagic::breed::robust::release_attitudes;
     use leafmagic::leaf::LeafSpec;
-    use leafmagic::motion::classify::classify;
-    use leafmagic::sim::drop::{DropParams, drop_leaf};
     let dir = scratch("spread");
     for target in ["spinner", "lilter"] {
         let run = dir.join(target);
@@ -688,14 +685,7 @@ fn a_class_breed_returns_a_spread_of_robust_leaves_not_ties() {
                 LeafSpec::load(run.join("best").join(&row["file"]).to_str().unwrap()).unwrap();
             let model = leaf.model().unwrap();
             let mut range = [[f64::INFINITY, f64::NEG_INFINITY]; 3];
-            for tilt in release_attitudes(1991, id, 4) {
-                let params = DropParams {
-                    seconds: 10.0,
-                    tilt_deg: tilt,
-                    ..Default::default()
-                };
-                let fall = drop_leaf(&model, &params).unwrap();
-                let c = classify(&fall.trajectory, model.chord());
+            for (tilt, c) in super::common::redropped(&model, id) {
                 assert_eq!(c.class.as_str(), target, "leaf {id} released at {tilt:?}");
                 let f = &c.features;
                 let spin = std::f64::consts::TAU * (f.net_turns.abs() + f.yaw_turns.abs())

@@ -147,3 +147,38 @@ pub fn assert_succeeded(out: &std::process::Output) {
         String::from_utf8_lossy(&out.stderr)
     );
 }
+
+/// An empty scratch folder for a test, `name` within module `module`'s
+/// (so that tests of different modules running at once never share one),
+/// made afresh: whatever an earlier run left there is removed.
+pub fn scratch(module: &str, name: &str) -> std::path::PathBuf {
+    let dir =
+        std::env::temp_dir().join(format!("leafmagic-{module}-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Leaf `id` of a breed run seeded 1991 dropped again for 10 s from each of
+/// the four release attitudes the run judged it on: each release and how
+/// its fall classifies.
+pub fn redropped(
+    model: &Model,
+    id: u64,
+) -> Vec<([f64; 2], leafmagic::motion::classify::Classification)> {
+    leafmagic::breed::robust::release_attitudes(1991, id, 4)
+        .into_iter()
+        .map(|tilt| {
+            let params = leafmagic::sim::drop::DropParams {
+                seconds: 10.0,
+                tilt_deg: tilt,
+                ..Default::default()
+            };
+            let fall = leafmagic::sim::drop::drop_leaf(model, &params).unwrap();
+            (
+                tilt,
+                leafmagic::motion::classify::classify(&fall.trajectory, model.chord()),
+            )
+        })
+        .collect()
+}

@@ -18,10 +18,7 @@ fn scene_path(name: &str) -> PathBuf {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("leafmagic-direct-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
+    super::common::scratch("direct", name)
 }
 
 /// Runs `direct` with `args` and returns its JSON report.

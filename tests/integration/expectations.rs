@@ -46,10 +46,7 @@ fn leafmagic() -> Command {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("leafmagic-expect-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    super::common::scratch("expect", name)
 }
 
 fn text(bytes: &[u8]) -> String {

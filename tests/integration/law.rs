@@ -10,10 +10,7 @@ fn leafmagic() -> Command {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(format!("law-{name}"));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    super::common::scratch("law", name)
 }
 
 /// Runs `leafmagic ARGS`, which must succeed.
@@ -379,10 +376,7 @@ fn a_breed_records_its_law_and_refuses_to_resume_under_another() {
 /// judged it on, it falls in the class every time.
 #[test]
 fn breeding_under_the_real_law_reaches_each_class_robustly() {
-    use leafmagic::breed::robust::release_attitudes;
     use leafmagic::leaf::{AeroLawName, LeafSpec};
-    use leafmagic::motion::classify::classify;
-    use leafmagic::sim::drop::{DropParams, drop_leaf};
     let dir = scratch("classes");
     for (proto, target) in [("a", "floater"), ("a", "spinner"), ("b", "lilter")] {
         let run = dir.join(target);
@@ -422,14 +416,7 @@ fn breeding_under_the_real_law_reaches_each_class_robustly() {
             assert_eq!(leaf.aero.law, AeroLawName::Unsteady);
             let model = leaf.model().unwrap();
             let id: u64 = row[col("id")].parse().unwrap();
-            for tilt in release_attitudes(1991, id, 4) {
-                let params = DropParams {
-                    seconds: 10.0,
-                    tilt_deg: tilt,
-                    ..Default::default()
-                };
-                let fall = drop_leaf(&model, &params).unwrap();
-                let c = classify(&fall.trajectory, model.chord());
+            for (tilt, c) in super::common::redropped(&model, id) {
                 assert_eq!(c.class.as_str(), target, "leaf {id} released at {tilt:?}");
             }
         }

@@ -34,10 +34,7 @@ fn leafmagic() -> Command {
 }
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("leafmagic-shards-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    super::common::scratch("shards", name)
 }
 
 fn assert_same_run(reference: &Path, other: &Path, what: &str) {

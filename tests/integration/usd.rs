@@ -89,10 +89,7 @@ print(json.dumps(out))
 "#;
 
 fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("leafmagic-usd-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+    super::common::scratch("usd", name)
 }
 
 /// One of everything that is exported differently (as in export.rs): a
